@@ -1,0 +1,48 @@
+//! Command-line interface: clap derive, one file per subcommand. Error context (anyhow)
+//! is added here and only here; the library returns [`rhier::Error`].
+
+mod flatland;
+mod inspect;
+mod play;
+mod probe;
+mod reference;
+mod solve;
+
+use clap::{Parser, Subcommand};
+
+/// rhier: hierarchical radiosity for scenes that move, kept on disk.
+#[derive(Debug, Parser)]
+#[command(name = "rhier", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Solve a scene (native JSON, glTF, OBJ; none = the embedded Cornell box).
+    Solve(solve::Args),
+    /// Radiosity at points from a stored `.rhier` solution.
+    Probe(probe::Args),
+    /// Render frames of a stored solution to PNG (or glTF).
+    Play(play::Args),
+    /// What a `.rhier` file holds and what it costs in memory.
+    Inspect(inspect::Args),
+    /// Exact 2D radiosity with the visibility complex.
+    Flatland(flatland::Args),
+    /// Independent Monte Carlo reference radiosity at probe points.
+    Reference(reference::Args),
+}
+
+/// Runs the parsed command line.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        None => solve::run(solve::Args::default_job()),
+        Some(Command::Solve(a)) => solve::run(a),
+        Some(Command::Probe(a)) => probe::run(a),
+        Some(Command::Play(a)) => play::run(a),
+        Some(Command::Inspect(a)) => inspect::run(a),
+        Some(Command::Flatland(a)) => flatland::run(a),
+        Some(Command::Reference(a)) => reference::run(a),
+    }
+}

@@ -1,0 +1,1 @@
+//! flatland: see the crate tour in lib.rs. (Under construction.)

@@ -1,0 +1,1 @@
+//! geometry: see the crate tour in lib.rs. (Under construction.)

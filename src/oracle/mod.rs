@@ -1,0 +1,1 @@
+//! oracle: see the crate tour in lib.rs. (Under construction.)

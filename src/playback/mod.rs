@@ -1,0 +1,1 @@
+//! playback: see the crate tour in lib.rs. (Under construction.)

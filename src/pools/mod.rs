@@ -1,0 +1,1 @@
+//! pools: see the crate tour in lib.rs. (Under construction.)

@@ -1,0 +1,1 @@
+//! reference: independent Monte Carlo path tracer (under construction).

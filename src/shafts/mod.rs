@@ -1,0 +1,1 @@
+//! shafts: see the crate tour in lib.rs. (Under construction.)

@@ -1,0 +1,180 @@
+//! What a solve hands to the store and to playback: the scene's patches and the leaves
+//! of the solved hierarchy, each leaf a parametric sub-domain of one patch over a time
+//! range, with radiosity at its corners.
+//!
+//! This is the contract between [`crate::solver`], [`crate::store`] and
+//! [`crate::playback`]: the store persists exactly these records, and probing a
+//! [`Solution`] in memory or read back from a `.rhier` file runs the same code.
+//!
+//! ## Patch parameterisation
+//! A patch is one input polygon. A quad `v0 v1 v2 v3` is parameterised bilinearly,
+//! `P(u,v) = (1-u)(1-v) v0 + u(1-v) v1 + u v v2 + (1-u) v v3`, `(u,v)` in `[0,1]^2`; a
+//! triangle `v0 v1 v2` affinely, `P(u,v) = v0 + u (v1-v0) + v (v2-v0)`, `u,v >= 0`,
+//! `u+v <= 1`. Since patches are planar, the image of a parametric rectangle of a quad is
+//! a planar quad, and the image of a parametric triangle is a triangle.
+
+use bytemuck::{Pod, Zeroable};
+use glam::DVec3;
+
+/// Shape of a patch or leaf domain.
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    /// Three corners, affine parameterisation.
+    Triangle = 3,
+    /// Four corners, bilinear parameterisation.
+    Quad = 4,
+}
+
+/// One leaf of the hierarchy as playback needs it. `repr(C)`, Pod, 96 bytes.
+///
+/// Corners `uv[0..n]` are in the patch's parameter space, counter-clockwise like the
+/// patch (`n` = 3 for triangle patches, 4 for quad patches: `(u0,v0) (u1,v0) (u1,v1)
+/// (u0,v1)`); `b[i]` is the radiosity at corner `i`. Inside the leaf, `B` is the
+/// bilinear (quad) or linear (triangle) interpolation of the corner values.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Leaf {
+    /// Patch index (position in [`Solution::patches`]).
+    pub patch: u32,
+    /// Number of valid corners: 3 or 4 (the patch's shape).
+    pub corners: u32,
+    /// Time range `[t0, t1]` over which this leaf holds.
+    pub time: [f32; 2],
+    /// Corners in the patch's parameter space.
+    pub uv: [[f32; 2]; 4],
+    /// Radiosity (RGB) at each corner.
+    pub b: [[f32; 3]; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<Leaf>() == 96);
+
+impl Leaf {
+    /// Radiosity at parameter point `(u, v)` of the patch, assumed inside this leaf.
+    pub fn eval(&self, u: f64, v: f64) -> [f64; 3] {
+        let w = self.weights(u, v);
+        let mut out = [0.0; 3];
+        for (c, wc) in w.iter().enumerate().take(self.corners as usize) {
+            for (k, o) in out.iter_mut().enumerate() {
+                *o += wc * self.b[c][k] as f64;
+            }
+        }
+        out
+    }
+
+    /// Interpolation weights of the corners at `(u, v)` (clamped into the leaf).
+    pub fn weights(&self, u: f64, v: f64) -> [f64; 4] {
+        let p = |i: usize| (self.uv[i][0] as f64, self.uv[i][1] as f64);
+        if self.corners == 3 {
+            // Barycentric coordinates in the parametric triangle.
+            let (a, b, c) = (p(0), p(1), p(2));
+            let det = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
+            if det.abs() < 1e-300 {
+                return [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 0.0];
+            }
+            let l1 = ((u - a.0) * (c.1 - a.1) - (c.0 - a.0) * (v - a.1)) / det;
+            let l2 = ((b.0 - a.0) * (v - a.1) - (u - a.0) * (b.1 - a.1)) / det;
+            let (l1, l2) = (l1.clamp(0.0, 1.0), l2.clamp(0.0, 1.0));
+            let s = (l1 + l2).max(1.0);
+            let (l1, l2) = (l1 / s, l2 / s);
+            [1.0 - l1 - l2, l1, l2, 0.0]
+        } else {
+            let (u0, v0) = p(0);
+            let (u1, v1) = p(2);
+            let s = if u1 > u0 { ((u - u0) / (u1 - u0)).clamp(0.0, 1.0) } else { 0.5 };
+            let t = if v1 > v0 { ((v - v0) / (v1 - v0)).clamp(0.0, 1.0) } else { 0.5 };
+            [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t]
+        }
+    }
+
+    /// True if parameter point `(u, v)` lies in this leaf's domain (with slack `eps`).
+    pub fn contains(&self, u: f64, v: f64, eps: f64) -> bool {
+        let p = |i: usize| (self.uv[i][0] as f64, self.uv[i][1] as f64);
+        if self.corners == 3 {
+            let (a, b, c) = (p(0), p(1), p(2));
+            let edge = |p0: (f64, f64), p1: (f64, f64)| {
+                (p1.0 - p0.0) * (v - p0.1) - (p1.1 - p0.1) * (u - p0.0)
+            };
+            let (e0, e1, e2) = (edge(a, b), edge(b, c), edge(c, a));
+            let sign = if (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1) >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            sign * e0 >= -eps && sign * e1 >= -eps && sign * e2 >= -eps
+        } else {
+            let (u0, v0) = p(0);
+            let (u1, v1) = p(2);
+            u >= u0 - eps && u <= u1 + eps && v >= v0 - eps && v <= v1 + eps
+        }
+    }
+
+    /// Area-weighted mean radiosity of the leaf (exact for the interpolant).
+    pub fn mean(&self) -> [f64; 3] {
+        let n = self.corners as usize;
+        let mut out = [0.0; 3];
+        for c in 0..n {
+            for (k, o) in out.iter_mut().enumerate() {
+                *o += self.b[c][k] as f64 / n as f64;
+            }
+        }
+        out
+    }
+}
+
+/// One input polygon as stored: object, material, object-space corners.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatchGeometry {
+    /// Owning object (index in the scene's objects).
+    pub object: u32,
+    /// Material index.
+    pub material: u32,
+    /// 3 or 4.
+    pub corners: u32,
+    /// Object-space corners (the 4th unused for triangles).
+    pub vertices: [DVec3; 4],
+}
+
+impl PatchGeometry {
+    /// Point of the patch at parameter `(u, v)`, in the patch's own (object) space.
+    pub fn point(&self, u: f64, v: f64) -> DVec3 {
+        let p = &self.vertices;
+        if self.corners == 3 {
+            p[0] + u * (p[1] - p[0]) + v * (p[2] - p[0])
+        } else {
+            (1.0 - u) * (1.0 - v) * p[0] + u * (1.0 - v) * p[1] + u * v * p[2] + (1.0 - u) * v * p[3]
+        }
+    }
+}
+
+/// Statistics of the solve that produced a solution (also printed by `solve`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SolveStats {
+    /// Wall-clock seconds of the solve.
+    pub seconds: f64,
+    /// Iterations run.
+    pub iterations: u32,
+    /// Elements in the hierarchy (all levels).
+    pub elements: u64,
+    /// Active links.
+    pub links_active: u64,
+    /// Passive (refined) links.
+    pub links_passive: u64,
+    /// Estimated relative error from link error bounds.
+    pub estimated_error: f64,
+    /// Last iteration's relative residual.
+    pub residual: f64,
+}
+
+/// A solved scene: its patches and the leaves of the hierarchy.
+#[derive(Clone, Debug, Default)]
+pub struct Solution {
+    /// The scene the solution is for (materials, objects, motion, camera).
+    pub scene: crate::scene::Scene,
+    /// Patches in scene order (objects in order, polygons in order, zero-area dropped).
+    pub patches: Vec<PatchGeometry>,
+    /// Leaves, sorted by `(time[0], patch)`.
+    pub leaves: Vec<Leaf>,
+    /// Statistics of the solve.
+    pub stats: SolveStats,
+}

@@ -1,0 +1,1 @@
+//! store: see the crate tour in lib.rs. (Under construction.)
