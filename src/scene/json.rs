@@ -279,35 +279,81 @@ pub fn to_json_string(scene: &Scene) -> String {
     out
 }
 
+/// Key order in written files (serde_json's map is sorted alphabetically otherwise).
+const KEY_ORDER: [&str; 22] = [
+    "rhier_scene",
+    "time",
+    "start",
+    "end",
+    "camera",
+    "eye",
+    "target",
+    "up",
+    "fov_y_degrees",
+    "materials",
+    "reflectance",
+    "emission",
+    "objects",
+    "name",
+    "polygons",
+    "vertices",
+    "material",
+    "motion",
+    "t",
+    "translation",
+    "rotation",
+    "scale",
+];
+
+fn ordered(map: &serde_json::Map<String, Value>) -> Vec<(&String, &Value)> {
+    let mut items: Vec<_> = map.iter().collect();
+    items.sort_by_key(|(k, _)| {
+        KEY_ORDER
+            .iter()
+            .position(|o| o == k)
+            .unwrap_or(KEY_ORDER.len())
+    });
+    items
+}
+
 /// Pretty printer that keeps "leaf" arrays (numbers, arrays of numbers) and objects
 /// holding only such values on one line.
 fn write_value(v: &Value, indent: usize, out: &mut String) {
-    if is_flat(v) {
-        out.push_str(&v.to_string());
-        return;
-    }
-    let pad = "  ".repeat(indent + 1);
+    let flat = is_flat(v);
+    let (open, sep, close) = if flat {
+        (String::new(), ", ".to_string(), String::new())
+    } else {
+        (
+            format!("\n{}", "  ".repeat(indent + 1)),
+            format!(",\n{}", "  ".repeat(indent + 1)),
+            format!("\n{}", "  ".repeat(indent)),
+        )
+    };
     match v {
-        Value::Array(items) => {
-            out.push_str("[\n");
+        Value::Array(items) if !items.is_empty() => {
+            out.push('[');
+            out.push_str(&open);
             for (i, item) in items.iter().enumerate() {
-                out.push_str(&pad);
+                if i > 0 {
+                    out.push_str(if flat && !item.is_array() { "," } else { &sep });
+                }
                 write_value(item, indent + 1, out);
-                out.push_str(if i + 1 < items.len() { ",\n" } else { "\n" });
             }
-            out.push_str(&"  ".repeat(indent));
+            out.push_str(&close);
             out.push(']');
         }
-        Value::Object(map) => {
-            out.push_str("{\n");
-            for (i, (k, item)) in map.iter().enumerate() {
-                out.push_str(&pad);
+        Value::Object(map) if !map.is_empty() => {
+            out.push('{');
+            out.push_str(&open);
+            for (i, (k, item)) in ordered(map).into_iter().enumerate() {
+                if i > 0 {
+                    out.push_str(&sep);
+                }
                 out.push_str(&Value::String(k.clone()).to_string());
                 out.push_str(": ");
                 write_value(item, indent + 1, out);
-                out.push_str(if i + 1 < map.len() { ",\n" } else { "\n" });
             }
-            out.push_str(&"  ".repeat(indent));
+            out.push_str(&close);
             out.push('}');
         }
         other => out.push_str(&other.to_string()),
