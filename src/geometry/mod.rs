@@ -14,11 +14,13 @@
 //! on the scene's scale.
 
 mod formfactor;
+mod nearest;
 mod patches;
 mod polygon;
 mod visibility;
 
 pub use formfactor::{point_to_point_kernel, point_to_polygon};
+pub use nearest::{closest_point_on_polygon, nearest_facing};
 pub use patches::{PatchId, Patches};
 pub use polygon::Poly;
 pub use visibility::{Hit, RayCounters, SceneBvh};

@@ -15,7 +15,8 @@
 //! 1995): intensity `B A / (4π)` for a cluster of area `A`, and a receiving cluster's
 //! surfaces see on average a quarter of the normal irradiance (Cauchy's mean projected
 //! area). Such a coefficient is only an estimate: its error bound is the whole
-//! transport, so only links that carry little energy stay at cluster level.
+//! transport with every cosine at its bound, so only links that carry little energy
+//! stay at cluster level.
 //!
 //! Deterministic: the ray jitter is a hash of (receiver, source, sample), not of the
 //! thread or the order of evaluation.
@@ -222,7 +223,11 @@ pub fn evaluate(
             0.25
         };
         f = cluster_factor(gs.area, cr, cs, d2);
-        spread = f;
+        // The true factor lies between 0 and the value with every cosine at its
+        // bound (1 on a cluster side): that width is the error bound.
+        let cr_max = if r_surface { cr } else { 1.0 };
+        let cs_max = if s_surface { cs } else { 1.0 };
+        spread = cluster_factor(gs.area, cr_max, cs_max, d2);
     }
     LinkEval {
         transport: Transport {

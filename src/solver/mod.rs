@@ -84,13 +84,18 @@ pub struct SolveOptions {
     pub tolerance: f64,
     /// Seed of the ray jitter.
     pub seed: u64,
+    /// Reconstruction tolerance: a cell splits while the gather at its centre
+    /// differs from its corners' interpolant by more than this times the RMS radiosity.
+    pub recon_tol: f64,
+    /// Smallest reconstruction cell edge, as a fraction of the scene's diameter.
+    pub recon_min_size: f64,
 }
 
 impl Default for SolveOptions {
     fn default() -> Self {
         SolveOptions {
             storage: Storage::Ram,
-            eps: 0.02,
+            eps: 0.5,
             min_size: 1.0 / 256.0,
             rays_per_point: 4,
             corner_rays: 8,
@@ -100,6 +105,8 @@ impl Default for SolveOptions {
             time_budget: None,
             tolerance: 1e-6,
             seed: 0x5eed,
+            recon_tol: 0.02,
+            recon_min_size: 1.0 / 512.0,
         }
     }
 }
@@ -269,8 +276,8 @@ impl<'a> Solver<'a> {
         Ok(records)
     }
 
-    /// Mean radiosity a closed room with the scene's mean exitance and reflectance
-    /// would have, max channel: the first round's radiosity scale.
+    /// Mean reflected radiosity a closed room with the scene's mean exitance and
+    /// reflectance would have, max channel: the first round's radiosity scale.
     fn enclosure_estimate(&self) -> f64 {
         let (mut ae, mut ar, mut a) = (0.0, 0.0, 0.0);
         for i in 0..self.patches.len() {
@@ -286,16 +293,22 @@ impl<'a> Solver<'a> {
         if a <= 0.0 {
             return 0.0;
         }
-        (ae / a) / (1.0 - (ar / a).min(0.999))
+        let rho = (ar / a).min(0.999);
+        (ae / a) * rho / (1.0 - rho)
     }
 
-    /// Area-weighted RMS of the leaves' radiosity (max channel).
+    /// Area-weighted RMS of the leaves' reflected radiosity `B − E` (max channel):
+    /// the scale errors are measured against. Emission is left out so that a small
+    /// bright lamp does not loosen the threshold for everything it lights.
     fn rms_radiosity(&self) -> f64 {
         let (mut s, mut a) = (0.0, 0.0);
         for &l in &self.leaves {
             let g = &self.elems.geoms.as_slice()[l.ix()];
             let b = self.elems.radiosities.as_slice()[l.ix()];
-            let m = b.iter().copied().fold(0.0f32, f32::max) as f64;
+            let e = self.patches.emissions[g.patch as usize];
+            let m = (0..3)
+                .map(|k| (b[k] as f64 - e[k]).max(0.0))
+                .fold(0.0, f64::max);
             s += g.area * m * m;
             a += g.area;
         }
@@ -735,88 +748,98 @@ impl<'a> Solver<'a> {
         )
     }
 
-    /// The solution: leaves with corner radiosity from the final gather.
+    /// The solution: reconstruction cells with corner radiosity from the final gather.
+    ///
+    /// Cells start as the hierarchy's leaves and split (in parameter space, like
+    /// elements) while the gather at a cell's centre differs from the interpolant of
+    /// its corners by more than `recon_tol · B_ref` and the cell is larger than the
+    /// reconstruction's smallest size; a split cell keeps the links of its leaf. This
+    /// meshes the stored answer to where `B(x)` bends (room edges, contact lines,
+    /// shadow boundaries) without refining the link hierarchy there.
     pub fn solution(&self) -> Solution {
         let geoms = self.elems.geoms.as_slice();
-        // Distinct corners per patch, each gathered from the smallest leaf holding it.
-        let key = |patch: u32, uv: [f32; 2]| {
-            let q = |x: f32| (x as f64 * (1u64 << 24) as f64).round() as u32;
-            (patch, q(uv[0]), q(uv[1]))
-        };
-        let mut vmap: HashMap<(u32, u32, u32), usize> = HashMap::new();
-        let mut verts: Vec<(ElementId, [f32; 2])> = Vec::new();
-        let mut corner_vertex: Vec<[usize; 4]> = Vec::with_capacity(self.leaves.len());
-        for &l in &self.leaves {
-            let g = &geoms[l.ix()];
-            let mut cv = [usize::MAX; 4];
-            for (i, slot) in cv.iter_mut().enumerate().take(g.n as usize) {
-                let k = key(g.patch, g.uv[i]);
-                let vi = *vmap.entry(k).or_insert_with(|| {
-                    verts.push((l, g.uv[i]));
-                    verts.len() - 1
-                });
-                if geoms[verts[vi].0.ix()].area > g.area {
-                    verts[vi].0 = l;
-                }
-                *slot = vi;
-            }
-            corner_vertex.push(cv);
-        }
-        let values: Vec<([f64; 3], bool)> = verts
-            .par_iter()
-            .map(|&(l, uv)| {
+        let b_ref = self.rms_radiosity();
+        let tol = self.opts.recon_tol * b_ref;
+        let min_area = (self.opts.recon_min_size * self.patches.scene_diameter_cached()).powi(2);
+        let mut cache = VertexCache::default();
+        let mut cells: Vec<Cell> = self
+            .leaves
+            .iter()
+            .map(|&l| {
                 let g = &geoms[l.ix()];
-                let x = self
-                    .patches
-                    .point(g.patch as usize, uv[0] as f64, uv[1] as f64);
-                // Evaluate a hair inside the leaf: on an edge shared with a
-                // perpendicular wall the factor jumps (the wall is seen edge-on), and
-                // the interpolant wants the limit from inside.
-                let c = oracle::poly(g).centroid();
-                self.gather_point(l, x + CORNER_INSET * (c - x))
+                Cell {
+                    leaf: l,
+                    patch: g.patch,
+                    n: g.n,
+                    uv: g.uv,
+                    area: g.area,
+                }
             })
             .collect();
-        let mut leaves = Vec::with_capacity(self.leaves.len());
-        for (li, &l) in self.leaves.iter().enumerate() {
-            let g = &geoms[l.ix()];
-            let nc = g.n as usize;
-            let cv = corner_vertex[li];
-            let valid: Vec<&[f64; 3]> = cv[..nc]
-                .iter()
-                .filter(|&&v| values[v].1)
-                .map(|&v| &values[v].0)
-                .collect();
-            let fallback = if valid.is_empty() {
-                let b = self.elems.radiosities.as_slice()[l.ix()];
-                [b[0] as f64, b[1] as f64, b[2] as f64]
-            } else {
-                let mut m = [0.0; 3];
-                for v in &valid {
-                    for k in 0..3 {
-                        m[k] += v[k] / valid.len() as f64;
-                    }
+        let mut done: Vec<(Cell, [usize; 4])> = Vec::with_capacity(cells.len());
+        while !cells.is_empty() {
+            // Register every corner and centre, gather the new ones in parallel.
+            let mut ids = Vec::with_capacity(cells.len());
+            for c in &cells {
+                let centre = c.centre_uv();
+                let mut corners = [usize::MAX; 4];
+                for (i, slot) in corners.iter_mut().enumerate().take(c.n as usize) {
+                    *slot = cache.register(c, c.uv[i], centre);
                 }
-                m
-            };
+                ids.push((corners, cache.register(c, centre, centre)));
+            }
+            cache.evaluate(|leaf, x| self.gather_point(leaf, x), &self.patches);
+            let mut next = Vec::new();
+            for (c, (corners, centre)) in cells.into_iter().zip(ids) {
+                let vals = corner_values(
+                    &cache,
+                    &corners,
+                    c.n as usize,
+                    self.elems.radiosities.as_slice()[c.leaf.ix()],
+                );
+                let interp = mean3(&vals[..c.n as usize]);
+                let (cv, ok) = cache.values[centre];
+                let off = (0..3)
+                    .map(|k| (cv[k] - interp[k]).abs())
+                    .fold(0.0, f64::max);
+                if ok && off > tol && c.area >= 4.0 * min_area {
+                    next.extend(c.split());
+                } else {
+                    done.push((c, corners));
+                }
+            }
+            cells = next;
+        }
+        let mut leaves = Vec::with_capacity(done.len());
+        for (c, corners) in &done {
+            let vals = corner_values(
+                &cache,
+                corners,
+                c.n as usize,
+                self.elems.radiosities.as_slice()[c.leaf.ix()],
+            );
             let mut b = [[0.0f32; 3]; 4];
-            for i in 0..nc {
-                let (v, ok) = values[cv[i]];
-                let v = if ok { v } else { fallback };
+            for i in 0..c.n as usize {
                 b[i] = [
-                    v[0].max(0.0) as f32,
-                    v[1].max(0.0) as f32,
-                    v[2].max(0.0) as f32,
+                    vals[i][0].max(0.0) as f32,
+                    vals[i][1].max(0.0) as f32,
+                    vals[i][2].max(0.0) as f32,
                 ];
             }
             leaves.push(Leaf {
-                patch: g.patch,
-                corners: g.n,
+                patch: c.patch,
+                corners: c.n,
                 time: self.time,
-                uv: g.uv,
+                uv: c.uv,
                 b,
             });
         }
-        leaves.sort_by_key(|l| l.patch);
+        leaves.sort_by(|a, b| {
+            a.patch
+                .cmp(&b.patch)
+                .then(a.uv[0][0].total_cmp(&b.uv[0][0]))
+                .then(a.uv[0][1].total_cmp(&b.uv[0][1]))
+        });
         let (active, passive) = self.links.counts();
         Solution {
             scene: self.scene.clone(),
@@ -832,6 +855,71 @@ impl<'a> Solver<'a> {
                 residual: 0.0,
             },
         }
+    }
+
+    /// Final gather at the point of patch `patch` with parameters `(u, v)`, through
+    /// the links of the leaf holding it: `(B, valid)`. What the stored corners hold.
+    pub fn gather_at(&self, patch: u32, u: f64, v: f64) -> Option<([f64; 3], bool)> {
+        let leaf = self.leaves.iter().copied().find(|&l| {
+            let g = &self.elems.geoms.as_slice()[l.ix()];
+            g.patch == patch
+                && Leaf {
+                    patch,
+                    corners: g.n,
+                    time: self.time,
+                    uv: g.uv,
+                    b: [[0.0; 3]; 4],
+                }
+                .contains(u, v, 1e-9)
+        })?;
+        Some(self.gather_point(leaf, self.patches.point(patch as usize, u, v)))
+    }
+
+    /// Debug: the chain links of the leaf holding `(patch, u, v)` as
+    /// (receiver, source, source kind, source area, source radiosity, transfer).
+    #[doc(hidden)]
+    pub fn debug_chain(
+        &self,
+        patch: u32,
+        u: f64,
+        v: f64,
+    ) -> Vec<(u32, u32, u8, f64, [f32; 3], [f64; 3])> {
+        let Some(leaf) = self.leaves.iter().copied().find(|&l| {
+            let g = &self.elems.geoms.as_slice()[l.ix()];
+            g.patch == patch
+                && Leaf {
+                    patch,
+                    corners: g.n,
+                    time: self.time,
+                    uv: g.uv,
+                    b: [[0.0; 3]; 4],
+                }
+                .contains(u, v, 1e-9)
+        }) else {
+            return Vec::new();
+        };
+        let x = self.patches.point(patch as usize, u, v);
+        let n = DVec3::from_array(self.elems.geoms.as_slice()[leaf.ix()].normal);
+        let mut out = Vec::new();
+        let mut e = leaf.0;
+        while e != u32::MAX {
+            for &l in self.links_of(e as usize) {
+                let t = self.links.transports.as_slice()[l as usize];
+                let s = self.links.ends.as_slice()[l as usize].source as usize;
+                let v = self.point_transfer(x, n, s, t.shaft_clear(), t.visibility as f64, 1);
+                let g = self.elems.geoms.as_slice()[s];
+                out.push((
+                    e,
+                    s as u32,
+                    self.elems.nodes.as_slice()[s].kind,
+                    g.area,
+                    self.elems.radiosities.as_slice()[s],
+                    v,
+                ));
+            }
+            e = self.elems.nodes.as_slice()[e as usize].parent;
+        }
+        out
     }
 
     /// Piecewise-constant radiosity of every leaf (element averages), for tests.
@@ -863,4 +951,137 @@ pub fn solve(scene: &Scene, opts: SolveOptions) -> Result<(Solution, Vec<RoundRe
         sol.stats.residual = last.residual;
     }
     Ok((sol, records))
+}
+
+/// A reconstruction cell: a parameter sub-domain of a leaf's patch.
+#[derive(Clone, Copy, Debug)]
+struct Cell {
+    leaf: ElementId,
+    patch: u32,
+    n: u32,
+    uv: [[f32; 2]; 4],
+    area: f64,
+}
+
+impl Cell {
+    fn centre_uv(&self) -> [f32; 2] {
+        let n = self.n as usize;
+        let (mut u, mut v) = (0.0, 0.0);
+        for c in &self.uv[..n] {
+            u += c[0] / n as f32;
+            v += c[1] / n as f32;
+        }
+        [u, v]
+    }
+
+    fn split(&self) -> [Cell; 4] {
+        let m = |a: [f32; 2], b: [f32; 2]| [(a[0] + b[0]) * 0.5, (a[1] + b[1]) * 0.5];
+        let uv = self.uv;
+        let kids: [[[f32; 2]; 4]; 4] = if self.n == 3 {
+            let (a, b, c) = (uv[0], uv[1], uv[2]);
+            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
+            let z = [0.0; 2];
+            [
+                [a, ab, ca, z],
+                [ab, b, bc, z],
+                [ca, bc, c, z],
+                [bc, ca, ab, z],
+            ]
+        } else {
+            let (u0, v0, u1, v1) = (uv[0][0], uv[0][1], uv[2][0], uv[2][1]);
+            let (um, vm) = ((u0 + u1) * 0.5, (v0 + v1) * 0.5);
+            let r = |a: f32, b: f32, c: f32, d: f32| [[a, b], [c, b], [c, d], [a, d]];
+            [
+                r(u0, v0, um, vm),
+                r(um, v0, u1, vm),
+                r(um, vm, u1, v1),
+                r(u0, vm, um, v1),
+            ]
+        };
+        kids.map(|uv| Cell {
+            uv,
+            area: self.area / 4.0,
+            ..*self
+        })
+    }
+}
+
+/// Final-gather values at distinct parameter points of each patch.
+#[derive(Default)]
+struct VertexCache {
+    index: HashMap<(u32, u32, u32), usize>,
+    /// (leaf whose links gather, parameter point, point inset towards this uv).
+    points: Vec<(ElementId, u32, [f32; 2], [f32; 2])>,
+    values: Vec<([f64; 3], bool)>,
+}
+
+impl VertexCache {
+    fn register(&mut self, c: &Cell, uv: [f32; 2], toward: [f32; 2]) -> usize {
+        let q = |x: f32| (x as f64 * (1u64 << 24) as f64).round() as u32;
+        let key = (c.patch, q(uv[0]), q(uv[1]));
+        *self.index.entry(key).or_insert_with(|| {
+            self.points.push((c.leaf, c.patch, uv, toward));
+            self.points.len() - 1
+        })
+    }
+
+    fn evaluate(
+        &mut self,
+        gather: impl Fn(ElementId, DVec3) -> ([f64; 3], bool) + Sync,
+        patches: &Patches,
+    ) {
+        let from = self.values.len();
+        let new: Vec<_> = self.points[from..]
+            .par_iter()
+            .map(|&(leaf, patch, uv, toward)| {
+                let x = patches.point(patch as usize, uv[0] as f64, uv[1] as f64);
+                let c = patches.point(patch as usize, toward[0] as f64, toward[1] as f64);
+                // Evaluate a hair inside the cell: on an edge shared with a
+                // perpendicular wall the factor jumps (the wall is seen edge-on), and
+                // the interpolant wants the limit from inside.
+                gather(leaf, x + CORNER_INSET * (c - x))
+            })
+            .collect();
+        self.values.extend(new);
+    }
+}
+
+fn mean3(v: &[[f64; 3]]) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for x in v {
+        for k in 0..3 {
+            m[k] += x[k] / v.len().max(1) as f64;
+        }
+    }
+    m
+}
+
+/// Corner values of a cell; a corner inside a solid takes the mean of the valid ones
+/// (or the leaf's element average when none is valid).
+fn corner_values(
+    cache: &VertexCache,
+    corners: &[usize; 4],
+    n: usize,
+    element_b: [f32; 3],
+) -> [[f64; 3]; 4] {
+    let valid: Vec<[f64; 3]> = corners[..n]
+        .iter()
+        .filter(|&&v| cache.values[v].1)
+        .map(|&v| cache.values[v].0)
+        .collect();
+    let fallback = if valid.is_empty() {
+        [
+            element_b[0] as f64,
+            element_b[1] as f64,
+            element_b[2] as f64,
+        ]
+    } else {
+        mean3(&valid)
+    };
+    let mut out = [[0.0; 3]; 4];
+    for i in 0..n {
+        let (v, ok) = cache.values[corners[i]];
+        out[i] = if ok { v } else { fallback };
+    }
+    out
 }

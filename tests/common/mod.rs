@@ -72,3 +72,4 @@ pub fn uniform_enclosure(rho: f64, e: f64, scale: f64, n: usize) -> Scene {
         ..Default::default()
     }
 }
+pub mod probe;
