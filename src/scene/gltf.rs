@@ -62,14 +62,11 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
 
 /// Loads and validates glTF `bytes`; external buffers are resolved against `base`.
 pub(crate) fn load_slice(bytes: &[u8], base: Option<&Path>, path: &Path) -> Result<Scene> {
-    let gltf = gl::Gltf::from_slice(bytes).map_err(|e| {
-        Error::invalid(
-            path,
-            "glTF document",
-            "a valid glTF 2.0 file",
-            e.to_string(),
-        )
-    })?;
+    let invalid =
+        |found: String| Error::invalid(path, "glTF document", "a valid glTF 2.0 file", found);
+    let gltf =
+        gl::Gltf::from_slice_without_validation(bytes).map_err(|e| invalid(e.to_string()))?;
+    check_document(gltf.document.as_json()).map_err(invalid)?;
     let base = base.unwrap_or(Path::new("."));
     let buffers = gl::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
         .map_err(|e| Error::invalid(path, "glTF buffers", "readable buffer data", e.to_string()))?;
@@ -81,6 +78,52 @@ pub(crate) fn load_slice(bytes: &[u8], base: Option<&Path>, path: &Path) -> Resu
     }
     .read()?;
     validate::validate(scene, path)
+}
+
+/// Validates the raw document: first what the `gltf` crate's own validation indexes
+/// without checking (a primitive's `POSITION` accessor) or does not check at all
+/// (animation channel targets), then the crate's validation. `Err` describes the
+/// first problems found.
+fn check_document(root: &gl::json::Root) -> std::result::Result<(), String> {
+    use gl::json::validation::{Checked, Validate};
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = prim
+                .attributes
+                .get(&Checked::Valid(gl::Semantic::Positions));
+            if let Some(i) = position.filter(|i| i.value() >= root.accessors.len()) {
+                return Err(format!(
+                    "mesh {m}, primitive {p}: POSITION accessor {} of {}",
+                    i.value(),
+                    root.accessors.len()
+                ));
+            }
+        }
+    }
+    for (a, anim) in root.animations.iter().enumerate() {
+        for (c, ch) in anim.channels.iter().enumerate() {
+            if ch.target.node.value() >= root.nodes.len()
+                || !matches!(ch.target.path, Checked::Valid(_))
+            {
+                return Err(format!(
+                    "animation {a}, channel {c}: target node {} of {} or an unknown path",
+                    ch.target.node.value(),
+                    root.nodes.len()
+                ));
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(root, gl::json::Path::new, &mut |place, error| {
+        if errors.len() < 5 {
+            errors.push(format!("{}: {error}", place()));
+        }
+    });
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(errors.join("; "))
+    }
 }
 
 /// One animation channel, read into `f64`.
