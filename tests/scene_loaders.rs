@@ -233,9 +233,11 @@ fn cornell_examples_equal_the_embedded_scenes() {
         assert_eq!(loaded.materials, embedded.materials, "{file}");
         assert_eq!(loaded.time, embedded.time, "{file}");
         assert!(loaded.warnings.is_empty(), "{file}: {:?}", loaded.warnings);
+        // The file holds the field of view in degrees: radians -> degrees -> radians
+        // may differ by one ulp, everything else is exact.
         let (a, b) = (loaded.camera.unwrap(), embedded.camera.unwrap());
         assert_eq!((a.eye, a.target, a.up), (b.eye, b.target, b.up));
-        assert!((a.fov_y - b.fov_y).abs() < 1e-15);
+        assert!((a.fov_y - b.fov_y).abs() <= 2.0 * f64::EPSILON * b.fov_y);
     }
 }
 
@@ -438,4 +440,17 @@ fn mirrored_static_node_keeps_the_front_face_lit() {
     for p in &room.polygons {
         assert!(p.normal().dot(centre - p.centroid()) > 0.0);
     }
+}
+
+#[test]
+fn readme_scene_example_loads_with_the_stated_orientation() {
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+    let section = &readme[readme.find("### Scene formats").unwrap()..];
+    let start = section.find("```json\n").unwrap() + "```json\n".len();
+    let text = &section[start..start + section[start..].find("```").unwrap()];
+    let s = scene::load_json_str(text, Path::new("README.md")).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(object(&s, "floor").polygons[0].normal(), DVec3::Y);
+    assert_eq!(object(&s, "lamp").polygons[0].normal(), DVec3::NEG_Y);
 }

@@ -62,14 +62,11 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
 
 /// Loads and validates glTF `bytes`; external buffers are resolved against `base`.
 pub(crate) fn load_slice(bytes: &[u8], base: Option<&Path>, path: &Path) -> Result<Scene> {
-    let gltf = gl::Gltf::from_slice(bytes).map_err(|e| {
-        Error::invalid(
-            path,
-            "glTF document",
-            "a valid glTF 2.0 file",
-            e.to_string(),
-        )
-    })?;
+    let invalid =
+        |found: String| Error::invalid(path, "glTF document", "a valid glTF 2.0 file", found);
+    let gltf =
+        gl::Gltf::from_slice_without_validation(bytes).map_err(|e| invalid(e.to_string()))?;
+    check_document(gltf.document.as_json()).map_err(invalid)?;
     let base = base.unwrap_or(Path::new("."));
     let buffers = gl::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
         .map_err(|e| Error::invalid(path, "glTF buffers", "readable buffer data", e.to_string()))?;
@@ -81,6 +78,52 @@ pub(crate) fn load_slice(bytes: &[u8], base: Option<&Path>, path: &Path) -> Resu
     }
     .read()?;
     validate::validate(scene, path)
+}
+
+/// Validates the raw document: first what the `gltf` crate's own validation indexes
+/// without checking (a primitive's `POSITION` accessor) or does not check at all
+/// (animation channel targets), then the crate's validation. `Err` describes the
+/// first problems found.
+fn check_document(root: &gl::json::Root) -> std::result::Result<(), String> {
+    use gl::json::validation::{Checked, Validate};
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = prim
+                .attributes
+                .get(&Checked::Valid(gl::Semantic::Positions));
+            if let Some(i) = position.filter(|i| i.value() >= root.accessors.len()) {
+                return Err(format!(
+                    "mesh {m}, primitive {p}: POSITION accessor {} of {}",
+                    i.value(),
+                    root.accessors.len()
+                ));
+            }
+        }
+    }
+    for (a, anim) in root.animations.iter().enumerate() {
+        for (c, ch) in anim.channels.iter().enumerate() {
+            if ch.target.node.value() >= root.nodes.len()
+                || !matches!(ch.target.path, Checked::Valid(_))
+            {
+                return Err(format!(
+                    "animation {a}, channel {c}: target node {} of {} or an unknown path",
+                    ch.target.node.value(),
+                    root.nodes.len()
+                ));
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(root, gl::json::Path::new, &mut |place, error| {
+        if errors.len() < 5 {
+            errors.push(format!("{}: {error}", place()));
+        }
+    });
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(errors.join("; "))
+    }
 }
 
 /// One animation channel, read into `f64`.
@@ -516,11 +559,10 @@ impl<'a> Reader<'a> {
             return Err(self.err(
                 format!("{place}, key {k}"),
                 "finite input times, strictly increasing",
-                format!(
-                    "t = {} after {:?}",
-                    times[k],
-                    k.checked_sub(1).map(|j| times[j])
-                ),
+                match k.checked_sub(1) {
+                    Some(j) => format!("t = {} after t = {}", times[k], times[j]),
+                    None => format!("t = {}", times[k]),
+                },
             ));
         }
         if let Some(k) = values.iter().position(|v| v.iter().any(|x| !x.is_finite())) {
@@ -683,4 +725,67 @@ pub(crate) fn unique_name(base: &str, materials: &[Material]) -> String {
         .map(|k| format!("{base}#{k}"))
         .find(|n| !taken.contains(n.as_str()))
         .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn channel(property: Property, interpolation: Interpolation, values: &[[f64; 4]]) -> Channel {
+        Channel {
+            property,
+            interpolation,
+            times: vec![1.0, 3.0],
+            values: values.to_vec(),
+        }
+    }
+
+    #[test]
+    fn step_holds_the_previous_key() {
+        let c = channel(
+            Property::Translation,
+            Interpolation::Step,
+            &[[1.0; 4], [5.0; 4]],
+        );
+        assert_eq!(c.sample(0.0)[0], 1.0);
+        assert_eq!(c.sample(2.999)[0], 1.0);
+        assert_eq!(c.sample(3.0)[0], 5.0);
+        assert_eq!(c.sample(9.0)[0], 5.0);
+    }
+
+    #[test]
+    fn linear_lerps_and_slerps() {
+        let c = channel(
+            Property::Translation,
+            Interpolation::Linear,
+            &[[0.0; 4], [4.0; 4]],
+        );
+        assert_eq!(c.sample(1.5)[1], 1.0);
+        let q1 = DQuat::from_rotation_x(1.2).to_array();
+        let c = channel(
+            Property::Rotation,
+            Interpolation::Linear,
+            &[[0.0, 0.0, 0.0, 1.0], q1],
+        );
+        let q = DQuat::from_array(c.sample(2.5));
+        // Three quarters of the way: 0.9 rad about x.
+        assert!(q.angle_between(DQuat::from_rotation_x(0.9)) < 1e-12);
+    }
+
+    #[test]
+    fn cubic_spline_is_hermite_with_scaled_tangents() {
+        // Keys (in-tangent, value, out-tangent): v0 = 0 with out-tangent 1, v1 = 1 with
+        // in-tangent 0; segment length 2. At s = 1/2: h00 = h01 = 1/2, h10 = 1/8,
+        // h11 = -1/8, so p = 0.5 * 1 + 0.125 * 2 * 1 = 0.75.
+        let z = [0.0; 4];
+        let c = channel(
+            Property::Translation,
+            Interpolation::CubicSpline,
+            &[z, z, [1.0; 4], z, [1.0; 4], z],
+        );
+        assert!((c.sample(2.0)[0] - 0.75).abs() < 1e-15);
+        assert_eq!(c.sample(1.0)[0], 0.0);
+        assert_eq!(c.sample(3.0)[0], 1.0);
+        assert_eq!(c.sample(0.0)[0], 0.0);
+    }
 }

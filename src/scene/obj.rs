@@ -41,7 +41,17 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
     let (models, mtl) = tobj::load_obj(path, &options)
         .map_err(|e| Error::invalid(path, "OBJ", "a readable Wavefront OBJ file", e.to_string()))?;
     let mtl = mtl.map_err(|e| {
-        Error::invalid(path, "mtllib", "readable MTL material files", e.to_string())
+        let libs: Vec<&str> = text
+            .lines()
+            .filter_map(|l| l.trim().strip_prefix("mtllib "))
+            .map(str::trim)
+            .collect();
+        Error::invalid(
+            path,
+            "mtllib",
+            "readable MTL material files next to the OBJ file",
+            format!("{e} ({})", libs.join(", ")),
+        )
     })?;
     let mut warnings = Vec::new();
 
