@@ -15,6 +15,7 @@ pub mod format;
 pub mod memory;
 pub mod reader;
 pub mod records;
+pub mod samples;
 pub mod writer;
 
 pub use format::{Codec, Header, SectionEntry, SectionKind};

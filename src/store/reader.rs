@@ -476,7 +476,14 @@ impl Reader {
         }
         let i = n - 1;
         let from = self.chunks[i].carry_from as usize;
-        (from..=i).filter(|&j| self.chunks[j].reach >= t || j == i).collect()
+        // Same test as Leaf::is_live on the chunk's latest leaf end, in f32.
+        let (tf, end) = (t as f32, self.time.end as f32);
+        (from..=i)
+            .filter(|&j| {
+                let reach = self.chunks[j].reach as f32;
+                j == i || reach > tf || (reach >= tf && reach >= end)
+            })
+            .collect()
     }
 
     /// The leaves live at `t` ([`Leaf::is_live`]), reading only the chunks that need it.
