@@ -52,9 +52,9 @@ fn lit_white_wall_has_the_expected_pixel_value() {
         let want = (srgb_oetf(0.5) * 255.0).round() as u8;
         assert_eq!(want, 188);
         assert_eq!(img.get_pixel(32, 24).0, [want; 3]);
-        // The wall spans x in [-1, 1] at distance 3 with a 60° field of view:
-        // half-width on screen = 1 / (3 tan 30°) * (h/2) / aspect-corrected ... in
-        // pixels: 0.577 * 24 = 13.9 px around the centre horizontally and vertically.
+        // The wall's half-width 1 at distance 3 with a 60° vertical field of view is
+        // 1 / (3 tan 30°) = 0.577 of the half-height (24 px), i.e. 13.9 px, and the
+        // same 13.9 px horizontally (0.433 of the half-width, 32 px, at aspect 4:3).
         assert_eq!(img.get_pixel(32 + 12, 24).0, [want; 3]);
         assert_eq!(img.get_pixel(32 + 16, 24).0, [0; 3]);
         assert_eq!(img.get_pixel(32, 24 - 12).0, [want; 3]);
