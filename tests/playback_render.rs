@@ -25,18 +25,43 @@ fn wall(b: f64, n: u32) -> (Solution, Camera) {
         DVec3::new(-1.0, 1.0, 0.0),
     ];
     let scene = Scene {
-        materials: vec![Material { name: "white".into(), rho: [0.8; 3], emission: [0.0; 3] }],
+        materials: vec![Material {
+            name: "white".into(),
+            rho: [0.8; 3],
+            emission: [0.0; 3],
+        }],
         objects: vec![Object {
             name: "wall".into(),
-            polygons: vec![Polygon { vertices: v.to_vec(), material: MaterialId(0) }],
+            polygons: vec![Polygon {
+                vertices: v.to_vec(),
+                material: MaterialId(0),
+            }],
             motion: None,
         }],
         ..Scene::default()
     };
-    let patch = PatchGeometry { object: 0, material: 0, corners: 4, vertices: v };
+    let patch = PatchGeometry {
+        object: 0,
+        material: 0,
+        corners: 4,
+        vertices: v,
+    };
     let leaves = uniform_leaves(0, &patch, n, [0.0, 0.0], |_| [b, b, b]);
-    let camera = Camera { eye: DVec3::new(0.0, 0.0, 3.0), target: DVec3::ZERO, up: DVec3::Y, fov_y: 60f64.to_radians() };
-    (Solution { scene, patches: vec![patch], leaves, stats: SolveStats::default() }, camera)
+    let camera = Camera {
+        eye: DVec3::new(0.0, 0.0, 3.0),
+        target: DVec3::ZERO,
+        up: DVec3::Y,
+        fov_y: 60f64.to_radians(),
+    };
+    (
+        Solution {
+            scene,
+            patches: vec![patch],
+            leaves,
+            stats: SolveStats::default(),
+        },
+        camera,
+    )
 }
 
 #[test]
@@ -63,9 +88,17 @@ fn lit_white_wall_has_the_expected_pixel_value() {
         assert!((auto_exposure(&pic) - 2.0).abs() < 1e-12);
     }
     // Seen from behind, the wall is culled.
-    let back = Camera { eye: DVec3::new(0.0, 0.0, -3.0), ..cam };
+    let back = Camera {
+        eye: DVec3::new(0.0, 0.0, -3.0),
+        ..cam
+    };
     let mesh = FrameMesh::build(&frame, Shading::Smooth);
-    assert!(render(&mesh, &back, 16, 16).pixels.iter().all(Option::is_none));
+    assert!(
+        render(&mesh, &back, 16, 16)
+            .pixels
+            .iter()
+            .all(Option::is_none)
+    );
 }
 
 #[test]
@@ -83,7 +116,12 @@ fn smooth_shading_interpolates_vertex_radiosity() {
         // Invert the projection at the pixel centre: x_ndc = x f / (aspect * 3).
         let ndc = (px as f64 + 0.5) / w * 2.0 - 1.0;
         let x = ndc * (w / h) * 3.0 / f;
-        assert!((c[0] - (1.0 + x)).abs() < 1e-9, "pixel {px}: {} vs {}", c[0], 1.0 + x);
+        assert!(
+            (c[0] - (1.0 + x)).abs() < 1e-9,
+            "pixel {px}: {} vs {}",
+            c[0],
+            1.0 + x
+        );
     }
 }
 
@@ -98,7 +136,10 @@ fn auto_camera_sees_the_inside_of_the_box() {
     // pixel (~0.02 in x and y on the wall) off the box centre, and only the back wall
     // has B.z = 0.5 (the front wall has 3.5).
     let c = pic.pixels[15 * 40 + 20].expect("centre drawn");
-    assert!((c[0] - 1.5).abs() < 0.06 && (c[1] - 2.0).abs() < 0.12 && (c[2] - 0.5).abs() < 1e-6, "{c:?}");
+    assert!(
+        (c[0] - 1.5).abs() < 0.06 && (c[1] - 2.0).abs() < 0.12 && (c[2] - 0.5).abs() < 1e-6,
+        "{c:?}"
+    );
 }
 
 #[test]
@@ -111,7 +152,14 @@ fn gltf_export_parses_back_with_expected_counts() {
     let text = serde_json::to_vec(&gltf_document(&mesh, 0.25)).unwrap();
     let g = gltf::Gltf::from_slice(&text).unwrap();
     let buffers = gltf::import_buffers(&g.document, None, None).unwrap();
-    let prim = g.document.meshes().next().unwrap().primitives().next().unwrap();
+    let prim = g
+        .document
+        .meshes()
+        .next()
+        .unwrap()
+        .primitives()
+        .next()
+        .unwrap();
     let reader = prim.reader(|b| Some(&buffers[b.index()]));
     let positions: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
     let colors: Vec<[f32; 3]> = reader.read_colors(0).unwrap().into_rgb_f32().collect();
@@ -136,32 +184,78 @@ fn cli_probe_play_inspect_on_a_file() {
     let sol = box_solution(2);
     write_solution(&file, &sol, WriteOptions::default()).unwrap();
     let pts = dir.path().join("p.json");
-    std::fs::write(&pts, r#"[{"p":[0.5,0.5,0.02],"n":[0,0,1]},{"p":[0.25,0.001,0.5],"n":[0,1,0]}]"#).unwrap();
+    std::fs::write(
+        &pts,
+        r#"[{"p":[0.5,0.5,0.02],"n":[0,0,1]},{"p":[0.25,0.001,0.5],"n":[0,1,0]}]"#,
+    )
+    .unwrap();
 
-    let out = rhier().arg("probe").arg(&file).arg("--points").arg(&pts).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = rhier()
+        .arg("probe")
+        .arg(&file)
+        .arg("--points")
+        .arg(&pts)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let b0: Vec<f64> = v[0]["B"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-    let b1: Vec<f64> = v[1]["B"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let b0: Vec<f64> = v[0]["B"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let b1: Vec<f64> = v[1]["B"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
     let w0 = rhier::store::samples::wall_radiosity(DVec3::new(0.5, 0.5, 0.0));
     let w1 = rhier::store::samples::wall_radiosity(DVec3::new(0.25, 0.0, 0.5));
     for k in 0..3 {
-        assert!((b0[k] - w0[k]).abs() < 1e-5 && (b1[k] - w1[k]).abs() < 1e-5, "{b0:?} {b1:?}");
+        assert!(
+            (b0[k] - w0[k]).abs() < 1e-5 && (b1[k] - w1[k]).abs() < 1e-5,
+            "{b0:?} {b1:?}"
+        );
     }
 
     let frames = dir.path().join("frames");
     let out = rhier()
-        .arg("play").arg(&file).args(["--time", "0", "--width", "80", "--height", "60", "-o"]).arg(&frames)
-        .output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        .arg("play")
+        .arg(&file)
+        .args(["--time", "0", "--width", "80", "--height", "60", "-o"])
+        .arg(&frames)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let img = image::open(frames.join("frame_00000.png")).unwrap();
     assert_eq!((img.width(), img.height()), (80, 60));
 
-    let out = rhier().arg("play").arg(&file).args(["--time", "0", "--export", "gltf", "-o"]).arg(&frames).output().unwrap();
+    let out = rhier()
+        .arg("play")
+        .arg(&file)
+        .args(["--time", "0", "--export", "gltf", "-o"])
+        .arg(&frames)
+        .output()
+        .unwrap();
     assert!(out.status.success());
     assert!(gltf::Gltf::open(frames.join("frame_00000.gltf")).is_ok());
 
-    let out = rhier().arg("inspect").arg(&file).arg("--json").output().unwrap();
+    let out = rhier()
+        .arg("inspect")
+        .arg(&file)
+        .arg("--json")
+        .output()
+        .unwrap();
     assert!(out.status.success());
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["header"]["version"], 1);
@@ -174,18 +268,36 @@ fn cli_probe_play_inspect_on_a_file() {
 fn cli_exit_codes() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
     // Corrupt file: exit 1 with a message naming it.
-    for name in ["bitflip_chunk.rhier", "wrong_magic.rhier", "huge_raw_length.rhier"] {
-        let out = rhier().arg("inspect").arg(data.join(name)).output().unwrap();
+    for name in [
+        "bitflip_chunk.rhier",
+        "wrong_magic.rhier",
+        "huge_raw_length.rhier",
+    ] {
+        let out = rhier()
+            .arg("inspect")
+            .arg(data.join(name))
+            .output()
+            .unwrap();
         assert_eq!(out.status.code(), Some(1), "{name}");
         assert!(String::from_utf8_lossy(&out.stderr).contains(name));
     }
     // Time outside the domain: exit 1.
     let pts = tempfile::NamedTempFile::new().unwrap();
     std::fs::write(pts.path(), r#"[{"p":[0,0,0],"n":[0,0,1]}]"#).unwrap();
-    let out = rhier().arg("probe").arg(data.join("v1_animated.rhier")).arg("--points").arg(pts.path())
-        .args(["--time", "7"]).output().unwrap();
+    let out = rhier()
+        .arg("probe")
+        .arg(data.join("v1_animated.rhier"))
+        .arg("--points")
+        .arg(pts.path())
+        .args(["--time", "7"])
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(1));
     // Usage errors: exit 2.
-    let out = rhier().arg("play").arg(data.join("v1_animated.rhier")).output().unwrap();
+    let out = rhier()
+        .arg("play")
+        .arg(data.join("v1_animated.rhier"))
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }

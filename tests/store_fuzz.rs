@@ -53,7 +53,12 @@ const ALLOC_LIMIT: usize = 16 << 20;
 fn valid_file() -> Vec<u8> {
     let sample = animated_box(1, 3);
     let name = std::path::Path::new("fuzz.rhier");
-    let mut w = Writer::in_memory(name, &SolutionHeader::of(&sample.solution), WriteOptions::default()).unwrap();
+    let mut w = Writer::in_memory(
+        name,
+        &SolutionHeader::of(&sample.solution),
+        WriteOptions::default(),
+    )
+    .unwrap();
     for (t0, t1, leaves) in &sample.chunks {
         w.write_chunk(*t0, *t1, leaves).unwrap();
     }
@@ -69,8 +74,14 @@ fn reseal(b: &mut [u8]) {
     if b.len() < HEADER_LEN {
         return;
     }
-    let (off, count) = (u64_at(b, 24) as usize, u32::from_le_bytes(b[32..36].try_into().unwrap()) as usize);
-    let table_ok = count < 1000 && off.checked_add(count * ENTRY_LEN).is_some_and(|e| e <= b.len());
+    let (off, count) = (
+        u64_at(b, 24) as usize,
+        u32::from_le_bytes(b[32..36].try_into().unwrap()) as usize,
+    );
+    let table_ok = count < 1000
+        && off
+            .checked_add(count * ENTRY_LEN)
+            .is_some_and(|e| e <= b.len());
     if table_ok {
         for i in 0..count {
             let e = off + i * ENTRY_LEN;
@@ -98,7 +109,8 @@ enum Mutation {
 fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![
         (any::<usize>(), 0u8..8).prop_map(|(o, bit)| Mutation::Flip(o, bit)),
-        (any::<usize>(), prop::collection::vec(any::<u8>(), 1..16)).prop_map(|(o, v)| Mutation::Overwrite(o, v)),
+        (any::<usize>(), prop::collection::vec(any::<u8>(), 1..16))
+            .prop_map(|(o, v)| Mutation::Overwrite(o, v)),
         any::<usize>().prop_map(Mutation::Truncate),
         prop::collection::vec(any::<u8>(), 1..64).prop_map(Mutation::Extend),
     ]
@@ -147,7 +159,10 @@ fn exercise(bytes: Vec<u8>) -> bool {
     let _ = MemoryReport::from_reader(&r).to_string();
     let _ = r.all_leaves();
     let td = r.time_domain();
-    let pts = [ProbePoint { p: DVec3::splat(0.5), n: DVec3::Z }];
+    let pts = [ProbePoint {
+        p: DVec3::splat(0.5),
+        n: DVec3::Z,
+    }];
     for t in [td.start, 0.5 * (td.start + td.end), td.end] {
         let _ = r.leaves_at(t);
         let _ = probe(&r, &pts, t);

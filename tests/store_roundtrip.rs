@@ -11,7 +11,9 @@ use rhier::store::samples::{
 use rhier::store::{Reader, SolutionHeader, WriteOptions, Writer, encode_solution, write_solution};
 
 fn lcg(s: &mut u64) -> f64 {
-    *s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *s = s
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     (*s >> 11) as f64 / (1u64 << 53) as f64
 }
 
@@ -30,15 +32,33 @@ fn wall_points(count: usize, seed: u64) -> Vec<(ProbePoint, DVec3)> {
         on[(axis + 1) % 3] = a;
         on[(axis + 2) % 3] = b;
         n[axis] = if side == 0 { 1.0 } else { -1.0 };
-        out.push((ProbePoint { p: on + n * 0.01, n }, on));
+        out.push((
+            ProbePoint {
+                p: on + n * 0.01,
+                n,
+            },
+            on,
+        ));
     }
     out
 }
 
 fn sorted(mut v: Vec<Leaf>) -> Vec<Leaf> {
     v.sort_by(|a, b| {
-        (a.patch, a.time[0].to_bits(), a.uv[0][0].to_bits(), a.uv[0][1].to_bits(), a.uv[1][0].to_bits())
-            .cmp(&(b.patch, b.time[0].to_bits(), b.uv[0][0].to_bits(), b.uv[0][1].to_bits(), b.uv[1][0].to_bits()))
+        (
+            a.patch,
+            a.time[0].to_bits(),
+            a.uv[0][0].to_bits(),
+            a.uv[0][1].to_bits(),
+            a.uv[1][0].to_bits(),
+        )
+            .cmp(&(
+                b.patch,
+                b.time[0].to_bits(),
+                b.uv[0][0].to_bits(),
+                b.uv[0][1].to_bits(),
+                b.uv[1][0].to_bits(),
+            ))
     });
     v
 }
@@ -57,18 +77,27 @@ fn static_box_round_trip_and_known_answer() {
     assert_eq!(back.stats, sol.stats);
     assert_eq!(back.scene.materials, sol.scene.materials);
     assert_eq!(back.scene.time, sol.scene.time);
-    assert_eq!(back.scene.objects[0].polygons, sol.scene.objects[0].polygons);
+    assert_eq!(
+        back.scene.objects[0].polygons,
+        sol.scene.objects[0].polygons
+    );
 
     let pts = wall_points(300, 11);
     let points: Vec<ProbePoint> = pts.iter().map(|p| p.0).collect();
     let from_mem = probe(&sol, &points, 0.0).unwrap();
     let from_file = probe(&r, &points, 0.0).unwrap();
-    assert_eq!(from_mem, from_file, "file probe must equal the solve's probe bit for bit");
+    assert_eq!(
+        from_mem, from_file,
+        "file probe must equal the solve's probe bit for bit"
+    );
     for ((_, on), b) in pts.iter().zip(&from_file) {
         let want = wall_radiosity(*on);
         for k in 0..3 {
             // f32 storage of corner values (up to 4 in magnitude): 1e-5 relative.
-            assert!((b[k] - want[k]).abs() < 4e-6 * want[k].abs().max(1.0), "{on:?}: {b:?} vs {want:?}");
+            assert!(
+                (b[k] - want[k]).abs() < 4e-6 * want[k].abs().max(1.0),
+                "{on:?}: {b:?} vs {want:?}"
+            );
         }
     }
 }
@@ -78,7 +107,13 @@ fn memory_built_bytes_equal_file_bytes_and_both_readers_agree() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("box.rhier");
     let sol = box_solution(3);
-    for options in [WriteOptions::default(), WriteOptions { compress: false, keep_links: true }] {
+    for options in [
+        WriteOptions::default(),
+        WriteOptions {
+            compress: false,
+            keep_links: true,
+        },
+    ] {
         write_solution(&path, &sol, options).unwrap();
         let on_disk = std::fs::read(&path).unwrap();
         let in_ram = encode_solution(&path, &sol, options).unwrap();
@@ -87,7 +122,10 @@ fn memory_built_bytes_equal_file_bytes_and_both_readers_agree() {
         let ram = Reader::from_bytes(&path, in_ram).unwrap();
         assert_eq!(mapped.sections(), ram.sections());
         let points: Vec<ProbePoint> = wall_points(50, 3).into_iter().map(|p| p.0).collect();
-        assert_eq!(probe(&mapped, &points, 0.0).unwrap(), probe(&ram, &points, 0.0).unwrap());
+        assert_eq!(
+            probe(&mapped, &points, 0.0).unwrap(),
+            probe(&ram, &points, 0.0).unwrap()
+        );
     }
 }
 
@@ -128,8 +166,14 @@ fn streamed_space_time_file_reads_chunk_by_chunk() {
         // Probe the moving plate from in front of its centre, and a wall.
         let centre = DVec3::new(0.2 + PLATE_TRAVEL * t, 0.5, 0.5);
         let points = [
-            ProbePoint { p: centre + DVec3::Z * 0.05, n: DVec3::Z },
-            ProbePoint { p: DVec3::new(0.999, 0.3, 0.6), n: DVec3::NEG_X },
+            ProbePoint {
+                p: centre + DVec3::Z * 0.05,
+                n: DVec3::Z,
+            },
+            ProbePoint {
+                p: DVec3::new(0.999, 0.3, 0.6),
+                n: DVec3::NEG_X,
+            },
         ];
         let mem = probe(sol, &points, t).unwrap();
         let file = probe(&r, &points, t).unwrap();
@@ -137,7 +181,11 @@ fn streamed_space_time_file_reads_chunk_by_chunk() {
         let t0 = k as f64 / 8.0;
         let want = plate_radiosity(t0);
         for c in 0..3 {
-            assert!((file[0][c] - want[c]).abs() < 1e-6, "t = {t}: {:?} vs {want:?}", file[0]);
+            assert!(
+                (file[0][c] - want[c]).abs() < 1e-6,
+                "t = {t}: {:?} vs {want:?}",
+                file[0]
+            );
         }
         let wall = wall_radiosity(DVec3::new(1.0, 0.3, 0.6));
         for c in 0..3 {
@@ -145,7 +193,10 @@ fn streamed_space_time_file_reads_chunk_by_chunk() {
         }
     }
     let err = r.leaves_at(1.5).map(|_| ()).unwrap_err().to_string();
-    assert!(err.contains("anim.rhier") && err.contains("[0, 1]") && err.contains("1.5"), "{err}");
+    assert!(
+        err.contains("anim.rhier") && err.contains("[0, 1]") && err.contains("1.5"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -161,7 +212,10 @@ fn writer_refuses_bad_chunks_and_leaves_no_file_when_dropped() {
     // Out of time order.
     let (a, b, l0) = &sample.chunks[0];
     let err = w.write_chunk(*a, *b, l0).unwrap_err().to_string();
-    assert!(err.contains("chunk 1") && err.contains("[0, 0.25]"), "{err}");
+    assert!(
+        err.contains("chunk 1") && err.contains("[0, 0.25]"),
+        "{err}"
+    );
     // A leaf starting outside its chunk.
     let (c0, c1, l2) = &sample.chunks[2];
     let mut bad = l2.clone();

@@ -11,7 +11,9 @@ use std::path::{Path, PathBuf};
 use rhier::playback::{SolutionView, probe};
 use rhier::store::format::{ENTRY_LEN, HEADER_LEN, crc32};
 use rhier::store::samples::{animated_box, box_solution};
-use rhier::store::{Codec, Reader, SectionKind, WriteOptions, Writer, SolutionHeader, write_solution};
+use rhier::store::{
+    Codec, Reader, SectionKind, SolutionHeader, WriteOptions, Writer, write_solution,
+};
 
 fn data() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
@@ -46,8 +48,16 @@ fn entry_of(b: &[u8], kind: SectionKind, n: usize) -> usize {
 /// `(name, bytes, what the error must say)` for every corrupted sample.
 fn corruptions(valid: &[u8]) -> Vec<(&'static str, Vec<u8>, &'static str)> {
     let mut out = Vec::new();
-    out.push(("truncated.rhier", valid[..valid.len() - 37].to_vec(), "truncated"));
-    out.push(("truncated_header.rhier", valid[..40].to_vec(), "64-byte header"));
+    out.push((
+        "truncated.rhier",
+        valid[..valid.len() - 37].to_vec(),
+        "truncated",
+    ));
+    out.push((
+        "truncated_header.rhier",
+        valid[..40].to_vec(),
+        "64-byte header",
+    ));
     let mut b = valid.to_vec();
     b[24] ^= 0x10;
     out.push(("bitflip_header.rhier", b, "header checksum"));
@@ -57,7 +67,10 @@ fn corruptions(valid: &[u8]) -> Vec<(&'static str, Vec<u8>, &'static str)> {
     out.push(("bitflip_table.rhier", b, "section table"));
     let mut b = valid.to_vec();
     let e = entry_of(valid, SectionKind::Chunk, 1);
-    let (off, len) = (u64_at(valid, e + 8) as usize, u64_at(valid, e + 16) as usize);
+    let (off, len) = (
+        u64_at(valid, e + 8) as usize,
+        u64_at(valid, e + 16) as usize,
+    );
     b[off + len / 2] ^= 0x04;
     out.push(("bitflip_chunk.rhier", b, "CRC-32"));
     let mut b = valid.to_vec();
@@ -75,10 +88,18 @@ fn corruptions(valid: &[u8]) -> Vec<(&'static str, Vec<u8>, &'static str)> {
     out.push(("huge_section_length.rhier", b, "offset and length"));
     let mut b = valid.to_vec();
     let e = entry_of(valid, SectionKind::Chunk, 0);
-    assert_eq!(u32_at(valid, e + 4), Codec::Zstd as u32, "sample chunk 0 must be compressed");
+    assert_eq!(
+        u32_at(valid, e + 4),
+        Codec::Zstd as u32,
+        "sample chunk 0 must be compressed"
+    );
     b[e + 24..e + 32].copy_from_slice(&(1u64 << 40).to_le_bytes());
     reseal(&mut b);
-    out.push(("huge_raw_length.rhier", b, "1099511627776 bytes once decompressed"));
+    out.push((
+        "huge_raw_length.rhier",
+        b,
+        "1099511627776 bytes once decompressed",
+    ));
     let mut b = valid.to_vec();
     b[..HEADER_LEN].fill(0);
     out.push(("unfinished.rhier", b, "magic"));
@@ -103,12 +124,20 @@ fn regenerate_samples_when_asked() {
     std::fs::create_dir_all(&dir).unwrap();
     let sample = animated_box(1, 2);
     let valid = dir.join("v1_animated.rhier");
-    let mut w = Writer::create(&valid, &SolutionHeader::of(&sample.solution), WriteOptions::default()).unwrap();
+    let mut w = Writer::create(
+        &valid,
+        &SolutionHeader::of(&sample.solution),
+        WriteOptions::default(),
+    )
+    .unwrap();
     for (t0, t1, leaves) in &sample.chunks {
         w.write_chunk(*t0, *t1, leaves).unwrap();
     }
     w.finish(&sample.solution.stats).unwrap();
-    let opts = WriteOptions { compress: false, keep_links: false };
+    let opts = WriteOptions {
+        compress: false,
+        keep_links: false,
+    };
     write_solution(&dir.join("v1_static_raw.rhier"), &box_solution(1), opts).unwrap();
     let bytes = std::fs::read(&valid).unwrap();
     for (name, b, _) in corruptions(&bytes) {
@@ -127,7 +156,10 @@ fn version_1_samples_still_read() {
     assert_eq!(got.stats, want.stats);
     assert_eq!(got.scene.time, want.scene.time);
     assert_eq!(got.scene.objects[1].motion, want.scene.objects[1].motion);
-    let pts = [rhier::playback::ProbePoint { p: glam::DVec3::new(0.5, 0.5, 0.01), n: glam::DVec3::Z }];
+    let pts = [rhier::playback::ProbePoint {
+        p: glam::DVec3::new(0.5, 0.5, 0.01),
+        n: glam::DVec3::Z,
+    }];
     for t in [0.0, 0.6, 1.0] {
         assert_eq!(probe(&r, &pts, t).unwrap(), probe(&want, &pts, t).unwrap());
     }
@@ -145,10 +177,19 @@ fn every_corrupted_sample_is_refused_cleanly() {
     for (name, bytes, fragment) in cases {
         let path = data().join(name);
         let committed = std::fs::read(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert_eq!(committed, bytes, "{name} differs from its generator: regenerate the samples");
+        assert_eq!(
+            committed, bytes,
+            "{name} differs from its generator: regenerate the samples"
+        );
         let err = read_fully(&path).map(|_| ()).expect_err(name).to_string();
-        assert!(err.contains(name), "{name}: error does not name the file: {err}");
-        assert!(err.contains(fragment), "{name}: expected {fragment:?} in: {err}");
+        assert!(
+            err.contains(name),
+            "{name}: error does not name the file: {err}"
+        );
+        assert!(
+            err.contains(fragment),
+            "{name}: expected {fragment:?} in: {err}"
+        );
         assert!(err.contains("expected"), "{name}: {err}");
     }
 }

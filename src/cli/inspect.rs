@@ -70,7 +70,11 @@ struct Inspect {
 pub fn run(args: Args) -> anyhow::Result<()> {
     use rhier::store::format::{FLAG_COMPRESSED, FLAG_LINKS, FLAG_MOVING};
     let r = Reader::open(&args.file)?;
-    let verified_leaves = if args.no_verify { None } else { Some(r.verify()?) };
+    let verified_leaves = if args.no_verify {
+        None
+    } else {
+        Some(r.verify()?)
+    };
     let h = r.header();
     let s = r.stats();
     let td = r.time_domain();
@@ -115,7 +119,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     println!("file: {}", report.file);
     println!(
         "header: version {} (readable by version >= {}), flags {:#x} [moving: {}, links: {}, compressed: {}], {} sections, table at byte {}",
-        hj.version, hj.min_reader_version, hj.flags, hj.moving, hj.links, hj.compressed, hj.sections, hj.table_offset
+        hj.version,
+        hj.min_reader_version,
+        hj.flags,
+        hj.moving,
+        hj.links,
+        hj.compressed,
+        hj.sections,
+        hj.table_offset
     );
     let sc = &report.scene;
     println!(
@@ -125,10 +136,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let st = &report.stats;
     println!(
         "solve: {:.3} s, {} iterations, {} elements, {} active + {} passive links, estimated error {:.3e}, residual {:.3e}",
-        st.seconds, st.iterations, st.elements, st.links_active, st.links_passive, st.estimated_error, st.residual
+        st.seconds,
+        st.iterations,
+        st.elements,
+        st.links_active,
+        st.links_passive,
+        st.estimated_error,
+        st.residual
     );
     match report.verified_leaves {
-        Some(n) => println!("verified: {} chunks, {n} leaves, all checksums and records valid", r.chunks().len()),
+        Some(n) => println!(
+            "verified: {} chunks, {n} leaves, all checksums and records valid",
+            r.chunks().len()
+        ),
         None => println!("verified: header, table and metadata only (--no-verify)"),
     }
     print!("{}", report.memory);

@@ -9,9 +9,9 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
+use rhier::playback::Frame;
 use rhier::playback::export::write_gltf;
 use rhier::playback::raster::{FrameMesh, Shading, auto_camera, auto_exposure, render, tone_map};
-use rhier::playback::Frame;
 use rhier::store::Reader;
 
 /// Output kind of `rhier play`.
@@ -67,10 +67,16 @@ fn frame_times(args: &Args) -> anyhow::Result<Vec<f64>> {
     let (a, b) = spec
         .split_once("..")
         .with_context(|| format!("--frames: expected A..B, found {spec:?}"))?;
-    let a: f64 = a.trim().parse().with_context(|| format!("--frames: start {a:?} is not a number"))?;
-    let b: f64 = b.trim().parse().with_context(|| format!("--frames: end {b:?} is not a number"))?;
+    let a: f64 = a
+        .trim()
+        .parse()
+        .with_context(|| format!("--frames: start {a:?} is not a number"))?;
+    let b: f64 = b
+        .trim()
+        .parse()
+        .with_context(|| format!("--frames: end {b:?} is not a number"))?;
     let fps = args.fps.unwrap_or(0.0);
-    if !(fps.is_finite() && fps > 0.0) || !(a.is_finite() && b.is_finite()) || b < a {
+    if !(fps.is_finite() && fps > 0.0 && a.is_finite() && b.is_finite()) || b < a {
         anyhow::bail!("--frames {spec} --fps {fps}: expected finite A <= B and fps > 0");
     }
     let n = ((b - a) * fps + 1e-9).floor() as u64 + 1;
@@ -83,7 +89,11 @@ fn frame_times(args: &Args) -> anyhow::Result<Vec<f64>> {
 /// Runs `rhier play`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if args.width == 0 || args.height == 0 || args.width > 16384 || args.height > 16384 {
-        anyhow::bail!("--width/--height: expected 1..=16384, found {}x{}", args.width, args.height);
+        anyhow::bail!(
+            "--width/--height: expected 1..=16384, found {}x{}",
+            args.width,
+            args.height
+        );
     }
     if let Some(e) = args.exposure
         && !(e.is_finite() && e > 0.0)
@@ -94,7 +104,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let reader = Reader::open(&args.file)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating output directory {}", args.out.display()))?;
-    let shading = if args.flat { Shading::Flat } else { Shading::Smooth };
+    let shading = if args.flat {
+        Shading::Flat
+    } else {
+        Shading::Smooth
+    };
     let mut exposure = args.exposure;
     for (k, &t) in times.iter().enumerate() {
         let frame = Frame::build(&reader, t)?;

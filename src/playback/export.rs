@@ -20,7 +20,9 @@ const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz012
 pub fn base64(bytes: &[u8]) -> String {
     let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
     for c in bytes.chunks(3) {
-        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
         for k in 0..4 {
             if k <= c.len() {
                 out.push(B64[(n >> (18 - 6 * k) & 63) as usize] as char);
@@ -100,7 +102,8 @@ pub fn gltf_document(mesh: &FrameMesh, exposure: f64) -> serde_json::Value {
 /// Writes `mesh` as a `.gltf` file.
 pub fn write_gltf(path: &Path, mesh: &FrameMesh, exposure: f64) -> Result<()> {
     let doc = gltf_document(mesh, exposure);
-    let text = serde_json::to_string(&doc).map_err(|e| Error::io(path, std::io::Error::other(e)))?;
+    let text =
+        serde_json::to_string(&doc).map_err(|e| Error::io(path, std::io::Error::other(e)))?;
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }
 

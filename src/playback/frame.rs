@@ -29,7 +29,10 @@ impl WorldPatch {
         if self.corners == 3 {
             p[0] + u * (p[1] - p[0]) + v * (p[2] - p[0])
         } else {
-            (1.0 - u) * (1.0 - v) * p[0] + u * (1.0 - v) * p[1] + u * v * p[2] + (1.0 - u) * v * p[3]
+            (1.0 - u) * (1.0 - v) * p[0]
+                + u * (1.0 - v) * p[1]
+                + u * v * p[2]
+                + (1.0 - u) * v * p[3]
         }
     }
 
@@ -42,7 +45,9 @@ impl WorldPatch {
     pub fn bounds(&self) -> (DVec3, DVec3) {
         let c = self.corners();
         let lo = c.iter().fold(DVec3::splat(f64::INFINITY), |a, &b| a.min(b));
-        let hi = c.iter().fold(DVec3::splat(f64::NEG_INFINITY), |a, &b| a.max(b));
+        let hi = c
+            .iter()
+            .fold(DVec3::splat(f64::NEG_INFINITY), |a, &b| a.max(b));
         (lo, hi)
     }
 }
@@ -111,6 +116,9 @@ impl Frame {
 
     /// Axis-aligned bounds of all patches (`None` if there are none).
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
-        self.patches.iter().map(WorldPatch::bounds).reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+        self.patches
+            .iter()
+            .map(WorldPatch::bounds)
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
     }
 }

@@ -75,7 +75,12 @@ impl SolutionView for Solution {
     fn leaves_at(&self, t: f64) -> Result<Vec<Leaf>> {
         crate::store::reader::check_time(self.name(), self.scene.time, t)?;
         let end = self.scene.time.end;
-        Ok(self.leaves.iter().filter(|l| l.is_live(t, end)).copied().collect())
+        Ok(self
+            .leaves
+            .iter()
+            .filter(|l| l.is_live(t, end))
+            .copied()
+            .collect())
     }
 }
 

@@ -85,7 +85,11 @@ pub fn closest_point_patch(p: DVec3, patch: &WorldPatch) -> DVec3 {
         return q0;
     }
     let q1 = closest_point_triangle(p, v[0], v[2], v[3]);
-    if q1.distance_squared(p) < q0.distance_squared(p) { q1 } else { q0 }
+    if q1.distance_squared(p) < q0.distance_squared(p) {
+        q1
+    } else {
+        q0
+    }
 }
 
 fn box_distance_squared(p: DVec3, lo: DVec3, hi: DVec3) -> f64 {
@@ -234,7 +238,9 @@ mod tests {
     use super::*;
 
     fn lcg(s: &mut u64) -> f64 {
-        *s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        *s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (*s >> 11) as f64 / (1u64 << 53) as f64
     }
 

@@ -14,9 +14,9 @@ use std::path::Path;
 use glam::DVec3;
 use serde_json::Value;
 
+use super::SolutionView;
 use super::frame::{Frame, WorldPatch};
 use super::nearest::NearestIndex;
-use super::SolutionView;
 use crate::error::{Error, Result};
 use crate::solver::Leaf;
 
@@ -29,7 +29,12 @@ pub struct ProbePoint {
     pub n: DVec3,
 }
 
-fn vec3_field(path: &Path, i: usize, obj: &serde_json::Map<String, Value>, key: &str) -> Result<DVec3> {
+fn vec3_field(
+    path: &Path,
+    i: usize,
+    obj: &serde_json::Map<String, Value>,
+    key: &str,
+) -> Result<DVec3> {
     let bad = |found: String| {
         Error::invalid(
             path,
@@ -45,7 +50,10 @@ fn vec3_field(path: &Path, i: usize, obj: &serde_json::Map<String, Value>, key: 
     }
     let mut out = [0.0; 3];
     for (o, x) in out.iter_mut().zip(a) {
-        *o = x.as_f64().filter(|x| x.is_finite()).ok_or_else(|| bad(v.to_string()))?;
+        *o = x
+            .as_f64()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| bad(v.to_string()))?;
     }
     Ok(DVec3::from_array(out))
 }
@@ -59,20 +67,40 @@ pub fn read_probe_points(path: &Path) -> Result<Vec<ProbePoint>> {
 /// Parses the text of a probe file (`path` names it in errors).
 pub fn parse_probe_points(path: &Path, text: &str) -> Result<Vec<ProbePoint>> {
     let value: Value = serde_json::from_str(text).map_err(|e| {
-        Error::invalid(path, format!("line {}, column {}", e.line(), e.column()), "JSON", e.to_string())
+        Error::invalid(
+            path,
+            format!("line {}, column {}", e.line(), e.column()),
+            "JSON",
+            e.to_string(),
+        )
     })?;
     let arr = value.as_array().ok_or_else(|| {
-        Error::invalid(path, "top level", "a JSON array of {\"p\":[x,y,z],\"n\":[x,y,z]}", kind(&value))
+        Error::invalid(
+            path,
+            "top level",
+            "a JSON array of {\"p\":[x,y,z],\"n\":[x,y,z]}",
+            kind(&value),
+        )
     })?;
     let mut points = Vec::with_capacity(arr.len());
     for (i, v) in arr.iter().enumerate() {
         let obj = v.as_object().ok_or_else(|| {
-            Error::invalid(path, format!("point {i}"), "an object {\"p\":[x,y,z],\"n\":[x,y,z]}", kind(v))
+            Error::invalid(
+                path,
+                format!("point {i}"),
+                "an object {\"p\":[x,y,z],\"n\":[x,y,z]}",
+                kind(v),
+            )
         })?;
         let p = vec3_field(path, i, obj, "p")?;
         let n = vec3_field(path, i, obj, "n")?;
         if n == DVec3::ZERO {
-            return Err(Error::invalid(path, format!("point {i}, \"n\""), "a non-zero normal", "[0, 0, 0]"));
+            return Err(Error::invalid(
+                path,
+                format!("point {i}, \"n\""),
+                "a non-zero normal",
+                "[0, 0, 0]",
+            ));
         }
         points.push(ProbePoint { p, n });
     }
@@ -94,7 +122,10 @@ fn kind(v: &Value) -> String {
 /// The JSON text of probe results: an array of `{"B":[r,g,b]}`, same order as the
 /// points.
 pub fn probe_results_json(values: &[[f64; 3]]) -> String {
-    let arr: Vec<Value> = values.iter().map(|b| serde_json::json!({ "B": b })).collect();
+    let arr: Vec<Value> = values
+        .iter()
+        .map(|b| serde_json::json!({ "B": b }))
+        .collect();
     let mut s = serde_json::to_string_pretty(&Value::Array(arr)).unwrap_or_default();
     s.push('\n');
     s
@@ -126,7 +157,11 @@ pub fn patch_params(patch: &WorldPatch, q: DVec3) -> (f64, f64) {
     // P(u,v) = a + u e + v f + u v g with a..d = v0..v3.
     let (a, e, f, g) = (v[0], v[1] - v[0], v[3] - v[0], v[0] - v[1] + v[2] - v[3]);
     let n = e.cross(f) + 0.5 * (e.cross(g) + g.cross(f));
-    let n = if n.length_squared() > 0.0 { n.normalize() } else { patch.normal };
+    let n = if n.length_squared() > 0.0 {
+        n.normalize()
+    } else {
+        patch.normal
+    };
     let h = q - a;
     // 2D cross products in the plane: cross2(x, y) = (x × y) · n.
     let c2 = |x: DVec3, y: DVec3| x.cross(y).dot(n);
@@ -136,7 +171,11 @@ pub fn patch_params(patch: &WorldPatch, q: DVec3) -> (f64, f64) {
     let u_of = |w: f64| {
         let den = e + g * w;
         let dd = den.length_squared();
-        if dd > 0.0 { (h - f * w).dot(den) / dd } else { 0.5 }
+        if dd > 0.0 {
+            (h - f * w).dot(den) / dd
+        } else {
+            0.5
+        }
     };
     let scale = k1.abs().max(k0.abs()).max(1e-300);
     let (mut u, mut w) = if k2.abs() <= 1e-12 * scale {
@@ -147,8 +186,13 @@ pub fn patch_params(patch: &WorldPatch, q: DVec3) -> (f64, f64) {
         let w1 = (-k1 - disc) / (2.0 * k2);
         let w2 = (-k1 + disc) / (2.0 * k2);
         let (u1, u2) = (u_of(w1), u_of(w2));
-        let inside = |u: f64, w: f64| (-1e-9..=1.0 + 1e-9).contains(&u) && (-1e-9..=1.0 + 1e-9).contains(&w);
-        if inside(u1, w1) || !inside(u2, w2) { (u1, w1) } else { (u2, w2) }
+        let inside =
+            |u: f64, w: f64| (-1e-9..=1.0 + 1e-9).contains(&u) && (-1e-9..=1.0 + 1e-9).contains(&w);
+        if inside(u1, w1) || !inside(u2, w2) {
+            (u1, w1)
+        } else {
+            (u2, w2)
+        }
     };
     // Newton polish on the least-squares system J^T (P - q) = 0.
     for _ in 0..3 {
@@ -171,9 +215,9 @@ pub fn patch_params(patch: &WorldPatch, q: DVec3) -> (f64, f64) {
 /// nearest.
 pub fn leaf_at(leaves: &[Leaf], u: f64, v: f64) -> Option<&Leaf> {
     leaves.iter().find(|l| l.contains(u, v, 1e-6)).or_else(|| {
-        leaves.iter().min_by(|a, b| {
-            domain_distance(a, u, v).total_cmp(&domain_distance(b, u, v))
-        })
+        leaves
+            .iter()
+            .min_by(|a, b| domain_distance(a, u, v).total_cmp(&domain_distance(b, u, v)))
     })
 }
 
@@ -190,7 +234,10 @@ fn domain_distance(l: &Leaf, u: f64, v: f64) -> f64 {
 /// Probes a frame already built.
 pub fn probe_frame(name: &Path, frame: &Frame, points: &[ProbePoint]) -> Result<Vec<[f64; 3]>> {
     let with_leaves: Vec<u32> = (0..frame.patches.len() as u32)
-        .filter(|&p| !frame.patch_leaves(p as usize).is_empty() && frame.patches[p as usize].normal != DVec3::ZERO)
+        .filter(|&p| {
+            !frame.patch_leaves(p as usize).is_empty()
+                && frame.patches[p as usize].normal != DVec3::ZERO
+        })
         .collect();
     let index = NearestIndex::build(&frame.patches, with_leaves);
     let mut out = Vec::with_capacity(points.len());
@@ -200,7 +247,10 @@ pub fn probe_frame(name: &Path, frame: &Frame, points: &[ProbePoint]) -> Result<
             return Err(Error::invalid(
                 name,
                 format!("probe point {i} at time {}", frame.t),
-                format!("a surface with leaves whose normal faces along n = {:?}", pt.n.to_array()),
+                format!(
+                    "a surface with leaves whose normal faces along n = {:?}",
+                    pt.n.to_array()
+                ),
                 "none",
             ));
         };
@@ -234,12 +284,22 @@ mod tests {
             DVec3::new(-0.4, 1.5, 0.0),
         ]
         .map(|x| rot * x + DVec3::new(5.0, -1.0, 2.0));
-        let patch = WorldPatch { corners: 4, v, normal: rot * DVec3::Z };
+        let patch = WorldPatch {
+            corners: 4,
+            v,
+            normal: rot * DVec3::Z,
+        };
         for &(u, w) in &[(0.0, 0.0), (1.0, 1.0), (0.3, 0.8), (0.95, 0.05), (0.5, 0.5)] {
             let (pu, pw) = patch_params(&patch, patch.point(u, w));
-            assert!((pu - u).abs() < 1e-10 && (pw - w).abs() < 1e-10, "{u} {w} -> {pu} {pw}");
+            assert!(
+                (pu - u).abs() < 1e-10 && (pw - w).abs() < 1e-10,
+                "{u} {w} -> {pu} {pw}"
+            );
         }
-        let tri = WorldPatch { corners: 3, ..patch };
+        let tri = WorldPatch {
+            corners: 3,
+            ..patch
+        };
         let (pu, pw) = patch_params(&tri, tri.point(0.2, 0.3));
         assert!((pu - 0.2).abs() < 1e-12 && (pw - 0.3).abs() < 1e-12);
     }
@@ -251,8 +311,17 @@ mod tests {
             .map(|_| ())
             .unwrap_err()
             .to_string();
-        assert!(err.contains("pts.json") && err.contains("point 1") && err.contains("\"p\""), "{err}");
+        assert!(
+            err.contains("pts.json") && err.contains("point 1") && err.contains("\"p\""),
+            "{err}"
+        );
         let ok = parse_probe_points(p, r#"[{"p":[1,2,3],"n":[0,0,1]}]"#).map_err(|e| e.to_string());
-        assert_eq!(ok, Ok(vec![ProbePoint { p: DVec3::new(1.0, 2.0, 3.0), n: DVec3::Z }]));
+        assert_eq!(
+            ok,
+            Ok(vec![ProbePoint {
+                p: DVec3::new(1.0, 2.0, 3.0),
+                n: DVec3::Z
+            }])
+        );
     }
 }

@@ -47,7 +47,9 @@ impl FrameMesh {
     /// Triangulates the frame's leaves.
     pub fn build(frame: &Frame, shading: Shading) -> FrameMesh {
         let mut mesh = FrameMesh::default();
-        let diag = frame.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length().max(1e-300));
+        let diag = frame
+            .bounds()
+            .map_or(1.0, |(lo, hi)| (hi - lo).length().max(1e-300));
         let q = 1e-7 * diag;
         // Smooth: one vertex per (quantised position, quantised normal).
         let mut shared: HashMap<([i64; 3], [i64; 3]), u32> = HashMap::new();
@@ -57,11 +59,11 @@ impl FrameMesh {
                 let n = leaf.corners as usize;
                 let mean = leaf.mean();
                 let mut ids = [0u32; 4];
-                for c in 0..n {
+                for (c, id_slot) in ids.iter_mut().enumerate().take(n) {
                     let (u, v) = (leaf.uv[c][0] as f64, leaf.uv[c][1] as f64);
                     let pos = patch.point(u, v);
                     let b = leaf.b[c].map(f64::from);
-                    ids[c] = match shading {
+                    *id_slot = match shading {
                         Shading::Flat => {
                             mesh.positions.push(pos);
                             mesh.colors.push(mean);
@@ -78,8 +80,8 @@ impl FrameMesh {
                                 (mesh.positions.len() - 1) as u32
                             });
                             let s = &mut sums[id as usize];
-                            for k in 0..3 {
-                                s.0[k] += b[k];
+                            for (acc, x) in s.0.iter_mut().zip(b) {
+                                *acc += x;
                             }
                             s.1 += 1.0;
                             id
@@ -93,7 +95,10 @@ impl FrameMesh {
             }
         }
         if shading == Shading::Smooth {
-            mesh.colors = sums.iter().map(|(s, w)| s.map(|x| x / w.max(1.0))).collect();
+            mesh.colors = sums
+                .iter()
+                .map(|(s, w)| s.map(|x| x / w.max(1.0)))
+                .collect();
         }
         mesh
     }
@@ -102,7 +107,9 @@ impl FrameMesh {
 /// A camera framing the frame's bounds: looking down `-z` from in front of the box,
 /// 45° vertical field of view.
 pub fn auto_camera(frame: &Frame) -> Camera {
-    let (lo, hi) = frame.bounds().unwrap_or((DVec3::splat(-1.0), DVec3::splat(1.0)));
+    let (lo, hi) = frame
+        .bounds()
+        .unwrap_or((DVec3::splat(-1.0), DVec3::splat(1.0)));
     let center = 0.5 * (lo + hi);
     let radius = (0.5 * (hi - lo).length()).max(1e-9);
     let fov_y = 45f64.to_radians();
@@ -145,7 +152,12 @@ pub fn render(mesh: &FrameMesh, camera: &Camera, width: u32, height: u32) -> Pic
         // View space: camera at the origin looking down -z.
         let vs: Vec<(DVec3, [f64; 3])> = tri
             .iter()
-            .map(|&i| (view.transform_point3(mesh.positions[i as usize]), mesh.colors[i as usize]))
+            .map(|&i| {
+                (
+                    view.transform_point3(mesh.positions[i as usize]),
+                    mesh.colors[i as usize],
+                )
+            })
             .collect();
         let normal = (vs[1].0 - vs[0].0).cross(vs[2].0 - vs[0].0);
         if normal.dot(vs[0].0) >= 0.0 {
@@ -169,7 +181,11 @@ pub fn render(mesh: &FrameMesh, camera: &Camera, width: u32, height: u32) -> Pic
             fill(&scr[0], &scr[k], &scr[k + 1], w, h, &mut pixels, &mut depth);
         }
     }
-    Picture { width, height, pixels }
+    Picture {
+        width,
+        height,
+        pixels,
+    }
 }
 
 type ScreenVertex = (f64, f64, f64, [f64; 3]);
@@ -258,7 +274,11 @@ pub fn auto_exposure(picture: &Picture) -> f64 {
 /// The sRGB transfer function of a linear value in `[0, 1]` (IEC 61966-2-1).
 pub fn srgb_oetf(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
 }
 
 /// 8-bit sRGB image of a picture after `exposure`; undrawn pixels are `background`.
@@ -283,7 +303,12 @@ pub fn view_matrix(camera: &Camera) -> DMat4 {
         DVec4::new(s.x, u.x, -f.x, 0.0),
         DVec4::new(s.y, u.y, -f.y, 0.0),
         DVec4::new(s.z, u.z, -f.z, 0.0),
-        DVec4::new(-s.dot(camera.eye), -u.dot(camera.eye), f.dot(camera.eye), 1.0),
+        DVec4::new(
+            -s.dot(camera.eye),
+            -u.dot(camera.eye),
+            f.dot(camera.eye),
+            1.0,
+        ),
     )
 }
 

@@ -176,7 +176,11 @@ fn u64_at(b: &[u8], off: usize) -> u64 {
 }
 
 fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect::<Vec<_>>().join(" ")
+    bytes
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 impl Header {
@@ -325,12 +329,16 @@ impl SectionEntry {
     /// Decodes entry `index` whose bytes start at file offset `at`, checking that its
     /// kind and codec are known and that its bytes lie inside `[HEADER_LEN, data_end)`.
     pub fn decode(path: &Path, index: usize, at: usize, b: &[u8], data_end: u64) -> Result<Self> {
-        let place = |field: &str, off: usize| {
-            format!("byte {} (section {index}, {field})", at + off)
-        };
+        let place =
+            |field: &str, off: usize| format!("byte {} (section {index}, {field})", at + off);
         let kind_raw = u32_at(b, 0);
         let kind = SectionKind::from_u32(kind_raw).ok_or_else(|| {
-            Error::invalid(path, place("kind", 0), "a section kind in 1..=6", kind_raw.to_string())
+            Error::invalid(
+                path,
+                place("kind", 0),
+                "a section kind in 1..=6",
+                kind_raw.to_string(),
+            )
         })?;
         let codec_raw = u32_at(b, 4);
         let codec = Codec::from_u32(codec_raw).ok_or_else(|| {
@@ -398,7 +406,10 @@ mod tests {
         file.extend_from_slice(&[0u8; ENTRY_LEN]);
         assert_eq!(Header::decode(Path::new("x"), &file).ok(), Some(h));
         file[20] ^= 1;
-        let err = Header::decode(Path::new("x"), &file).map(|_| ()).unwrap_err().to_string();
+        let err = Header::decode(Path::new("x"), &file)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("header checksum"), "{err}");
     }
 }

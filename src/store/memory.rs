@@ -175,14 +175,23 @@ fn human(b: u64) -> String {
         v /= 1024.0;
         u += 1;
     }
-    if u == 0 { format!("{b} B") } else { format!("{v:.1} {}", UNITS[u]) }
+    if u == 0 {
+        format!("{b} B")
+    } else {
+        format!("{v:.1} {}", UNITS[u])
+    }
 }
 
 impl std::fmt::Display for MemoryReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(f, "memory report: {}", self.source)?;
         if self.file_bytes > 0 {
-            writeln!(f, "  file bytes        {:>12}  ({})", self.file_bytes, human(self.file_bytes))?;
+            writeln!(
+                f,
+                "  file bytes        {:>12}  ({})",
+                self.file_bytes,
+                human(self.file_bytes)
+            )?;
             writeln!(f, "  header + table    {:>12}", self.table_bytes)?;
         }
         if !self.sections.is_empty() {
@@ -203,7 +212,14 @@ impl std::fmt::Display for MemoryReport {
         if !self.pools.is_empty() {
             writeln!(f, "  pools:")?;
             for p in &self.pools {
-                writeln!(f, "    {:<16} {:>12} items {:>12} bytes ({})", p.name, p.items, p.bytes, human(p.bytes))?;
+                writeln!(
+                    f,
+                    "    {:<16} {:>12} items {:>12} bytes ({})",
+                    p.name,
+                    p.items,
+                    p.bytes,
+                    human(p.bytes)
+                )?;
             }
         }
         if !self.chunks.is_empty() {
@@ -222,8 +238,18 @@ impl std::fmt::Display for MemoryReport {
             }
         }
         writeln!(f, "  patches           {:>12}", self.patches)?;
-        writeln!(f, "  open (resident)   {:>12}  ({})", self.open_bytes, human(self.open_bytes))?;
-        write!(f, "  play one frame    {:>12}  ({})", self.frame_bytes, human(self.frame_bytes))?;
+        writeln!(
+            f,
+            "  open (resident)   {:>12}  ({})",
+            self.open_bytes,
+            human(self.open_bytes)
+        )?;
+        write!(
+            f,
+            "  play one frame    {:>12}  ({})",
+            self.frame_bytes,
+            human(self.frame_bytes)
+        )?;
         if let Some(c) = self.frame_worst_chunk {
             write!(f, "  worst at chunk {c}")?;
         }

@@ -26,7 +26,9 @@ use super::records::{
     ArchivedStatsRecord, ChunkRecord,
 };
 use crate::error::{Error, Result};
-use crate::scene::{Camera, Material, MaterialId, MotionKey, MotionTrack, Object, Polygon, Scene, TimeDomain};
+use crate::scene::{
+    Camera, Material, MaterialId, MotionKey, MotionTrack, Object, Polygon, Scene, TimeDomain,
+};
 use crate::solver::{Leaf, PatchGeometry, Solution, SolveStats};
 
 /// Largest zstd window (log2 bytes) a reader accepts: bounds the decoder's memory.
@@ -89,7 +91,12 @@ impl std::fmt::Debug for Reader {
 }
 
 fn rkyv_err(path: &Path, place: String, what: &str, e: rancor::Error) -> Error {
-    Error::invalid(path, place, format!("a valid rkyv archive of {what}"), e.to_string())
+    Error::invalid(
+        path,
+        place,
+        format!("a valid rkyv archive of {what}"),
+        e.to_string(),
+    )
 }
 
 impl Reader {
@@ -184,10 +191,12 @@ impl Reader {
             Codec::Raw => Ok(std::borrow::Cow::Borrowed(stored)),
             Codec::Zstd => {
                 let place = || format!("byte {} ({} section {i}, zstd)", e.offset, e.kind.name());
-                let mut dec = zstd::stream::read::Decoder::with_buffer(stored)
-                    .map_err(|err| Error::invalid(&self.path, place(), "a zstd frame", err.to_string()))?;
-                dec.window_log_max(ZSTD_WINDOW_LOG_MAX)
-                    .map_err(|err| Error::invalid(&self.path, place(), "a zstd frame", err.to_string()))?;
+                let mut dec = zstd::stream::read::Decoder::with_buffer(stored).map_err(|err| {
+                    Error::invalid(&self.path, place(), "a zstd frame", err.to_string())
+                })?;
+                dec.window_log_max(ZSTD_WINDOW_LOG_MAX).map_err(|err| {
+                    Error::invalid(&self.path, place(), "a zstd frame", err.to_string())
+                })?;
                 // Grow with the data actually produced, never by the stated length.
                 let mut out = Vec::new();
                 dec.take(e.raw_len.saturating_add(1))
@@ -298,7 +307,10 @@ impl Reader {
                         self.objects.len(),
                         self.materials.len()
                     ),
-                    format!("object {}, material {}, {} corners", p.object, p.material, p.corners),
+                    format!(
+                        "object {}, material {}, {} corners",
+                        p.object, p.material, p.corners
+                    ),
                 ));
             }
             patches.push(p);
@@ -322,7 +334,9 @@ impl Reader {
                 leaves: c.leaves.to_native(),
                 carry_from: c.carry_from.to_native(),
             };
-            let prev_t1 = chunks.last().map_or(self.time.start, |p: &ChunkRecord| p.t1);
+            let prev_t1 = chunks
+                .last()
+                .map_or(self.time.start, |p: &ChunkRecord| p.t1);
             let entry = self.sections.get(c.section as usize);
             let ok = c.t0.is_finite()
                 && c.t1.is_finite()
@@ -332,7 +346,8 @@ impl Reader {
                 && c.t1 <= self.time.end
                 && c.reach >= c.t0
                 && (c.carry_from as usize) <= k
-                && entry.is_some_and(|e| e.kind == SectionKind::Chunk && e.items == c.leaves as u64);
+                && entry
+                    .is_some_and(|e| e.kind == SectionKind::Chunk && e.items == c.leaves as u64);
             if !ok {
                 return Err(Error::invalid(
                     &self.path,
@@ -451,7 +466,10 @@ impl Reader {
                         c.t1,
                         c.reach
                     ),
-                    format!("patch {}, {} corners, time [{}, {}]", l.patch, l.corners, l.time[0], l.time[1]),
+                    format!(
+                        "patch {}, {} corners, time [{}, {}]",
+                        l.patch, l.corners, l.time[0], l.time[1]
+                    ),
                 ));
             }
             leaves.push(l);
@@ -563,7 +581,10 @@ pub(crate) fn check_time(path: &Path, time: TimeDomain, t: f64) -> Result<()> {
         return Err(Error::invalid(
             path,
             "requested time",
-            format!("a time in the scene's domain [{}, {}]", time.start, time.end),
+            format!(
+                "a time in the scene's domain [{}, {}]",
+                time.start, time.end
+            ),
             format!("{t}"),
         ));
     }

@@ -14,7 +14,9 @@
 
 use glam::{DQuat, DVec3};
 
-use crate::scene::{Material, MaterialId, MotionKey, MotionTrack, Object, Polygon, Scene, TimeDomain};
+use crate::scene::{
+    Material, MaterialId, MotionKey, MotionTrack, Object, Polygon, Scene, TimeDomain,
+};
 use crate::solver::{Leaf, PatchGeometry, Solution, SolveStats};
 
 /// Radiosity of the box walls at world point `p`.
@@ -43,7 +45,11 @@ fn walls() -> Vec<Vec<DVec3>> {
         .iter()
         .map(|&(o, a, b)| {
             // Order the corners so that the normal a × b faces the centre.
-            let (a, b) = if (c - o).dot(a.cross(b)) > 0.0 { (a, b) } else { (b, a) };
+            let (a, b) = if (c - o).dot(a.cross(b)) > 0.0 {
+                (a, b)
+            } else {
+                (b, a)
+            };
             vec![o, o + a, o + a + b, o + b]
         })
         .collect();
@@ -106,7 +112,12 @@ pub fn uniform_leaves(
     };
     for j in 0..n {
         for i in 0..n {
-            let (u0, v0, u1, v1) = (i as f64 * s, j as f64 * s, (i + 1) as f64 * s, (j + 1) as f64 * s);
+            let (u0, v0, u1, v1) = (
+                i as f64 * s,
+                j as f64 * s,
+                (i + 1) as f64 * s,
+                (j + 1) as f64 * s,
+            );
             if patch.corners == 4 {
                 out.push(leaf(&[(u0, v0), (u1, v0), (u1, v1), (u0, v1)]));
             } else if i + j < n {
@@ -198,7 +209,10 @@ pub struct AnimatedSample {
 /// the plate has `n × n` leaves per chunk with [`plate_radiosity`].
 pub fn animated_box(n: u32, chunks: u32) -> AnimatedSample {
     let mut sol = box_solution(n);
-    sol.scene.time = TimeDomain { start: 0.0, end: 1.0 };
+    sol.scene.time = TimeDomain {
+        start: 0.0,
+        end: 1.0,
+    };
     sol.scene.objects.push(Object {
         name: "plate".into(),
         polygons: vec![Polygon {
@@ -239,13 +253,29 @@ pub fn animated_box(n: u32, chunks: u32) -> AnimatedSample {
         l.time = [0.0, 1.0];
     }
     let still = sol.patches[still_index as usize];
-    sol.leaves.extend(uniform_leaves(still_index, &still, n, [0.0, 1.0], wall_radiosity));
+    sol.leaves.extend(uniform_leaves(
+        still_index,
+        &still,
+        n,
+        [0.0, 1.0],
+        wall_radiosity,
+    ));
     let mut out = Vec::new();
     for k in 0..chunks {
         let (t0, t1) = (k as f64 / chunks as f64, (k + 1) as f64 / chunks as f64);
-        let mut leaves = if k == 0 { sol.leaves.clone() } else { Vec::new() };
+        let mut leaves = if k == 0 {
+            sol.leaves.clone()
+        } else {
+            Vec::new()
+        };
         let plate = sol.patches[plate_index as usize];
-        leaves.extend(uniform_leaves(plate_index, &plate, n, [t0 as f32, t1 as f32], |_| plate_radiosity(t0)));
+        leaves.extend(uniform_leaves(
+            plate_index,
+            &plate,
+            n,
+            [t0 as f32, t1 as f32],
+            |_| plate_radiosity(t0),
+        ));
         leaves.sort_by(|a, b| a.time[0].total_cmp(&b.time[0]).then(a.patch.cmp(&b.patch)));
         out.push((t0, t1, leaves));
     }
@@ -253,5 +283,59 @@ pub fn animated_box(n: u32, chunks: u32) -> AnimatedSample {
     AnimatedSample {
         solution: sol,
         chunks: out,
+    }
+}
+
+/// A box of `6 m²` quad patches (each wall cut into `m × m` tiles), `n × n` leaves per
+/// patch, radiosity [`wall_radiosity`]: the many-patch scene of the probe benchmark.
+pub fn tiled_box(m: u32, n: u32) -> Solution {
+    let c = DVec3::splat(0.5);
+    let faces = [
+        (DVec3::ZERO, DVec3::Y, DVec3::Z),
+        (DVec3::X, DVec3::Y, DVec3::Z),
+        (DVec3::ZERO, DVec3::X, DVec3::Z),
+        (DVec3::Y, DVec3::X, DVec3::Z),
+        (DVec3::ZERO, DVec3::X, DVec3::Y),
+        (DVec3::Z, DVec3::X, DVec3::Y),
+    ];
+    let s = 1.0 / m as f64;
+    let mut polygons = Vec::new();
+    for &(o, a, b) in &faces {
+        let (a, b) = if (c - o).dot(a.cross(b)) > 0.0 {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        for j in 0..m {
+            for i in 0..m {
+                let p = o + a * (i as f64 * s) + b * (j as f64 * s);
+                polygons.push(Polygon {
+                    vertices: vec![p, p + a * s, p + (a + b) * s, p + b * s],
+                    material: MaterialId(0),
+                });
+            }
+        }
+    }
+    let scene = Scene {
+        time: TimeDomain::default(),
+        materials: materials(),
+        objects: vec![Object {
+            name: "tiled box".into(),
+            polygons,
+            motion: None,
+        }],
+        camera: None,
+        warnings: Vec::new(),
+    };
+    let patches = patches_of(&scene);
+    let mut leaves = Vec::new();
+    for (i, p) in patches.iter().enumerate() {
+        leaves.extend(uniform_leaves(i as u32, p, n, [0.0, 0.0], wall_radiosity));
+    }
+    Solution {
+        scene,
+        patches,
+        leaves,
+        stats: stats(),
     }
 }

@@ -119,7 +119,11 @@ pub fn temp_path(path: &Path) -> PathBuf {
 impl Writer {
     /// Starts writing `path` (through `<path>.tmp`): writes the placeholder header, the
     /// scene section and the patch section.
-    pub fn create(path: &Path, header: &SolutionHeader<'_>, options: WriteOptions) -> Result<Writer> {
+    pub fn create(
+        path: &Path,
+        header: &SolutionHeader<'_>,
+        options: WriteOptions,
+    ) -> Result<Writer> {
         let tmp = temp_path(path);
         let file = OpenOptions::new()
             .write(true)
@@ -137,11 +141,25 @@ impl Writer {
 
     /// Starts writing into memory; [`Writer::finish_to_bytes`] returns the file's bytes
     /// (identical to what [`Writer::create`] + [`Writer::finish`] put on disk).
-    pub fn in_memory(name: &Path, header: &SolutionHeader<'_>, options: WriteOptions) -> Result<Writer> {
-        Writer::start(name.to_path_buf(), Sink::Memory(Vec::new()), header, options)
+    pub fn in_memory(
+        name: &Path,
+        header: &SolutionHeader<'_>,
+        options: WriteOptions,
+    ) -> Result<Writer> {
+        Writer::start(
+            name.to_path_buf(),
+            Sink::Memory(Vec::new()),
+            header,
+            options,
+        )
     }
 
-    fn start(path: PathBuf, sink: Sink, header: &SolutionHeader<'_>, options: WriteOptions) -> Result<Writer> {
+    fn start(
+        path: PathBuf,
+        sink: Sink,
+        header: &SolutionHeader<'_>,
+        options: WriteOptions,
+    ) -> Result<Writer> {
         let scene = header.scene;
         let mut w = Writer {
             path,
@@ -177,7 +195,10 @@ impl Writer {
                         scene.objects.len(),
                         scene.materials.len()
                     ),
-                    format!("object {}, material {}, {} corners", p.object, p.material, p.corners),
+                    format!(
+                        "object {}, material {}, {} corners",
+                        p.object, p.material, p.corners
+                    ),
                 ));
             }
         }
@@ -190,7 +211,11 @@ impl Writer {
                 .iter()
                 .map(|o| ObjectRecord {
                     name: o.name.clone(),
-                    motion: o.motion.as_ref().filter(|m| m.is_moving()).map(track_record),
+                    motion: o
+                        .motion
+                        .as_ref()
+                        .filter(|m| m.is_moving())
+                        .map(track_record),
                 })
                 .collect(),
             camera: scene.camera.as_ref().map(CameraRecord::from),
@@ -202,7 +227,12 @@ impl Writer {
         w.section(SectionKind::Scene, &bytes, 1, false)?;
         let patches: Vec<PatchRecord> = header.patches.iter().map(PatchRecord::from).collect();
         let bytes = archive(&w.path, &patches)?;
-        w.section(SectionKind::Patches, &bytes, patches.len() as u64, options.compress)?;
+        w.section(
+            SectionKind::Patches,
+            &bytes,
+            patches.len() as u64,
+            options.compress,
+        )?;
         Ok(w)
     }
 
@@ -236,7 +266,10 @@ impl Writer {
                         "a leaf of one of {} patches, with its corner count, starting in [{t0}, {t1}]",
                         self.patch_corners.len()
                     ),
-                    format!("patch {}, {} corners, time [{lt0}, {lt1}]", l.patch, l.corners),
+                    format!(
+                        "patch {}, {} corners, time [{lt0}, {lt1}]",
+                        l.patch, l.corners
+                    ),
                 ));
             }
             reach = reach.max(lt1 as f64);
@@ -244,7 +277,12 @@ impl Writer {
         let records: Vec<LeafRecord> = leaves.iter().map(LeafRecord::from).collect();
         let bytes = archive(&self.path, &records)?;
         let section = self.entries.len() as u32;
-        self.section(SectionKind::Chunk, &bytes, leaves.len() as u64, self.options.compress)?;
+        self.section(
+            SectionKind::Chunk,
+            &bytes,
+            leaves.len() as u64,
+            self.options.compress,
+        )?;
         // First chunk whose leaves may still be live at t0 (reach only matters for
         // chunks after the previous carry_from, whose reach was below an earlier t0).
         let mut carry_from = self.chunks.last().map_or(0, |c| c.carry_from);
@@ -310,13 +348,23 @@ impl Writer {
             self.flags |= FLAG_LINKS;
             let links = std::mem::take(&mut self.links);
             let bytes = archive(&self.path, &links)?;
-            self.section(SectionKind::Links, &bytes, links.len() as u64, self.options.compress)?;
+            self.section(
+                SectionKind::Links,
+                &bytes,
+                links.len() as u64,
+                self.options.compress,
+            )?;
         }
         let index = ChunkIndexRecord {
             chunks: self.chunks.clone(),
         };
         let bytes = archive(&self.path, &index)?;
-        self.section(SectionKind::ChunkIndex, &bytes, self.chunks.len() as u64, false)?;
+        self.section(
+            SectionKind::ChunkIndex,
+            &bytes,
+            self.chunks.len() as u64,
+            false,
+        )?;
         let bytes = archive(&self.path, &StatsRecord::from(stats))?;
         self.section(SectionKind::Stats, &bytes, 1, false)?;
         let table: Vec<u8> = self.entries.iter().flat_map(|e| e.encode()).collect();
@@ -388,7 +436,10 @@ impl Writer {
 
 impl Drop for Writer {
     fn drop(&mut self) {
-        if let Sink::File { tmp, done: false, .. } = &self.sink {
+        if let Sink::File {
+            tmp, done: false, ..
+        } = &self.sink
+        {
             // An unfinished file must not survive: it has no header, but remove it so
             // that it cannot be mistaken for output either.
             let _ = std::fs::remove_file(tmp);
@@ -400,12 +451,23 @@ impl Drop for Writer {
 pub(crate) fn archive<T>(path: &Path, value: &T) -> Result<Vec<u8>>
 where
     T: for<'a> rkyv::Serialize<
-            rkyv::api::high::HighSerializer<rkyv::util::AlignedVec, rkyv::ser::allocator::ArenaHandle<'a>, rancor::Error>,
+            rkyv::api::high::HighSerializer<
+                rkyv::util::AlignedVec,
+                rkyv::ser::allocator::ArenaHandle<'a>,
+                rancor::Error,
+            >,
         >,
 {
     rkyv::to_bytes::<rancor::Error>(value)
         .map(|v| v.to_vec())
-        .map_err(|e| Error::invalid(path, "serialising a record", "a serialisable record", e.to_string()))
+        .map_err(|e| {
+            Error::invalid(
+                path,
+                "serialising a record",
+                "a serialisable record",
+                e.to_string(),
+            )
+        })
 }
 
 /// Time chunks a static or space-time [`Solution`] is written in by
