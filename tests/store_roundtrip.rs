@@ -248,3 +248,78 @@ fn unfinished_file_is_refused() {
     assert!(err.contains("cut.rhier"), "{err}");
     assert!(err.contains("magic") || err.contains("header"), "{err}");
 }
+
+#[test]
+fn links_are_kept_only_when_asked() {
+    use rhier::store::LinkRecord;
+    let dir = tempfile::tempdir().unwrap();
+    let sol = box_solution(1);
+    let links = vec![
+        LinkRecord {
+            receiver: 3,
+            source: 9,
+            time: [0.0, 0.0],
+            coefficient: [0.1, 0.2, 0.3],
+            error: 0.01,
+            active: 1,
+            reserved: 0,
+        },
+        LinkRecord {
+            receiver: 4,
+            source: 1,
+            time: [0.0, 0.0],
+            coefficient: [0.0, 0.5, 0.25],
+            error: 0.5,
+            active: 0,
+            reserved: 0,
+        },
+    ];
+    for keep in [false, true] {
+        let path = dir.path().join(format!("links_{keep}.rhier"));
+        let opts = WriteOptions {
+            compress: true,
+            keep_links: keep,
+        };
+        let mut w = Writer::create(&path, &SolutionHeader::of(&sol), opts).unwrap();
+        w.write_chunk(0.0, 0.0, &sol.leaves).unwrap();
+        w.write_links(&links);
+        w.finish(&sol.stats).unwrap();
+        let r = Reader::open(&path).unwrap();
+        let want = if keep { links.clone() } else { Vec::new() };
+        assert_eq!(r.links().unwrap(), want);
+        let has_section = r
+            .sections()
+            .iter()
+            .any(|e| e.kind == rhier::store::SectionKind::Links);
+        assert_eq!(has_section, keep);
+    }
+}
+
+#[test]
+fn writer_report_in_progress_matches_the_finished_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("report.rhier");
+    let sample = animated_box(2, 4);
+    let sol = &sample.solution;
+    let mut w = Writer::create(&path, &SolutionHeader::of(sol), WriteOptions::default()).unwrap();
+    for (k, (t0, t1, leaves)) in sample.chunks.iter().enumerate() {
+        w.write_chunk(*t0, *t1, leaves).unwrap();
+        let m = w.memory_report();
+        assert_eq!(m.chunks.len(), k + 1);
+        assert_eq!(m.chunks[k].leaves, leaves.len() as u64);
+    }
+    let during = w.memory_report();
+    w.finish(&sol.stats).unwrap();
+    let r = Reader::open(&path).unwrap();
+    let after = rhier::store::MemoryReport::from_reader(&r);
+    assert_eq!(during.chunks, after.chunks);
+    assert_eq!(during.sections[..], after.sections[..during.sections.len()]);
+    assert_eq!(after.file_bytes, std::fs::metadata(&path).unwrap().len());
+    let stored: u64 = after.sections.iter().map(|s| s.stored_bytes).sum();
+    assert_eq!(stored + after.table_bytes, after.file_bytes);
+    // Chunk 0 holds the walls (4 leaves each) and the still triangle and the plate.
+    assert_eq!(after.chunks[0].leaves, 7 * 4 + 4 + 4);
+    assert_eq!(after.chunks[3].live_upper_bound, 7 * 4 + 4 + 4 + 4);
+    let text = after.to_string();
+    assert!(text.contains("play one frame") && text.contains("chunk_index"));
+}

@@ -8,8 +8,9 @@
 
 use serde::Serialize;
 
-use super::format::{Codec, SectionKind};
+use super::format::{Codec, SectionEntry, SectionKind};
 use super::reader::Reader;
+use super::records::ChunkRecord;
 use crate::solver::{Leaf, PatchGeometry};
 
 /// Bytes of one section of a file.
@@ -94,10 +95,46 @@ pub struct MemoryReport {
 pub const FRAME_BYTES_PER_PATCH: u64 = 4 * 24 + 24 + 48 + 8;
 
 impl MemoryReport {
+    /// An empty report for a run in progress named `source`.
+    pub fn for_run(source: &str) -> MemoryReport {
+        MemoryReport {
+            source: source.to_string(),
+            ..MemoryReport::default()
+        }
+    }
+
+    /// Adds a pool row (name, records, resident bytes).
+    pub fn add_pool(&mut self, name: &str, items: u64, bytes: u64) {
+        self.pools.push(PoolBytes {
+            name: name.to_string(),
+            items,
+            bytes,
+        });
+    }
+
     /// The report of an opened file.
     pub fn from_reader(r: &Reader) -> MemoryReport {
-        let sections: Vec<SectionBytes> = r
-            .sections()
+        let mut m = MemoryReport::from_parts(
+            &r.path().display().to_string(),
+            r.file_len(),
+            r.sections(),
+            r.chunks(),
+            r.patches().len() as u64,
+        );
+        m.table_bytes = r.table_bytes();
+        m
+    }
+
+    /// The report of a file (finished or being written) from its table and chunk
+    /// index: `file_bytes` is the bytes written so far.
+    pub fn from_parts(
+        source: &str,
+        file_bytes: u64,
+        entries: &[SectionEntry],
+        index: &[ChunkRecord],
+        patches: u64,
+    ) -> MemoryReport {
+        let sections: Vec<SectionBytes> = entries
             .iter()
             .enumerate()
             .map(|(index, e)| SectionBytes {
@@ -113,24 +150,32 @@ impl MemoryReport {
                 items: e.items,
             })
             .collect();
-        let patches = r.patches().len() as u64;
         let open_bytes = patches * std::mem::size_of::<PatchGeometry>() as u64
-            + r.chunks().len() as u64 * std::mem::size_of::<super::records::ChunkRecord>() as u64
-            + r.sections()
+            + index.len() as u64 * std::mem::size_of::<ChunkRecord>() as u64
+            + entries
                 .iter()
                 .filter(|e| e.kind == SectionKind::Scene)
                 .map(|e| e.raw_len)
                 .sum::<u64>();
         let mut chunks = Vec::new();
         let mut worst = (0u64, None);
-        for (i, c) in r.chunks().iter().enumerate() {
-            let e = &r.sections()[c.section as usize];
-            // Chunks read to play the chunk's first instant.
+        for (i, c) in index.iter().enumerate() {
+            let Some(e) = entries.get(c.section as usize) else {
+                continue;
+            };
+            // Chunks read to play the chunk's first instant: carry_from..=i whose
+            // reach gets there (an upper bound of what Reader::chunks_for reads).
             let (mut decoded, mut live) = (0u64, 0u64);
-            for j in r.chunks_for(c.t0) {
-                let cj = &r.chunks()[j];
-                let ej = &r.sections()[cj.section as usize];
-                if ej.codec == Codec::Zstd {
+            let from = (c.carry_from as usize).min(i);
+            for (j, cj) in index.iter().enumerate().take(i + 1).skip(from) {
+                // Leaves are live on [t0, t1): a chunk whose leaves all end by t0 is
+                // not read (Reader::chunks_for), unless it is chunk i itself.
+                if j != i && cj.reach <= c.t0 {
+                    continue;
+                }
+                if let Some(ej) = entries.get(cj.section as usize)
+                    && ej.codec == Codec::Zstd
+                {
                     decoded += ej.raw_len;
                 }
                 live += cj.leaves as u64;
@@ -153,9 +198,10 @@ impl MemoryReport {
             });
         }
         MemoryReport {
-            source: r.path().display().to_string(),
-            file_bytes: r.file_len(),
-            table_bytes: r.table_bytes(),
+            source: source.to_string(),
+            file_bytes,
+            table_bytes: (super::format::HEADER_LEN + entries.len() * super::format::ENTRY_LEN)
+                as u64,
             sections,
             pools: Vec::new(),
             chunks,

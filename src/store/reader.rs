@@ -528,6 +528,35 @@ impl Reader {
         Ok(n)
     }
 
+    /// The links section (written with `--keep-links`), or an empty list when the file
+    /// has none.
+    pub fn links(&self) -> Result<Vec<super::records::LinkRecord>> {
+        let Some(i) = self
+            .sections
+            .iter()
+            .position(|e| e.kind == SectionKind::Links)
+        else {
+            return Ok(Vec::new());
+        };
+        let bytes = self.section_bytes(i)?;
+        let v = rkyv::access::<
+            rkyv::vec::ArchivedVec<super::records::ArchivedLinkRecord>,
+            rancor::Error,
+        >(&bytes)
+        .map_err(|e| rkyv_err(&self.path, self.place(i), "the link records", e))?;
+        Ok(v.iter()
+            .map(|l| super::records::LinkRecord {
+                receiver: l.receiver.to_native(),
+                source: l.source.to_native(),
+                time: l.time.map(|x| x.to_native()),
+                coefficient: l.coefficient.map(|x| x.to_native()),
+                error: l.error.to_native(),
+                active: l.active.to_native(),
+                reserved: l.reserved.to_native(),
+            })
+            .collect())
+    }
+
     /// Every leaf of every chunk, validated (reads the whole file).
     pub fn all_leaves(&self) -> Result<Vec<Leaf>> {
         let mut out = Vec::new();

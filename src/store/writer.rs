@@ -308,6 +308,19 @@ impl Writer {
         }
     }
 
+    /// The counters of the file so far (sections and chunks written, bytes), for
+    /// `solve --stats` while the solve streams; the solver adds its pools with
+    /// [`super::MemoryReport::add_pool`].
+    pub fn memory_report(&self) -> super::MemoryReport {
+        super::MemoryReport::from_parts(
+            &self.path.display().to_string(),
+            self.pos,
+            &self.entries,
+            &self.chunks,
+            self.patch_corners.len() as u64,
+        )
+    }
+
     /// Writes the remaining sections, the table and the header, then (for a file)
     /// fsyncs and renames the temporary file to its final name.
     pub fn finish(mut self, stats: &SolveStats) -> Result<()> {
