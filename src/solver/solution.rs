@@ -117,6 +117,16 @@ impl Leaf {
         }
     }
 
+    /// True if this leaf holds at time `t` in a scene whose time domain ends at
+    /// `t_end`: `t0 <= t < t1`, or `t0 <= t <= t1` when `t1` is the domain's end (so
+    /// that exactly one leaf of a domain holds at a chunk boundary, and static leaves
+    /// `[t, t]` hold at `t`). Compared in `f32`, the precision leaf times are kept in.
+    pub fn is_live(&self, t: f64, t_end: f64) -> bool {
+        let (t, t_end) = (t as f32, t_end as f32);
+        let [t0, t1] = self.time;
+        t0 <= t && (t < t1 || (t <= t1 && t1 >= t_end))
+    }
+
     /// Area-weighted mean radiosity of the leaf (exact for the interpolant).
     pub fn mean(&self) -> [f64; 3] {
         let n = self.corners as usize;
