@@ -16,10 +16,11 @@
 //! group of collinear points reverses as a block). The piece of a face of the complex
 //! inside one gap is a *cell*; a face (§2.2: rays with label `(O_l, O_r)` that can be
 //! moved into each other keeping the label) is the union of the cells of one label
-//! that touch, found with union-find: cells of neighbouring gaps with the same label
-//! share a face (a curve can be crossed without a label change only if the point's
-//! segments are on neither side of the free segment), and so do the cells meeting at
-//! one event point. The chart's seam `theta0 + pi ~ theta0` is glued with the order
+//! that touch along a stretch of curve or continue through an event, found with
+//! union-find: cells of neighbouring gaps with the same label share a face (a curve
+//! can be crossed without a label change only if the point's segments are on neither
+//! side of the free segment); regions meeting at an event point only are not joined
+//! (faces are open sets). The chart's seam `theta0 + pi ~ theta0` is glued with the order
 //! reversed (`p(theta + pi) = -p(theta)`); `theta0` is chosen in the widest event-free
 //! interval so that no two curves meet on the seam.
 //!
@@ -782,23 +783,29 @@ impl<'g> State<'g> {
             for &j in &adj {
                 self.rec.adj_start[j] = theta;
             }
-            // Unions: the gaps meeting at each event point, and each new boundary gap
-            // with its unchanged neighbour across a curve.
+            // Unions (faces are open sets: only regions sharing a stretch of curve or
+            // continuing in time are joined, never regions touching at the event
+            // point alone, e.g. the two sides of a segment seen along its own line):
+            // new neighbours across a curve, and the gaps just above the unchanged
+            // point below the block / just below the one above it, which continue
+            // through the event.
             for (s, vs) in changes {
                 let (a, b) = gap_range(*s, vs.len());
-                let mut set: Vec<u32> = Vec::new();
-                for k in a..=b {
-                    if let Ok(i) = gaps.binary_search(&k) {
-                        set.push(dead[i]);
+                let dead_at = |k: usize| gaps.binary_search(&k).map_or(NONE, |i| dead[i]);
+                for k in a..b {
+                    self.union_gaps(&[self.rec.gid[k], self.rec.gid[k + 1]]);
+                }
+                if *s >= 1 {
+                    self.union_gaps(&[dead_at(a), self.rec.gid[a]]);
+                    if a >= 1 {
+                        self.union_gaps(&[self.rec.gid[a - 1], self.rec.gid[a]]);
                     }
-                    set.push(self.rec.gid[k]);
                 }
-                self.union_gaps(&set);
-                if a >= 1 {
-                    self.union_gaps(&[self.rec.gid[a - 1], self.rec.gid[a]]);
-                }
-                if b + 1 < ng {
-                    self.union_gaps(&[self.rec.gid[b], self.rec.gid[b + 1]]);
+                if s + vs.len() < np {
+                    self.union_gaps(&[dead_at(b), self.rec.gid[b]]);
+                    if b + 1 < ng {
+                        self.union_gaps(&[self.rec.gid[b], self.rec.gid[b + 1]]);
+                    }
                 }
             }
         }
