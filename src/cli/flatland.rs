@@ -5,6 +5,7 @@
 //! the form factors are updated between times (only those the motion changes, see
 //! `rhier::flatland::dynamic`) and each frame reports what the update did.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
@@ -87,7 +88,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .fold(0.0, f64::max);
             update["verify"] = json!({"max_abs_dF": df, "max_abs_dB": db});
         }
-        println!(
+        let _ = writeln!(
+            std::io::stdout(),
             "t = {t}: {} elements, {} non-zero form factors; {}: {} recomputed, {} cells visited, {:.3} ms",
             sol.geom.elements.len(),
             report.ff_total,

@@ -230,6 +230,7 @@ pub struct Clip {
 impl Clip {
     /// The lines meeting `hull(sets[0])` or `hull(sets[1])`; 1 or 2 non-empty sets.
     pub fn new(sets: Vec<Vec<[f64; 2]>>) -> Self {
+        let sets: Vec<Vec<[f64; 2]>> = sets.into_iter().filter(|s| !s.is_empty()).collect();
         let all: Vec<[f64; 2]> = sets.iter().flatten().copied().collect();
         let mut set_angles = Vec::new();
         for i in 0..all.len() {
@@ -239,18 +240,43 @@ impl Clip {
                 }
             }
         }
+        set_angles.sort_by(f64::total_cmp);
+        set_angles.dedup();
         Clip { sets, set_angles }
     }
 
     /// Measure of the lines of the gap `(u below, w above)` over `[a, b]` in the region.
     pub fn area(&self, u: [f64; 2], w: [f64; 2], a: f64, b: f64) -> f64 {
+        // Quick rejection: the gap's p-range over [a, b] misses a set's p-range.
+        let (u_lo, _) = curve_range(u, a, b);
+        let (_, w_hi) = curve_range(w, a, b);
+        let meets = |si: usize| {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for &q in &self.sets[si] {
+                let (l, h) = curve_range(q, a, b);
+                lo = lo.min(l);
+                hi = hi.max(h);
+            }
+            w_hi > lo && u_lo < hi
+        };
         match self.sets.len() {
             0 => 0.0,
-            1 => self.band(u, w, &[0], a, b),
-            _ => {
-                self.band(u, w, &[0], a, b) + self.band(u, w, &[1], a, b)
-                    - self.band(u, w, &[0, 1], a, b)
+            1 => {
+                if meets(0) {
+                    self.band(u, w, &[0], a, b)
+                } else {
+                    0.0
+                }
             }
+            _ => match (meets(0), meets(1)) {
+                (false, false) => 0.0,
+                (true, false) => self.band(u, w, &[0], a, b),
+                (false, true) => self.band(u, w, &[1], a, b),
+                (true, true) => {
+                    self.band(u, w, &[0], a, b) + self.band(u, w, &[1], a, b)
+                        - self.band(u, w, &[0, 1], a, b)
+                }
+            },
         }
     }
 
@@ -274,8 +300,16 @@ impl Clip {
                 }
             }
         }
-        for &ang in &self.set_angles {
-            push(ang, &mut bps);
+        // Precomputed set-set directions inside (a, b), found by binary search.
+        let a_mod = a.rem_euclid(PI);
+        let span = b - a;
+        let sa = &self.set_angles;
+        let from = sa.partition_point(|&x| x <= a_mod);
+        let to = sa.partition_point(|&x| x < (a_mod + span).min(PI));
+        bps.extend(sa[from..to].iter().map(|&x| a + (x - a_mod)));
+        if a_mod + span > PI {
+            let to2 = sa.partition_point(|&x| x < a_mod + span - PI);
+            bps.extend(sa[..to2].iter().map(|&x| a + (x + PI - a_mod)));
         }
         bps.sort_by(f64::total_cmp);
         let mut acc = 0.0;
@@ -313,6 +347,22 @@ impl Clip {
         }
         acc
     }
+}
+
+/// Exact `(min, max)` of the curve `v . n(theta)` over `[a, b]` (`b - a <= pi`).
+fn curve_range(v: [f64; 2], a: f64, b: f64) -> (f64, f64) {
+    let (pa, pb) = (proj(v, a), proj(v, b));
+    let (mut lo, mut hi) = (pa.min(pb), pa.max(pb));
+    // Interior extrema where v . d(theta) = 0: theta = angle(v) + pi/2 (mod pi).
+    let r = v[0].hypot(v[1]);
+    let ext = v[1].atan2(v[0]) + 0.5 * PI;
+    let t = ext + PI * ((a - ext) / PI).ceil();
+    if t > a && t < b {
+        let pt = proj(v, t);
+        lo = lo.min(pt).max(-r);
+        hi = hi.max(pt).min(r);
+    }
+    (lo, hi)
 }
 
 /// Direction of the line through `a` and `b`, in `[0, pi)`.
