@@ -46,7 +46,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::Result;
-use crate::geometry::{Patches, SceneBvh, point_to_polygon};
+use crate::geometry::{Patches, SceneBvh, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
 use crate::pools::{ElementId, ElementKind, ElementPool, LinkId, LinkPool, LinkState, Storage};
 use crate::scene::Scene;
@@ -89,6 +89,8 @@ pub struct SolveOptions {
     pub recon_tol: f64,
     /// Smallest reconstruction cell edge, as a fraction of the scene's diameter.
     pub recon_min_size: f64,
+    /// Cut patches along contact lines before solving ([`split_at_contacts`]).
+    pub contact_meshing: bool,
 }
 
 impl Default for SolveOptions {
@@ -107,6 +109,7 @@ impl Default for SolveOptions {
             seed: 0x5eed,
             recon_tol: 0.02,
             recon_min_size: 1.0 / 512.0,
+            contact_meshing: true,
         }
     }
 }
@@ -145,7 +148,10 @@ impl<'a> Solver<'a> {
     /// Places the scene at its start time, builds BVHs, clusters and patch roots.
     pub fn new(scene: &'a Scene, opts: SolveOptions) -> Result<Self> {
         let t = scene.time.start;
-        let patches = Patches::at_time(scene, t);
+        let mut patches = Patches::at_time(scene, t);
+        if opts.contact_meshing {
+            patches = split_at_contacts(scene, &patches, t).0;
+        }
         let bvh = SceneBvh::build(scene, &patches, t);
         let mut elems = ElementPool::new(&opts.storage)?;
         let links = LinkPool::new(&opts.storage)?;
