@@ -263,9 +263,11 @@ fn check_moving_cube(s: &Scene) {
     assert_eq!((s.time.start, s.time.end), (0.0, 2.0));
     let names: Vec<&str> = s.objects.iter().map(|o| o.name.as_str()).collect();
     assert_eq!(names, ["room", "lamp", "cube"]);
-    // Room: 6 quads as 12 triangles, static, node translation baked in.
+    // Room: 6 quads written as 12 triangles, merged back; static, node translation
+    // baked in.
     let room = object(s, "room");
-    assert_eq!(room.polygons.len(), 12);
+    assert_eq!(room.polygons.len(), 6);
+    assert!(room.polygons.iter().all(|p| p.vertices.len() == 4));
     assert!(room.motion.is_none());
     let xs = room
         .polygons
@@ -279,7 +281,8 @@ fn check_moving_cube(s: &Scene) {
     }
     // Lamp: white 1.0 clamped, E = pi * emissiveFactor * strength 5, facing down.
     let lamp_obj = object(s, "lamp");
-    assert_eq!(lamp_obj.polygons.len(), 2);
+    assert_eq!(lamp_obj.polygons.len(), 1);
+    assert!((lamp_obj.polygons[0].area() - 1.0).abs() < 1e-12);
     assert!(
         lamp_obj
             .polygons
@@ -301,7 +304,9 @@ fn check_moving_cube(s: &Scene) {
     assert!((material(s, "red").rho[0] - 0.7).abs() < 1e-6);
     // Cube: mesh space kept (half-size 1), keys at the union {0, 1, 2}.
     let cube = object(s, "cube");
-    assert_eq!(cube.polygons.len(), 12);
+    assert_eq!(cube.polygons.len(), 6);
+    let area: f64 = cube.polygons.iter().map(Polygon::area).sum();
+    assert!((area - 24.0).abs() < 1e-12);
     let track: &MotionTrack = cube.motion.as_ref().unwrap();
     let times: Vec<f64> = track.keys.iter().map(|k| k.t).collect();
     assert_eq!(times, [0.0, 1.0, 2.0]);

@@ -170,8 +170,26 @@ fn check_polygons(scene: &Scene, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Planarity and convexity of a quad with non-zero area.
-fn check_quad(v: &[DVec3], n: DVec3, place: impl Fn() -> String, path: &Path) -> Result<()> {
+/// What makes a quad (of non-zero area) invalid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum QuadProblem {
+    /// `vertex` lies `distance` off the mean plane, beyond `tolerance`.
+    NotPlanar {
+        vertex: usize,
+        distance: f64,
+        tolerance: f64,
+    },
+    /// The corner at `vertex` turns against the normal.
+    Concave { vertex: usize },
+}
+
+/// Checks planarity (every vertex within [`PLANARITY_TOLERANCE`] × diameter of the
+/// plane through the centroid with the quad's normal) and convexity (no corner
+/// turning against the normal; collinear corners accepted) of a 4-vertex polygon of
+/// non-zero area.
+pub(crate) fn quad_problem(v: &[DVec3]) -> Option<QuadProblem> {
+    let n =
+        ((v[1] - v[0]).cross(v[2] - v[0]) + (v[2] - v[0]).cross(v[3] - v[0])).normalize_or_zero();
     let c = v.iter().copied().sum::<DVec3>() / 4.0;
     let mut diam: f64 = 0.0;
     for i in 0..4 {
@@ -179,36 +197,50 @@ fn check_quad(v: &[DVec3], n: DVec3, place: impl Fn() -> String, path: &Path) ->
             diam = diam.max(v[i].distance(v[j]));
         }
     }
-    let tol = PLANARITY_TOLERANCE * diam;
-    let (k, dev) = (0..4)
+    let tolerance = PLANARITY_TOLERANCE * diam;
+    let (vertex, distance) = (0..4)
         .map(|k| (k, n.dot(v[k] - c).abs()))
         .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
-    if dev > tol {
-        return Err(Error::invalid(
+    if distance > tolerance {
+        return Some(QuadProblem::NotPlanar {
+            vertex,
+            distance,
+            tolerance,
+        });
+    }
+    (0..4)
+        .find(|&k| {
+            let turn = (v[(k + 1) % 4] - v[k]).cross(v[(k + 2) % 4] - v[(k + 1) % 4]);
+            turn.dot(n) < -1e-9 * diam * diam
+        })
+        .map(|k| QuadProblem::Concave {
+            vertex: (k + 1) % 4,
+        })
+}
+
+/// Planarity and convexity of a quad with non-zero area, as an error.
+fn check_quad(v: &[DVec3], place: impl Fn() -> String, path: &Path) -> Result<()> {
+    match quad_problem(v) {
+        None => Ok(()),
+        Some(QuadProblem::NotPlanar {
+            vertex,
+            distance,
+            tolerance,
+        }) => Err(Error::invalid(
             path,
             place(),
             format!(
-                "a planar quad (every vertex within {PLANARITY_TOLERANCE} x diameter = {tol:.3e} of the mean plane)"
+                "a planar quad (every vertex within {PLANARITY_TOLERANCE} x diameter = {tolerance:.3e} of the mean plane)"
             ),
-            format!("vertex {k} is {dev:.3e} off the plane"),
-        ));
+            format!("vertex {vertex} is {distance:.3e} off the plane"),
+        )),
+        Some(QuadProblem::Concave { vertex }) => Err(Error::invalid(
+            path,
+            place(),
+            "a convex quad, counter-clockwise seen from its lit side",
+            format!("a reflex corner at vertex {vertex}"),
+        )),
     }
-    // Convex: every corner turns the same way as the polygon's normal (collinear
-    // corners accepted).
-    for k in 0..4 {
-        let turn = (v[(k + 1) % 4] - v[k])
-            .cross(v[(k + 2) % 4] - v[(k + 1) % 4])
-            .dot(n);
-        if turn < -1e-9 * diam * diam {
-            return Err(Error::invalid(
-                path,
-                place(),
-                "a convex quad, counter-clockwise seen from its lit side",
-                format!("a reflex corner at vertex {}", (k + 1) % 4),
-            ));
-        }
-    }
-    Ok(())
 }
 
 fn check_motion(scene: &mut Scene, path: &Path) -> Result<()> {
@@ -320,7 +352,7 @@ fn drop_degenerate(scene: &mut Scene, path: &Path) -> Result<()> {
             }
             if p.vertices.len() == 4 {
                 let place = || format!("object \"{}\", polygon {i}", o.name);
-                check_quad(&p.vertices, a.normalize(), place, path)?;
+                check_quad(&p.vertices, place, path)?;
             }
             kept.push(p);
         }
