@@ -1,10 +1,156 @@
-//! `rhier inspect`: not yet implemented.
+//! `rhier inspect FILE.rhier [--json]`: header, sections (stored and raw bytes),
+//! time chunks with their element counts, solve statistics, and the memory needed to
+//! play one frame ([`rhier::store::MemoryReport`], the counters `solve --stats` prints).
+
+use std::path::PathBuf;
+
+use rhier::store::{MemoryReport, Reader};
+use serde::Serialize;
 
 /// Arguments of `rhier inspect`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// The `.rhier` file.
+    pub file: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Skip checking every chunk (checksums, decompression, leaves): only the header,
+    /// table and metadata sections are validated, as when playing.
+    #[arg(long)]
+    pub no_verify: bool,
+}
+
+#[derive(Serialize)]
+struct HeaderJson {
+    version: u32,
+    min_reader_version: u32,
+    flags: u32,
+    moving: bool,
+    links: bool,
+    compressed: bool,
+    table_offset: u64,
+    sections: u32,
+    file_bytes: u64,
+}
+
+#[derive(Serialize)]
+struct SceneJson {
+    time: [f64; 2],
+    materials: usize,
+    objects: usize,
+    moving_objects: usize,
+    patches: usize,
+    camera: bool,
+}
+
+#[derive(Serialize)]
+struct StatsJson {
+    seconds: f64,
+    iterations: u32,
+    elements: u64,
+    links_active: u64,
+    links_passive: u64,
+    estimated_error: f64,
+    residual: f64,
+}
+
+#[derive(Serialize)]
+struct Inspect {
+    file: String,
+    header: HeaderJson,
+    scene: SceneJson,
+    stats: StatsJson,
+    /// Leaves checked in every chunk (`None` with `--no-verify`).
+    verified_leaves: Option<u64>,
+    memory: MemoryReport,
+}
 
 /// Runs `rhier inspect`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("rhier inspect is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    use rhier::store::format::{FLAG_COMPRESSED, FLAG_LINKS, FLAG_MOVING};
+    let r = Reader::open(&args.file)?;
+    let verified_leaves = if args.no_verify {
+        None
+    } else {
+        Some(r.verify()?)
+    };
+    let h = r.header();
+    let s = r.stats();
+    let td = r.time_domain();
+    let report = Inspect {
+        file: args.file.display().to_string(),
+        header: HeaderJson {
+            version: h.version,
+            min_reader_version: h.min_reader_version,
+            flags: h.flags,
+            moving: h.flags & FLAG_MOVING != 0,
+            links: h.flags & FLAG_LINKS != 0,
+            compressed: h.flags & FLAG_COMPRESSED != 0,
+            table_offset: h.table_offset,
+            sections: h.table_count,
+            file_bytes: h.file_len,
+        },
+        scene: SceneJson {
+            time: [td.start, td.end],
+            materials: r.materials().len(),
+            objects: r.objects().len(),
+            moving_objects: r.objects().iter().filter(|o| o.motion.is_some()).count(),
+            patches: r.patches().len(),
+            camera: r.camera().is_some(),
+        },
+        stats: StatsJson {
+            seconds: s.seconds,
+            iterations: s.iterations,
+            elements: s.elements,
+            links_active: s.links_active,
+            links_passive: s.links_passive,
+            estimated_error: s.estimated_error,
+            residual: s.residual,
+        },
+        verified_leaves,
+        memory: MemoryReport::from_reader(&r),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
+    let hj = &report.header;
+    println!("file: {}", report.file);
+    println!(
+        "header: version {} (readable by version >= {}), flags {:#x} [moving: {}, links: {}, compressed: {}], {} sections, table at byte {}",
+        hj.version,
+        hj.min_reader_version,
+        hj.flags,
+        hj.moving,
+        hj.links,
+        hj.compressed,
+        hj.sections,
+        hj.table_offset
+    );
+    let sc = &report.scene;
+    println!(
+        "scene: time [{}, {}] s, {} materials, {} objects ({} moving), {} patches, camera: {}",
+        sc.time[0], sc.time[1], sc.materials, sc.objects, sc.moving_objects, sc.patches, sc.camera
+    );
+    let st = &report.stats;
+    println!(
+        "solve: {:.3} s, {} iterations, {} elements, {} active + {} passive links, estimated error {:.3e}, residual {:.3e}",
+        st.seconds,
+        st.iterations,
+        st.elements,
+        st.links_active,
+        st.links_passive,
+        st.estimated_error,
+        st.residual
+    );
+    match report.verified_leaves {
+        Some(n) => println!(
+            "verified: {} chunks, {n} leaves, all checksums and records valid",
+            r.chunks().len()
+        ),
+        None => println!("verified: header, table and metadata only (--no-verify)"),
+    }
+    print!("{}", report.memory);
+    Ok(())
 }

@@ -81,8 +81,16 @@ impl Leaf {
         } else {
             let (u0, v0) = p(0);
             let (u1, v1) = p(2);
-            let s = if u1 > u0 { ((u - u0) / (u1 - u0)).clamp(0.0, 1.0) } else { 0.5 };
-            let t = if v1 > v0 { ((v - v0) / (v1 - v0)).clamp(0.0, 1.0) } else { 0.5 };
+            let s = if u1 > u0 {
+                ((u - u0) / (u1 - u0)).clamp(0.0, 1.0)
+            } else {
+                0.5
+            };
+            let t = if v1 > v0 {
+                ((v - v0) / (v1 - v0)).clamp(0.0, 1.0)
+            } else {
+                0.5
+            };
             [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t]
         }
     }
@@ -107,6 +115,16 @@ impl Leaf {
             let (u1, v1) = p(2);
             u >= u0 - eps && u <= u1 + eps && v >= v0 - eps && v <= v1 + eps
         }
+    }
+
+    /// True if this leaf holds at time `t` in a scene whose time domain ends at
+    /// `t_end`: `t0 <= t < t1`, or `t0 <= t <= t1` when `t1` is the domain's end (so
+    /// that exactly one leaf of a domain holds at a chunk boundary, and static leaves
+    /// `[t, t]` hold at `t`). Compared in `f32`, the precision leaf times are kept in.
+    pub fn is_live(&self, t: f64, t_end: f64) -> bool {
+        let (t, t_end) = (t as f32, t_end as f32);
+        let [t0, t1] = self.time;
+        t0 <= t && (t < t1 || (t <= t1 && t1 >= t_end))
     }
 
     /// Area-weighted mean radiosity of the leaf (exact for the interpolant).
@@ -142,7 +160,10 @@ impl PatchGeometry {
         if self.corners == 3 {
             p[0] + u * (p[1] - p[0]) + v * (p[2] - p[0])
         } else {
-            (1.0 - u) * (1.0 - v) * p[0] + u * (1.0 - v) * p[1] + u * v * p[2] + (1.0 - u) * v * p[3]
+            (1.0 - u) * (1.0 - v) * p[0]
+                + u * (1.0 - v) * p[1]
+                + u * v * p[2]
+                + (1.0 - u) * v * p[3]
         }
     }
 }

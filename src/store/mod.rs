@@ -1,1 +1,25 @@
-//! store: see the crate tour in lib.rs. (Under construction.)
+//! The `.rhier` file: a solved hierarchy persisted so that frames can be played back,
+//! probed and inspected without the solver and without loading everything.
+//!
+//! The byte layout is specified in `formats/rhier.md`; this module mirrors it:
+//! [`format`] holds the header and section-table layout, [`records`] the rkyv records
+//! of each section, [`writer`] streams a file chunk by chunk in time order and makes it
+//! valid only when finished (temporary name, fsync, rename), [`reader`] maps a file and
+//! validates it before any rkyv access, and [`memory`] holds the named counters that
+//! `inspect` and `solve --stats` print.
+//!
+//! It does not evaluate radiosity: that is [`crate::playback`], which runs the same
+//! code on a [`crate::solver::Solution`] in memory and on a [`Reader`].
+
+pub mod format;
+pub mod memory;
+pub mod reader;
+pub mod records;
+pub mod samples;
+pub mod writer;
+
+pub use format::{Codec, Header, SectionEntry, SectionKind};
+pub use memory::MemoryReport;
+pub use reader::{Reader, StoredObject};
+pub use records::LinkRecord;
+pub use writer::{SolutionHeader, WriteOptions, Writer, encode_solution, write_solution};

@@ -1,0 +1,621 @@
+//! The `.rhier` reader: maps a file (memmap2) or takes bytes in memory, validates it,
+//! and hands out the scene, patches and the leaves live at a time `t`.
+//!
+//! How it works: [`Reader::open`] checks, in this order and before any rkyv access, the
+//! header (magic, CRC, version range, flags, stated file length), the section table's
+//! CRC and every entry's bounds, then the CRCs of the small metadata sections (scene,
+//! patches, chunk index, stats), which it decodes through rkyv's validating `access`.
+//! Chunks are checked (CRC, bounded decompression, rkyv validation, leaf invariants)
+//! only when a time that needs them is asked for, so opening and playing one frame
+//! touch the metadata and the few chunks live at that time, never the whole file.
+//!
+//! What it does not do: it never trusts a length before comparing it to the bytes that
+//! exist; decompression grows its buffer with the data actually produced and stops at
+//! the stated raw length, so a lying length cannot cause a huge allocation. It keeps no
+//! cache of decoded chunks (the OS page cache serves mapped raw chunks).
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use glam::DAffine3;
+use rkyv::rancor;
+
+use super::format::{Codec, ENTRY_LEN, HEADER_LEN, Header, SectionEntry, SectionKind, crc32};
+use super::records::{
+    ArchivedChunkIndexRecord, ArchivedLeafRecord, ArchivedPatchRecord, ArchivedSceneRecord,
+    ArchivedStatsRecord, ChunkRecord,
+};
+use crate::error::{Error, Result};
+use crate::scene::{
+    Camera, Material, MaterialId, MotionKey, MotionTrack, Object, Polygon, Scene, TimeDomain,
+};
+use crate::solver::{Leaf, PatchGeometry, Solution, SolveStats};
+
+/// Largest zstd window (log2 bytes) a reader accepts: bounds the decoder's memory.
+pub const ZSTD_WINDOW_LOG_MAX: u32 = 27;
+
+/// The bytes of an opened file.
+enum Backing {
+    Mapped(memmap2::Mmap),
+    Memory(Vec<u8>),
+}
+
+impl Backing {
+    fn bytes(&self) -> &[u8] {
+        match self {
+            Backing::Mapped(m) => m,
+            Backing::Memory(v) => v,
+        }
+    }
+}
+
+/// An object as stored: name and motion (only for objects that move).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StoredObject {
+    /// Name.
+    pub name: String,
+    /// Motion track; `None` = static.
+    pub motion: Option<MotionTrack>,
+}
+
+impl StoredObject {
+    /// Object → world map at `t`.
+    pub fn to_world(&self, t: f64) -> DAffine3 {
+        self.motion.as_ref().map_or(DAffine3::IDENTITY, |m| m.at(t))
+    }
+}
+
+/// A validated, opened `.rhier` file.
+pub struct Reader {
+    path: PathBuf,
+    data: Backing,
+    header: Header,
+    sections: Vec<SectionEntry>,
+    time: TimeDomain,
+    materials: Vec<Material>,
+    objects: Vec<StoredObject>,
+    camera: Option<Camera>,
+    patches: Vec<PatchGeometry>,
+    chunks: Vec<ChunkRecord>,
+    stats: SolveStats,
+}
+
+impl std::fmt::Debug for Reader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Reader")
+            .field("path", &self.path)
+            .field("header", &self.header)
+            .field("sections", &self.sections.len())
+            .finish()
+    }
+}
+
+fn rkyv_err(path: &Path, place: String, what: &str, e: rancor::Error) -> Error {
+    Error::invalid(
+        path,
+        place,
+        format!("a valid rkyv archive of {what}"),
+        e.to_string(),
+    )
+}
+
+impl Reader {
+    /// Maps and validates `path`.
+    pub fn open(path: &Path) -> Result<Reader> {
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        // SAFETY: the map is read-only and private to this reader; every byte read from
+        // it is validated (CRC, bounds, rkyv checks) before use. Another process
+        // truncating the file while mapped is outside what any mmap reader can guard.
+        let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
+        Reader::validate(path.to_path_buf(), Backing::Mapped(map))
+    }
+
+    /// Validates a file's bytes held in memory (`name` is used in errors).
+    pub fn from_bytes(name: &Path, bytes: Vec<u8>) -> Result<Reader> {
+        Reader::validate(name.to_path_buf(), Backing::Memory(bytes))
+    }
+
+    fn validate(path: PathBuf, data: Backing) -> Result<Reader> {
+        let bytes = data.bytes();
+        // 1. Header: magic, CRC, versions, flags, lengths.
+        let header = Header::decode(&path, bytes)?;
+        // 2. Section table: CRC, then each entry's kind, codec and bounds.
+        let range = header.table_range();
+        let table = &bytes[range.clone()];
+        let crc = crc32(table);
+        if crc != header.table_crc {
+            return Err(Error::invalid(
+                &path,
+                format!("byte {} (section table)", range.start),
+                format!("CRC-32 {:#010x} stated in the header", header.table_crc),
+                format!("{crc:#010x}"),
+            ));
+        }
+        let mut sections = Vec::with_capacity(header.table_count as usize);
+        for (i, b) in table.chunks_exact(ENTRY_LEN).enumerate() {
+            let at = range.start + i * ENTRY_LEN;
+            sections.push(SectionEntry::decode(&path, i, at, b, header.table_offset)?);
+        }
+        let single = |kind: SectionKind| -> Result<usize> {
+            let mut found = sections.iter().enumerate().filter(|(_, e)| e.kind == kind);
+            match (found.next(), found.next()) {
+                (Some((i, _)), None) => Ok(i),
+                _ => Err(Error::invalid(
+                    &path,
+                    format!("byte {} (section table)", range.start),
+                    format!("exactly one {} section", kind.name()),
+                    format!("{}", sections.iter().filter(|e| e.kind == kind).count()),
+                )),
+            }
+        };
+        let (i_scene, i_patches, i_index, i_stats) = (
+            single(SectionKind::Scene)?,
+            single(SectionKind::Patches)?,
+            single(SectionKind::ChunkIndex)?,
+            single(SectionKind::Stats)?,
+        );
+        let mut reader = Reader {
+            path,
+            data,
+            header,
+            sections,
+            time: TimeDomain::default(),
+            materials: Vec::new(),
+            objects: Vec::new(),
+            camera: None,
+            patches: Vec::new(),
+            chunks: Vec::new(),
+            stats: SolveStats::default(),
+        };
+        reader.load_scene(i_scene)?;
+        reader.load_patches(i_patches)?;
+        reader.load_index(i_index)?;
+        reader.load_stats(i_stats)?;
+        Ok(reader)
+    }
+
+    /// The stored bytes of section `i` after the CRC check, decompressed if needed.
+    fn section_bytes(&self, i: usize) -> Result<std::borrow::Cow<'_, [u8]>> {
+        let e = &self.sections[i];
+        let stored = &self.data.bytes()[e.offset as usize..(e.offset + e.stored_len) as usize];
+        let crc = crc32(stored);
+        if crc != e.crc {
+            return Err(Error::invalid(
+                &self.path,
+                format!("byte {} ({} section {i})", e.offset, e.kind.name()),
+                format!("CRC-32 {:#010x} stated in the section table", e.crc),
+                format!("{crc:#010x}"),
+            ));
+        }
+        match e.codec {
+            Codec::Raw => Ok(std::borrow::Cow::Borrowed(stored)),
+            Codec::Zstd => {
+                let place = || format!("byte {} ({} section {i}, zstd)", e.offset, e.kind.name());
+                let mut dec = zstd::stream::read::Decoder::with_buffer(stored).map_err(|err| {
+                    Error::invalid(&self.path, place(), "a zstd frame", err.to_string())
+                })?;
+                dec.window_log_max(ZSTD_WINDOW_LOG_MAX).map_err(|err| {
+                    Error::invalid(&self.path, place(), "a zstd frame", err.to_string())
+                })?;
+                // Grow with the data actually produced, never by the stated length.
+                let mut out = Vec::new();
+                dec.take(e.raw_len.saturating_add(1))
+                    .read_to_end(&mut out)
+                    .map_err(|err| {
+                        Error::invalid(&self.path, place(), "a valid zstd frame", err.to_string())
+                    })?;
+                if out.len() as u64 != e.raw_len {
+                    return Err(Error::invalid(
+                        &self.path,
+                        place(),
+                        format!("{} bytes once decompressed", e.raw_len),
+                        if out.len() as u64 > e.raw_len {
+                            "more".to_string()
+                        } else {
+                            format!("{}", out.len())
+                        },
+                    ));
+                }
+                Ok(std::borrow::Cow::Owned(out))
+            }
+        }
+    }
+
+    fn place(&self, i: usize) -> String {
+        let e = &self.sections[i];
+        format!("byte {} ({} section {i})", e.offset, e.kind.name())
+    }
+
+    fn load_scene(&mut self, i: usize) -> Result<()> {
+        let bytes = self.section_bytes(i)?;
+        let s = rkyv::access::<ArchivedSceneRecord, rancor::Error>(&bytes)
+            .map_err(|e| rkyv_err(&self.path, self.place(i), "the scene record", e))?;
+        let time = TimeDomain {
+            start: s.time[0].to_native(),
+            end: s.time[1].to_native(),
+        };
+        let materials: Vec<Material> = s
+            .materials
+            .iter()
+            .map(|m| Material {
+                name: m.name.to_string(),
+                rho: m.rho.map(|x| x.to_native()),
+                emission: m.emission.map(|x| x.to_native()),
+            })
+            .collect();
+        let mut objects = Vec::with_capacity(s.objects.len());
+        for (k, o) in s.objects.iter().enumerate() {
+            let motion = o.motion.as_ref().map(|keys| MotionTrack {
+                keys: keys.iter().map(MotionKey::from).collect(),
+            });
+            if let Some(m) = &motion {
+                let sorted = m.keys.windows(2).all(|w| w[0].t < w[1].t);
+                let finite = m.keys.iter().all(|k| {
+                    k.t.is_finite()
+                        && k.translation.is_finite()
+                        && k.rotation.is_finite()
+                        && k.scale.is_finite()
+                });
+                if m.keys.is_empty() || !sorted || !finite {
+                    return Err(Error::invalid(
+                        &self.path,
+                        format!("{}, object {k} motion", self.place(i)),
+                        "at least one finite key, strictly increasing in time",
+                        format!("{} keys", m.keys.len()),
+                    ));
+                }
+            }
+            objects.push(StoredObject {
+                name: o.name.to_string(),
+                motion,
+            });
+        }
+        let camera = s.camera.as_ref().map(Camera::from);
+        drop(bytes);
+        if !(time.start.is_finite() && time.end.is_finite() && time.start <= time.end) {
+            return Err(Error::invalid(
+                &self.path,
+                format!("{}, time domain", self.place(i)),
+                "finite start <= end",
+                format!("[{}, {}]", time.start, time.end),
+            ));
+        }
+        self.time = time;
+        self.materials = materials;
+        self.objects = objects;
+        self.camera = camera;
+        Ok(())
+    }
+
+    fn load_patches(&mut self, i: usize) -> Result<()> {
+        let bytes = self.section_bytes(i)?;
+        let v = rkyv::access::<rkyv::vec::ArchivedVec<ArchivedPatchRecord>, rancor::Error>(&bytes)
+            .map_err(|e| rkyv_err(&self.path, self.place(i), "the patch records", e))?;
+        let mut patches = Vec::with_capacity(v.len());
+        for (k, p) in v.iter().enumerate() {
+            let p = PatchGeometry::from(p);
+            let ok = (p.object as usize) < self.objects.len()
+                && (p.material as usize) < self.materials.len()
+                && (p.corners == 3 || p.corners == 4)
+                && p.vertices.iter().all(|v| v.is_finite());
+            if !ok {
+                return Err(Error::invalid(
+                    &self.path,
+                    format!("{}, patch {k}", self.place(i)),
+                    format!(
+                        "object < {}, material < {}, 3 or 4 finite corners",
+                        self.objects.len(),
+                        self.materials.len()
+                    ),
+                    format!(
+                        "object {}, material {}, {} corners",
+                        p.object, p.material, p.corners
+                    ),
+                ));
+            }
+            patches.push(p);
+        }
+        drop(bytes);
+        self.patches = patches;
+        Ok(())
+    }
+
+    fn load_index(&mut self, i: usize) -> Result<()> {
+        let bytes = self.section_bytes(i)?;
+        let idx = rkyv::access::<ArchivedChunkIndexRecord, rancor::Error>(&bytes)
+            .map_err(|e| rkyv_err(&self.path, self.place(i), "the chunk index", e))?;
+        let mut chunks = Vec::with_capacity(idx.chunks.len());
+        for (k, c) in idx.chunks.iter().enumerate() {
+            let c = ChunkRecord {
+                t0: c.t0.to_native(),
+                t1: c.t1.to_native(),
+                reach: c.reach.to_native(),
+                section: c.section.to_native(),
+                leaves: c.leaves.to_native(),
+                carry_from: c.carry_from.to_native(),
+            };
+            let prev_t1 = chunks
+                .last()
+                .map_or(self.time.start, |p: &ChunkRecord| p.t1);
+            let entry = self.sections.get(c.section as usize);
+            let ok = c.t0.is_finite()
+                && c.t1.is_finite()
+                && c.reach.is_finite()
+                && c.t0 >= prev_t1
+                && c.t1 >= c.t0
+                && c.t1 <= self.time.end
+                && c.reach >= c.t0
+                && (c.carry_from as usize) <= k
+                && entry
+                    .is_some_and(|e| e.kind == SectionKind::Chunk && e.items == c.leaves as u64);
+            if !ok {
+                return Err(Error::invalid(
+                    &self.path,
+                    format!("{}, chunk {k}", self.place(i)),
+                    format!(
+                        "a chunk in time order inside [{}, {}] naming a chunk section with its leaf count",
+                        self.time.start, self.time.end
+                    ),
+                    format!(
+                        "[{}, {}] reach {} section {} leaves {} carry_from {}",
+                        c.t0, c.t1, c.reach, c.section, c.leaves, c.carry_from
+                    ),
+                ));
+            }
+            chunks.push(c);
+        }
+        drop(bytes);
+        self.chunks = chunks;
+        Ok(())
+    }
+
+    fn load_stats(&mut self, i: usize) -> Result<()> {
+        let bytes = self.section_bytes(i)?;
+        let s = rkyv::access::<ArchivedStatsRecord, rancor::Error>(&bytes)
+            .map_err(|e| rkyv_err(&self.path, self.place(i), "the stats record", e))?;
+        let stats = SolveStats::from(s);
+        drop(bytes);
+        self.stats = stats;
+        Ok(())
+    }
+
+    /// The file's path (or in-memory name).
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The decoded header.
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    /// The section table.
+    pub fn sections(&self) -> &[SectionEntry] {
+        &self.sections
+    }
+
+    /// The chunk index, in time order.
+    pub fn chunks(&self) -> &[ChunkRecord] {
+        &self.chunks
+    }
+
+    /// The scene's time domain.
+    pub fn time_domain(&self) -> TimeDomain {
+        self.time
+    }
+
+    /// Materials.
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// Objects (name and motion).
+    pub fn objects(&self) -> &[StoredObject] {
+        &self.objects
+    }
+
+    /// Camera, if the scene had one.
+    pub fn camera(&self) -> Option<Camera> {
+        self.camera
+    }
+
+    /// Patches.
+    pub fn patches(&self) -> &[PatchGeometry] {
+        &self.patches
+    }
+
+    /// Statistics of the solve that wrote the file.
+    pub fn stats(&self) -> &SolveStats {
+        &self.stats
+    }
+
+    /// Total length of the file in bytes.
+    pub fn file_len(&self) -> u64 {
+        self.header.file_len
+    }
+
+    /// The leaves stored in chunk `k`, validated.
+    pub fn chunk_leaves(&self, k: usize) -> Result<Vec<Leaf>> {
+        let c = *self.chunks.get(k).ok_or_else(|| {
+            Error::Usage(format!(
+                "{}: chunk {k} requested, the file has {} chunks",
+                self.path.display(),
+                self.chunks.len()
+            ))
+        })?;
+        let i = c.section as usize;
+        let bytes = self.section_bytes(i)?;
+        let v = rkyv::access::<rkyv::vec::ArchivedVec<ArchivedLeafRecord>, rancor::Error>(&bytes)
+            .map_err(|e| rkyv_err(&self.path, self.place(i), "the leaf records", e))?;
+        let (t0, t1) = (c.t0 as f32, c.t1 as f32);
+        let mut leaves = Vec::with_capacity(v.len());
+        for (n, l) in v.iter().enumerate() {
+            let l = Leaf::from(l);
+            let corners = self.patches.get(l.patch as usize).map(|p| p.corners);
+            let finite = l.uv.iter().flatten().all(|x| x.is_finite())
+                && l.b.iter().flatten().all(|x| x.is_finite());
+            let timely = l.time[0] >= t0 && l.time[0] <= t1 && l.time[1] >= l.time[0];
+            if corners != Some(l.corners) || !finite || !timely || l.time[1] as f64 > c.reach {
+                return Err(Error::invalid(
+                    &self.path,
+                    format!("{}, leaf {n}", self.place(i)),
+                    format!(
+                        "a leaf of one of {} patches with its corner count, finite values, starting in [{}, {}] and ending by {}",
+                        self.patches.len(),
+                        c.t0,
+                        c.t1,
+                        c.reach
+                    ),
+                    format!(
+                        "patch {}, {} corners, time [{}, {}]",
+                        l.patch, l.corners, l.time[0], l.time[1]
+                    ),
+                ));
+            }
+            leaves.push(l);
+        }
+        if leaves.len() != c.leaves as usize {
+            return Err(Error::invalid(
+                &self.path,
+                self.place(i),
+                format!("{} leaves (chunk index)", c.leaves),
+                format!("{}", leaves.len()),
+            ));
+        }
+        Ok(leaves)
+    }
+
+    /// Indices of the chunks that may hold leaves live at `t` (see
+    /// [`super::records::ChunkRecord`]): a binary search plus the carried chunks.
+    pub fn chunks_for(&self, t: f64) -> Vec<usize> {
+        let n = self.chunks.partition_point(|c| c.t0 <= t);
+        if n == 0 {
+            return Vec::new();
+        }
+        let i = n - 1;
+        let from = self.chunks[i].carry_from as usize;
+        // Same test as Leaf::is_live on the chunk's latest leaf end, in f32.
+        let (tf, end) = (t as f32, self.time.end as f32);
+        (from..=i)
+            .filter(|&j| {
+                let reach = self.chunks[j].reach as f32;
+                j == i || reach > tf || (reach >= tf && reach >= end)
+            })
+            .collect()
+    }
+
+    /// The leaves live at `t` ([`Leaf::is_live`]), reading only the chunks that need it.
+    pub fn leaves_at(&self, t: f64) -> Result<Vec<Leaf>> {
+        check_time(&self.path, self.time, t)?;
+        let mut out = Vec::new();
+        for k in self.chunks_for(t) {
+            out.extend(
+                self.chunk_leaves(k)?
+                    .into_iter()
+                    .filter(|l| l.is_live(t, self.time.end)),
+            );
+        }
+        Ok(out)
+    }
+
+    /// Validates every chunk (checksum, decompression, rkyv, leaf invariants) and
+    /// returns the number of leaves checked; reads the whole file.
+    pub fn verify(&self) -> Result<u64> {
+        let mut n = 0u64;
+        for k in 0..self.chunks.len() {
+            n += self.chunk_leaves(k)?.len() as u64;
+        }
+        Ok(n)
+    }
+
+    /// The links section (written with `--keep-links`), or an empty list when the file
+    /// has none.
+    pub fn links(&self) -> Result<Vec<super::records::LinkRecord>> {
+        let Some(i) = self
+            .sections
+            .iter()
+            .position(|e| e.kind == SectionKind::Links)
+        else {
+            return Ok(Vec::new());
+        };
+        let bytes = self.section_bytes(i)?;
+        let v = rkyv::access::<
+            rkyv::vec::ArchivedVec<super::records::ArchivedLinkRecord>,
+            rancor::Error,
+        >(&bytes)
+        .map_err(|e| rkyv_err(&self.path, self.place(i), "the link records", e))?;
+        Ok(v.iter()
+            .map(|l| super::records::LinkRecord {
+                receiver: l.receiver.to_native(),
+                source: l.source.to_native(),
+                time: l.time.map(|x| x.to_native()),
+                coefficient: l.coefficient.map(|x| x.to_native()),
+                error: l.error.to_native(),
+                active: l.active.to_native(),
+                reserved: l.reserved.to_native(),
+            })
+            .collect())
+    }
+
+    /// Every leaf of every chunk, validated (reads the whole file).
+    pub fn all_leaves(&self) -> Result<Vec<Leaf>> {
+        let mut out = Vec::new();
+        for k in 0..self.chunks.len() {
+            out.extend(self.chunk_leaves(k)?);
+        }
+        Ok(out)
+    }
+
+    /// The whole solution in memory: the scene rebuilt from the stored objects and
+    /// patches (polygons dropped by the solver are not stored), every leaf, the stats.
+    pub fn to_solution(&self) -> Result<Solution> {
+        let mut objects: Vec<Object> = self
+            .objects
+            .iter()
+            .map(|o| Object {
+                name: o.name.clone(),
+                polygons: Vec::new(),
+                motion: o.motion.clone(),
+            })
+            .collect();
+        for p in &self.patches {
+            objects[p.object as usize].polygons.push(Polygon {
+                vertices: p.vertices[..p.corners as usize].to_vec(),
+                material: MaterialId(p.material),
+            });
+        }
+        Ok(Solution {
+            scene: Scene {
+                time: self.time,
+                materials: self.materials.clone(),
+                objects,
+                camera: self.camera,
+                warnings: Vec::new(),
+            },
+            patches: self.patches.clone(),
+            leaves: self.all_leaves()?,
+            stats: self.stats.clone(),
+        })
+    }
+
+    /// Bytes of the header and section table.
+    pub fn table_bytes(&self) -> u64 {
+        (HEADER_LEN + self.sections.len() * ENTRY_LEN) as u64
+    }
+}
+
+/// Refuses a time outside the scene's time domain.
+pub(crate) fn check_time(path: &Path, time: TimeDomain, t: f64) -> Result<()> {
+    if !(t >= time.start && t <= time.end) {
+        return Err(Error::invalid(
+            path,
+            "requested time",
+            format!(
+                "a time in the scene's domain [{}, {}]",
+                time.start, time.end
+            ),
+            format!("{t}"),
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,507 @@
+//! The `.rhier` writer: streams sections in file order and makes the file valid only at
+//! [`Writer::finish`].
+//!
+//! How it works: [`Writer::create`] opens `<path>.tmp`, writes 64 zero bytes where the
+//! header goes (so a partial file has no magic and is refused), then the scene and
+//! patch sections. Each [`Writer::write_chunk`] appends one chunk section of leaves (in
+//! time order) and remembers its index entry. [`Writer::finish`] appends the links,
+//! chunk index and stats sections and the section table, writes the header at offset
+//! 0, fsyncs, renames `<path>.tmp` to `<path>` and fsyncs the directory. Dropping an
+//! unfinished writer removes the temporary file. Nothing is ever rewritten except the
+//! header, so memory stays at one chunk whatever the animation's length.
+//!
+//! What it stores: only what playback needs. Motion tracks only for objects that move;
+//! each leaf once, in the chunk where its time range starts (a leaf that holds over
+//! the whole animation is stored once); links only when
+//! [`WriteOptions::keep_links`] is set. It does not merge equal leaves that the caller
+//! hands in separate chunks: the solver gives each leaf its full time range.
+
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+use rkyv::rancor;
+
+use super::format::{
+    Codec, FLAG_COMPRESSED, FLAG_LINKS, FLAG_MOVING, HEADER_LEN, Header, MIN_READER_VERSION,
+    SectionEntry, SectionKind, VERSION, crc32,
+};
+use super::records::{
+    CameraRecord, ChunkIndexRecord, ChunkRecord, LeafRecord, LinkRecord, MaterialRecord,
+    ObjectRecord, PatchRecord, SceneRecord, StatsRecord, track_record,
+};
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use crate::solver::{Leaf, PatchGeometry, Solution, SolveStats};
+
+/// zstd level used for compressed sections.
+pub const ZSTD_LEVEL: i32 = 3;
+
+/// Choices of the writer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WriteOptions {
+    /// zstd-compress chunk sections (and the patch section) when it makes them smaller.
+    pub compress: bool,
+    /// Keep a links section (`--keep-links`); without it [`Writer::write_links`] is a
+    /// no-op.
+    pub keep_links: bool,
+}
+
+impl Default for WriteOptions {
+    fn default() -> Self {
+        WriteOptions {
+            compress: true,
+            keep_links: false,
+        }
+    }
+}
+
+/// What the writer needs before the first chunk: the scene and its patches.
+#[derive(Clone, Copy, Debug)]
+pub struct SolutionHeader<'a> {
+    /// The solved scene (time domain, materials, objects, motion, camera).
+    pub scene: &'a Scene,
+    /// Patches in solver order; leaves refer to them by index.
+    pub patches: &'a [PatchGeometry],
+}
+
+impl<'a> SolutionHeader<'a> {
+    /// The header of a complete solution.
+    pub fn of(solution: &'a Solution) -> Self {
+        SolutionHeader {
+            scene: &solution.scene,
+            patches: &solution.patches,
+        }
+    }
+}
+
+/// Where the bytes go: a temporary file renamed at the end, or memory.
+enum Sink {
+    File {
+        out: BufWriter<File>,
+        tmp: PathBuf,
+        done: bool,
+    },
+    Memory(Vec<u8>),
+}
+
+/// Streams a `.rhier` file; see the module header.
+pub struct Writer {
+    path: PathBuf,
+    sink: Sink,
+    pos: u64,
+    options: WriteOptions,
+    flags: u32,
+    time: [f64; 2],
+    patch_corners: Vec<u32>,
+    entries: Vec<SectionEntry>,
+    chunks: Vec<ChunkRecord>,
+    links: Vec<LinkRecord>,
+}
+
+impl std::fmt::Debug for Writer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Writer")
+            .field("path", &self.path)
+            .field("pos", &self.pos)
+            .field("chunks", &self.chunks.len())
+            .finish()
+    }
+}
+
+/// Temporary name used while writing `path`.
+pub fn temp_path(path: &Path) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(".tmp");
+    PathBuf::from(s)
+}
+
+impl Writer {
+    /// Starts writing `path` (through `<path>.tmp`): writes the placeholder header, the
+    /// scene section and the patch section.
+    pub fn create(
+        path: &Path,
+        header: &SolutionHeader<'_>,
+        options: WriteOptions,
+    ) -> Result<Writer> {
+        let tmp = temp_path(path);
+        let file = OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&tmp)
+            .map_err(|e| Error::io(&tmp, e))?;
+        let sink = Sink::File {
+            out: BufWriter::with_capacity(1 << 20, file),
+            tmp,
+            done: false,
+        };
+        Writer::start(path.to_path_buf(), sink, header, options)
+    }
+
+    /// Starts writing into memory; [`Writer::finish_to_bytes`] returns the file's bytes
+    /// (identical to what [`Writer::create`] + [`Writer::finish`] put on disk).
+    pub fn in_memory(
+        name: &Path,
+        header: &SolutionHeader<'_>,
+        options: WriteOptions,
+    ) -> Result<Writer> {
+        Writer::start(
+            name.to_path_buf(),
+            Sink::Memory(Vec::new()),
+            header,
+            options,
+        )
+    }
+
+    fn start(
+        path: PathBuf,
+        sink: Sink,
+        header: &SolutionHeader<'_>,
+        options: WriteOptions,
+    ) -> Result<Writer> {
+        let scene = header.scene;
+        let mut w = Writer {
+            path,
+            sink,
+            pos: 0,
+            options,
+            flags: 0,
+            time: [scene.time.start, scene.time.end],
+            patch_corners: header.patches.iter().map(|p| p.corners).collect(),
+            entries: Vec::new(),
+            chunks: Vec::new(),
+            links: Vec::new(),
+        };
+        if !(scene.time.start.is_finite() && scene.time.end.is_finite())
+            || scene.time.end < scene.time.start
+        {
+            return Err(Error::invalid(
+                &w.path,
+                "scene time domain",
+                "finite start <= end",
+                format!("[{}, {}]", scene.time.start, scene.time.end),
+            ));
+        }
+        for (i, p) in header.patches.iter().enumerate() {
+            let ok_obj = (p.object as usize) < scene.objects.len();
+            let ok_mat = (p.material as usize) < scene.materials.len();
+            if !ok_obj || !ok_mat || !(p.corners == 3 || p.corners == 4) {
+                return Err(Error::invalid(
+                    &w.path,
+                    format!("patch {i}"),
+                    format!(
+                        "object < {}, material < {}, 3 or 4 corners",
+                        scene.objects.len(),
+                        scene.materials.len()
+                    ),
+                    format!(
+                        "object {}, material {}, {} corners",
+                        p.object, p.material, p.corners
+                    ),
+                ));
+            }
+        }
+        w.emit(&[0u8; HEADER_LEN])?;
+        let record = SceneRecord {
+            time: w.time,
+            materials: scene.materials.iter().map(MaterialRecord::from).collect(),
+            objects: scene
+                .objects
+                .iter()
+                .map(|o| ObjectRecord {
+                    name: o.name.clone(),
+                    motion: o
+                        .motion
+                        .as_ref()
+                        .filter(|m| m.is_moving())
+                        .map(track_record),
+                })
+                .collect(),
+            camera: scene.camera.as_ref().map(CameraRecord::from),
+        };
+        if scene.has_motion() {
+            w.flags |= FLAG_MOVING;
+        }
+        let bytes = archive(&w.path, &record)?;
+        w.section(SectionKind::Scene, &bytes, 1, false)?;
+        let patches: Vec<PatchRecord> = header.patches.iter().map(PatchRecord::from).collect();
+        let bytes = archive(&w.path, &patches)?;
+        w.section(
+            SectionKind::Patches,
+            &bytes,
+            patches.len() as u64,
+            options.compress,
+        )?;
+        Ok(w)
+    }
+
+    /// Appends the chunk `[t0, t1]` holding `leaves`, each of which starts in it.
+    /// Chunks come in time order (`t0` >= the previous chunk's `t1`).
+    pub fn write_chunk(&mut self, t0: f64, t1: f64, leaves: &[Leaf]) -> Result<()> {
+        let index = self.chunks.len();
+        let prev_t1 = self.chunks.last().map_or(self.time[0], |c| c.t1);
+        let in_domain = t0 >= self.time[0] && t1 <= self.time[1];
+        if !(t0.is_finite() && t1.is_finite()) || t1 < t0 || t0 < prev_t1 || !in_domain {
+            return Err(Error::invalid(
+                &self.path,
+                format!("chunk {index}"),
+                format!(
+                    "a time range inside [{}, {}] starting at or after {prev_t1}",
+                    self.time[0], self.time[1]
+                ),
+                format!("[{t0}, {t1}]"),
+            ));
+        }
+        let mut reach = t0;
+        for (k, l) in leaves.iter().enumerate() {
+            let patch_corners = self.patch_corners.get(l.patch as usize).copied();
+            let (lt0, lt1) = (l.time[0], l.time[1]);
+            let starts_here = lt0 >= t0 as f32 && lt0 <= t1 as f32 && lt1 >= lt0;
+            if patch_corners != Some(l.corners) || !starts_here {
+                return Err(Error::invalid(
+                    &self.path,
+                    format!("chunk {index}, leaf {k}"),
+                    format!(
+                        "a leaf of one of {} patches, with its corner count, starting in [{t0}, {t1}]",
+                        self.patch_corners.len()
+                    ),
+                    format!(
+                        "patch {}, {} corners, time [{lt0}, {lt1}]",
+                        l.patch, l.corners
+                    ),
+                ));
+            }
+            reach = reach.max(lt1 as f64);
+        }
+        let records: Vec<LeafRecord> = leaves.iter().map(LeafRecord::from).collect();
+        let bytes = archive(&self.path, &records)?;
+        let section = self.entries.len() as u32;
+        self.section(
+            SectionKind::Chunk,
+            &bytes,
+            leaves.len() as u64,
+            self.options.compress,
+        )?;
+        // First chunk whose leaves may still be live at t0 (reach only matters for
+        // chunks after the previous carry_from, whose reach was below an earlier t0).
+        let mut carry_from = self.chunks.last().map_or(0, |c| c.carry_from);
+        while (carry_from as usize) < index && self.chunks[carry_from as usize].reach < t0 {
+            carry_from += 1;
+        }
+        self.chunks.push(ChunkRecord {
+            t0,
+            t1,
+            reach,
+            section,
+            leaves: leaves.len() as u32,
+            carry_from,
+        });
+        Ok(())
+    }
+
+    /// Queues links for the links section; ignored unless
+    /// [`WriteOptions::keep_links`].
+    pub fn write_links(&mut self, links: &[LinkRecord]) {
+        if self.options.keep_links {
+            self.links.extend_from_slice(links);
+        }
+    }
+
+    /// The counters of the file so far (sections and chunks written, bytes), for
+    /// `solve --stats` while the solve streams; the solver adds its pools with
+    /// [`super::MemoryReport::add_pool`].
+    pub fn memory_report(&self) -> super::MemoryReport {
+        super::MemoryReport::from_parts(
+            &self.path.display().to_string(),
+            self.pos,
+            &self.entries,
+            &self.chunks,
+            self.patch_corners.len() as u64,
+        )
+    }
+
+    /// Writes the remaining sections, the table and the header, then (for a file)
+    /// fsyncs and renames the temporary file to its final name.
+    pub fn finish(mut self, stats: &SolveStats) -> Result<()> {
+        self.write_tail(stats)?;
+        let path = self.path.clone();
+        match &mut self.sink {
+            Sink::File { out, tmp, done } => {
+                out.flush().map_err(|e| Error::io(&*tmp, e))?;
+                let file = out.get_mut();
+                file.sync_all().map_err(|e| Error::io(&*tmp, e))?;
+                std::fs::rename(&*tmp, &path).map_err(|e| Error::io(&path, e))?;
+                *done = true;
+                if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                    // Make the rename durable; some platforms cannot open directories.
+                    if let Ok(d) = File::open(dir) {
+                        let _ = d.sync_all();
+                    }
+                }
+                Ok(())
+            }
+            Sink::Memory(_) => Err(Error::Usage(
+                "an in-memory writer ends with finish_to_bytes".into(),
+            )),
+        }
+    }
+
+    /// Ends an in-memory writer and returns the file's bytes.
+    pub fn finish_to_bytes(mut self, stats: &SolveStats) -> Result<Vec<u8>> {
+        self.write_tail(stats)?;
+        match &mut self.sink {
+            Sink::Memory(v) => Ok(std::mem::take(v)),
+            Sink::File { .. } => Err(Error::Usage("a file writer ends with finish".into())),
+        }
+    }
+
+    fn write_tail(&mut self, stats: &SolveStats) -> Result<()> {
+        if self.options.keep_links {
+            self.flags |= FLAG_LINKS;
+            let links = std::mem::take(&mut self.links);
+            let bytes = archive(&self.path, &links)?;
+            self.section(
+                SectionKind::Links,
+                &bytes,
+                links.len() as u64,
+                self.options.compress,
+            )?;
+        }
+        let index = ChunkIndexRecord {
+            chunks: self.chunks.clone(),
+        };
+        let bytes = archive(&self.path, &index)?;
+        self.section(
+            SectionKind::ChunkIndex,
+            &bytes,
+            self.chunks.len() as u64,
+            false,
+        )?;
+        let bytes = archive(&self.path, &StatsRecord::from(stats))?;
+        self.section(SectionKind::Stats, &bytes, 1, false)?;
+        let table: Vec<u8> = self.entries.iter().flat_map(|e| e.encode()).collect();
+        let table_offset = self.pos;
+        self.emit(&table)?;
+        let header = Header {
+            version: VERSION,
+            min_reader_version: MIN_READER_VERSION,
+            flags: self.flags,
+            table_offset,
+            table_count: self.entries.len() as u32,
+            table_crc: crc32(&table),
+            file_len: self.pos,
+        };
+        let bytes = header.encode();
+        match &mut self.sink {
+            Sink::File { out, tmp, .. } => {
+                let r = out
+                    .seek(SeekFrom::Start(0))
+                    .and_then(|_| out.write_all(&bytes))
+                    .and_then(|_| out.seek(SeekFrom::End(0)).map(|_| ()));
+                r.map_err(|e| Error::io(&*tmp, e))
+            }
+            Sink::Memory(v) => {
+                v[..HEADER_LEN].copy_from_slice(&bytes);
+                Ok(())
+            }
+        }
+    }
+
+    /// Appends one section (compressed when asked and smaller) and its table entry.
+    fn section(&mut self, kind: SectionKind, raw: &[u8], items: u64, compress: bool) -> Result<()> {
+        let packed = if compress {
+            let z = zstd::bulk::compress(raw, ZSTD_LEVEL).map_err(|e| Error::io(&self.path, e))?;
+            (z.len() < raw.len()).then_some(z)
+        } else {
+            None
+        };
+        let (codec, stored) = match &packed {
+            Some(z) => (Codec::Zstd, z.as_slice()),
+            None => (Codec::Raw, raw),
+        };
+        if codec == Codec::Zstd {
+            self.flags |= FLAG_COMPRESSED;
+        }
+        let entry = SectionEntry {
+            kind,
+            codec,
+            offset: self.pos,
+            stored_len: stored.len() as u64,
+            raw_len: raw.len() as u64,
+            items,
+            crc: crc32(stored),
+        };
+        self.emit(stored)?;
+        self.entries.push(entry);
+        Ok(())
+    }
+
+    fn emit(&mut self, bytes: &[u8]) -> Result<()> {
+        match &mut self.sink {
+            Sink::File { out, tmp, .. } => out.write_all(bytes).map_err(|e| Error::io(&*tmp, e))?,
+            Sink::Memory(v) => v.extend_from_slice(bytes),
+        }
+        self.pos += bytes.len() as u64;
+        Ok(())
+    }
+}
+
+impl Drop for Writer {
+    fn drop(&mut self) {
+        if let Sink::File {
+            tmp, done: false, ..
+        } = &self.sink
+        {
+            // An unfinished file must not survive: it has no header, but remove it so
+            // that it cannot be mistaken for output either.
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+}
+
+/// Serializes one rkyv root.
+pub(crate) fn archive<T>(path: &Path, value: &T) -> Result<Vec<u8>>
+where
+    T: for<'a> rkyv::Serialize<
+            rkyv::api::high::HighSerializer<
+                rkyv::util::AlignedVec,
+                rkyv::ser::allocator::ArenaHandle<'a>,
+                rancor::Error,
+            >,
+        >,
+{
+    rkyv::to_bytes::<rancor::Error>(value)
+        .map(|v| v.to_vec())
+        .map_err(|e| {
+            Error::invalid(
+                path,
+                "serialising a record",
+                "a serialisable record",
+                e.to_string(),
+            )
+        })
+}
+
+/// Time chunks a static or space-time [`Solution`] is written in by
+/// [`write_solution`]: one chunk over the whole time domain.
+fn whole_domain(solution: &Solution) -> (f64, f64) {
+    (solution.scene.time.start, solution.scene.time.end)
+}
+
+/// Writes a complete solution as one chunk (a static solve, or a space-time solution
+/// already in memory).
+pub fn write_solution(path: &Path, solution: &Solution, options: WriteOptions) -> Result<()> {
+    let mut w = Writer::create(path, &SolutionHeader::of(solution), options)?;
+    let (t0, t1) = whole_domain(solution);
+    w.write_chunk(t0, t1, &solution.leaves)?;
+    w.finish(&solution.stats)
+}
+
+/// The bytes [`write_solution`] would write, built in memory.
+pub fn encode_solution(name: &Path, solution: &Solution, options: WriteOptions) -> Result<Vec<u8>> {
+    let mut w = Writer::in_memory(name, &SolutionHeader::of(solution), options)?;
+    let (t0, t1) = whole_domain(solution);
+    w.write_chunk(t0, t1, &solution.leaves)?;
+    w.finish_to_bytes(&solution.stats)
+}
