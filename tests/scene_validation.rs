@@ -593,3 +593,16 @@ fn gltf_unsorted_animation_input_is_refused() {
         "t = 1 after t = 2",
     );
 }
+
+#[test]
+fn huge_coordinates_are_refused() {
+    let huge = "[[0,0,0],[1e200,0,0],[0,1,0]]";
+    let err = load_native(&native("[0.5,0.5,0.5]", "[1,1,1]", &[TRI, huge], None)).unwrap_err();
+    assert_invalid(
+        err,
+        "bad.json",
+        "object \"obj\", polygon 1",
+        "magnitude <= 1e100",
+        "vertex 1 = [1e200, 0, 0]",
+    );
+}

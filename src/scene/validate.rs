@@ -44,6 +44,14 @@ pub const ZERO_AREA_TOLERANCE: f64 = 1e-12;
 /// normalised.
 pub const QUATERNION_TOLERANCE: f64 = 1e-3;
 
+/// Largest coordinate magnitude accepted (vertices, translations), so that
+/// diameters and areas stay finite.
+pub const MAX_COORDINATE: f64 = 1e100;
+
+fn in_range(v: DVec3) -> bool {
+    v.is_finite() && v.abs().max_element() <= MAX_COORDINATE
+}
+
 /// The warning given for a scene in which no polygon emits.
 pub const NO_EMITTER_WARNING: &str = "scene has no emitter: the solution is zero";
 
@@ -63,9 +71,19 @@ pub fn validate(mut scene: Scene, path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
+/// A number for messages: shortest round-trip form, in exponent notation when very
+/// large or very small.
+pub(crate) fn fmt_num(x: f64) -> String {
+    if x.is_finite() && x != 0.0 && !(1e-6..1e16).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 /// `[a, b, c]` with full precision, for messages.
 pub(crate) fn fmt3(v: [f64; 3]) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
+    format!("[{}, {}, {}]", fmt_num(v[0]), fmt_num(v[1]), fmt_num(v[2]))
 }
 
 fn fmt_vec(v: DVec3) -> String {
@@ -149,11 +167,11 @@ fn check_polygons(scene: &Scene, path: &Path) -> Result<()> {
                     format!("{n} vertices"),
                 ));
             }
-            if let Some((k, v)) = p.vertices.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            if let Some((k, v)) = p.vertices.iter().enumerate().find(|(_, v)| !in_range(**v)) {
                 return Err(Error::invalid(
                     path,
                     place(),
-                    "finite vertex coordinates",
+                    format!("finite vertex coordinates of magnitude <= {MAX_COORDINATE:e}"),
                     format!("vertex {k} = {}", fmt_vec(*v)),
                 ));
             }
@@ -267,11 +285,11 @@ fn check_motion(scene: &mut Scene, path: &Path) -> Result<()> {
                     format!("t = {}", key.t),
                 ));
             }
-            if !key.translation.is_finite() {
+            if !in_range(key.translation) {
                 return Err(Error::invalid(
                     path,
                     place(),
-                    "a finite translation",
+                    format!("a finite translation of magnitude <= {MAX_COORDINATE:e}"),
                     fmt_vec(key.translation),
                 ));
             }
