@@ -553,7 +553,10 @@ fn cornell_box_as_obj_and_gltf_loads_to_the_embedded_scene() {
     assert_same_up_to_f32(&gltf, &want, "glTF");
     let (a, b) = (gltf.camera.unwrap(), want.camera.unwrap());
     // A glTF camera has a direction, not a target: compare the view directions.
-    let (da, db) = ((a.target - a.eye).normalize(), (b.target - b.eye).normalize());
+    let (da, db) = (
+        (a.target - a.eye).normalize(),
+        (b.target - b.eye).normalize(),
+    );
     assert!(close(a.eye, b.eye, 1e-4) && close(da, db, 1e-7), "{a:?}");
     assert!(
         close(a.up, b.up, 1e-7) && (a.fov_y - b.fov_y).abs() < 1e-7,
