@@ -16,7 +16,10 @@ use rhier::oracle::hash3;
 use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
 
 fn boxes_scene(n: usize) -> Scene {
-    let q = |v: [[f64; 3]; 4]| Polygon { vertices: v.iter().map(|&p| DVec3::from_array(p)).collect(), material: MaterialId(0) };
+    let q = |v: [[f64; 3]; 4]| Polygon {
+        vertices: v.iter().map(|&p| DVec3::from_array(p)).collect(),
+        material: MaterialId(0),
+    };
     let (s, h) = (10.0, 4.0);
     let mut polys = vec![
         q([[0.0, 0.0, 0.0], [0.0, 0.0, s], [s, 0.0, s], [s, 0.0, 0.0]]),
@@ -30,17 +33,49 @@ fn boxes_scene(n: usize) -> Scene {
     for i in 0..n {
         for j in 0..n {
             let (x0, z0) = (0.5 + i as f64 * pitch, 0.5 + j as f64 * pitch);
-            let (x1, z1, y1) = (x0 + 0.6 * pitch, z0 + 0.6 * pitch, 0.05 + 0.03 * ((i * 7 + j * 13) % 11) as f64);
+            let (x1, z1, y1) = (
+                x0 + 0.6 * pitch,
+                z0 + 0.6 * pitch,
+                0.05 + 0.03 * ((i * 7 + j * 13) % 11) as f64,
+            );
             polys.push(q([[x0, y1, z0], [x0, y1, z1], [x1, y1, z1], [x1, y1, z0]]));
-            polys.push(q([[x0, 0.0, z0], [x1, 0.0, z0], [x1, y1, z0], [x0, y1, z0]]));
-            polys.push(q([[x1, 0.0, z1], [x0, 0.0, z1], [x0, y1, z1], [x1, y1, z1]]));
-            polys.push(q([[x0, 0.0, z1], [x0, 0.0, z0], [x0, y1, z0], [x0, y1, z1]]));
-            polys.push(q([[x1, 0.0, z0], [x1, 0.0, z1], [x1, y1, z1], [x1, y1, z0]]));
+            polys.push(q([
+                [x0, 0.0, z0],
+                [x1, 0.0, z0],
+                [x1, y1, z0],
+                [x0, y1, z0],
+            ]));
+            polys.push(q([
+                [x1, 0.0, z1],
+                [x0, 0.0, z1],
+                [x0, y1, z1],
+                [x1, y1, z1],
+            ]));
+            polys.push(q([
+                [x0, 0.0, z1],
+                [x0, 0.0, z0],
+                [x0, y1, z0],
+                [x0, y1, z1],
+            ]));
+            polys.push(q([
+                [x1, 0.0, z0],
+                [x1, 0.0, z1],
+                [x1, y1, z1],
+                [x1, y1, z0],
+            ]));
         }
     }
     Scene {
-        materials: vec![Material { name: "w".into(), rho: [0.5; 3], emission: [1.0; 3] }],
-        objects: vec![Object { name: "room".into(), polygons: polys, motion: None }],
+        materials: vec![Material {
+            name: "w".into(),
+            rho: [0.5; 3],
+            emission: [1.0; 3],
+        }],
+        objects: vec![Object {
+            name: "room".into(),
+            polygons: polys,
+            motion: None,
+        }],
         ..Default::default()
     }
 }
@@ -51,13 +86,19 @@ fn segments(p: &Patches, count: usize) -> Vec<(DVec3, DVec3)> {
         .map(|k| {
             let i = (hash3(1, k, 0) % p.len() as u64) as usize;
             let j = (hash3(2, k, 0) % p.len() as u64) as usize;
-            (p.point(i, u(hash3(3, k, 0)), u(hash3(4, k, 0))), p.point(j, u(hash3(5, k, 0)), u(hash3(6, k, 0))))
+            (
+                p.point(i, u(hash3(3, k, 0)), u(hash3(4, k, 0))),
+                p.point(j, u(hash3(5, k, 0)), u(hash3(6, k, 0))),
+            )
         })
         .collect()
 }
 
 fn bench(c: &mut Criterion) {
-    let n: usize = std::env::var("RHIER_BENCH_GRID").ok().and_then(|s| s.parse().ok()).unwrap_or(129);
+    let n: usize = std::env::var("RHIER_BENCH_GRID")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(129);
     let scene = boxes_scene(n);
     let patches = Patches::at_time(&scene, 0.0);
     let bvh = SceneBvh::build(&scene, &patches, 0.0);
@@ -68,11 +109,23 @@ fn bench(c: &mut Criterion) {
     for poly in &patches.polys {
         let v = poly.corners();
         for k in 1..v.len() - 1 {
-            tris.push(Triangle { v0: f(v[0]), v1: f(v[k]), v2: f(v[k + 1]) });
+            tris.push(Triangle {
+                v0: f(v[0]),
+                v1: f(v[k]),
+                v2: f(v[k + 1]),
+            });
         }
     }
-    let bare = build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut Duration::default());
-    let tris: Vec<Triangle> = bare.primitive_indices.iter().map(|&i| tris[i as usize]).collect();
+    let bare = build_cwbvh_from_tris(
+        &tris,
+        BvhBuildParams::medium_build(),
+        &mut Duration::default(),
+    );
+    let tris: Vec<Triangle> = bare
+        .primitive_indices
+        .iter()
+        .map(|&i| tris[i as usize])
+        .collect();
     let trim = rhier::geometry::SEGMENT_TRIM as f32;
     let mut g = c.benchmark_group(format!("occlusion_{}k_triangles", tris.len() / 1000));
     g.throughput(Throughput::Elements(segs.len() as u64));

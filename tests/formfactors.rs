@@ -5,15 +5,18 @@
 use std::f64::consts::PI;
 
 use glam::DVec3;
-use rhier::geometry::{Poly, point_to_polygon};
 use rhier::geometry::formfactor_contour as contour;
+use rhier::geometry::{Poly, point_to_polygon};
 
 fn area_factor(recv: [DVec3; 4], n: DVec3, src: &Poly, k: usize) -> f64 {
     let mut s = 0.0;
     for i in 0..k {
         for j in 0..k {
             let (u, v) = ((i as f64 + 0.5) / k as f64, (j as f64 + 0.5) / k as f64);
-            let x = (1.0 - u) * (1.0 - v) * recv[0] + u * (1.0 - v) * recv[1] + u * v * recv[2] + (1.0 - u) * v * recv[3];
+            let x = (1.0 - u) * (1.0 - v) * recv[0]
+                + u * (1.0 - v) * recv[1]
+                + u * v * recv[2]
+                + (1.0 - u) * v * recv[3];
             s += point_to_polygon(x, n, src);
         }
     }
@@ -26,14 +29,26 @@ fn parallel_directly_opposed_rectangles() {
     let (a, b, c) = (1.0f64, 2.0f64, 0.7f64);
     let (x, y) = (a / c, b / c);
     let exact = 2.0 / (PI * x * y)
-        * (((1.0 + x * x) * (1.0 + y * y) / (1.0 + x * x + y * y)).sqrt().ln()
+        * (((1.0 + x * x) * (1.0 + y * y) / (1.0 + x * x + y * y))
+            .sqrt()
+            .ln()
             + x * (1.0 + y * y).sqrt() * (x / (1.0 + y * y).sqrt()).atan()
             + y * (1.0 + x * x).sqrt() * (y / (1.0 + x * x).sqrt()).atan()
             - x * x.atan()
             - y * y.atan());
-    let recv = [DVec3::new(0.0, 0.0, 0.0), DVec3::new(a, 0.0, 0.0), DVec3::new(a, b, 0.0), DVec3::new(0.0, b, 0.0)];
+    let recv = [
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(a, 0.0, 0.0),
+        DVec3::new(a, b, 0.0),
+        DVec3::new(0.0, b, 0.0),
+    ];
     // Source facing down: counter-clockwise seen from below.
-    let src = Poly::new(&[DVec3::new(0.0, 0.0, c), DVec3::new(0.0, b, c), DVec3::new(a, b, c), DVec3::new(a, 0.0, c)]);
+    let src = Poly::new(&[
+        DVec3::new(0.0, 0.0, c),
+        DVec3::new(0.0, b, c),
+        DVec3::new(a, b, c),
+        DVec3::new(a, 0.0, c),
+    ]);
     let f = area_factor(recv, DVec3::Z, &src, 64);
     assert!((f - exact).abs() / exact < 0.01, "{f} vs {exact}");
 }
@@ -48,11 +63,22 @@ fn perpendicular_rectangles_sharing_an_edge() {
     let c = hh * hh * (1.0 + hh * hh + ww * ww) / ((1.0 + hh * hh) * (hh * hh + ww * ww));
     // Howell C-14, factor from the w × l rectangle to the h × l one.
     let exact = 1.0 / (PI * ww)
-        * (ww * (1.0 / ww).atan() + hh * (1.0 / hh).atan() - (hh * hh + ww * ww).sqrt() * (1.0 / (hh * hh + ww * ww).sqrt()).atan()
+        * (ww * (1.0 / ww).atan() + hh * (1.0 / hh).atan()
+            - (hh * hh + ww * ww).sqrt() * (1.0 / (hh * hh + ww * ww).sqrt()).atan()
             + 0.25 * (a * b.powf(ww * ww) * c.powf(hh * hh)).ln());
-    let recv = [DVec3::new(0.0, 0.0, 0.0), DVec3::new(w, 0.0, 0.0), DVec3::new(w, l, 0.0), DVec3::new(0.0, l, 0.0)];
+    let recv = [
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(w, 0.0, 0.0),
+        DVec3::new(w, l, 0.0),
+        DVec3::new(0.0, l, 0.0),
+    ];
     // Source on x = 0 facing +x: counter-clockwise seen from +x.
-    let src = Poly::new(&[DVec3::new(0.0, 0.0, 0.0), DVec3::new(0.0, l, 0.0), DVec3::new(0.0, l, h), DVec3::new(0.0, 0.0, h)]);
+    let src = Poly::new(&[
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(0.0, l, 0.0),
+        DVec3::new(0.0, l, h),
+        DVec3::new(0.0, 0.0, h),
+    ]);
     assert!(src.normal().dot(DVec3::X) > 0.99);
     let f = area_factor(recv, DVec3::Z, &src, 64);
     assert!((exact - 0.200044).abs() < 1e-5, "closed form {exact}");

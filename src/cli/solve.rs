@@ -101,15 +101,27 @@ impl Args {
 /// Reads reference points `{"p","n","B"}`.
 fn read_reference(path: &Path) -> anyhow::Result<(Vec<ProbePoint>, Vec<[f64; 3]>)> {
     let points = read_probe_points(path)?;
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let value: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
     let mut b = Vec::with_capacity(points.len());
     for (i, v) in value.as_array().into_iter().flatten().enumerate() {
-        let arr = v.get("B").and_then(|x| x.as_array()).filter(|a| a.len() == 3);
+        let arr = v
+            .get("B")
+            .and_then(|x| x.as_array())
+            .filter(|a| a.len() == 3);
         let vals: Option<Vec<f64>> = arr.map(|a| a.iter().filter_map(|x| x.as_f64()).collect());
         match vals {
-            Some(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => b.push([v[0], v[1], v[2]]),
-            _ => anyhow::bail!("{}: point {i}, \"B\": expected an array of 3 finite numbers, found {}", path.display(), v.get("B").map_or("no such field".to_string(), |x| x.to_string())),
+            Some(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => {
+                b.push([v[0], v[1], v[2]])
+            }
+            _ => anyhow::bail!(
+                "{}: point {i}, \"B\": expected an array of 3 finite numbers, found {}",
+                path.display(),
+                v.get("B")
+                    .map_or("no such field".to_string(), |x| x.to_string())
+            ),
         }
     }
     Ok((points, b))
@@ -124,18 +136,28 @@ pub fn relative_rms(b: &[[f64; 3]], reference: &[[f64; 3]]) -> f64 {
             den += y[c] * y[c];
         }
     }
-    if den > 0.0 { (num / den).sqrt() } else { num.sqrt() }
+    if den > 0.0 {
+        (num / den).sqrt()
+    } else {
+        num.sqrt()
+    }
 }
 
 fn load(args: &Args) -> anyhow::Result<(Scene, String)> {
     match &args.scene {
         Some(path) => {
             let scene = rhier::scene::load(path)?;
-            let stem = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+            let stem = path
+                .file_stem()
+                .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
             Ok((scene, stem))
         }
         None => {
-            let name = if args.blocks { "cornell_blocks" } else { "cornell" };
+            let name = if args.blocks {
+                "cornell_blocks"
+            } else {
+                "cornell"
+            };
             Ok((rhier::scene::cornell_box(args.blocks), name.to_string()))
         }
     }
@@ -145,7 +167,9 @@ fn load(args: &Args) -> anyhow::Result<(Scene, String)> {
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(n) = args.threads {
         // Only fails if a pool exists already, which cannot happen this early.
-        let _ = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global();
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global();
     }
     let start = std::time::Instant::now();
     let (scene, stem) = load(&args)?;
@@ -177,7 +201,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let probes = args.probe.as_deref().map(read_probe_points).transpose()?;
     let t = scene.time.start;
 
-    let show_progress = !args.quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
+    let show_progress =
+        !args.quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
     let bar = show_progress.then(|| {
         let b = indicatif::ProgressBar::new_spinner();
         b.set_message("refining");
@@ -225,9 +250,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let values = probe(&solution, points, t)?;
         write_probe_results(out, &values)?;
     }
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from(format!("{stem}.rhier")));
-    write_solution(&out, &solution, WriteOptions { keep_links: args.keep_links, ..WriteOptions::default() })
-        .with_context(|| format!("writing {}", out.display()))?;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{stem}.rhier")));
+    write_solution(
+        &out,
+        &solution,
+        WriteOptions {
+            keep_links: args.keep_links,
+            ..WriteOptions::default()
+        },
+    )
+    .with_context(|| format!("writing {}", out.display()))?;
     if !args.quiet {
         eprintln!(
             "solved {} patches in {:.3} s: {} stored cells, {} elements, {} active / {} passive links; wrote {}",
@@ -242,10 +277,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if args.stats {
         let mut m = MemoryReport::for_run(&stem);
-        m.add_pool("elements", solver.elems.len() as u64, solver.elems.bytes() as u64);
-        m.add_pool("links", solver.links.len() as u64, solver.links.bytes() as u64);
-        m.add_pool("bvh", solver.bvh.triangle_count() as u64, solver.bvh.resident_bytes() as u64);
-        m.add_pool("stored cells", solution.leaves.len() as u64, (solution.leaves.len() * std::mem::size_of::<rhier::solver::Leaf>()) as u64);
+        m.add_pool(
+            "elements",
+            solver.elems.len() as u64,
+            solver.elems.bytes() as u64,
+        );
+        m.add_pool(
+            "links",
+            solver.links.len() as u64,
+            solver.links.bytes() as u64,
+        );
+        m.add_pool(
+            "bvh",
+            solver.bvh.triangle_count() as u64,
+            solver.bvh.resident_bytes() as u64,
+        );
+        m.add_pool(
+            "stored cells",
+            solution.leaves.len() as u64,
+            (solution.leaves.len() * std::mem::size_of::<rhier::solver::Leaf>()) as u64,
+        );
         println!("{m}");
     }
     Ok(())

@@ -40,14 +40,26 @@ pub struct ContactStats {
 pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, ContactStats) {
     let bvh = SceneBvh::build(scene, patches, t);
     let tol = patches.diameter * 1e-6;
-    let moving = |i: usize| scene.objects.get(patches.objects[i] as usize).is_some_and(|o| o.is_moving());
+    let moving = |i: usize| {
+        scene
+            .objects
+            .get(patches.objects[i] as usize)
+            .is_some_and(|o| o.is_moving())
+    };
     let mut out = Patches::default();
     let mut stats = ContactStats::default();
     for i in 0..patches.len() {
         let poly = patches.polys[i];
         let g = patches.geometry[i];
         if moving(i) {
-            out.push(scene, poly, g.vertices, g.corners as usize, patches.objects[i], g.material);
+            out.push(
+                scene,
+                poly,
+                g.vertices,
+                g.corners as usize,
+                patches.objects[i],
+                g.material,
+            );
             continue;
         }
         let n = patches.normals[i];
@@ -119,11 +131,20 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
             pieces = next;
         }
         if pieces.len() == 1 {
-            out.push(scene, poly, g.vertices, g.corners as usize, patches.objects[i], g.material);
+            out.push(
+                scene,
+                poly,
+                g.vertices,
+                g.corners as usize,
+                patches.objects[i],
+                g.material,
+            );
             continue;
         }
         stats.patches_cut += 1;
-        let to_object = scene.objects[patches.objects[i] as usize].to_world(t).inverse();
+        let to_object = scene.objects[patches.objects[i] as usize]
+            .to_world(t)
+            .inverse();
         for piece in pieces {
             // Hidden under a resting solid?
             let c = piece.centroid() + n * (tol * 4.0);
@@ -139,7 +160,14 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
                 for (o, &v) in obj.iter_mut().zip(w) {
                     *o = to_object.transform_point3(v);
                 }
-                out.push(scene, Poly::new(w), obj, w.len(), patches.objects[i], g.material);
+                out.push(
+                    scene,
+                    Poly::new(w),
+                    obj,
+                    w.len(),
+                    patches.objects[i],
+                    g.material,
+                );
             };
             if corners.len() <= 4 {
                 emit(corners);

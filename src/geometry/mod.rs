@@ -21,7 +21,9 @@ mod polygon;
 mod visibility;
 
 pub use contact::{ContactStats, split_at_contacts};
-pub use formfactor::{contour_integral as formfactor_contour, point_to_point_kernel, point_to_polygon};
+pub use formfactor::{
+    contour_integral as formfactor_contour, point_to_point_kernel, point_to_polygon,
+};
 pub use nearest::{closest_point_on_polygon, nearest_facing};
 pub use patches::{PatchId, Patches};
 pub use polygon::Poly;

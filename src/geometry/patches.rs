@@ -45,7 +45,14 @@ impl Patches {
                 let mut verts = [DVec3::ZERO; 4];
                 verts[..k].copy_from_slice(&poly.vertices[..k]);
                 let world: Vec<DVec3> = verts[..k].iter().map(|&v| m.transform_point3(v)).collect();
-                p.push(scene, Poly::new(&world), verts, k, oi as u32, poly.material.0);
+                p.push(
+                    scene,
+                    Poly::new(&world),
+                    verts,
+                    k,
+                    oi as u32,
+                    poly.material.0,
+                );
             }
         }
         p.diameter = p.scene_diameter();
@@ -53,7 +60,15 @@ impl Patches {
     }
 
     /// Appends a patch: its world polygon and its object-space corners.
-    pub fn push(&mut self, scene: &Scene, world: Poly, object_space: [DVec3; 4], corners: usize, object: u32, material: u32) {
+    pub fn push(
+        &mut self,
+        scene: &Scene,
+        world: Poly,
+        object_space: [DVec3; 4],
+        corners: usize,
+        object: u32,
+        material: u32,
+    ) {
         let mat = &scene.materials[material as usize];
         self.normals.push(world.normal());
         self.areas.push(world.area());

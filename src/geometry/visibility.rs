@@ -105,7 +105,8 @@ impl SceneBvh {
     pub fn build(scene: &Scene, patches: &Patches, t: f64) -> SceneBvh {
         let mut parts = Vec::new();
         let (mut st, mut sp) = (Vec::new(), Vec::new());
-        let mut moving: Vec<(Vec<Triangle>, Vec<u32>)> = vec![(Vec::new(), Vec::new()); scene.objects.len()];
+        let mut moving: Vec<(Vec<Triangle>, Vec<u32>)> =
+            vec![(Vec::new(), Vec::new()); scene.objects.len()];
         for i in 0..patches.len() {
             let obj = patches.objects[i] as usize;
             if scene.objects.get(obj).is_some_and(|o| o.is_moving()) {
@@ -126,12 +127,24 @@ impl SceneBvh {
     /// True if something blocks the open segment between `a` and `b` (both ends
     /// trimmed by [`SEGMENT_TRIM`] of its length).
     pub fn occluded(&self, a: DVec3, b: DVec3) -> bool {
+        self.occluded_except(a, b, [u32::MAX; 2])
+    }
+
+    /// [`SceneBvh::occluded`], ignoring the patches `skip` (the planar patches the
+    /// segment starts and ends on cannot block it; their hits are round-off, which
+    /// grazing segments make larger than any trim).
+    pub fn occluded_except(&self, a: DVec3, b: DVec3, skip: [u32; 2]) -> bool {
         let d = b - a;
         for part in &self.parts {
             let ray = part.local_ray(a, d, SEGMENT_TRIM, 1.0 - SEGMENT_TRIM);
-            let hit = !part
-                .bvh
-                .ray_traverse_miss(ray, |r, id| part.tris[id].intersect(r));
+            let hit = !part.bvh.ray_traverse_miss(ray, |r, id| {
+                let p = part.tri_patch[id];
+                if p == skip[0] || p == skip[1] {
+                    f32::INFINITY
+                } else {
+                    part.tris[id].intersect(r)
+                }
+            });
             if hit {
                 return true;
             }

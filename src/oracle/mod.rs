@@ -291,7 +291,7 @@ fn evaluate_surfaces(
     let mut rays = 0;
     for i in 0..q.count {
         let key = hash3(set.seed, r.0 as u64, (s.0 as u64) << 8 | i as u64);
-        vq[i] = visible_fraction(bvh, q.points[i], nr, gs, &pols, ns, m, key);
+        vq[i] = visible_fraction(bvh, q.points[i], nr, gs, &pols, ns, m, key, skip);
         rays += m;
     }
     let _ = patches;
@@ -316,7 +316,7 @@ fn evaluate_surfaces(
 }
 
 /// Kernel-weighted fraction of source `gs` visible from `x` (normal `n`), with `m`
-/// jittered stratified rays.
+/// jittered stratified rays, ignoring hits on the patches `skip`.
 #[allow(clippy::too_many_arguments)]
 pub fn visible_fraction(
     bvh: &SceneBvh,
@@ -327,6 +327,7 @@ pub fn visible_fraction(
     ns: DVec3,
     m: u32,
     key: u64,
+    skip: [u32; 2],
 ) -> f64 {
     let side = (m as f64).sqrt().ceil() as u32;
     let (mut wsum, mut vsum, mut plain) = (0.0, 0.0, 0.0);
@@ -340,7 +341,11 @@ pub fn visible_fraction(
         );
         let y = point_in(gs, pols, su, sv.min(1.0));
         let k = point_to_point_kernel(x, n, y, ns);
-        let vis = if bvh.occluded(x, y) { 0.0 } else { 1.0 };
+        let vis = if bvh.occluded_except(x, y, skip) {
+            0.0
+        } else {
+            1.0
+        };
         wsum += k;
         vsum += k * vis;
         plain += vis;
