@@ -56,7 +56,10 @@ fn uniform_room_has_the_known_radiosity_with_every_mesh() {
         assert_eq!(segs[5]["object"], "box");
         assert_eq!(segs[5]["index"], 1);
         for s in segs {
-            assert!((s["B"].as_f64().unwrap() - 2.0).abs() < 1e-12, "{mesh}: {s}");
+            assert!(
+                (s["B"].as_f64().unwrap() - 2.0).abs() < 1e-12,
+                "{mesh}: {s}"
+            );
             for e in s["elements"].as_array().unwrap() {
                 assert!((e["B"].as_f64().unwrap() - 2.0).abs() < 1e-12);
             }
@@ -90,7 +93,12 @@ fn room_example_matches_the_library_and_draws_svg() {
     assert_eq!(segs.len(), 10);
     for (s, b) in segs.iter().zip(&sol.segment_b) {
         // The scene has RGB values: B is a triple.
-        let got: Vec<f64> = s["B"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        let got: Vec<f64> = s["B"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
         for c in 0..3 {
             assert!((got[c] - b[c]).abs() < 1e-12);
         }

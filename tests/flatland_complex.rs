@@ -87,6 +87,7 @@ fn sampled_lines_have_the_labels_of_their_cells() {
 }
 
 #[test]
+#[expect(clippy::needless_range_loop, reason = "grid indices are used in several arrays")]
 fn faces_are_the_connected_components_of_each_label() {
     for seed in 1..4u64 {
         let g = random_geometry(seed, 5);
@@ -195,8 +196,8 @@ fn chains_give_the_face_measure_by_eq_3_and_faces_sum_to_form_factors() {
         let c = sweep(&g, None, true).complex.unwrap();
         let mut checked = 0;
         for (fi, f) in c.faces.iter().enumerate() {
-            let seam = (f.theta[0] - c.theta0).abs() < 1e-12
-                || (f.theta[1] - c.theta0 - PI).abs() < 1e-12;
+            let seam =
+                (f.theta[0] - c.theta0).abs() < 1e-12 || (f.theta[1] - c.theta0 - PI).abs() < 1e-12;
             if seam {
                 continue;
             }
@@ -240,9 +241,10 @@ fn vertices_are_the_visibility_graph_edges() {
         for u in 0..pts.len() {
             for w in u + 1..pts.len() {
                 let (pu, pw) = (pts[u], pts[w]);
-                let own = g.segments.iter().any(|s| {
-                    (s.a == pu && s.b == pw) || (s.a == pw && s.b == pu)
-                });
+                let own = g
+                    .segments
+                    .iter()
+                    .any(|s| (s.a == pu && s.b == pw) || (s.a == pw && s.b == pu));
                 let crossed = g.segments.iter().any(|s| {
                     orient(pu, pw, s.a) * orient(pu, pw, s.b) < 0.0
                         && orient(s.a, s.b, pu) * orient(s.a, s.b, pw) < 0.0
@@ -262,4 +264,3 @@ fn vertices_are_the_visibility_graph_edges() {
         }
     }
 }
-

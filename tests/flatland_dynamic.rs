@@ -35,7 +35,10 @@ fn update_equals_full_recompute_along_the_path() {
             for i in 0..n {
                 for j in 0..n {
                     let (a, b) = (ff.f(i, j), full.f(i, j));
-                    assert!((a - b).abs() < 1e-12, "{mesh:?} t {t}: F({i},{j}) {a} vs {b}");
+                    assert!(
+                        (a - b).abs() < 1e-12,
+                        "{mesh:?} t {t}: F({i},{j}) {a} vs {b}"
+                    );
                 }
             }
             let b_dyn = solve_with(&scene, t, dynamic.geometry().clone(), &ff);
@@ -57,8 +60,14 @@ fn update_equals_full_recompute_along_the_path() {
                 partial += 1;
             }
         }
-        assert!(created > 0 && destroyed > 0, "{mesh:?}: no visibility event on the path");
-        assert!(partial >= 15, "{mesh:?}: only {partial} steps were partial updates");
+        assert!(
+            created > 0 && destroyed > 0,
+            "{mesh:?}: no visibility event on the path"
+        );
+        assert!(
+            partial >= 15,
+            "{mesh:?}: only {partial} steps were partial updates"
+        );
     }
 }
 

@@ -17,7 +17,10 @@ fn geom(segs: Vec<PosedSegment>) -> FlatGeometry {
 #[test]
 fn facing_unit_segments_match_hottel() {
     // i: floor (0,0)-(1,0), lit side up; j: ceiling (1,1)-(0,1), lit side down.
-    let g = geom(vec![seg([0.0, 0.0], [1.0, 0.0]), seg([1.0, 1.0], [0.0, 1.0])]);
+    let g = geom(vec![
+        seg([0.0, 0.0], [1.0, 0.0]),
+        seg([1.0, 1.0], [0.0, 1.0]),
+    ]);
     let (ff, _) = form_factors(&g);
     let want = 2f64.sqrt() - 1.0; // (2 sqrt 2 - 2) / 2
     assert!((ff.f(0, 1) - want).abs() < 1e-14, "{}", ff.f(0, 1));
@@ -27,7 +30,10 @@ fn facing_unit_segments_match_hottel() {
 #[test]
 fn back_facing_pair_has_no_factor() {
     // Both lit sides face down: the ceiling's lit side looks away from the floor's.
-    let g = geom(vec![seg([0.0, 0.0], [1.0, 0.0]), seg([0.0, 1.0], [1.0, 1.0])]);
+    let g = geom(vec![
+        seg([0.0, 0.0], [1.0, 0.0]),
+        seg([0.0, 1.0], [1.0, 1.0]),
+    ]);
     let (ff, _) = form_factors(&g);
     assert_eq!(ff.f(0, 1), 0.0);
 }
@@ -46,7 +52,11 @@ fn partly_hidden_pair_strings_stretch_around_the_obstacle() {
     let crossed = 2.0 * 2f64.sqrt();
     let uncrossed = 1.0 + 2.0 * (0.4f64 * 0.4 + 0.25).sqrt();
     let want = (crossed - uncrossed) / 2.0;
-    assert!((ff.f(0, 1) - want).abs() < 1e-14, "{} vs {want}", ff.f(0, 1));
+    assert!(
+        (ff.f(0, 1) - want).abs() < 1e-14,
+        "{} vs {want}",
+        ff.f(0, 1)
+    );
 }
 
 /// A closed room (lit inside) with a box (lit outside) whose corners are collinear
@@ -177,5 +187,8 @@ fn string_rule_matches_quadrature_on_random_scenes() {
             }
         }
     }
-    assert!(checked_hidden >= 3, "only {checked_hidden} partly hidden pairs");
+    assert!(
+        checked_hidden >= 3,
+        "only {checked_hidden} partly hidden pairs"
+    );
 }

@@ -166,8 +166,12 @@ fn max_ff_diff(
 }
 
 fn suffixed(path: &Path, k: usize) -> PathBuf {
-    let stem = path.file_stem().map_or("frame".into(), |s| s.to_string_lossy());
-    let ext = path.extension().map_or("svg".into(), |s| s.to_string_lossy());
+    let stem = path
+        .file_stem()
+        .map_or("frame".into(), |s| s.to_string_lossy());
+    let ext = path
+        .extension()
+        .map_or("svg".into(), |s| s.to_string_lossy());
     path.with_file_name(format!("{stem}_{k:03}.{ext}"))
 }
 
@@ -184,7 +188,10 @@ fn segments_json(scene: &FlatScene, sol: &FlatSolution) -> Vec<Value> {
         .collect();
     (0..g.segments.len())
         .map(|s| {
-            let (lo, hi) = (g.segment_elements[s] as usize, g.segment_elements[s + 1] as usize);
+            let (lo, hi) = (
+                g.segment_elements[s] as usize,
+                g.segment_elements[s + 1] as usize,
+            );
             let elems: Vec<Value> = (lo..hi)
                 .map(|e| {
                     let el = &g.elements[e];
@@ -207,7 +214,9 @@ fn write_svg(scene: &FlatScene, sol: &FlatSolution, path: &Path, dual: bool) -> 
             .collect();
         let g = &sol.geom;
         let elems: Vec<u32> = (0..g.elements.len() as u32)
-            .filter(|&e| movers.contains(&g.segments[g.elements[e as usize].segment as usize].object))
+            .filter(|&e| {
+                movers.contains(&g.segments[g.elements[e as usize].segment as usize].object)
+            })
             .collect();
         let points: Vec<u32> = (0..g.points.len() as u32)
             .filter(|&p| {

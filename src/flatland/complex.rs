@@ -891,7 +891,7 @@ impl Rec {
         let mut face_of_root: HashMap<u32, u32> = HashMap::new();
         let mut faces: Vec<CFace> = Vec::new();
         let mut cell_face = vec![0u32; nc];
-        for c in 0..nc {
+        for (c, cf) in cell_face.iter_mut().enumerate() {
             let r = find(&mut self.parent, c as u32);
             let f = *face_of_root.entry(r).or_insert_with(|| {
                 let cell = &self.cells[c];
@@ -906,7 +906,7 @@ impl Rec {
                 });
                 (faces.len() - 1) as u32
             });
-            cell_face[c] = f;
+            *cf = f;
         }
         let mut cells = self.cells;
         for (c, cell) in cells.iter_mut().enumerate() {

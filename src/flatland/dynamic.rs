@@ -148,10 +148,7 @@ impl<'s> Dynamic<'s> {
             self.mu.retain(|_, v| *v > tiny);
             rep.cells_visited = out0.stats.cells + out1.stats.cells;
             rep.labels_visited = touched.len();
-            rep.ff_recomputed = touched
-                .iter()
-                .map(|k| if k.0 == k.1 { 1 } else { 2 })
-                .sum();
+            rep.ff_recomputed = touched.iter().map(|k| if k.0 == k.1 { 1 } else { 2 }).sum();
             rep.casts = out0.stats.casts + out1.stats.casts;
         }
         self.geom = geom1;

@@ -41,7 +41,9 @@ impl FormFactors {
     /// `F_ij`: the fraction of the energy leaving `i` that reaches `j` (eq. 1).
     pub fn f(&self, i: u32, j: u32) -> f64 {
         let key = (i.min(j), i.max(j));
-        self.mu.get(&key).map_or(0.0, |m| m / (2.0 * self.lens[i as usize]))
+        self.mu
+            .get(&key)
+            .map_or(0.0, |m| m / (2.0 * self.lens[i as usize]))
     }
 
     /// The dense row-major matrix `F` (`N x N`).
@@ -82,9 +84,10 @@ pub fn solve_radiosity(ff: &FormFactors, rho: &[[f64; 3]], e: &[[f64; 3]]) -> Ve
     let mut done: Vec<([f64; 3], usize)> = Vec::new();
     for c in 0..3 {
         // Channels with identical rho and E share the answer.
-        if let Some(&(_, prev)) = done.iter().find(|(_, p)| {
-            (0..n).all(|i| rho[i][c] == rho[i][*p] && e[i][c] == e[i][*p])
-        }) {
+        if let Some(&(_, prev)) = done
+            .iter()
+            .find(|(_, p)| (0..n).all(|i| rho[i][c] == rho[i][*p] && e[i][c] == e[i][*p]))
+        {
             for bi in b.iter_mut() {
                 bi[c] = bi[prev];
             }

@@ -9,6 +9,6 @@
 mod model;
 
 pub use model::{
-    Camera, MaterialId, Material, MotionKey, MotionTrack, Object, ObjectId, Polygon, Scene,
+    Camera, Material, MaterialId, MotionKey, MotionTrack, Object, ObjectId, Polygon, Scene,
     TimeDomain,
 };

@@ -156,9 +156,7 @@ pub struct Object {
 impl Object {
     /// Object → world map at time `t` (identity when static).
     pub fn to_world(&self, t: f64) -> DAffine3 {
-        self.motion
-            .as_ref()
-            .map_or(DAffine3::IDENTITY, |m| m.at(t))
+        self.motion.as_ref().map_or(DAffine3::IDENTITY, |m| m.at(t))
     }
 
     /// True if the object has a track that actually moves it.
