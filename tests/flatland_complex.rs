@@ -87,7 +87,10 @@ fn sampled_lines_have_the_labels_of_their_cells() {
 }
 
 #[test]
-#[expect(clippy::needless_range_loop, reason = "grid indices are used in several arrays")]
+#[expect(
+    clippy::needless_range_loop,
+    reason = "grid indices are used in several arrays"
+)]
 fn faces_are_the_connected_components_of_each_label() {
     for seed in 1..4u64 {
         let g = random_geometry(seed, 5);

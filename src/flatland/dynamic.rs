@@ -1,18 +1,20 @@
 //! Moving polygons (paper §5): update only the form factors the motion changes.
 //!
 //! How it works: between times `t0` and `t1` only the objects whose pose differs
-//! move. A line that meets neither the convex hull of the moving geometry at `t0` nor
-//! at `t1` has the same free segments at both times, so every face of the complex
-//! made of such lines is unchanged. The faces *related to* the moving object O (§5.1:
-//! O in their label, or O's points on their chains) and all faces created or destroyed
-//! by visibility events (§5.2) lie inside the region `R` of lines meeting one of the
-//! two hulls. Hence, exactly,
+//! move. A line that misses the convex hull `K` of the moving geometry at `t0` and at
+//! `t1` together (the hull of the corners at both times) misses the moving geometry at
+//! both times, so it has the same free segments at both times, and every face of the
+//! complex made of such lines is unchanged. The faces *related to* the moving object O
+//! (§5.1: O in their label, or O's points on their chains) and all faces created or
+//! destroyed by visibility events (§5.2) lie inside the region `R` of lines meeting
+//! `K`. Hence, exactly,
 //!
 //! `mu(t1) = mu(t0) - mu_t0[R] + mu_t1[R]`,
 //!
 //! where `mu_t[R]` is the measure of the free lines inside `R`, computed by a sweep
-//! that clips every gap to `R` (exact: the clip's bounds are dual curves of the hull
-//! points, integrated piecewise) and casts only the gaps that meet `R`. The form
+//! that clips every gap to `R` (exact: `R`'s bounds are the dual curves of the hull's
+//! vertices, switching at the hull's edge directions, integrated piecewise) and casts
+//! only the gaps that meet `R`. The form
 //! factors recomputed are the element pairs with a non-zero clipped measure at either
 //! time; all others are kept from `t0`. The result equals a from-scratch computation at
 //! every step to round-off (tested).

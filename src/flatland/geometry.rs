@@ -140,8 +140,12 @@ impl FlatGeometry {
 
     /// Intersects the line `(theta, p)` with every segment; hits sorted along `d`.
     pub fn cast(&self, theta: f64, p: f64, out: &mut Vec<Hit>) {
+        self.cast_sc(theta.sin_cos(), p, out);
+    }
+
+    /// [`FlatGeometry::cast`] with `(sin theta, cos theta)` given.
+    pub fn cast_sc(&self, (sn, cs): (f64, f64), p: f64, out: &mut Vec<Hit>) {
         out.clear();
-        let (sn, cs) = theta.sin_cos();
         let d = [cs, sn];
         let n = [-sn, cs];
         for (si, seg) in self.segments.iter().enumerate() {
@@ -164,7 +168,11 @@ impl FlatGeometry {
     /// Whether the free segment between consecutive hits `h0` then `h1` (along `d` of
     /// angle `theta`) leaves `h0`'s lit side and arrives on `h1`'s lit side.
     pub fn fronts_face(&self, theta: f64, h0: &Hit, h1: &Hit) -> bool {
-        let (sn, cs) = theta.sin_cos();
+        self.fronts_face_sc(theta.sin_cos(), h0, h1)
+    }
+
+    /// [`FlatGeometry::fronts_face`] with `(sin theta, cos theta)` given.
+    pub fn fronts_face_sc(&self, (sn, cs): (f64, f64), h0: &Hit, h1: &Hit) -> bool {
         let n0 = self.segments[h0.segment as usize].n;
         let n1 = self.segments[h1.segment as usize].n;
         cs * n0[0] + sn * n0[1] > 0.0 && cs * n1[0] + sn * n1[1] < 0.0
