@@ -91,3 +91,34 @@ fn discontinuity_mesh_steps_are_full_and_exact() {
     assert_eq!(dynamic.geometry().elements.len(), full.geom.elements.len());
     assert!(full.geom.elements.len() > full.geom.segments.len());
 }
+
+#[test]
+fn window_sweep_over_the_whole_scene_equals_the_full_sweep() {
+    use rhier::flatland::window::window_sweep;
+    let scene = load(scene_path()).unwrap();
+    for mesh in [Mesh::None, Mesh::Uniform(2)] {
+        let g = geometry_at(&scene, 0.3, mesh);
+        let (full, _) = form_factors(&g);
+        // A region containing every line that meets the scene.
+        let big = [[-10.0, -10.0], [14.0, -10.0], [14.0, 13.0], [-10.0, 13.0]];
+        let w = window_sweep(&g, &big);
+        assert_eq!(w.mu.len(), full.mu.len());
+        for (k, v) in &full.mu {
+            assert!((w.mu[k] - v).abs() < 1e-12, "{k:?}: {} vs {v}", w.mu[k]);
+        }
+        // A small region: the window sweep and the full sweep clipped gap by gap
+        // (two independent restrictions) agree, up to the window's 1e-9 growth.
+        let k = [[1.0, 1.0], [1.6, 1.1], [1.2, 1.7]];
+        let w = window_sweep(&g, &k);
+        let clip = rhier::flatland::complex::Clip::new(vec![k.to_vec()]);
+        let c = rhier::flatland::complex::sweep(&g, Some(&clip), false);
+        assert!(!c.mu.is_empty());
+        for (key, v) in &c.mu {
+            let got = w.mu.get(key).copied().unwrap_or(0.0);
+            assert!((got - v).abs() < 1e-7, "{key:?}: window {got}, clipped {v}");
+        }
+        for key in w.mu.keys() {
+            assert!(c.mu.contains_key(key) || w.mu[key] < 1e-7);
+        }
+    }
+}

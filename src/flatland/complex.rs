@@ -60,7 +60,7 @@
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
-use super::geometry::{FlatGeometry, Hit, big_n, proj};
+use super::geometry::{FlatGeometry, Hit, PairMap, big_n, proj};
 
 /// Index of a cell in [`Complex::cells`].
 #[repr(transparent)]
@@ -211,7 +211,7 @@ pub struct SweepStats {
 pub struct SweepOut {
     /// `mu[(i, j)]`, `i < j`: measure of lines whose free segment joins the lit sides
     /// of elements `i` and `j` (restricted to the clip region when one was given).
-    pub mu: HashMap<(u32, u32), f64>,
+    pub mu: PairMap,
     /// Counters.
     pub stats: SweepStats,
     /// The complex, when asked for.

@@ -11,30 +11,33 @@
 //!
 //! `mu(t1) = mu(t0) - mu_t0[R] + mu_t1[R]`,
 //!
-//! where `mu_t[R]` is the measure of the free lines inside `R`, computed by a sweep
-//! that clips every gap to `R` (exact: `R`'s bounds are the dual curves of the hull's
-//! vertices, switching at the hull's edge directions, integrated piecewise) and casts
-//! only the gaps that meet `R`. The form
-//! factors recomputed are the element pairs with a non-zero clipped measure at either
-//! time; all others are kept from `t0`. The result equals a from-scratch computation at
-//! every step to round-off (tested).
+//! where `mu_t[R]` is the measure of the free lines inside `R`, computed by the
+//! restricted sweep of [`super::window`]: it visits only the part of the complex
+//! whose lines meet `K` ("sweeping the complex along the dual lines of the object",
+//! §5.1), bounded by the dual curves of `K`'s vertices, and casts one line per gap of
+//! that part. The form factors recomputed are the element pairs with a non-zero
+//! measure in `R` at either time; all others are kept from `t0`. The result equals a
+//! from-scratch computation at every step to round-off (tested).
 //!
 //! What it does not do (honestly): the paper tracks the visibility events one by one
 //! with a priority queue and updates the complex in constant time per event (§5.2);
-//! here the topology inside `R` is re-swept at both times instead, which handles any
-//! number of events between two times but still enumerates all point pairs (the sort
-//! of events is `O(P^2 log P)` per step; only the casts, `O(n)` each, are restricted to
-//! `R`). With the discontinuity mesh the elements themselves move with the shadows, so
-//! each step is a full recomputation (reported as such).
+//! here the part of line space in `R` is re-swept at both times instead, which handles
+//! any number of visibility events between two times (creations and destructions of
+//! faces included) but costs a sweep of `R` per step rather than `O(log m_O)` per
+//! event, and selecting the events inside `R` tests all point pairs (`O(P^2)`
+//! orientation tests, no trigonometry). With the discontinuity mesh the elements
+//! themselves move with the shadows, so each step is a full recomputation (reported as
+//! such).
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 use std::time::Instant;
 
-use super::complex::{Clip, sweep};
-use super::geometry::FlatGeometry;
+use super::complex::sweep;
+use super::geometry::{FlatGeometry, PairMap};
 use super::mesh::{Mesh, splits};
 use super::radiosity::FormFactors;
 use super::scene::FlatScene;
+use super::window::window_sweep;
 
 /// What one update step did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -65,7 +68,7 @@ pub struct Dynamic<'s> {
     splits: Vec<Vec<f64>>,
     t: f64,
     geom: FlatGeometry,
-    mu: HashMap<(u32, u32), f64>,
+    mu: PairMap,
 }
 
 impl<'s> Dynamic<'s> {
@@ -132,9 +135,10 @@ impl<'s> Dynamic<'s> {
                     .flat_map(|s| [s.a, s.b])
                     .collect()
             };
-            let clip = Clip::new(vec![hull_points(&self.geom), hull_points(&geom1)]);
-            let out0 = sweep(&self.geom, Some(&clip), false);
-            let out1 = sweep(&geom1, Some(&clip), false);
+            let mut region = hull_points(&self.geom);
+            region.extend(hull_points(&geom1));
+            let out0 = window_sweep(&self.geom, &region);
+            let out1 = window_sweep(&geom1, &region);
             let mut touched: HashSet<(u32, u32)> = HashSet::new();
             for (k, v) in &out0.mu {
                 *self.mu.entry(*k).or_insert(0.0) -= v;
@@ -148,10 +152,10 @@ impl<'s> Dynamic<'s> {
             let scale = geom1.elements.iter().map(|e| e.len).fold(0.0, f64::max);
             let tiny = 1e-12 * scale;
             self.mu.retain(|_, v| *v > tiny);
-            rep.cells_visited = out0.stats.cells + out1.stats.cells;
+            rep.cells_visited = out0.cells + out1.cells;
             rep.labels_visited = touched.len();
             rep.ff_recomputed = touched.iter().map(|k| if k.0 == k.1 { 1 } else { 2 }).sum();
-            rep.casts = out0.stats.casts + out1.stats.casts;
+            rep.casts = out0.casts + out1.casts;
         }
         self.geom = geom1;
         self.t = t1;

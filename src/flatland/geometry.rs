@@ -215,6 +215,31 @@ impl FlatGeometry {
     }
 }
 
+/// A map keyed by element pairs `(i, j)`, `i < j`, with a fast multiplicative hash
+/// (keys are small integers chosen by the program, not by an adversary).
+pub type PairMap = HashMap<(u32, u32), f64, std::hash::BuildHasherDefault<PairHasher>>;
+
+/// The hasher of [`PairMap`]: one multiply-rotate per written integer (FxHash style).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PairHasher(u64);
+
+impl std::hash::Hasher for PairHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_u32(&mut self, x: u32) {
+        self.write_u64(x as u64);
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
 /// `(cos theta, sin theta)`: the antiderivative of `n(theta)` used in every exact
 /// measure `integral x . n(theta) dtheta = x . (N(t1) - N(t0))`.
 #[inline]

@@ -26,6 +26,7 @@ pub mod mesh;
 pub mod radiosity;
 pub mod scene;
 pub mod svg;
+pub mod window;
 
 use geometry::FlatGeometry;
 use radiosity::FormFactors;
