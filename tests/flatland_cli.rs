@@ -179,3 +179,33 @@ fn bad_scene_exits_1_naming_file_and_place() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn crossing_at_a_solve_time_between_keys_exits_1() {
+    // The bar passes through the wall between its two (valid) keyframes.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("through.json");
+    std::fs::write(
+        &scene,
+        r#"{"rhier_flatland": 1, "objects": [
+          {"name": "wall", "segments": [{"a": [0, 0], "b": [0, 2]}]},
+          {"name": "bar", "segments": [{"a": [-2, 1], "b": [-1, 1]}],
+           "motion": [{"t": 0, "translation": [0, 0]}, {"t": 1, "translation": [3, 0]}]}]}"#,
+    )
+    .unwrap();
+    let o = rhier()
+        .arg("flatland")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.path().join("r.json"))
+        .args(["--times", "0,0.5,1"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("through.json") && err.contains("t = 0.5"),
+        "{err}"
+    );
+    assert!(err.contains("object \"wall\", segment 0") && err.contains("object \"bar\""));
+}

@@ -51,8 +51,10 @@ fn update_equals_full_recompute_along_the_path() {
             // Topological changes: pairs that start or stop seeing each other.
             let now: HashSet<(u32, u32)> = full.mu.keys().copied().collect();
             if let Some(p) = &prev {
-                created += now.difference(p).count();
-                destroyed += p.difference(&now).count();
+                let (c, d) = (now.difference(p).count(), p.difference(&now).count());
+                assert_eq!((rep.pairs_appeared, rep.pairs_vanished), (c, d), "t {t}");
+                created += c;
+                destroyed += d;
             }
             prev = Some(now);
             assert_eq!(rep.ff_total, full.nonzeros());

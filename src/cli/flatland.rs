@@ -73,6 +73,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "labels_visited": report.labels_visited,
             "form_factors_recomputed": report.ff_recomputed,
             "form_factors_total": report.ff_total,
+            "pairs_appeared": report.pairs_appeared,
+            "pairs_vanished": report.pairs_vanished,
             "lines_cast": report.casts,
             "seconds": report.seconds,
         });

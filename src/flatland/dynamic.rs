@@ -52,6 +52,11 @@ pub struct StepReport {
     pub ff_recomputed: usize,
     /// Non-zero form factors after the step (ordered pairs).
     pub ff_total: usize,
+    /// Element pairs that started to see each other (visibility events creating
+    /// faces, §5.2).
+    pub pairs_appeared: usize,
+    /// Element pairs that stopped seeing each other (faces destroyed).
+    pub pairs_vanished: usize,
     /// Lines cast by the two clipped sweeps.
     pub casts: usize,
     /// Wall time of the update (both sweeps and the merge), seconds.
@@ -95,6 +100,8 @@ impl<'s> Dynamic<'s> {
             labels_visited: d.mu.len(),
             ff_recomputed: ff_total,
             ff_total,
+            pairs_appeared: 0,
+            pairs_vanished: 0,
             casts: out.stats.casts,
             seconds: start.elapsed().as_secs_f64(),
             full: true,
@@ -140,18 +147,30 @@ impl<'s> Dynamic<'s> {
             let out0 = window_sweep(&self.geom, &region);
             let out1 = window_sweep(&geom1, &region);
             let mut touched: HashSet<(u32, u32)> = HashSet::new();
+            touched.extend(out0.mu.keys().copied());
+            touched.extend(out1.mu.keys().copied());
+            let before: HashSet<(u32, u32)> = touched
+                .iter()
+                .filter(|k| self.mu.contains_key(k))
+                .copied()
+                .collect();
             for (k, v) in &out0.mu {
                 *self.mu.entry(*k).or_insert(0.0) -= v;
-                touched.insert(*k);
             }
             for (k, v) in &out1.mu {
                 *self.mu.entry(*k).or_insert(0.0) += v;
-                touched.insert(*k);
             }
             // Entries of destroyed faces cancel to round-off: drop them.
             let scale = geom1.elements.iter().map(|e| e.len).fold(0.0, f64::max);
             let tiny = 1e-12 * scale;
             self.mu.retain(|_, v| *v > tiny);
+            for k in &touched {
+                match (before.contains(k), self.mu.contains_key(k)) {
+                    (false, true) => rep.pairs_appeared += 1,
+                    (true, false) => rep.pairs_vanished += 1,
+                    _ => {}
+                }
+            }
             rep.cells_visited = out0.cells + out1.cells;
             rep.labels_visited = touched.len();
             rep.ff_recomputed = touched.iter().map(|k| if k.0 == k.1 { 1 } else { 2 }).sum();
