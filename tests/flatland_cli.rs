@@ -107,6 +107,29 @@ fn room_example_matches_the_library_and_draws_svg() {
     assert!(segs[3]["B"][1].as_f64().unwrap() > segs[0]["B"][1].as_f64().unwrap());
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.starts_with("<svg") && text.contains("<polygon"));
+    // The same picture as PNG: scene (600 px) + dual plane (600 px) side by side.
+    let png = dir.path().join("room.png");
+    let st = rhier()
+        .arg("flatland")
+        .arg(example("flatland_room.json"))
+        .arg("--out")
+        .arg(&out)
+        .arg("--svg")
+        .arg(&png)
+        .arg("--dual")
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (1220, 600));
+    // The light (ceiling x in [1.5, 2.5]) is drawn (nearly) white, the floor darker.
+    let light = img.get_pixel(20 + (2.0 * 140.0) as u32, 20 + 3);
+    assert!(light.0.iter().all(|&c| c >= 250), "{light:?}");
+    let floor = img.get_pixel(20 + (2.0 * 140.0) as u32, 20 + 420 - 3);
+    assert!(
+        floor.0.iter().all(|&c| c < 250) && floor.0.iter().any(|&c| c > 40),
+        "{floor:?}"
+    );
 }
 
 #[test]

@@ -29,8 +29,8 @@ pub struct Args {
     /// Elements: none (the input segments), discontinuity, or uniform:N.
     #[arg(long, default_value = "none", value_parser = parse_mesh)]
     pub mesh: Mesh,
-    /// Draw the scene coloured by radiosity to this SVG file (one file per frame,
-    /// suffixed `_NNN`, when there are several times).
+    /// Draw the scene coloured by radiosity to this SVG file, or PNG if the name ends
+    /// in `.png` (one file per frame, suffixed `_NNN`, when there are several times).
     #[arg(long)]
     pub svg: Option<PathBuf>,
     /// Also draw the visibility complex in the dual plane (faces related to moving
@@ -208,29 +208,38 @@ fn segments_json(scene: &FlatScene, sol: &FlatSolution) -> Vec<Value> {
 }
 
 fn write_svg(scene: &FlatScene, sol: &FlatSolution, path: &Path, dual: bool) -> anyhow::Result<()> {
-    let text = if dual {
-        let out = sweep(&sol.geom, None, true);
-        let complex = out.complex.unwrap_or_default();
-        let movers: Vec<u32> = (0..scene.objects.len() as u32)
-            .filter(|&o| !scene.objects[o as usize].motion.is_empty())
-            .collect();
-        let g = &sol.geom;
-        let elems: Vec<u32> = (0..g.elements.len() as u32)
-            .filter(|&e| {
-                movers.contains(&g.segments[g.elements[e as usize].segment as usize].object)
-            })
-            .collect();
-        let points: Vec<u32> = (0..g.points.len() as u32)
-            .filter(|&p| {
-                g.point_segments[p as usize]
-                    .iter()
-                    .any(|&s| movers.contains(&g.segments[s as usize].object))
-            })
-            .collect();
-        let related = complex.related_faces(&elems, &points);
-        svg::draw(sol, Some((&complex, &related)))
-    } else {
-        svg::draw(sol, None)
+    let complex = dual.then(|| sweep(&sol.geom, None, true).complex.unwrap_or_default());
+    let related = match &complex {
+        Some(c) => {
+            let movers: Vec<u32> = (0..scene.objects.len() as u32)
+                .filter(|&o| !scene.objects[o as usize].motion.is_empty())
+                .collect();
+            let g = &sol.geom;
+            let of = |s: u32| g.segments[s as usize].object;
+            let elems: Vec<u32> = (0..g.elements.len() as u32)
+                .filter(|&e| movers.contains(&of(g.elements[e as usize].segment)))
+                .collect();
+            let points: Vec<u32> = (0..g.points.len() as u32)
+                .filter(|&p| {
+                    g.point_segments[p as usize]
+                        .iter()
+                        .any(|&s| movers.contains(&of(s)))
+                })
+                .collect();
+            c.related_faces(&elems, &points)
+        }
+        None => Vec::new(),
     };
-    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+    let cx = complex.as_ref().map(|c| (c, related.as_slice()));
+    let png = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if png {
+        svg::raster(sol, cx)
+            .save(path)
+            .with_context(|| format!("writing {}", path.display()))
+    } else {
+        std::fs::write(path, svg::draw(sol, cx))
+            .with_context(|| format!("writing {}", path.display()))
+    }
 }
