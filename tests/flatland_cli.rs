@@ -194,6 +194,21 @@ fn bad_scene_exits_1_naming_file_and_place() {
         .unwrap();
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("missing.json"));
+    // Too many elements for the dense solve: refused before any work.
+    let o = rhier()
+        .arg("flatland")
+        .arg(example("flatland_room.json"))
+        .arg("--out")
+        .arg(dir.path().join("r.json"))
+        .args(["--mesh", "uniform:1000"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("flatland_room.json") && err.contains("10000"),
+        "{err}"
+    );
     let o = rhier()
         .arg("flatland")
         .arg(&scene)

@@ -48,8 +48,19 @@ pub struct Args {
     pub verify: bool,
 }
 
+/// Largest number of elements solved (dense matrix of 8 * N^2 bytes: 128 MB).
+const MAX_ELEMENTS: usize = 4000;
+
 fn parse_mesh(s: &str) -> Result<Mesh, String> {
     s.parse()
+}
+
+fn mesh_name(m: Mesh) -> String {
+    match m {
+        Mesh::None => "none".to_string(),
+        Mesh::Discontinuity => "discontinuity".to_string(),
+        Mesh::Uniform(n) => format!("uniform:{n}"),
+    }
 }
 
 /// Runs `rhier flatland`.
@@ -58,6 +69,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let times = frame_times(&scene, &args)?;
     for &t in &times {
         scene.check_at(&args.scene, t)?;
+    }
+    // The solve is dense (N^2 form factors, N^3 elimination) and the sweep visits all
+    // point pairs: refuse sizes that would exhaust memory rather than abort.
+    let elements = rhier::flatland::geometry_at(&scene, times[0], args.mesh)
+        .elements
+        .len();
+    if elements > MAX_ELEMENTS {
+        anyhow::bail!(
+            "{}: expected at most {MAX_ELEMENTS} elements for the dense exact solve, found {elements} \
+             (with --mesh {}); use a coarser mesh",
+            args.scene.display(),
+            mesh_name(args.mesh)
+        );
     }
     let (mut dynamic, mut report) = Dynamic::new(&scene, args.mesh, times[0]);
     let mut frames = Vec::with_capacity(times.len());
@@ -115,11 +139,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         frames.push(frame);
     }
-    let mesh = match args.mesh {
-        Mesh::None => "none".to_string(),
-        Mesh::Discontinuity => "discontinuity".to_string(),
-        Mesh::Uniform(n) => format!("uniform:{n}"),
-    };
+    let mesh = mesh_name(args.mesh);
     let doc = if frames.len() == 1 {
         let mut f = frames.pop().unwrap_or_default();
         f["rhier_flatland_result"] = json!(1);
