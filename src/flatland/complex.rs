@@ -1061,6 +1061,73 @@ impl Rec {
 }
 
 impl Complex {
+    /// Checks the structure's invariants: every index in range, cells grouped by face
+    /// with the face's label and side, measures adding up, chains sorted by angle and
+    /// made of the face's own edges, edge ends at vertices through the edge's point.
+    /// Returns the first violation found.
+    pub fn validate(&self, geom: &FlatGeometry) -> Result<(), String> {
+        let np = geom.points.len() as u32;
+        let ne = geom.elements.len() as u32;
+        for (i, c) in self.cells.iter().enumerate() {
+            if c.lower >= np || c.upper >= np || c.from >= ne || c.to >= ne {
+                return Err(format!("cell {i}: index out of range"));
+            }
+            if c.face.0 as usize >= self.faces.len()
+                || c.theta[0].partial_cmp(&c.theta[1]) == Some(std::cmp::Ordering::Greater)
+                || c.theta.iter().any(|t| t.is_nan())
+            {
+                return Err(format!("cell {i}: bad face or angles"));
+            }
+        }
+        for (fi, f) in self.faces.iter().enumerate() {
+            let cells = &self.face_cells[f.cells[0] as usize..f.cells[1] as usize];
+            let mut sum = 0.0;
+            for id in cells {
+                let c = &self.cells[id.0 as usize];
+                let label = [c.from.min(c.to), c.from.max(c.to)];
+                if c.face.0 as usize != fi || label != f.objects || c.front != f.front {
+                    return Err(format!("face {fi}: cell {} does not belong", id.0));
+                }
+                sum += c.area;
+            }
+            if (sum - f.measure).abs() > 1e-12 * (1.0 + sum.abs()) {
+                return Err(format!(
+                    "face {fi}: measure {} != sum of cells {sum}",
+                    f.measure
+                ));
+            }
+            for (range, side) in [(f.lower, Side::Lower), (f.upper, Side::Upper)] {
+                let chain = &self.chain_edges[range[0] as usize..range[1] as usize];
+                for (k, e) in chain.iter().enumerate() {
+                    let edge = &self.edges[e.0 as usize];
+                    if edge.face.0 as usize != fi || edge.side != side || edge.point >= np {
+                        return Err(format!("face {fi}: chain edge {} is foreign", e.0));
+                    }
+                    if k > 0 && self.edges[chain[k - 1].0 as usize].theta[0] > edge.theta[0] {
+                        return Err(format!("face {fi}: chain not sorted"));
+                    }
+                }
+            }
+        }
+        for (ei, e) in self.edges.iter().enumerate() {
+            for v in e.ends.iter().flatten() {
+                let v = self
+                    .vertices
+                    .get(v.0 as usize)
+                    .ok_or(format!("edge {ei}: end"))?;
+                if v.u != e.point && v.w != e.point {
+                    return Err(format!("edge {ei}: end vertex misses its point"));
+                }
+            }
+        }
+        for (vi, v) in self.vertices.iter().enumerate() {
+            if v.u >= np || v.w >= np || v.u == v.w {
+                return Err(format!("vertex {vi}: bad points"));
+            }
+        }
+        Ok(())
+    }
+
     /// The cells containing the line `(theta, p)` (any angle; mapped into the chart).
     pub fn locate(&self, geom: &FlatGeometry, theta: f64, p: f64) -> Vec<CellId> {
         let k = ((theta - self.theta0) / PI).floor();
