@@ -59,6 +59,7 @@ pub struct FlatGeometry {
 }
 
 /// A hit of a cast line with an element, at abscissa `s` along the line's direction.
+/// 16 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     /// Abscissa along `d`.
@@ -68,6 +69,8 @@ pub struct Hit {
     /// Its input segment.
     pub segment: u32,
 }
+
+const _: () = assert!(std::mem::size_of::<Hit>() == 16);
 
 impl FlatGeometry {
     /// Builds the geometry from posed segments and, per segment, the sorted interior
