@@ -157,6 +157,7 @@ fn times_report_updates_per_frame() {
             u["form_factors_total"].as_u64().unwrap(),
         );
         assert!(re > 0 && tot > 0);
+        assert!(u["faces_visited"].as_u64().unwrap() > 0);
         assert!(u["verify"]["max_abs_dF"].as_f64().unwrap() < 1e-12);
         assert!(u["verify"]["max_abs_dB"].as_f64().unwrap() < 1e-10);
         assert_eq!(f["segments"].as_array().unwrap().len(), 14);

@@ -304,3 +304,19 @@ fn complex_of_degenerate_rooms_validates() {
         }
     }
 }
+
+#[test]
+fn window_sweep_over_everything_finds_the_complex_faces() {
+    use rhier::flatland::window::window_sweep;
+    for seed in 1..8u64 {
+        let g = random_geometry(seed, 6);
+        let c = sweep(&g, None, true).complex.unwrap();
+        let front = c.faces.iter().filter(|f| f.front).count();
+        let w = window_sweep(&g, &[[-5.0, -5.0], [6.0, -5.0], [6.0, 6.0], [-5.0, 6.0]]);
+        assert_eq!(w.faces, front, "seed {seed}");
+        let (ff, _) = form_factors(&g);
+        for (k, v) in &ff.mu {
+            assert!((w.mu[k] - v).abs() < 1e-12);
+        }
+    }
+}

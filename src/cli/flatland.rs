@@ -93,6 +93,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let sol = solve_with(&scene, t, dynamic.geometry().clone(), &ff);
         let mut update = json!({
             "full": report.full,
+            "faces_visited": report.faces_visited,
             "cells_visited": report.cells_visited,
             "labels_visited": report.labels_visited,
             "form_factors_recomputed": report.ff_recomputed,
@@ -114,14 +115,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .fold(0.0, f64::max);
             update["verify"] = json!({"max_abs_dF": df, "max_abs_dB": db});
         }
+        let what = if report.full {
+            format!("full solve, {} cells", report.cells_visited)
+        } else {
+            format!(
+                "update: {} recomputed, {} faces ({} cells) visited",
+                report.ff_recomputed, report.faces_visited, report.cells_visited
+            )
+        };
         let _ = writeln!(
             std::io::stdout(),
-            "t = {t}: {} elements, {} non-zero form factors; {}: {} recomputed, {} cells visited, {:.3} ms",
+            "t = {t}: {} elements, {} non-zero form factors; {what}, {:.3} ms",
             sol.geom.elements.len(),
             report.ff_total,
-            if report.full { "full solve" } else { "update" },
-            report.ff_recomputed,
-            report.cells_visited,
             report.seconds * 1e3
         );
         if let Some(path) = &args.svg {

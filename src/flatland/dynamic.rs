@@ -44,6 +44,9 @@ use super::window::window_sweep;
 pub struct StepReport {
     /// Time reached.
     pub t: f64,
+    /// Front-facing faces of the complex visited (connected pieces inside the updated
+    /// region, at `t0` plus at `t1`); 0 on full steps (not counted there).
+    pub faces_visited: usize,
     /// Face pieces (cells) whose measure was integrated, both sweeps together.
     pub cells_visited: usize,
     /// Distinct element pairs (face labels) met in `R`.
@@ -96,6 +99,7 @@ impl<'s> Dynamic<'s> {
         let ff_total = d.form_factors().nonzeros();
         let rep = StepReport {
             t: t0,
+            faces_visited: 0,
             cells_visited: out.stats.cells,
             labels_visited: d.mu.len(),
             ff_recomputed: ff_total,
@@ -172,6 +176,7 @@ impl<'s> Dynamic<'s> {
                 }
             }
             rep.cells_visited = out0.cells + out1.cells;
+            rep.faces_visited = out0.faces + out1.faces;
             rep.labels_visited = touched.len();
             rep.ff_recomputed = touched.iter().map(|k| if k.0 == k.1 { 1 } else { 2 }).sum();
             rep.casts = out0.casts + out1.casts;

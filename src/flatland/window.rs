@@ -54,6 +54,9 @@ pub struct WindowOut {
     pub casts: usize,
     /// Events inside the region.
     pub events: usize,
+    /// Front-facing faces of the complex met (connected pieces inside the region:
+    /// a face that leaves the region and comes back counts twice).
+    pub faces: usize,
 }
 
 /// Measures the free lines of `geom` that meet the convex hull of `points` (grown
@@ -89,11 +92,19 @@ pub fn window_sweep(geom: &FlatGeometry, points: &[[f64; 2]]) -> WindowOut {
     let inside =
         |v: [f64; 2]| (0..hull.len()).all(|i| orient(hull[i], hull[(i + 1) % hull.len()], v) > 0.0);
     // 2. Events: (absolute angle) of swaps, tangents and envelope changes.
-    let mut events: Vec<f64> = Vec::new();
+    // (angle, point or NO_POINT, point or NO_POINT, is a tangent); envelope changes
+    // name no point.
+    let mut events: Vec<(f64, u32, u32, bool)> = Vec::new();
     for i in 0..hull.len() {
-        events.push(line_angle(hull[i], hull[(i + 1) % hull.len()]));
+        events.push((
+            line_angle(hull[i], hull[(i + 1) % hull.len()]),
+            NO_POINT,
+            NO_POINT,
+            false,
+        ));
     }
     for (vi, &v) in pts.iter().enumerate() {
+        let vi_u = vi as u32;
         if !inside(v) {
             for &q in &hull {
                 // Tangent through q: every vertex of K on one side.
@@ -104,18 +115,18 @@ pub fn window_sweep(geom: &FlatGeometry, points: &[[f64; 2]]) -> WindowOut {
                     r |= o < 0.0;
                 }
                 if !(l && r) {
-                    events.push(line_angle(v, q));
+                    events.push((line_angle(v, q), vi as u32, NO_POINT, true));
                 }
             }
         }
-        for &w in &pts[vi + 1..] {
+        for (wi, &w) in pts.iter().enumerate().skip(vi + 1) {
             let (mut l, mut r) = (false, false);
             for &h in &hull {
                 let o = orient(v, w, h);
                 l |= o > 0.0;
                 r |= o < 0.0;
                 if l && r {
-                    events.push(line_angle(v, w));
+                    events.push((line_angle(v, w), vi_u, wi as u32, false));
                     break;
                 }
             }
@@ -123,22 +134,26 @@ pub fn window_sweep(geom: &FlatGeometry, points: &[[f64; 2]]) -> WindowOut {
     }
     out.events = events.len();
     // 3. Chart start in the widest event-free interval, then groups.
-    events.sort_by(f64::total_cmp);
-    let mut theta0 = 0.5 * (events[0] + events[events.len() - 1] - PI);
-    let mut widest = events[0] + PI - events[events.len() - 1];
+    events.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (first, last) = (events[0].0, events[events.len() - 1].0);
+    let mut theta0 = 0.5 * (first + last - PI);
+    let mut widest = first + PI - last;
     for w in events.windows(2) {
-        if w[1] - w[0] > widest {
-            widest = w[1] - w[0];
-            theta0 = 0.5 * (w[0] + w[1]);
+        if w[1].0 - w[0].0 > widest {
+            widest = w[1].0 - w[0].0;
+            theta0 = 0.5 * (w[0].0 + w[1].0);
         }
     }
-    let mut rel: Vec<f64> = events.iter().map(|a| (a - theta0).rem_euclid(PI)).collect();
-    rel.sort_by(f64::total_cmp);
-    let mut groups: Vec<f64> = Vec::new();
+    for e in &mut events {
+        e.0 = (e.0 - theta0).rem_euclid(PI);
+    }
+    events.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // (absolute angle, range of its events)
+    let mut groups: Vec<(f64, usize, usize)> = Vec::new();
     let mut start = 0;
-    for i in 1..=rel.len() {
-        if i == rel.len() || rel[i] - rel[i - 1] > ANGLE_EPS {
-            groups.push(theta0 + 0.5 * (rel[start] + rel[i - 1]));
+    for i in 1..=events.len() {
+        if i == events.len() || events[i].0 - events[i - 1].0 > ANGLE_EPS {
+            groups.push((theta0 + 0.5 * (events[start].0 + events[i - 1].0), start, i));
             start = i;
         }
     }
@@ -176,17 +191,41 @@ pub fn window_sweep(geom: &FlatGeometry, points: &[[f64; 2]]) -> WindowOut {
         by_lower: Vec::new(),
         hits: Vec::new(),
         out,
+        gap_cells: Vec::new(),
+        cells: Vec::new(),
+        parent: Vec::new(),
+        involved: vec![false; pts.len() + 2],
+        initial: Vec::new(),
     };
-    let mid0 = 0.5 * (theta0 + groups.first().copied().unwrap_or(theta0 + PI));
+    let mid0 = 0.5 * (theta0 + groups.first().map_or(theta0 + PI, |g| g.0));
     // The window is re-evaluated (one dot product per point) and re-sorted at the
     // middle of every event-free interval.
     st.rebuild(&window_at(mid0), theta0, mid0, true);
-    for (gi, &th) in groups.iter().enumerate() {
-        let next = groups.get(gi + 1).copied().unwrap_or(theta0 + PI);
+    st.initial = st.gaps.clone();
+    for (gi, &(th, e0, e1)) in groups.iter().enumerate() {
+        let next = groups.get(gi + 1).map_or(theta0 + PI, |g| g.0);
         let mid = 0.5 * (th + next);
+        let mut marked = Vec::new();
+        for &(_, a, b, tangent) in &events[e0..e1] {
+            for v in [a, b] {
+                if v != NO_POINT {
+                    marked.push(v as usize + 2);
+                }
+            }
+            if tangent {
+                marked.extend([0, 1]); // a point crosses the envelope
+            }
+        }
+        for &m in &marked {
+            st.involved[m] = true;
+        }
         st.rebuild(&window_at(mid), th, mid, false);
+        for &m in &marked {
+            st.involved[m] = false;
+        }
     }
     st.finish(theta0 + PI);
+    st.out.faces = st.count_faces();
     st.out
 }
 
@@ -196,7 +235,12 @@ struct Gap {
     upper: u32,
     birth: f64,
     probe: f64,
+    /// Index in `gap_cells`.
+    id: u32,
 }
+
+/// No point (in an event naming fewer than two points).
+const NO_POINT: u32 = u32::MAX;
 
 struct Sweep<'a> {
     geom: &'a FlatGeometry,
@@ -206,18 +250,21 @@ struct Sweep<'a> {
     by_lower: Vec<u32>,
     hits: Vec<Hit>,
     out: WindowOut,
+    /// Per gap id: range of its front-facing cells in `cells`.
+    gap_cells: Vec<[u32; 2]>,
+    /// Front-facing cells: the unordered element pair of each.
+    cells: Vec<(u32, u32)>,
+    /// Union-find over `cells` (faces of the complex inside the region).
+    parent: Vec<u32>,
+    /// Per bound slot (`LO`, `HI`, points): touched by the current event group.
+    involved: Vec<bool>,
+    /// The gaps at the start of the chart (glued to the end, reversed).
+    initial: Vec<Gap>,
 }
 
 impl Sweep<'_> {
     /// Replaces the gaps by those of `window` at angle `th` (probe angle `mid`).
     fn rebuild(&mut self, window: &[u32], th: f64, mid: f64, first: bool) {
-        let slot = |id: u32| -> usize {
-            match id {
-                LO => 0,
-                HI => 1,
-                v => v as usize + 2,
-            }
-        };
         // Old gaps by their lower bound (each bound is the lower bound of one gap).
         if self.by_lower.len() < self.geom.points.len() + 2 {
             self.by_lower = vec![u32::MAX; self.geom.points.len() + 2];
@@ -229,23 +276,22 @@ impl Sweep<'_> {
         let mut new: Vec<Gap> = Vec::with_capacity(window.len() + 1);
         let mut lower = LO;
         for &upper in window.iter().chain(std::iter::once(&HI)) {
-            let mut g = Gap {
-                lower,
-                upper,
-                birth: th,
-                probe: mid,
-            };
             let i = self.by_lower[slot(lower)];
+            let mut cont = None;
             if !first && i != u32::MAX && self.gaps[i as usize].upper == upper {
                 // A gap keeps living if its bounds are unchanged, unless it is bounded
                 // by the envelope and the envelope's vertex changed.
                 let o = self.gaps[i as usize];
                 let env = lower == LO || upper == HI;
                 if !env || self.same_envelope(o.probe, mid) {
-                    g = o;
+                    cont = Some(o);
                     kept[i as usize] = true;
                 }
             }
+            let g = match cont {
+                Some(o) => o,
+                None => self.born(lower, upper, th, mid),
+            };
             new.push(g);
             lower = upper;
         }
@@ -253,13 +299,99 @@ impl Sweep<'_> {
             self.by_lower[slot(g.lower)] = u32::MAX;
         }
         let old = std::mem::replace(&mut self.gaps, new);
-        if !first {
-            for (g, k) in old.into_iter().zip(kept) {
-                if !k {
-                    self.die(g, th);
+        if first {
+            return;
+        }
+        // Faces: neighbours across a point curve share a face when they share a
+        // label; a new gap continues a dead one with the same lower (upper) bound
+        // when that bound took no part in the event (regions meeting only at the
+        // event point are not joined).
+        for k in 0..self.gaps.len().saturating_sub(1) {
+            let (a, b) = (self.gaps[k].id, self.gaps[k + 1].id);
+            self.union_gaps(a, b);
+        }
+        let dead: Vec<Gap> = old
+            .iter()
+            .zip(&kept)
+            .filter(|(_, k)| !**k)
+            .map(|(g, _)| *g)
+            .collect();
+        let born: Vec<Gap> = self
+            .gaps
+            .iter()
+            .filter(|g| g.birth == th)
+            .copied()
+            .collect();
+        for d in &dead {
+            for &n in &born {
+                let same_lower = n.lower == d.lower && !self.involved[slot(n.lower)];
+                let same_upper = n.upper == d.upper && !self.involved[slot(n.upper)];
+                if same_lower || same_upper {
+                    self.union_gaps(d.id, n.id);
                 }
             }
         }
+        for g in dead {
+            self.die(g, th);
+        }
+    }
+
+    /// A new gap: one line cast at the probe angle gives its labels.
+    fn born(&mut self, lower: u32, upper: u32, th: f64, mid: f64) -> Gap {
+        let id = self.gap_cells.len() as u32;
+        let (u, w) = (self.bound(lower, mid), self.bound(upper, mid));
+        let (s, c) = mid.sin_cos();
+        let p = 0.5 * (-(u[0] + w[0]) * s + (u[1] + w[1]) * c);
+        let mut hits = std::mem::take(&mut self.hits);
+        self.geom.cast_sc((s, c), p, &mut hits);
+        self.out.casts += 1;
+        let c0 = self.cells.len() as u32;
+        for h in hits.windows(2) {
+            if self.geom.fronts_face_sc((s, c), &h[0], &h[1]) {
+                let key = (h[0].elem.min(h[1].elem), h[0].elem.max(h[1].elem));
+                self.parent.push(self.cells.len() as u32);
+                self.cells.push(key);
+            }
+        }
+        self.hits = hits;
+        self.gap_cells.push([c0, self.cells.len() as u32]);
+        Gap {
+            lower,
+            upper,
+            birth: th,
+            probe: mid,
+            id,
+        }
+    }
+
+    fn union_gaps(&mut self, a: u32, b: u32) {
+        let [a0, a1] = self.gap_cells[a as usize];
+        let [b0, b1] = self.gap_cells[b as usize];
+        for i in a0..a1 {
+            for j in b0..b1 {
+                if self.cells[i as usize] == self.cells[j as usize] {
+                    let (ri, rj) = (self.find(i), self.find(j));
+                    if ri != rj {
+                        self.parent[ri as usize] = rj;
+                    }
+                }
+            }
+        }
+    }
+
+    fn find(&mut self, mut x: u32) -> u32 {
+        while self.parent[x as usize] != x {
+            let p = self.parent[x as usize];
+            self.parent[x as usize] = self.parent[p as usize];
+            x = p;
+        }
+        x
+    }
+
+    fn count_faces(&mut self) -> usize {
+        (0..self.parent.len() as u32)
+            .filter(|&i| self.find(i) == i)
+            .count()
     }
 
     fn same_envelope(&self, a: f64, b: f64) -> bool {
@@ -308,27 +440,43 @@ impl Sweep<'_> {
         if area <= 0.0 {
             return;
         }
-        // One line inside the gap at its probe angle.
-        let (u, w) = (self.bound(g.lower, g.probe), self.bound(g.upper, g.probe));
-        let (s, c) = g.probe.sin_cos();
-        let p = 0.5 * (-(u[0] + w[0]) * s + (u[1] + w[1]) * c);
-        let mut hits = std::mem::take(&mut self.hits);
-        self.geom.cast_sc((s, c), p, &mut hits);
-        self.out.casts += 1;
-        for h in hits.windows(2) {
-            if self.geom.fronts_face_sc((s, c), &h[0], &h[1]) {
-                let key = (h[0].elem.min(h[1].elem), h[0].elem.max(h[1].elem));
-                *self.out.mu.entry(key).or_insert(0.0) += area;
-                self.out.cells += 1;
-            }
+        let [c0, c1] = self.gap_cells[g.id as usize];
+        for c in c0..c1 {
+            *self.out.mu.entry(self.cells[c as usize]).or_insert(0.0) += area;
+            self.out.cells += 1;
         }
-        self.hits = hits;
     }
 
     fn finish(&mut self, th: f64) {
-        for g in std::mem::take(&mut self.gaps) {
+        // The seam: at theta0 + pi the window is the initial one reversed, with the
+        // envelope's sides exchanged (p -> -p).
+        let swap = |b: u32| match b {
+            LO => HI,
+            HI => LO,
+            v => v,
+        };
+        let fin = std::mem::take(&mut self.gaps);
+        for g in &fin {
+            if let Some(i) = self
+                .initial
+                .iter()
+                .find(|i| i.lower == swap(g.upper) && i.upper == swap(g.lower))
+            {
+                let id = i.id;
+                self.union_gaps(g.id, id);
+            }
+        }
+        for g in fin {
             self.die(g, th);
         }
+    }
+}
+
+fn slot(id: u32) -> usize {
+    match id {
+        LO => 0,
+        HI => 1,
+        v => v as usize + 2,
     }
 }
 
