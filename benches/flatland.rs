@@ -123,8 +123,9 @@ fn moving_update(c: &mut Criterion) {
         let (mut d, _) = Dynamic::new(&scene, Mesh::None, t0);
         let rep = d.step(t1);
         eprintln!(
-            "boxes {k}: segments {}, update recomputes {} of {} form factors ({:.1} %), {} casts",
+            "boxes {k}: segments {}, faces visited {}, update recomputes {} of {} form factors ({:.1} %), {} casts",
             d.geometry().segments.len(),
+            rep.faces_visited,
             rep.ff_recomputed,
             rep.ff_total,
             100.0 * rep.ff_recomputed as f64 / rep.ff_total as f64,

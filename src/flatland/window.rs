@@ -307,8 +307,11 @@ impl Sweep<'_> {
         // when that bound took no part in the event (regions meeting only at the
         // event point are not joined).
         for k in 0..self.gaps.len().saturating_sub(1) {
-            let (a, b) = (self.gaps[k].id, self.gaps[k + 1].id);
-            self.union_gaps(a, b);
+            let (a, b) = (self.gaps[k], self.gaps[k + 1]);
+            // Pairs of continuing gaps were joined when the younger was born.
+            if a.birth == th || b.birth == th {
+                self.union_gaps(a.id, b.id);
+            }
         }
         let dead: Vec<Gap> = old
             .iter()
