@@ -15,7 +15,8 @@
 //! restricted sweep of [`super::window`]: it visits only the part of the complex
 //! whose lines meet `K` ("sweeping the complex along the dual lines of the object",
 //! §5.1), bounded by the dual curves of `K`'s vertices, and casts one line per gap of
-//! that part. The form factors recomputed are the element pairs with a non-zero
+//! that part, counting the faces it visits. The form factors recomputed are the
+//! element pairs with a non-zero
 //! measure in `R` at either time; all others are kept from `t0`. The result equals a
 //! from-scratch computation at every step to round-off (tested).
 //!

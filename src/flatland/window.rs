@@ -29,8 +29,16 @@
 //! the motion touches, as in §5.1 ("in time proportional to their number"), apart from
 //! the quadratic but trigonometry-free selection.
 //!
-//! What it does not do: it does not build the complex's faces, only their measures;
-//! the region must be convex.
+//! Faces: each gap's front-facing labels come from one cast at its birth; cells of
+//! one label are joined (union-find) across a point curve between neighbouring gaps,
+//! from a dead gap to the new gap with the same lower (upper) bound when that bound
+//! took no part in the event, and across the chart's seam, exactly as in
+//! [`super::complex`]; the roots are the faces visited (connected pieces of faces
+//! inside the region; over a region containing the whole scene they are the complex's
+//! front faces, tested).
+//!
+//! What it does not do: it does not store the faces' chains or vertices, only their
+//! measures and their number; the region must be convex.
 
 use std::f64::consts::PI;
 
