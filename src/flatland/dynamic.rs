@@ -16,9 +16,9 @@
 //! whose lines meet `K` ("sweeping the complex along the dual lines of the object",
 //! §5.1), bounded by the dual curves of `K`'s vertices, and casts one line per gap of
 //! that part, counting the faces it visits. The form factors recomputed are the
-//! element pairs with a non-zero
-//! measure in `R` at either time; all others are kept from `t0`. The result equals a
-//! from-scratch computation at every step to round-off (tested).
+//! element pairs with a non-zero measure in `R` at either time; all others are kept
+//! from `t0`. The result equals a from-scratch computation at every step to round-off
+//! (tested).
 //!
 //! What it does not do (honestly): the paper tracks the visibility events one by one
 //! with a priority queue and updates the complex in constant time per event (§5.2);
