@@ -192,3 +192,40 @@ fn string_rule_matches_quadrature_on_random_scenes() {
         "only {checked_hidden} partly hidden pairs"
     );
 }
+
+#[test]
+fn closure_holds_with_massively_collinear_points() {
+    // A room with a 3 x 3 lattice of boxes: many points on common lines (rows,
+    // columns, diagonals), so most events are degenerate blocks.
+    let mut segs = Vec::new();
+    let room = [[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]];
+    for k in 0..4 {
+        segs.push(seg(room[k], room[(k + 1) % 4]));
+    }
+    for i in 0..3 {
+        for j in 0..3 {
+            let (x, y) = (1.0 + i as f64, 1.0 + j as f64);
+            let b = [
+                [x - 0.25, y - 0.25],
+                [x - 0.25, y + 0.25],
+                [x + 0.25, y + 0.25],
+                [x + 0.25, y - 0.25],
+            ];
+            for k in 0..4 {
+                segs.push(seg(b[k], b[(k + 1) % 4]));
+            }
+        }
+    }
+    let n = segs.len();
+    for splits in [1usize, 2] {
+        let ts: Vec<f64> = (1..splits).map(|k| k as f64 / splits as f64).collect();
+        let g = FlatGeometry::new(segs.clone(), &vec![ts; n]);
+        let (ff, stats) = form_factors(&g);
+        let m = g.elements.len() as u32;
+        for i in 0..m {
+            let sum: f64 = (0..m).map(|j| ff.f(i, j)).sum();
+            assert!((sum - 1.0).abs() < 1e-12, "splits {splits} row {i}: {sum}");
+        }
+        assert!(stats.events > 0);
+    }
+}

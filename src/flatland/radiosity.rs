@@ -15,10 +15,8 @@
 //! `O(N^2)` memory and `O(N^3)` time in the number of elements `N` (fine up to a few
 //! thousand elements).
 
-use std::collections::HashMap;
-
 use super::complex::{SweepStats, sweep};
-use super::geometry::FlatGeometry;
+use super::geometry::{FlatGeometry, PairMap};
 
 /// Sparse exact form factors between the elements of one geometry.
 #[derive(Clone, Debug, Default)]
@@ -26,12 +24,12 @@ pub struct FormFactors {
     /// Element lengths.
     pub lens: Vec<f64>,
     /// `mu[(i, j)]`, `i < j`: measure of the free lines joining the lit sides.
-    pub mu: HashMap<(u32, u32), f64>,
+    pub mu: PairMap,
 }
 
 impl FormFactors {
     /// Form factors from measures (see the module header).
-    pub fn from_mu(geom: &FlatGeometry, mu: HashMap<(u32, u32), f64>) -> Self {
+    pub fn from_mu(geom: &FlatGeometry, mu: PairMap) -> Self {
         FormFactors {
             lens: geom.elements.iter().map(|e| e.len).collect(),
             mu,
