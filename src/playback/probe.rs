@@ -211,14 +211,17 @@ pub fn patch_params(patch: &WorldPatch, q: DVec3) -> (f64, f64) {
 }
 
 /// The leaf of `leaves` (one patch's) holding `(u, v)`: the first whose domain
-/// contains it, else (a point in a crack between f32 domains) the one whose domain is
-/// nearest.
+/// contains it, else the first within `1e-6` (a point in a crack between f32
+/// domains), else the one whose domain centre is nearest.
 pub fn leaf_at(leaves: &[Leaf], u: f64, v: f64) -> Option<&Leaf> {
-    leaves.iter().find(|l| l.contains(u, v, 1e-6)).or_else(|| {
-        leaves
-            .iter()
-            .min_by(|a, b| domain_distance(a, u, v).total_cmp(&domain_distance(b, u, v)))
-    })
+    let found = leaves.iter().find(|l| l.contains(u, v, 0.0));
+    found
+        .or_else(|| leaves.iter().find(|l| l.contains(u, v, 1e-6)))
+        .or_else(|| {
+            leaves
+                .iter()
+                .min_by(|a, b| domain_distance(a, u, v).total_cmp(&domain_distance(b, u, v)))
+        })
 }
 
 fn domain_distance(l: &Leaf, u: f64, v: f64) -> f64 {
