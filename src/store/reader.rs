@@ -136,6 +136,19 @@ impl Reader {
             let at = range.start + i * ENTRY_LEN;
             sections.push(SectionEntry::decode(&path, i, at, b, header.table_offset)?);
         }
+        for (i, e) in sections.iter().enumerate() {
+            if let Err(expected) = check_raw_len(e.kind, e.items, e.raw_len) {
+                return Err(Error::invalid(
+                    &path,
+                    format!(
+                        "byte {} (section {i}, raw length)",
+                        range.start + i * ENTRY_LEN + 24
+                    ),
+                    expected,
+                    format!("{} bytes, {} records", e.raw_len, e.items),
+                ));
+            }
+        }
         let single = |kind: SectionKind| -> Result<usize> {
             let mut found = sections.iter().enumerate().filter(|(_, e)| e.kind == kind);
             match (found.next(), found.next()) {
@@ -601,6 +614,41 @@ impl Reader {
     /// Bytes of the header and section table.
     pub fn table_bytes(&self) -> u64 {
         (HEADER_LEN + self.sections.len() * ENTRY_LEN) as u64
+    }
+}
+
+/// What the raw length of a section with `items` records must be: fixed-size records
+/// then the 16-byte root (`ArchivedVec`: 8-byte relative pointer, 8-byte length);
+/// one stats record; one scene record of any length. `Err` holds what was expected.
+fn check_raw_len(kind: SectionKind, items: u64, raw_len: u64) -> std::result::Result<(), String> {
+    use std::mem::size_of;
+    let record = match kind {
+        SectionKind::Patches => size_of::<super::records::ArchivedPatchRecord>(),
+        SectionKind::Chunk => size_of::<ArchivedLeafRecord>(),
+        SectionKind::ChunkIndex => size_of::<super::records::ArchivedChunkRecord>(),
+        SectionKind::Links => size_of::<super::records::ArchivedLinkRecord>(),
+        SectionKind::Stats => {
+            let want = size_of::<ArchivedStatsRecord>() as u64;
+            return if items == 1 && raw_len == want {
+                Ok(())
+            } else {
+                Err(format!("1 stats record of {want} bytes"))
+            };
+        }
+        SectionKind::Scene => {
+            return if items == 1 {
+                Ok(())
+            } else {
+                Err("1 scene record".into())
+            };
+        }
+    } as u64;
+    match items.checked_mul(record).and_then(|x| x.checked_add(16)) {
+        Some(want) if want == raw_len => Ok(()),
+        Some(want) => Err(format!("{want} bytes for {items} {} records", kind.name())),
+        None => Err(format!(
+            "a record count whose size fits in 64 bits, not {items}"
+        )),
     }
 }
 
