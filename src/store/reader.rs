@@ -11,8 +11,9 @@
 //!
 //! What it does not do: it never trusts a length before comparing it to the bytes that
 //! exist; decompression grows its buffer with the data actually produced and stops at
-//! the stated raw length, so a lying length cannot cause a huge allocation. It keeps no
-//! cache of decoded chunks (the OS page cache serves mapped raw chunks).
+//! the stated raw length, so a lying length cannot cause a huge allocation. It keeps
+//! only the chunks decoded by the last [`Reader::leaves_at`] (so that playing frames
+//! in order decodes the long-lived chunks once); memory stays that of one frame.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -78,6 +79,8 @@ pub struct Reader {
     patches: Vec<PatchGeometry>,
     chunks: Vec<ChunkRecord>,
     stats: SolveStats,
+    /// Chunks decoded by the last `leaves_at`: `(chunk, leaves)`.
+    recent: std::sync::Mutex<Vec<(usize, std::sync::Arc<Vec<Leaf>>)>>,
 }
 
 impl std::fmt::Debug for Reader {
@@ -179,6 +182,7 @@ impl Reader {
             patches: Vec::new(),
             chunks: Vec::new(),
             stats: SolveStats::default(),
+            recent: std::sync::Mutex::new(Vec::new()),
         };
         reader.load_scene(i_scene)?;
         reader.load_patches(i_patches)?;
@@ -520,14 +524,23 @@ impl Reader {
     /// The leaves live at `t` ([`Leaf::is_live`]), reading only the chunks that need it.
     pub fn leaves_at(&self, t: f64) -> Result<Vec<Leaf>> {
         check_time(&self.path, self.time, t)?;
+        // A poisoned lock only means another thread panicked mid-update: start afresh.
+        let mut recent = self.recent.lock().unwrap_or_else(|p| {
+            let mut g = p.into_inner();
+            g.clear();
+            g
+        });
+        let mut kept = Vec::new();
         let mut out = Vec::new();
         for k in self.chunks_for(t) {
-            out.extend(
-                self.chunk_leaves(k)?
-                    .into_iter()
-                    .filter(|l| l.is_live(t, self.time.end)),
-            );
+            let leaves = match recent.iter().find(|(j, _)| *j == k) {
+                Some((_, l)) => l.clone(),
+                None => std::sync::Arc::new(self.chunk_leaves(k)?),
+            };
+            out.extend(leaves.iter().filter(|l| l.is_live(t, self.time.end)));
+            kept.push((k, leaves));
         }
+        *recent = kept;
         Ok(out)
     }
 
