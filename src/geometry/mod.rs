@@ -1,1 +1,26 @@
-//! geometry: see the crate tour in lib.rs. (Under construction.)
+//! Geometry: patches in world space, polygon clipping, the form-factor kernels and ray
+//! visibility.
+//!
+//! - [`Poly`]: a small convex polygon (≤ 8 corners, `f64`) with area, normal, clipping.
+//! - [`point_to_polygon`]: the exact unoccluded form factor from a differential area
+//!   to a polygon (Lambert's contour integral), clipped to the receiver's hemisphere.
+//! - [`Patches`]: every input polygon placed in world space at a time `t`.
+//! - [`SceneBvh`]: occlusion rays and closest hits through obvhs CWBVHs: one BVH in
+//!   world space for all static objects, one in object space per moving object placed
+//!   by its motion at time `t`. This module is the only user of obvhs.
+//!
+//! Geometry is `f64` everywhere except inside the BVHs (`f32`, as obvhs stores it);
+//! ray end points are offset relative to the segment length, so results do not depend
+//! on the scene's scale.
+
+mod formfactor;
+mod nearest;
+mod patches;
+mod polygon;
+mod visibility;
+
+pub use formfactor::{point_to_point_kernel, point_to_polygon};
+pub use nearest::{closest_point_on_polygon, nearest_facing};
+pub use patches::{PatchId, Patches};
+pub use polygon::Poly;
+pub use visibility::{Hit, RayCounters, SceneBvh};

@@ -63,6 +63,52 @@ pub struct Polygon {
     pub material: MaterialId,
 }
 
+impl Polygon {
+    /// Vector area: `sum (v[i] - v[0]) x (v[i+1] - v[0]) / 2`. Its length is the area of
+    /// a planar polygon, its direction the normal of the lit side (counter-clockwise
+    /// winding seen from that side).
+    pub fn area_vector(&self) -> DVec3 {
+        let Some(&v0) = self.vertices.first() else {
+            return DVec3::ZERO;
+        };
+        let mut sum = DVec3::ZERO;
+        for w in self.vertices.windows(2).skip(1) {
+            sum += (w[0] - v0).cross(w[1] - v0);
+        }
+        0.5 * sum
+    }
+
+    /// Area (length of [`Polygon::area_vector`]).
+    pub fn area(&self) -> f64 {
+        self.area_vector().length()
+    }
+
+    /// Unit normal pointing to the lit side (zero for a degenerate polygon).
+    pub fn normal(&self) -> DVec3 {
+        self.area_vector().normalize_or_zero()
+    }
+
+    /// Mean of the vertices.
+    pub fn centroid(&self) -> DVec3 {
+        if self.vertices.is_empty() {
+            return DVec3::ZERO;
+        }
+        self.vertices.iter().copied().sum::<DVec3>() / self.vertices.len() as f64
+    }
+
+    /// Largest distance between two vertices.
+    pub fn diameter(&self) -> f64 {
+        let v = &self.vertices;
+        let mut d: f64 = 0.0;
+        for i in 0..v.len() {
+            for j in i + 1..v.len() {
+                d = d.max(v[i].distance(v[j]));
+            }
+        }
+        d
+    }
+}
+
 /// One keyframe of a rigid-plus-scale motion.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MotionKey {
@@ -156,9 +202,7 @@ pub struct Object {
 impl Object {
     /// Object → world map at time `t` (identity when static).
     pub fn to_world(&self, t: f64) -> DAffine3 {
-        self.motion
-            .as_ref()
-            .map_or(DAffine3::IDENTITY, |m| m.at(t))
+        self.motion.as_ref().map_or(DAffine3::IDENTITY, |m| m.at(t))
     }
 
     /// True if the object has a track that actually moves it.

@@ -1,1 +1,195 @@
-//! shafts: see the crate tour in lib.rs. (Under construction.)
+//! Shafts: the convex volume holding every segment between two convex polygons, used
+//! to prove a link unoccluded without casting a ray (Haines & Wallace, "Shaft
+//! culling for efficient ray-traced radiosity", 1991; the line-space hierarchy of
+//! paper 000 keeps such shafts per link).
+//!
+//! A [`Shaft`] is the bounding box of both polygons plus the planes of their convex
+//! hull that pass through an edge of one polygon and a corner of the other (every hull
+//! face other than the two polygons themselves is of that form, since a hull face
+//! cannot hold a diagonal of a convex polygon). A triangle is outside the shaft when
+//! all its corners lie outside one plane, outside the box, or behind either polygon's
+//! own plane (a segment between the two polygons never crosses behind its ends).
+//!
+//! [`Shaft::is_clear`] asks the scene's BVH for the triangles overlapping the box and
+//! stops at the first one it cannot cull: "clear" is a proof, "not clear" only means
+//! rays must decide.
+
+use glam::DVec3;
+
+use crate::geometry::SceneBvh;
+
+/// Most planes a shaft keeps (two quads: 8 edges × 4 corners candidates, few survive).
+const MAX_PLANES: usize = 16;
+
+/// A shaft between two convex polygons. 432 bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct Shaft {
+    /// Box of both polygons.
+    pub lo: DVec3,
+    /// Box of both polygons.
+    pub hi: DVec3,
+    /// Hull planes `(n, d)`: inside is `n · p <= d`.
+    planes: [(DVec3, f64); MAX_PLANES],
+    count: usize,
+    /// Planes of the two polygons `(n, d)`, front is `n · p > d`.
+    ends: [(DVec3, f64); 2],
+    /// Tolerance in length units.
+    eps: f64,
+}
+
+impl Shaft {
+    /// The shaft between polygons `a` and `b` (corners in order, 3 to 4 each), whose
+    /// unit normals are `na`, `nb`.
+    pub fn new(a: &[DVec3], na: DVec3, b: &[DVec3], nb: DVec3) -> Shaft {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for &p in a.iter().chain(b) {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        let eps = (hi - lo).length() * 1e-9;
+        let mut s = Shaft {
+            lo,
+            hi,
+            planes: [(DVec3::ZERO, 0.0); MAX_PLANES],
+            count: 0,
+            ends: [(na, na.dot(a[0])), (nb, nb.dot(b[0]))],
+            eps,
+        };
+        s.add_edge_planes(a, b);
+        s.add_edge_planes(b, a);
+        s
+    }
+
+    fn add_edge_planes(&mut self, edges_of: &[DVec3], corners_of: &[DVec3]) {
+        let k = edges_of.len();
+        for i in 0..k {
+            let (p, q) = (edges_of[i], edges_of[(i + 1) % k]);
+            for &c in corners_of {
+                if self.count == MAX_PLANES {
+                    return;
+                }
+                let n = (q - p).cross(c - p);
+                let len = n.length();
+                if len <= self.eps * (q - p).length() {
+                    continue;
+                }
+                let n = n / len;
+                let d = n.dot(p);
+                // Orient so every corner of both polygons is inside (n·x <= d).
+                let (mut above, mut below) = (false, false);
+                for &x in edges_of.iter().chain(corners_of) {
+                    let s = n.dot(x) - d;
+                    above |= s > self.eps;
+                    below |= s < -self.eps;
+                }
+                match (above, below) {
+                    (true, true) => continue, // not a hull face
+                    (true, false) => self.planes[self.count] = (-n, -d),
+                    _ => self.planes[self.count] = (n, d),
+                }
+                self.count += 1;
+            }
+        }
+    }
+
+    /// True if the triangle `t` cannot meet any segment between the two polygons.
+    pub fn culls(&self, t: &[DVec3; 3]) -> bool {
+        let eps = self.eps;
+        for axis in 0..3 {
+            if t.iter().all(|v| v[axis] < self.lo[axis] - eps)
+                || t.iter().all(|v| v[axis] > self.hi[axis] + eps)
+            {
+                return true;
+            }
+        }
+        for &(n, d) in &self.ends {
+            if t.iter().all(|v| n.dot(*v) - d <= eps) {
+                return true;
+            }
+        }
+        for &(n, d) in &self.planes[..self.count] {
+            if t.iter().all(|v| n.dot(*v) - d >= -eps) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// True if no triangle of `bvh` other than those of patches `skip` can block a
+    /// segment between the two polygons.
+    pub fn is_clear(&self, bvh: &SceneBvh, skip: [u32; 2]) -> bool {
+        bvh.for_each_triangle_in_box(self.lo, self.hi, |patch, tri| {
+            patch == skip[0] || patch == skip[1] || self.culls(&tri)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(z: f64, up: bool) -> Vec<DVec3> {
+        let mut v = vec![
+            DVec3::new(0.0, 0.0, z),
+            DVec3::new(1.0, 0.0, z),
+            DVec3::new(1.0, 1.0, z),
+            DVec3::new(0.0, 1.0, z),
+        ];
+        if !up {
+            v.reverse();
+        }
+        v
+    }
+
+    #[test]
+    fn blocker_between_is_not_culled_and_side_walls_are() {
+        let (a, b) = (square(0.0, true), square(1.0, false));
+        let s = Shaft::new(&a, DVec3::Z, &b, -DVec3::Z);
+        // A triangle across the middle blocks.
+        let mid = [
+            DVec3::new(0.2, 0.2, 0.5),
+            DVec3::new(0.8, 0.2, 0.5),
+            DVec3::new(0.5, 0.8, 0.5),
+        ];
+        assert!(!s.culls(&mid));
+        // A wall on the side x = 0 plane touches the hull but cannot block.
+        let wall = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.0, 0.5, 1.0),
+        ];
+        assert!(s.culls(&wall));
+        // Outside the box.
+        let far = [
+            DVec3::new(3.0, 0.0, 0.5),
+            DVec3::new(4.0, 0.0, 0.5),
+            DVec3::new(3.0, 1.0, 0.5),
+        ];
+        assert!(s.culls(&far));
+    }
+
+    #[test]
+    fn hull_planes_cull_inside_the_box_but_outside_the_hull() {
+        // Small squares in opposite corners of a big box: the box's middle corner
+        // regions are outside the hull.
+        let a: Vec<DVec3> = square(0.0, true).iter().map(|p| *p * 0.1).collect();
+        let b: Vec<DVec3> = square(0.0, false)
+            .iter()
+            .map(|p| *p * 0.1 + DVec3::new(0.9, 0.9, 1.0))
+            .collect();
+        let s = Shaft::new(&a, DVec3::Z, &b, -DVec3::Z);
+        let off = [
+            DVec3::new(0.9, 0.0, 0.5),
+            DVec3::new(1.0, 0.0, 0.5),
+            DVec3::new(1.0, 0.1, 0.5),
+        ];
+        assert!(s.culls(&off));
+        let on = [
+            DVec3::new(0.45, 0.45, 0.5),
+            DVec3::new(0.6, 0.5, 0.5),
+            DVec3::new(0.5, 0.6, 0.5),
+        ];
+        assert!(!s.culls(&on));
+    }
+}

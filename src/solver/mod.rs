@@ -1,5 +1,1087 @@
-//! Hierarchical radiosity: clusters, refinement, gather, push-pull, iteration.
+//! Hierarchical radiosity with clustering (Hanrahan, Salzman & Aupperle 1991; Smits,
+//! Arvo & Greenberg 1994), solved with GMRES, reconstructed by a final gather at the
+//! leaves' corners.
+//!
+//! One solve runs **rounds**. Each round:
+//! 1. *refine*: every active link whose error bound `ρ_r · B_s · ΔK` exceeds
+//!    `eps · B_ref` is split at its larger end ([`crate::oracle`]); the new links are
+//!    evaluated in parallel (rayon) wave by wave, and the refined link stays in the pool
+//!    as *passive*. The first round starts from the root cluster's self-link, so no
+//!    `n²` initial linking happens.
+//! 2. *solve*: `(I − ρK) B = E` over the leaves with GMRES ([`gmres`]), the operator
+//!    applied matrix-free as pull (area-weighted averages up the tree), gather (each
+//!    element sums `F · B_source` over its active links, in parallel) and push
+//!    (irradiance down to the leaves).
+//!
+//! **Leaf closure correction.** A leaf gathers through links that live at different
+//! levels of its ancestry, each averaged over a different receiver; their factors do
+//! not sum exactly to the leaf's true total, and with `ρ → 1` that small defect is
+//! amplified by `1/(1 − ρ)`. Each leaf's gathered irradiance is therefore scaled by
+//! `S_exact / S_hier`, where `S_hier` is the sum of the coefficients it gathers through
+//! and `S_exact` the same sources' factors (with the links' visibility) re-integrated
+//! over the leaf itself. In a closed room `S_exact = 1` to round-off, so `B = E/(1−ρ)`
+//! holds at `ρ = 0.999`.
+//!
+//! **Reconstruction.** A piecewise-constant solution is a poor point answer, so the
+//! stored leaves carry radiosity at their corners, computed by a final gather at each
+//! distinct corner: `B(x) = E + ρ Σ F(x → A_s) V(x, s) B_s` over the sources of the
+//! links of the leaf and its ancestors (which cover the scene exactly once), opening
+//! sources that are large seen from `x` into their children, with exact
+//! point-to-polygon factors. A corner that lies inside a solid (its normal ray first
+//! meets a back face, e.g. under a block resting on the floor) takes the mean of its
+//! leaf's valid corners instead. `probe` interpolates these corners.
+//!
+//! Results are deterministic for a given seed and thread count (ray jitter is hashed
+//! from link ids; parallel loops write disjoint outputs).
 
+pub mod gmres;
+pub mod hierarchy;
+pub mod report;
 pub mod solution;
 
+use std::collections::HashMap;
+use std::time::Instant;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::Result;
+use crate::geometry::{Patches, SceneBvh, point_to_polygon};
+use crate::oracle::{self, EvalSettings, Split};
+use crate::pools::{ElementId, ElementKind, ElementPool, LinkId, LinkPool, LinkState, Storage};
+use crate::scene::Scene;
+
+pub use report::RoundRecord;
 pub use solution::{Leaf, PatchGeometry, Shape, Solution, SolveStats};
+
+/// Fraction of the way from a corner to its leaf's centroid where the corner's
+/// final gather is evaluated.
+pub const CORNER_INSET: f64 = 1e-3;
+
+/// Settings of a solve.
+#[derive(Clone, Debug)]
+pub struct SolveOptions {
+    /// Where the pools live.
+    pub storage: Storage,
+    /// Refinement threshold relative to the scene's RMS radiosity.
+    pub eps: f64,
+    /// Smallest element edge, as a fraction of the scene's diameter.
+    pub min_size: f64,
+    /// Rays per receiver quadrature point for partly hidden links.
+    pub rays_per_point: u32,
+    /// Rays from a reconstruction corner to a partly hidden source (emitters: 4×).
+    pub corner_rays: u32,
+    /// A source seen from a corner under a half-angle above this (radius/distance) is
+    /// opened into its children during reconstruction.
+    pub open_ratio: f64,
+    /// Most refine-and-solve rounds.
+    pub max_rounds: u32,
+    /// Stop when the estimated error is below this.
+    pub target_error: Option<f64>,
+    /// Stop starting new rounds after this many seconds.
+    pub time_budget: Option<f64>,
+    /// GMRES relative residual tolerance.
+    pub tolerance: f64,
+    /// Seed of the ray jitter.
+    pub seed: u64,
+    /// Reconstruction tolerance: a cell splits while the gather at its centre
+    /// differs from its corners' interpolant by more than this times the RMS radiosity.
+    pub recon_tol: f64,
+    /// Smallest reconstruction cell edge, as a fraction of the scene's diameter.
+    pub recon_min_size: f64,
+}
+
+impl Default for SolveOptions {
+    fn default() -> Self {
+        SolveOptions {
+            storage: Storage::Ram,
+            eps: 0.5,
+            min_size: 1.0 / 256.0,
+            rays_per_point: 4,
+            corner_rays: 8,
+            open_ratio: 0.5,
+            max_rounds: 8,
+            target_error: None,
+            time_budget: None,
+            tolerance: 1e-6,
+            seed: 0x5eed,
+            recon_tol: 0.02,
+            recon_min_size: 1.0 / 512.0,
+        }
+    }
+}
+
+/// The solver's state: pools, geometry and the leaf system of the last round.
+pub struct Solver<'a> {
+    scene: &'a Scene,
+    opts: SolveOptions,
+    /// Patches at the solve's time.
+    pub patches: Patches,
+    /// Visibility.
+    pub bvh: SceneBvh,
+    /// Element arena.
+    pub elems: ElementPool,
+    /// Link arena.
+    pub links: LinkPool,
+    root: Option<ElementId>,
+    time: [f32; 2],
+    eps_len: f64,
+    min_area: f64,
+    rho_max: f64,
+    /// Leaves (surface elements without children), in id order.
+    leaves: Vec<ElementId>,
+    /// Leaf index of each element (`u32::MAX` for inner elements).
+    leaf_of: Vec<u32>,
+    /// Active links by receiver (CSR over element ids).
+    csr_start: Vec<u32>,
+    csr_links: Vec<u32>,
+    /// Closure correction per leaf.
+    closure: Vec<f64>,
+    rays: u64,
+    shaft_clear: u64,
+}
+
+impl<'a> Solver<'a> {
+    /// Places the scene at its start time, builds BVHs, clusters and patch roots.
+    pub fn new(scene: &'a Scene, opts: SolveOptions) -> Result<Self> {
+        let t = scene.time.start;
+        let patches = Patches::at_time(scene, t);
+        let bvh = SceneBvh::build(scene, &patches, t);
+        let mut elems = ElementPool::new(&opts.storage)?;
+        let links = LinkPool::new(&opts.storage)?;
+        let time = [scene.time.start as f32, scene.time.end as f32];
+        let root = hierarchy::build(&mut elems, &patches, time)?;
+        let diam = patches.scene_diameter();
+        let rho_max = patches
+            .rhos
+            .iter()
+            .flat_map(|r| r.iter().copied())
+            .fold(0.0, f64::max);
+        let mut s = Solver {
+            scene,
+            eps_len: diam * 1e-9,
+            min_area: (opts.min_size * diam).powi(2),
+            opts,
+            patches,
+            bvh,
+            elems,
+            links,
+            root,
+            time,
+            rho_max,
+            leaves: Vec::new(),
+            leaf_of: Vec::new(),
+            csr_start: Vec::new(),
+            csr_links: Vec::new(),
+            closure: Vec::new(),
+            rays: 0,
+            shaft_clear: 0,
+        };
+        // Initial guess B = E at the patch roots, pulled up.
+        for i in 0..s.elems.len() {
+            let g = s.elems.geoms.as_slice()[i];
+            if g.patch != u32::MAX {
+                let e = s.patches.emissions[g.patch as usize];
+                s.elems.radiosities.as_mut_slice()[i] = [e[0] as f32, e[1] as f32, e[2] as f32];
+            }
+        }
+        s.pull_pool();
+        Ok(s)
+    }
+
+    fn settings(&self) -> EvalSettings {
+        EvalSettings {
+            rays_per_point: self.opts.rays_per_point,
+            seed: self.opts.seed,
+        }
+    }
+
+    /// Runs rounds until nothing refines, a stop criterion holds or `max_rounds`;
+    /// `on_round` sees each round's record and the solver (to measure true error).
+    pub fn run(
+        &mut self,
+        mut on_round: impl FnMut(&mut RoundRecord, &Solver),
+    ) -> Result<Vec<RoundRecord>> {
+        let start = Instant::now();
+        let mut records = Vec::new();
+        let Some(root) = self.root else {
+            return Ok(records);
+        };
+        let mut b_ref = self.enclosure_estimate();
+        for round in 0..self.opts.max_rounds {
+            let (rays0, clear0) = (self.rays, self.shaft_clear);
+            let thr = self.opts.eps * b_ref;
+            let changed = if round == 0 {
+                let ev = oracle::evaluate(
+                    &self.elems,
+                    &self.patches,
+                    &self.bvh,
+                    root,
+                    root,
+                    &self.settings(),
+                    self.eps_len,
+                );
+                let id = self.links.push(root, root, ev.transport)?;
+                self.refine(vec![id], thr)?;
+                true
+            } else {
+                let active: Vec<LinkId> = (0..self.links.len() as u32)
+                    .map(LinkId)
+                    .filter(|l| {
+                        self.links.transports.as_slice()[l.ix()].state() == LinkState::Active
+                    })
+                    .collect();
+                self.refine(active, thr)?
+            };
+            if round > 0 && !changed {
+                break;
+            }
+            self.index_links();
+            self.compute_closure();
+            let residual = self.solve_leaves()?;
+            b_ref = self.rms_radiosity().max(f64::MIN_POSITIVE);
+            #[cfg(debug_assertions)]
+            {
+                self.elems.validate()?;
+                self.links.validate(self.elems.len())?;
+            }
+            let (active, passive) = self.links.counts();
+            let mut rec = RoundRecord {
+                round,
+                seconds: start.elapsed().as_secs_f64(),
+                elements: self.elems.len() as u64,
+                leaves: self.leaves.len() as u64,
+                links_active: active,
+                links_passive: passive,
+                bytes_elements: self.elems.bytes() as u64,
+                bytes_links: self.links.bytes() as u64,
+                bytes_bvh: self.bvh.resident_bytes() as u64,
+                rays: self.rays - rays0,
+                shaft_clear: self.shaft_clear - clear0,
+                estimated_error: self.estimated_error(b_ref),
+                residual,
+                true_error: None,
+            };
+            on_round(&mut rec, self);
+            let stop = self
+                .opts
+                .target_error
+                .is_some_and(|t| rec.estimated_error <= t)
+                || self.opts.time_budget.is_some_and(|b| rec.seconds >= b);
+            records.push(rec);
+            if stop {
+                break;
+            }
+        }
+        Ok(records)
+    }
+
+    /// Mean reflected radiosity a closed room with the scene's mean exitance and
+    /// reflectance would have, max channel: the first round's radiosity scale.
+    fn enclosure_estimate(&self) -> f64 {
+        let (mut ae, mut ar, mut a) = (0.0, 0.0, 0.0);
+        for i in 0..self.patches.len() {
+            let area = self.patches.areas[i];
+            ae += area
+                * self.patches.emissions[i]
+                    .iter()
+                    .copied()
+                    .fold(0.0, f64::max);
+            ar += area * self.patches.rhos[i].iter().copied().fold(0.0, f64::max);
+            a += area;
+        }
+        if a <= 0.0 {
+            return 0.0;
+        }
+        let rho = (ar / a).min(0.999);
+        (ae / a) * rho / (1.0 - rho)
+    }
+
+    /// Area-weighted RMS of the leaves' reflected radiosity `B − E` (max channel):
+    /// the scale errors are measured against. Emission is left out so that a small
+    /// bright lamp does not loosen the threshold for everything it lights.
+    fn rms_radiosity(&self) -> f64 {
+        let (mut s, mut a) = (0.0, 0.0);
+        for &l in &self.leaves {
+            let g = &self.elems.geoms.as_slice()[l.ix()];
+            let b = self.elems.radiosities.as_slice()[l.ix()];
+            let e = self.patches.emissions[g.patch as usize];
+            let m = (0..3)
+                .map(|k| (b[k] as f64 - e[k]).max(0.0))
+                .fold(0.0, f64::max);
+            s += g.area * m * m;
+            a += g.area;
+        }
+        if a > 0.0 { (s / a).sqrt() } else { 0.0 }
+    }
+
+    fn rho_of(&self, e: ElementId) -> f64 {
+        let p = self.elems.geoms.as_slice()[e.ix()].patch;
+        if p == u32::MAX {
+            self.rho_max
+        } else {
+            self.patches.rhos[p as usize]
+                .iter()
+                .copied()
+                .fold(0.0, f64::max)
+        }
+    }
+
+    fn link_error(&self, l: LinkId) -> f64 {
+        let ends = self.links.ends.as_slice()[l.ix()];
+        let t = self.links.transports.as_slice()[l.ix()];
+        let b = self.elems.radiosities.as_slice()[ends.source as usize];
+        let bmax = b.iter().copied().fold(0.0f32, f32::max) as f64;
+        self.rho_of(ElementId(ends.receiver)) * bmax * t.spread as f64
+    }
+
+    /// Refines from the links `wave`; returns true if any link was split.
+    fn refine(&mut self, mut wave: Vec<LinkId>, thr: f64) -> Result<bool> {
+        let mut changed = false;
+        loop {
+            let mut pairs: Vec<(ElementId, ElementId)> = Vec::new();
+            for &l in &wave {
+                let t = self.links.transports.as_slice()[l.ix()];
+                if t.state() != LinkState::Active {
+                    continue;
+                }
+                let ends = self.links.ends.as_slice()[l.ix()];
+                let (r, s) = (ElementId(ends.receiver), ElementId(ends.source));
+                let forced = r == s || t.spread.is_infinite() || t.spread >= f32::MAX;
+                if !forced && self.link_error(l) <= thr {
+                    continue;
+                }
+                match oracle::choose_split(&self.elems, r, s, self.min_area) {
+                    Split::Keep => {}
+                    Split::Receiver => {
+                        hierarchy::subdivide(&mut self.elems, &self.patches, r)?;
+                        for c in self.elems.children(r) {
+                            pairs.push((ElementId(c), s));
+                        }
+                        self.links.set_passive(l);
+                        changed = true;
+                    }
+                    Split::Source => {
+                        hierarchy::subdivide(&mut self.elems, &self.patches, s)?;
+                        for c in self.elems.children(s) {
+                            pairs.push((r, ElementId(c)));
+                        }
+                        self.links.set_passive(l);
+                        changed = true;
+                    }
+                }
+            }
+            if pairs.is_empty() {
+                return Ok(changed);
+            }
+            let set = self.settings();
+            let (elems, patches, bvh, eps_len) =
+                (&self.elems, &self.patches, &self.bvh, self.eps_len);
+            let evals: Vec<_> = pairs
+                .par_iter()
+                .map(|&(r, s)| oracle::evaluate(elems, patches, bvh, r, s, &set, eps_len))
+                .collect();
+            wave = Vec::with_capacity(evals.len());
+            for ((r, s), ev) in pairs.into_iter().zip(evals) {
+                if ev.empty {
+                    continue;
+                }
+                self.rays += ev.rays as u64;
+                if ev.transport.shaft_clear() {
+                    self.shaft_clear += 1;
+                }
+                wave.push(self.links.push(r, s, ev.transport)?);
+            }
+        }
+    }
+
+    /// Rebuilds the leaf list and the by-receiver index of active links.
+    fn index_links(&mut self) {
+        let n = self.elems.len();
+        self.leaves.clear();
+        self.leaf_of = vec![u32::MAX; n];
+        for (i, node) in self.elems.nodes.as_slice().iter().enumerate() {
+            if node.child_count == 0 && node.kind == ElementKind::Surface as u8 {
+                self.leaf_of[i] = self.leaves.len() as u32;
+                self.leaves.push(ElementId(i as u32));
+            }
+        }
+        let mut start = vec![0u32; n + 1];
+        let ends = self.links.ends.as_slice();
+        let tr = self.links.transports.as_slice();
+        for (e, t) in ends.iter().zip(tr) {
+            if t.state() == LinkState::Active {
+                start[e.receiver as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut list = vec![0u32; start[n] as usize];
+        for (li, (e, t)) in ends.iter().zip(tr).enumerate() {
+            if t.state() == LinkState::Active {
+                let r = e.receiver as usize;
+                list[fill[r] as usize] = li as u32;
+                fill[r] += 1;
+            }
+        }
+        self.csr_start = start;
+        self.csr_links = list;
+    }
+
+    fn links_of(&self, e: usize) -> &[u32] {
+        &self.csr_links[self.csr_start[e] as usize..self.csr_start[e + 1] as usize]
+    }
+
+    /// Closure correction `S_exact / S_hier` of every leaf (see module docs).
+    fn compute_closure(&mut self) {
+        let elems = &self.elems;
+        let geoms = elems.geoms.as_slice();
+        let nodes = elems.nodes.as_slice();
+        let ends = self.links.ends.as_slice();
+        let tr = self.links.transports.as_slice();
+        self.closure = self
+            .leaves
+            .par_iter()
+            .map(|&leaf| {
+                let g = &geoms[leaf.ix()];
+                let q = oracle::samples(g);
+                let n = DVec3::from_array(g.normal);
+                let (mut hier, mut exact) = (0.0, 0.0);
+                let mut e = leaf.0;
+                while e != u32::MAX {
+                    for &l in self.links_of(e as usize) {
+                        let t = &tr[l as usize];
+                        let s = ends[l as usize].source as usize;
+                        hier += t.f as f64;
+                        let gs = &geoms[s];
+                        if gs.patch == u32::MAX {
+                            exact += t.f as f64;
+                        } else {
+                            let ps = oracle::poly(gs);
+                            let f: f64 = (0..q.count)
+                                .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
+                                .sum();
+                            exact += f * t.visibility as f64;
+                        }
+                    }
+                    e = nodes[e as usize].parent;
+                }
+                if hier > 0.0 {
+                    (exact / hier).clamp(0.5, 2.0)
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+    }
+
+    /// Area-weighted pull of the pool's radiosities (leaves → root).
+    fn pull_pool(&mut self) {
+        let n = self.elems.len();
+        for i in (0..n).rev() {
+            let node = self.elems.nodes.as_slice()[i];
+            if node.child_count == 0 {
+                continue;
+            }
+            let mut acc = [0.0f64; 3];
+            let mut area = 0.0;
+            for c in node.first_child..node.first_child + node.child_count {
+                let a = self.elems.geoms.as_slice()[c as usize].area;
+                let b = self.elems.radiosities.as_slice()[c as usize];
+                for k in 0..3 {
+                    acc[k] += a * b[k] as f64;
+                }
+                area += a;
+            }
+            let out = &mut self.elems.radiosities.as_mut_slice()[i];
+            for k in 0..3 {
+                out[k] = if area > 0.0 {
+                    (acc[k] / area) as f32
+                } else {
+                    0.0
+                };
+            }
+        }
+    }
+
+    /// Applies `A = I − ρ·c·(push ∘ gather ∘ pull)` to leaf radiosities `x` (3 per leaf).
+    fn apply(
+        &self,
+        x: &[f64],
+        out: &mut [f64],
+        scratch_b: &mut [[f64; 3]],
+        scratch_h: &mut [[f64; 3]],
+    ) {
+        let nodes = self.elems.nodes.as_slice();
+        let geoms = self.elems.geoms.as_slice();
+        // Pull.
+        for i in (0..nodes.len()).rev() {
+            let li = self.leaf_of[i];
+            if li != u32::MAX {
+                let j = li as usize * 3;
+                scratch_b[i] = [x[j], x[j + 1], x[j + 2]];
+                continue;
+            }
+            let node = nodes[i];
+            let mut acc = [0.0; 3];
+            let mut area = 0.0;
+            for c in node.first_child..node.first_child + node.child_count {
+                let a = geoms[c as usize].area;
+                for k in 0..3 {
+                    acc[k] += a * scratch_b[c as usize][k];
+                }
+                area += a;
+            }
+            scratch_b[i] = if area > 0.0 {
+                [acc[0] / area, acc[1] / area, acc[2] / area]
+            } else {
+                [0.0; 3]
+            };
+        }
+        // Gather.
+        let ends = self.links.ends.as_slice();
+        let tr = self.links.transports.as_slice();
+        let b = &*scratch_b;
+        scratch_h.par_iter_mut().enumerate().for_each(|(e, h)| {
+            let mut acc = [0.0; 3];
+            for &l in self.links_of(e) {
+                let f = tr[l as usize].f as f64;
+                let s = ends[l as usize].source as usize;
+                for k in 0..3 {
+                    acc[k] += f * b[s][k];
+                }
+            }
+            *h = acc;
+        });
+        // Push (parents precede children), then B − ρ c H at the leaves.
+        for i in 0..nodes.len() {
+            let p = nodes[i].parent;
+            if p != u32::MAX {
+                let ph = scratch_h[p as usize];
+                for k in 0..3 {
+                    scratch_h[i][k] += ph[k];
+                }
+            }
+            let li = self.leaf_of[i];
+            if li != u32::MAX {
+                let rho = self.patches.rhos[geoms[i].patch as usize];
+                let c = self.closure[li as usize];
+                let j = li as usize * 3;
+                for k in 0..3 {
+                    out[j + k] = x[j + k] - rho[k] * c * scratch_h[i][k];
+                }
+            }
+        }
+    }
+
+    /// Solves the leaf system with GMRES from the current radiosities; writes the
+    /// result into the pool (leaves and pulled inner elements). Returns the residual.
+    fn solve_leaves(&mut self) -> Result<f64> {
+        let nl = self.leaves.len();
+        let n = self.elems.len();
+        let mut rhs = vec![0.0; nl * 3];
+        let mut x = vec![0.0; nl * 3];
+        for (li, &l) in self.leaves.iter().enumerate() {
+            let p = self.elems.geoms.as_slice()[l.ix()].patch as usize;
+            let b = self.elems.radiosities.as_slice()[l.ix()];
+            for k in 0..3 {
+                rhs[li * 3 + k] = self.patches.emissions[p][k];
+                x[li * 3 + k] = b[k] as f64;
+            }
+        }
+        let mut sb = vec![[0.0; 3]; n];
+        let mut sh = vec![[0.0; 3]; n];
+        let outcome = gmres::solve(
+            |v, out| self.apply(v, out, &mut sb, &mut sh),
+            &rhs,
+            &mut x,
+            self.opts.tolerance,
+            40,
+            2000,
+        );
+        for (li, &l) in self.leaves.iter().enumerate() {
+            let out = &mut self.elems.radiosities.as_mut_slice()[l.ix()];
+            for k in 0..3 {
+                // Radiosity is never negative; clamp round-off of the Krylov solve.
+                out[k] = x[li * 3 + k].max(0.0) as f32;
+            }
+        }
+        self.pull_pool();
+        Ok(outcome.residual)
+    }
+
+    /// Relative RMS error estimate from the active links' bounds: per leaf, the
+    /// bounds of the links it gathers through add up; RMS over area, relative to `b_ref`.
+    fn estimated_error(&self, b_ref: f64) -> f64 {
+        let nodes = self.elems.nodes.as_slice();
+        let mut per_elem = vec![0.0f64; self.elems.len()];
+        for (e, v) in per_elem.iter_mut().enumerate() {
+            *v = self
+                .links_of(e)
+                .iter()
+                .map(|&l| self.link_error(LinkId(l)))
+                .sum();
+        }
+        let (mut s, mut a) = (0.0, 0.0);
+        for i in 0..nodes.len() {
+            let p = nodes[i].parent;
+            if p != u32::MAX {
+                per_elem[i] += per_elem[p as usize];
+            }
+            if self.leaf_of[i] != u32::MAX {
+                let area = self.elems.geoms.as_slice()[i].area;
+                s += area * per_elem[i] * per_elem[i];
+                a += area;
+            }
+        }
+        if a > 0.0 && b_ref > 0.0 {
+            (s / a).sqrt() / b_ref
+        } else {
+            0.0
+        }
+    }
+
+    /// Radiosity transported from source `s` to the point `x` (normal `n`): exact
+    /// point-to-polygon factor, visibility by rays unless `clear`, sources that look
+    /// large from `x` opened into their children.
+    fn point_transfer(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        s: usize,
+        clear: bool,
+        vis: f64,
+        key: u64,
+    ) -> [f64; 3] {
+        let geoms = self.elems.geoms.as_slice();
+        let nodes = self.elems.nodes.as_slice();
+        let gs = &geoms[s];
+        let node = nodes[s];
+        let (c, rad) = oracle::sphere(gs);
+        let d = c.distance(x).max(f64::MIN_POSITIVE);
+        if node.child_count > 0 && rad / d > self.opts.open_ratio {
+            let mut acc = [0.0; 3];
+            for ch in node.first_child..node.first_child + node.child_count {
+                let v = self.point_transfer(
+                    x,
+                    n,
+                    ch as usize,
+                    clear,
+                    vis,
+                    oracle::hash3(key, ch as u64, 1),
+                );
+                for k in 0..3 {
+                    acc[k] += v[k];
+                }
+            }
+            return acc;
+        }
+        let b = self.elems.radiosities.as_slice()[s];
+        let f = if gs.patch == u32::MAX {
+            let u = (c - x) / d;
+            gs.area * n.dot(u).max(0.0) * 0.25 / (std::f64::consts::PI * d * d) * vis
+        } else {
+            let ps = oracle::poly(gs);
+            let f = point_to_polygon(x, n, &ps);
+            if f <= 0.0 || clear {
+                f
+            } else {
+                let emitter = self.patches.emissions[gs.patch as usize]
+                    .iter()
+                    .any(|&e| e > 0.0);
+                let m = if emitter {
+                    self.opts.corner_rays * 4
+                } else {
+                    self.opts.corner_rays
+                };
+                let ns = DVec3::from_array(gs.normal);
+                f * oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key)
+            }
+        };
+        [f * b[0] as f64, f * b[1] as f64, f * b[2] as f64]
+    }
+
+    /// Final gather at point `x` of leaf `leaf`: `(B(x), valid)`.
+    fn gather_point(&self, leaf: ElementId, x: DVec3) -> ([f64; 3], bool) {
+        let geoms = self.elems.geoms.as_slice();
+        let nodes = self.elems.nodes.as_slice();
+        let ends = self.links.ends.as_slice();
+        let tr = self.links.transports.as_slice();
+        let g = &geoms[leaf.ix()];
+        let n = DVec3::from_array(g.normal);
+        let p = g.patch as usize;
+        // Inside a solid? The first thing straight above is a back face.
+        let diam = self.patches.scene_diameter_cached();
+        let valid = match self.bvh.intersect(x, n * diam, 1e-7, 1.0) {
+            Some(h) => self.patches.normals[h.patch as usize].dot(n) <= 0.0,
+            None => true,
+        };
+        let mut h = [0.0; 3];
+        let mut e = leaf.0;
+        while e != u32::MAX {
+            for &l in self.links_of(e as usize) {
+                let t = &tr[l as usize];
+                let s = ends[l as usize].source as usize;
+                let key = oracle::hash3(
+                    self.opts.seed,
+                    l as u64,
+                    x.x.to_bits() ^ x.y.to_bits().rotate_left(21) ^ x.z.to_bits().rotate_left(42),
+                );
+                let v = self.point_transfer(x, n, s, t.shaft_clear(), t.visibility as f64, key);
+                for k in 0..3 {
+                    h[k] += v[k];
+                }
+            }
+            e = nodes[e as usize].parent;
+        }
+        let rho = self.patches.rhos[p];
+        let em = self.patches.emissions[p];
+        (
+            [
+                em[0] + rho[0] * h[0],
+                em[1] + rho[1] * h[1],
+                em[2] + rho[2] * h[2],
+            ],
+            valid,
+        )
+    }
+
+    /// The solution: reconstruction cells with corner radiosity from the final gather.
+    ///
+    /// Cells start as the hierarchy's leaves and split (in parameter space, like
+    /// elements) while the gather at a cell's centre differs from the interpolant of
+    /// its corners by more than `recon_tol · B_ref` and the cell is larger than the
+    /// reconstruction's smallest size; a split cell keeps the links of its leaf. This
+    /// meshes the stored answer to where `B(x)` bends (room edges, contact lines,
+    /// shadow boundaries) without refining the link hierarchy there.
+    pub fn solution(&self) -> Solution {
+        let geoms = self.elems.geoms.as_slice();
+        let b_ref = self.rms_radiosity();
+        let tol = self.opts.recon_tol * b_ref;
+        let min_area = (self.opts.recon_min_size * self.patches.scene_diameter_cached()).powi(2);
+        let mut cache = VertexCache::default();
+        let mut cells: Vec<Cell> = self
+            .leaves
+            .iter()
+            .map(|&l| {
+                let g = &geoms[l.ix()];
+                Cell {
+                    leaf: l,
+                    patch: g.patch,
+                    n: g.n,
+                    uv: g.uv,
+                    area: g.area,
+                }
+            })
+            .collect();
+        let mut done: Vec<(Cell, [usize; 4])> = Vec::with_capacity(cells.len());
+        while !cells.is_empty() {
+            // Register every corner and centre, gather the new ones in parallel.
+            let mut ids = Vec::with_capacity(cells.len());
+            for c in &cells {
+                let centre = c.centre_uv();
+                let mut corners = [usize::MAX; 4];
+                for (i, slot) in corners.iter_mut().enumerate().take(c.n as usize) {
+                    *slot = cache.register(c, c.uv[i], centre);
+                }
+                ids.push((corners, cache.register(c, centre, centre)));
+            }
+            cache.evaluate(|leaf, x| self.gather_point(leaf, x), &self.patches);
+            let mut next = Vec::new();
+            for (c, (corners, centre)) in cells.into_iter().zip(ids) {
+                let vals = corner_values(
+                    &cache,
+                    &corners,
+                    c.n as usize,
+                    self.elems.radiosities.as_slice()[c.leaf.ix()],
+                );
+                let interp = mean3(&vals[..c.n as usize]);
+                let (cv, ok) = cache.values[centre];
+                let off = (0..3)
+                    .map(|k| (cv[k] - interp[k]).abs())
+                    .fold(0.0, f64::max);
+                if ok && off > tol && c.area >= 4.0 * min_area {
+                    next.extend(c.split());
+                } else {
+                    done.push((c, corners));
+                }
+            }
+            cells = next;
+        }
+        let mut leaves = Vec::with_capacity(done.len());
+        for (c, corners) in &done {
+            let vals = corner_values(
+                &cache,
+                corners,
+                c.n as usize,
+                self.elems.radiosities.as_slice()[c.leaf.ix()],
+            );
+            let mut b = [[0.0f32; 3]; 4];
+            for i in 0..c.n as usize {
+                b[i] = [
+                    vals[i][0].max(0.0) as f32,
+                    vals[i][1].max(0.0) as f32,
+                    vals[i][2].max(0.0) as f32,
+                ];
+            }
+            leaves.push(Leaf {
+                patch: c.patch,
+                corners: c.n,
+                time: self.time,
+                uv: c.uv,
+                b,
+            });
+        }
+        leaves.sort_by(|a, b| {
+            a.patch
+                .cmp(&b.patch)
+                .then(a.uv[0][0].total_cmp(&b.uv[0][0]))
+                .then(a.uv[0][1].total_cmp(&b.uv[0][1]))
+        });
+        let (active, passive) = self.links.counts();
+        Solution {
+            scene: self.scene.clone(),
+            patches: self.patches.geometry.clone(),
+            leaves,
+            stats: SolveStats {
+                seconds: 0.0,
+                iterations: 0,
+                elements: self.elems.len() as u64,
+                links_active: active,
+                links_passive: passive,
+                estimated_error: 0.0,
+                residual: 0.0,
+            },
+        }
+    }
+
+    /// Final gather at the point of patch `patch` with parameters `(u, v)`, through
+    /// the links of the leaf holding it: `(B, valid)`. What the stored corners hold.
+    pub fn gather_at(&self, patch: u32, u: f64, v: f64) -> Option<([f64; 3], bool)> {
+        let leaf = self.leaves.iter().copied().find(|&l| {
+            let g = &self.elems.geoms.as_slice()[l.ix()];
+            g.patch == patch
+                && Leaf {
+                    patch,
+                    corners: g.n,
+                    time: self.time,
+                    uv: g.uv,
+                    b: [[0.0; 3]; 4],
+                }
+                .contains(u, v, 1e-9)
+        })?;
+        Some(self.gather_point(leaf, self.patches.point(patch as usize, u, v)))
+    }
+
+    /// Debug: the chain links of the leaf holding `(patch, u, v)` as
+    /// (receiver, source, source kind, source area, source radiosity, transfer).
+    #[doc(hidden)]
+    pub fn debug_chain(
+        &self,
+        patch: u32,
+        u: f64,
+        v: f64,
+    ) -> Vec<(u32, u32, u8, f64, [f32; 3], [f64; 3])> {
+        let Some(leaf) = self.leaves.iter().copied().find(|&l| {
+            let g = &self.elems.geoms.as_slice()[l.ix()];
+            g.patch == patch
+                && Leaf {
+                    patch,
+                    corners: g.n,
+                    time: self.time,
+                    uv: g.uv,
+                    b: [[0.0; 3]; 4],
+                }
+                .contains(u, v, 1e-9)
+        }) else {
+            return Vec::new();
+        };
+        let x = self.patches.point(patch as usize, u, v);
+        let n = DVec3::from_array(self.elems.geoms.as_slice()[leaf.ix()].normal);
+        let mut out = Vec::new();
+        let mut e = leaf.0;
+        while e != u32::MAX {
+            for &l in self.links_of(e as usize) {
+                let t = self.links.transports.as_slice()[l as usize];
+                let s = self.links.ends.as_slice()[l as usize].source as usize;
+                let v = self.point_transfer(x, n, s, t.shaft_clear(), t.visibility as f64, 1);
+                let g = self.elems.geoms.as_slice()[s];
+                out.push((
+                    e,
+                    s as u32,
+                    self.elems.nodes.as_slice()[s].kind,
+                    g.area,
+                    self.elems.radiosities.as_slice()[s],
+                    v,
+                ));
+            }
+            e = self.elems.nodes.as_slice()[e as usize].parent;
+        }
+        out
+    }
+
+    /// Piecewise-constant radiosity of every leaf (element averages), for tests.
+    pub fn leaf_radiosities(&self) -> Vec<(u32, [f32; 2], [f32; 3])> {
+        self.leaves
+            .iter()
+            .map(|&l| {
+                let g = &self.elems.geoms.as_slice()[l.ix()];
+                (
+                    g.patch,
+                    [g.uv[0][0], g.uv[0][1]],
+                    self.elems.radiosities.as_slice()[l.ix()],
+                )
+            })
+            .collect()
+    }
+}
+
+/// Solves `scene` with `opts`: rounds of refine + GMRES, then reconstruction.
+pub fn solve(scene: &Scene, opts: SolveOptions) -> Result<(Solution, Vec<RoundRecord>)> {
+    let start = Instant::now();
+    let mut solver = Solver::new(scene, opts)?;
+    let records = solver.run(|_, _| {})?;
+    let mut sol = solver.solution();
+    sol.stats.seconds = start.elapsed().as_secs_f64();
+    if let Some(last) = records.last() {
+        sol.stats.iterations = records.len() as u32;
+        sol.stats.estimated_error = last.estimated_error;
+        sol.stats.residual = last.residual;
+    }
+    Ok((sol, records))
+}
+
+/// A reconstruction cell: a parameter sub-domain of a leaf's patch.
+#[derive(Clone, Copy, Debug)]
+struct Cell {
+    leaf: ElementId,
+    patch: u32,
+    n: u32,
+    uv: [[f32; 2]; 4],
+    area: f64,
+}
+
+impl Cell {
+    fn centre_uv(&self) -> [f32; 2] {
+        let n = self.n as usize;
+        let (mut u, mut v) = (0.0, 0.0);
+        for c in &self.uv[..n] {
+            u += c[0] / n as f32;
+            v += c[1] / n as f32;
+        }
+        [u, v]
+    }
+
+    fn split(&self) -> [Cell; 4] {
+        let m = |a: [f32; 2], b: [f32; 2]| [(a[0] + b[0]) * 0.5, (a[1] + b[1]) * 0.5];
+        let uv = self.uv;
+        let kids: [[[f32; 2]; 4]; 4] = if self.n == 3 {
+            let (a, b, c) = (uv[0], uv[1], uv[2]);
+            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
+            let z = [0.0; 2];
+            [
+                [a, ab, ca, z],
+                [ab, b, bc, z],
+                [ca, bc, c, z],
+                [bc, ca, ab, z],
+            ]
+        } else {
+            let (u0, v0, u1, v1) = (uv[0][0], uv[0][1], uv[2][0], uv[2][1]);
+            let (um, vm) = ((u0 + u1) * 0.5, (v0 + v1) * 0.5);
+            let r = |a: f32, b: f32, c: f32, d: f32| [[a, b], [c, b], [c, d], [a, d]];
+            [
+                r(u0, v0, um, vm),
+                r(um, v0, u1, vm),
+                r(um, vm, u1, v1),
+                r(u0, vm, um, v1),
+            ]
+        };
+        kids.map(|uv| Cell {
+            uv,
+            area: self.area / 4.0,
+            ..*self
+        })
+    }
+}
+
+/// Final-gather values at distinct parameter points of each patch.
+#[derive(Default)]
+struct VertexCache {
+    index: HashMap<(u32, u32, u32), usize>,
+    /// (leaf whose links gather, parameter point, point inset towards this uv).
+    points: Vec<(ElementId, u32, [f32; 2], [f32; 2])>,
+    values: Vec<([f64; 3], bool)>,
+}
+
+impl VertexCache {
+    fn register(&mut self, c: &Cell, uv: [f32; 2], toward: [f32; 2]) -> usize {
+        let q = |x: f32| (x as f64 * (1u64 << 24) as f64).round() as u32;
+        let key = (c.patch, q(uv[0]), q(uv[1]));
+        *self.index.entry(key).or_insert_with(|| {
+            self.points.push((c.leaf, c.patch, uv, toward));
+            self.points.len() - 1
+        })
+    }
+
+    fn evaluate(
+        &mut self,
+        gather: impl Fn(ElementId, DVec3) -> ([f64; 3], bool) + Sync,
+        patches: &Patches,
+    ) {
+        let from = self.values.len();
+        let new: Vec<_> = self.points[from..]
+            .par_iter()
+            .map(|&(leaf, patch, uv, toward)| {
+                let x = patches.point(patch as usize, uv[0] as f64, uv[1] as f64);
+                let c = patches.point(patch as usize, toward[0] as f64, toward[1] as f64);
+                // Evaluate a hair inside the cell: on an edge shared with a
+                // perpendicular wall the factor jumps (the wall is seen edge-on), and
+                // the interpolant wants the limit from inside.
+                gather(leaf, x + CORNER_INSET * (c - x))
+            })
+            .collect();
+        self.values.extend(new);
+    }
+}
+
+fn mean3(v: &[[f64; 3]]) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for x in v {
+        for k in 0..3 {
+            m[k] += x[k] / v.len().max(1) as f64;
+        }
+    }
+    m
+}
+
+/// Corner values of a cell; a corner inside a solid takes the mean of the valid ones
+/// (or the leaf's element average when none is valid).
+fn corner_values(
+    cache: &VertexCache,
+    corners: &[usize; 4],
+    n: usize,
+    element_b: [f32; 3],
+) -> [[f64; 3]; 4] {
+    let valid: Vec<[f64; 3]> = corners[..n]
+        .iter()
+        .filter(|&&v| cache.values[v].1)
+        .map(|&v| cache.values[v].0)
+        .collect();
+    let fallback = if valid.is_empty() {
+        [
+            element_b[0] as f64,
+            element_b[1] as f64,
+            element_b[2] as f64,
+        ]
+    } else {
+        mean3(&valid)
+    };
+    let mut out = [[0.0; 3]; 4];
+    for i in 0..n {
+        let (v, ok) = cache.values[corners[i]];
+        out[i] = if ok { v } else { fallback };
+    }
+    out
+}

@@ -81,8 +81,16 @@ impl Leaf {
         } else {
             let (u0, v0) = p(0);
             let (u1, v1) = p(2);
-            let s = if u1 > u0 { ((u - u0) / (u1 - u0)).clamp(0.0, 1.0) } else { 0.5 };
-            let t = if v1 > v0 { ((v - v0) / (v1 - v0)).clamp(0.0, 1.0) } else { 0.5 };
+            let s = if u1 > u0 {
+                ((u - u0) / (u1 - u0)).clamp(0.0, 1.0)
+            } else {
+                0.5
+            };
+            let t = if v1 > v0 {
+                ((v - v0) / (v1 - v0)).clamp(0.0, 1.0)
+            } else {
+                0.5
+            };
             [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t]
         }
     }
@@ -152,7 +160,10 @@ impl PatchGeometry {
         if self.corners == 3 {
             p[0] + u * (p[1] - p[0]) + v * (p[2] - p[0])
         } else {
-            (1.0 - u) * (1.0 - v) * p[0] + u * (1.0 - v) * p[1] + u * v * p[2] + (1.0 - u) * v * p[3]
+            (1.0 - u) * (1.0 - v) * p[0]
+                + u * (1.0 - v) * p[1]
+                + u * v * p[2]
+                + (1.0 - u) * v * p[3]
         }
     }
 }

@@ -1,0 +1,196 @@
+//! Form-factor kernels.
+//!
+//! [`point_to_polygon`] is the exact unoccluded form factor from a differential area
+//! at `x` (unit normal `n`) to a planar polygon, by Lambert's contour integral
+//! (Nusselt / Hottel & Sarofim; the form used in every radiosity text):
+//!
+//! ```text
+//! F(dA_x → A) = 1/(2π) · Σ_i  n · (r_i × r_{i+1}) / |r_i × r_{i+1}| · γ_i ,
+//! r_i = v_i − x,   γ_i = angle between r_i and r_{i+1}
+//! ```
+//!
+//! valid for a polygon entirely in front of `x`'s tangent plane, so the polygon is
+//! first clipped to that half-space (the contour integral of the clipped polygon is
+//! the exact factor to the visible part). Sources are one-sided: a receiver behind
+//! the source's plane gets 0. Angles use `atan2(|a×b|, a·b)`, accurate at every
+//! scale and for nearly collinear corners. Visibility is not part of these kernels.
+
+use glam::DVec3;
+
+use super::polygon::Poly;
+
+/// Point-to-point kernel `cos θx cos θy / (π r²)` between `x` (normal `nx`) and `y`
+/// (normal `ny`), zero when either faces away.
+pub fn point_to_point_kernel(x: DVec3, nx: DVec3, y: DVec3, ny: DVec3) -> f64 {
+    let d = y - x;
+    let r2 = d.length_squared();
+    if r2 <= 0.0 {
+        return 0.0;
+    }
+    let cx = nx.dot(d);
+    let cy = -ny.dot(d);
+    if cx <= 0.0 || cy <= 0.0 {
+        return 0.0;
+    }
+    cx * cy / (std::f64::consts::PI * r2 * r2)
+}
+
+/// Exact unoccluded form factor from the differential area at `x` with unit normal
+/// `n` to the one-sided polygon `src` (counter-clockwise seen from its front).
+pub fn point_to_polygon(x: DVec3, n: DVec3, src: &Poly) -> f64 {
+    if src.n < 3 {
+        return 0.0;
+    }
+    // One-sided source: x must be strictly in front of its plane.
+    let ns = src.area_vector();
+    if ns.dot(x - src.v[0]) <= 0.0 {
+        return 0.0;
+    }
+    // Keep the part of the source above x's tangent plane.
+    let clipped = src.clip_front(x, n);
+    contour_integral(x, n, clipped.corners())
+}
+
+/// Lambert's contour sum over `corners` (any count), no clipping, no side test.
+/// Exposed for polygons with more corners than [`Poly`] holds (tests use a 256-gon).
+pub fn contour_integral(x: DVec3, n: DVec3, corners: &[DVec3]) -> f64 {
+    let k = corners.len();
+    if k < 3 {
+        return 0.0;
+    }
+    let mut sum = 0.0;
+    for i in 0..k {
+        let a = corners[i] - x;
+        let b = corners[(i + 1) % k] - x;
+        let c = a.cross(b);
+        let cl = c.length();
+        if cl <= 0.0 {
+            continue; // edge through x or degenerate: contributes nothing
+        }
+        let gamma = cl.atan2(a.dot(b));
+        sum += n.dot(c) / cl * gamma;
+    }
+    // The corners run counter-clockwise seen from the source's front, i.e. clockwise
+    // seen from x: the sum is negative for a visible polygon.
+    (-sum / (2.0 * std::f64::consts::PI)).max(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    fn quad(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> Poly {
+        Poly::new(&[a.into(), b.into(), c.into(), d.into()])
+    }
+
+    /// dA on the axis of a coaxial parallel disk: F = R² / (R² + h²).
+    #[test]
+    fn point_to_coaxial_disk() {
+        let (r, h) = (0.7, 1.3);
+        let m = 256;
+        // Disk at height h facing down (-z): counter-clockwise seen from below.
+        let corners: Vec<DVec3> = (0..m)
+            .map(|i| {
+                let a = -2.0 * PI * i as f64 / m as f64;
+                DVec3::new(r * a.cos(), r * a.sin(), h)
+            })
+            .collect();
+        let f = contour_integral(DVec3::ZERO, DVec3::Z, &corners);
+        // Inscribed 256-gon: area ratio sin(2π/m)/(2π/m), well under 1e-4.
+        let exact = r * r / (r * r + h * h);
+        assert!((f - exact).abs() / exact < 2e-4, "{f} vs {exact}");
+    }
+
+    /// Corner of a square at unit distance, parallel: F = (1/2π)(atan… ) closed form
+    /// for dA below one corner of a w×l rectangle at height h.
+    #[test]
+    fn point_below_rectangle_corner() {
+        let (w, l, h) = (1.0f64, 2.0f64, 0.5f64);
+        let src = quad([0.0, 0.0, h], [0.0, l, h], [w, l, h], [w, 0.0, h]);
+        let f = point_to_polygon(DVec3::ZERO, DVec3::Z, &src);
+        let (a, b) = (w / h, l / h);
+        let exact = 1.0 / (2.0 * PI)
+            * (a / (1.0 + a * a).sqrt() * (b / (1.0 + a * a).sqrt()).atan()
+                + b / (1.0 + b * b).sqrt() * (a / (1.0 + b * b).sqrt()).atan());
+        assert!((f - exact).abs() < 1e-12, "{f} vs {exact}");
+    }
+
+    #[test]
+    fn back_facing_and_behind_are_zero() {
+        // Facing up (away from a receiver below).
+        let up = quad(
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [0.0, 1.0, 1.0],
+        );
+        assert_eq!(point_to_polygon(DVec3::ZERO, DVec3::Z, &up), 0.0);
+        // Facing down but behind the receiver's plane.
+        let below = quad(
+            [0.0, 0.0, -1.0],
+            [0.0, 1.0, -1.0],
+            [1.0, 1.0, -1.0],
+            [1.0, 0.0, -1.0],
+        );
+        assert_eq!(point_to_polygon(DVec3::ZERO, DVec3::Z, &below), 0.0);
+    }
+
+    #[test]
+    fn hemisphere_closure_of_a_cube_is_one() {
+        // Centre of the floor of a unit cube: the other five faces fill the hemisphere.
+        let x = DVec3::new(0.5, 0.5, 0.0);
+        let faces = [
+            quad(
+                [0.0, 0.0, 1.0],
+                [0.0, 1.0, 1.0],
+                [1.0, 1.0, 1.0],
+                [1.0, 0.0, 1.0],
+            ), // top, facing -z
+            quad(
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 1.0],
+                [1.0, 0.0, 0.0],
+            ), // y=0, +y
+            quad(
+                [0.0, 1.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [1.0, 1.0, 1.0],
+                [0.0, 1.0, 1.0],
+            ), // y=1, -y
+            quad(
+                [0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 1.0, 1.0],
+                [0.0, 0.0, 1.0],
+            ), // x=0, +x
+            quad(
+                [1.0, 0.0, 0.0],
+                [1.0, 0.0, 1.0],
+                [1.0, 1.0, 1.0],
+                [1.0, 1.0, 0.0],
+            ), // x=1, -x
+        ];
+        for f in &faces {
+            assert!(f.normal().dot(DVec3::new(0.5, 0.5, 0.5) - f.centroid()) > 0.0);
+        }
+        let total: f64 = faces.iter().map(|f| point_to_polygon(x, DVec3::Z, f)).sum();
+        assert!((total - 1.0).abs() < 1e-13, "{total}");
+        // A point on an edge of the floor: still a closed hemisphere.
+        let e = DVec3::new(0.0, 0.3, 0.0);
+        let total: f64 = faces.iter().map(|f| point_to_polygon(e, DVec3::Z, f)).sum();
+        assert!((total - 1.0).abs() < 1e-12, "{total}");
+    }
+
+    #[test]
+    fn kernel_is_symmetric_and_scale_free() {
+        let (x, nx) = (DVec3::ZERO, DVec3::Z);
+        let (y, ny) = (DVec3::new(0.3, 0.1, 1.0), DVec3::new(0.0, 0.0, -1.0));
+        let k = point_to_point_kernel(x, nx, y, ny);
+        assert_eq!(k, point_to_point_kernel(y, ny, x, nx));
+        let s = 1e3;
+        let ks = point_to_point_kernel(x * s, nx, y * s, ny);
+        assert!((ks * s * s - k).abs() / k < 1e-12);
+    }
+}

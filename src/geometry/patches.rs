@@ -1,0 +1,112 @@
+//! [`Patches`]: every input polygon of a scene placed in world space at one time, as
+//! columns indexed by [`PatchId`]. Patch `i` is the `i`-th polygon in scene order
+//! (objects in order, polygons in order).
+
+use glam::DVec3;
+
+use super::polygon::Poly;
+use crate::scene::Scene;
+use crate::solver::PatchGeometry;
+
+/// Index of a patch in [`Patches`].
+#[repr(transparent)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct PatchId(pub u32);
+
+/// World-space patch table at one time (struct of arrays).
+#[derive(Clone, Debug, Default)]
+pub struct Patches {
+    /// World-space polygon of each patch.
+    pub polys: Vec<Poly>,
+    /// Unit normals.
+    pub normals: Vec<DVec3>,
+    /// Areas.
+    pub areas: Vec<f64>,
+    /// Reflectance per patch (from its material).
+    pub rhos: Vec<[f64; 3]>,
+    /// Exitance per patch (from its material).
+    pub emissions: Vec<[f64; 3]>,
+    /// Object of each patch.
+    pub objects: Vec<u32>,
+    /// Object-space description (what the store keeps).
+    pub geometry: Vec<PatchGeometry>,
+    /// Diameter of the bounding box of all patches.
+    pub diameter: f64,
+}
+
+impl Patches {
+    /// Places every polygon of `scene` at time `t`.
+    pub fn at_time(scene: &Scene, t: f64) -> Self {
+        let mut p = Patches::default();
+        for (oi, obj) in scene.objects.iter().enumerate() {
+            let m = obj.to_world(t);
+            for poly in &obj.polygons {
+                let k = poly.vertices.len().min(4);
+                let mut verts = [DVec3::ZERO; 4];
+                verts[..k].copy_from_slice(&poly.vertices[..k]);
+                let world: Vec<DVec3> = verts[..k].iter().map(|&v| m.transform_point3(v)).collect();
+                let wp = Poly::new(&world);
+                let mat = &scene.materials[poly.material.0 as usize];
+                p.normals.push(wp.normal());
+                p.areas.push(wp.area());
+                p.polys.push(wp);
+                p.rhos.push(mat.rho);
+                p.emissions.push(mat.emission);
+                p.objects.push(oi as u32);
+                p.geometry.push(PatchGeometry {
+                    object: oi as u32,
+                    material: poly.material.0,
+                    corners: k as u32,
+                    vertices: verts,
+                });
+            }
+        }
+        p.diameter = p.scene_diameter();
+        p
+    }
+
+    /// Number of patches.
+    pub fn len(&self) -> usize {
+        self.polys.len()
+    }
+
+    /// True if there are no patches.
+    pub fn is_empty(&self) -> bool {
+        self.polys.is_empty()
+    }
+
+    /// World point of patch `i` at parameter `(u, v)` (see [`crate::solver::solution`]).
+    pub fn point(&self, i: usize, u: f64, v: f64) -> DVec3 {
+        let c = &self.polys[i].v;
+        if self.polys[i].n == 3 {
+            c[0] + u * (c[1] - c[0]) + v * (c[2] - c[0])
+        } else {
+            (1.0 - u) * (1.0 - v) * c[0]
+                + u * (1.0 - v) * c[1]
+                + u * v * c[2]
+                + (1.0 - u) * v * c[3]
+        }
+    }
+
+    /// Diameter of the bounding box of all patches (cached at construction).
+    pub fn scene_diameter_cached(&self) -> f64 {
+        self.diameter
+    }
+
+    /// Diameter of the bounding box of all patches (the scene's length scale).
+    pub fn scene_diameter(&self) -> f64 {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for p in &self.polys {
+            for &c in p.corners() {
+                lo = lo.min(c);
+                hi = hi.max(c);
+            }
+        }
+        if lo.x.is_finite() {
+            (hi - lo).length()
+        } else {
+            0.0
+        }
+    }
+}

@@ -1,0 +1,150 @@
+//! [`Poly`]: a convex planar polygon of at most 8 corners in `f64`, the shape of every
+//! patch, element and clipped source in the form-factor code. Fixed capacity so that
+//! kernels never allocate.
+
+use glam::DVec3;
+
+/// Most corners a [`Poly`] holds: a quad clipped by one plane has at most 5, by two 6.
+pub const MAX_CORNERS: usize = 8;
+
+/// A convex planar polygon, corners counter-clockwise seen from its front. 200 bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Poly {
+    /// Corners; only the first `n` are valid.
+    pub v: [DVec3; MAX_CORNERS],
+    /// Number of valid corners.
+    pub n: usize,
+}
+
+impl Poly {
+    /// A polygon from 3 or 4 (up to 8) corners.
+    pub fn new(corners: &[DVec3]) -> Self {
+        let mut v = [DVec3::ZERO; MAX_CORNERS];
+        let n = corners.len().min(MAX_CORNERS);
+        v[..n].copy_from_slice(&corners[..n]);
+        Poly { v, n }
+    }
+
+    /// The valid corners.
+    pub fn corners(&self) -> &[DVec3] {
+        &self.v[..self.n]
+    }
+
+    /// Newell's vector: normal times twice the area (robust for any planar polygon).
+    pub fn area_vector(&self) -> DVec3 {
+        let mut s = DVec3::ZERO;
+        let c = self.corners();
+        if c.is_empty() {
+            return s;
+        }
+        let o = c[0];
+        for i in 1..c.len().saturating_sub(1) {
+            s += (c[i] - o).cross(c[i + 1] - o);
+        }
+        s
+    }
+
+    /// Area.
+    pub fn area(&self) -> f64 {
+        0.5 * self.area_vector().length()
+    }
+
+    /// Unit normal (zero for a degenerate polygon).
+    pub fn normal(&self) -> DVec3 {
+        self.area_vector().normalize_or_zero()
+    }
+
+    /// Area-weighted centroid.
+    pub fn centroid(&self) -> DVec3 {
+        let c = self.corners();
+        if c.len() < 3 {
+            return c.iter().copied().sum::<DVec3>() / (c.len().max(1) as f64);
+        }
+        let o = c[0];
+        let mut acc = DVec3::ZERO;
+        let mut w = 0.0;
+        for i in 1..c.len() - 1 {
+            let a = (c[i] - o).cross(c[i + 1] - o).length();
+            acc += a * (o + c[i] + c[i + 1]) / 3.0;
+            w += a;
+        }
+        if w > 0.0 {
+            acc / w
+        } else {
+            c.iter().copied().sum::<DVec3>() / c.len() as f64
+        }
+    }
+
+    /// Longest distance between two corners.
+    pub fn diameter(&self) -> f64 {
+        let c = self.corners();
+        let mut d: f64 = 0.0;
+        for i in 0..c.len() {
+            for j in i + 1..c.len() {
+                d = d.max(c[i].distance_squared(c[j]));
+            }
+        }
+        d.sqrt()
+    }
+
+    /// The part of the polygon on the side `n · (p - x) >= 0` of the plane through `x`
+    /// with normal `n` (Sutherland–Hodgman against one plane).
+    pub fn clip_front(&self, x: DVec3, n: DVec3) -> Poly {
+        let mut out = Poly {
+            v: [DVec3::ZERO; MAX_CORNERS],
+            n: 0,
+        };
+        let c = self.corners();
+        let k = c.len();
+        for i in 0..k {
+            let a = c[i];
+            let b = c[(i + 1) % k];
+            let da = n.dot(a - x);
+            let db = n.dot(b - x);
+            if da >= 0.0 && out.n < MAX_CORNERS {
+                out.v[out.n] = a;
+                out.n += 1;
+            }
+            if (da >= 0.0) != (db >= 0.0) && out.n < MAX_CORNERS {
+                let s = da / (da - db);
+                out.v[out.n] = a + s * (b - a);
+                out.n += 1;
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_square_area_normal_centroid() {
+        let p = Poly::new(&[
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ]);
+        assert!((p.area() - 1.0).abs() < 1e-15);
+        assert_eq!(p.normal(), DVec3::Z);
+        assert!((p.centroid() - DVec3::new(0.5, 0.5, 0.0)).length() < 1e-15);
+        assert!((p.diameter() - 2f64.sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn clipping_keeps_the_front_half() {
+        let p = Poly::new(&[
+            DVec3::new(-1.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(-1.0, 1.0, 0.0),
+        ]);
+        let c = p.clip_front(DVec3::ZERO, DVec3::X);
+        assert_eq!(c.n, 4);
+        assert!((c.area() - 1.0).abs() < 1e-15);
+        let none = p.clip_front(DVec3::new(2.0, 0.0, 0.0), DVec3::X);
+        assert_eq!(none.n, 0);
+    }
+}

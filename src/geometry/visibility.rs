@@ -1,0 +1,264 @@
+//! [`SceneBvh`]: ray visibility through obvhs compressed wide BVHs (CWBVH, Ylitie et
+//! al. 2017, as built by obvhs' PLOC builder).
+//!
+//! Static objects are merged into one BVH in world space; every moving object has its
+//! own BVH in object space, and a query at time `t` maps the ray into that object's
+//! space with the inverse of its motion at `t` (rays are parameterised by the segment,
+//! `o + s·d` with `s ∈ [0, 1]`, so an affine map keeps `s`). Quads enter the BVH as two
+//! triangles; every triangle remembers its patch.
+//!
+//! What it does not do: it never decides what a segment's end points may hit. Callers
+//! pass segments between two surface points; the ends are trimmed by a fraction of the
+//! segment's length so the surfaces they start and end on do not count.
+
+use std::time::Duration;
+
+use glam::{DAffine3, DVec3, UVec2, Vec3A};
+use obvhs::{
+    BvhBuildParams, aabb::Aabb, cwbvh::CwBvh, cwbvh::builder::build_cwbvh_from_tris, ray::Ray,
+    triangle::Triangle,
+};
+
+use super::patches::Patches;
+use crate::scene::Scene;
+
+/// Relative trim of both ends of a visibility segment.
+pub const SEGMENT_TRIM: f64 = 1e-4;
+
+/// A closest hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Patch hit.
+    pub patch: u32,
+    /// Ray parameter of the hit (in units of the given direction's length).
+    pub t: f64,
+}
+
+/// Counters of visibility work (summed by the solver per iteration).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounters {
+    /// Occlusion rays cast.
+    pub rays: u64,
+    /// Links whose visibility was settled by a shaft test without rays.
+    pub shaft_culled: u64,
+}
+
+/// One BVH with the triangles it indexes.
+struct Part {
+    bvh: CwBvh,
+    /// Triangles in BVH order (indexed by the BVH's primitive ids).
+    tris: Vec<Triangle>,
+    /// Patch of each triangle in `tris`.
+    tri_patch: Vec<u32>,
+    /// World → part space (identity for the static part).
+    world_to_local: DAffine3,
+    /// Part → world.
+    local_to_world: DAffine3,
+}
+
+impl Part {
+    fn build(tris: Vec<Triangle>, tri_patch: Vec<u32>, local_to_world: DAffine3) -> Option<Part> {
+        if tris.is_empty() {
+            return None;
+        }
+        let bvh = build_cwbvh_from_tris(
+            &tris,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        // Reorder so the BVH's primitive ids index the triangles directly.
+        let (tris, tri_patch) = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| (tris[i as usize], tri_patch[i as usize]))
+            .unzip();
+        Some(Part {
+            bvh,
+            tris,
+            tri_patch,
+            world_to_local: local_to_world.inverse(),
+            local_to_world,
+        })
+    }
+
+    fn local_ray(&self, o: DVec3, d: DVec3, tmin: f64, tmax: f64) -> Ray {
+        let lo = self.world_to_local.transform_point3(o);
+        let ld = self.world_to_local.transform_vector3(d);
+        Ray::new(
+            Vec3A::new(lo.x as f32, lo.y as f32, lo.z as f32),
+            Vec3A::new(ld.x as f32, ld.y as f32, ld.z as f32),
+            tmin as f32,
+            tmax as f32,
+        )
+    }
+}
+
+/// Visibility structure of a scene at one time.
+pub struct SceneBvh {
+    parts: Vec<Part>,
+}
+
+impl SceneBvh {
+    /// Builds the BVHs of `scene` placed at time `t`; `patches` must be
+    /// `Patches::at_time(scene, t)` (it gives the patch numbering).
+    pub fn build(scene: &Scene, patches: &Patches, t: f64) -> SceneBvh {
+        let mut parts = Vec::new();
+        let (mut st, mut sp) = (Vec::new(), Vec::new());
+        let mut first = 0u32;
+        for obj in &scene.objects {
+            let count = obj.polygons.len() as u32;
+            let patch_ids = first..first + count;
+            first += count;
+            if obj.is_moving() {
+                // Object-space triangles, placed by the motion at t.
+                let (mut tris, mut tp) = (Vec::new(), Vec::new());
+                for (pi, poly) in patch_ids.zip(&obj.polygons) {
+                    push_triangles(&poly.vertices, pi, &mut tris, &mut tp);
+                }
+                parts.extend(Part::build(tris, tp, obj.to_world(t)));
+            } else {
+                for pi in patch_ids {
+                    push_triangles(patches.polys[pi as usize].corners(), pi, &mut st, &mut sp);
+                }
+            }
+        }
+        parts.extend(Part::build(st, sp, DAffine3::IDENTITY));
+        SceneBvh { parts }
+    }
+
+    /// True if something blocks the open segment between `a` and `b` (both ends
+    /// trimmed by [`SEGMENT_TRIM`] of its length).
+    pub fn occluded(&self, a: DVec3, b: DVec3) -> bool {
+        let d = b - a;
+        for part in &self.parts {
+            let ray = part.local_ray(a, d, SEGMENT_TRIM, 1.0 - SEGMENT_TRIM);
+            let hit = !part
+                .bvh
+                .ray_traverse_miss(ray, |r, id| part.tris[id].intersect(r));
+            if hit {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Closest hit along `o + s·d`, `s ∈ (smin, smax)`.
+    pub fn intersect(&self, o: DVec3, d: DVec3, smin: f64, smax: f64) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        for part in &self.parts {
+            let tmax = best.map_or(smax, |h| h.t);
+            let ray = part.local_ray(o, d, smin, tmax);
+            let mut hit = obvhs::ray::RayHit::none();
+            if part
+                .bvh
+                .ray_traverse(ray, &mut hit, |r, id| part.tris[id].intersect(r))
+            {
+                best = Some(Hit {
+                    patch: part.tri_patch[hit.primitive_id as usize],
+                    t: hit.t as f64,
+                });
+            }
+        }
+        best
+    }
+
+    /// Calls `f(patch, triangle)` (world space) for every triangle whose box overlaps
+    /// the box `[lo, hi]`, until `f` returns false. Returns false if stopped early.
+    pub fn for_each_triangle_in_box(
+        &self,
+        lo: DVec3,
+        hi: DVec3,
+        mut f: impl FnMut(u32, [DVec3; 3]) -> bool,
+    ) -> bool {
+        for part in &self.parts {
+            // Box of the query box's corners in part space.
+            let mut llo = DVec3::splat(f64::INFINITY);
+            let mut lhi = DVec3::splat(f64::NEG_INFINITY);
+            for i in 0..8 {
+                let c = DVec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                );
+                let l = part.world_to_local.transform_point3(c);
+                llo = llo.min(l);
+                lhi = lhi.max(l);
+            }
+            // Widen by one f32 ulp-scale so touching boxes still overlap.
+            let pad = (lhi - llo)
+                .max_element()
+                .max(llo.abs().max(lhi.abs()).max_element())
+                * 1e-6;
+            let aabb = Aabb::new(
+                Vec3A::new(
+                    (llo.x - pad) as f32,
+                    (llo.y - pad) as f32,
+                    (llo.z - pad) as f32,
+                ),
+                Vec3A::new(
+                    (lhi.x + pad) as f32,
+                    (lhi.y + pad) as f32,
+                    (lhi.z + pad) as f32,
+                ),
+            );
+            let bvh = &part.bvh;
+            let mut state = bvh.new_traversal(Vec3A::X);
+            let mut node;
+            let mut go_on = true;
+            obvhs::traverse!(
+                bvh,
+                node,
+                state,
+                node.intersect_aabb(&aabb, state.oct_inv4),
+                {
+                    let id = state.primitive_id as usize;
+                    let tri = &part.tris[id];
+                    if tri.aabb().intersect_aabb(&aabb) {
+                        let w = |v: Vec3A| {
+                            part.local_to_world
+                                .transform_point3(DVec3::new(v.x as f64, v.y as f64, v.z as f64))
+                        };
+                        if !f(part.tri_patch[id], [w(tri.v0), w(tri.v1), w(tri.v2)]) {
+                            go_on = false;
+                            break;
+                        }
+                    }
+                }
+            );
+            if !go_on {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Number of triangles indexed.
+    pub fn triangle_count(&self) -> usize {
+        self.parts.iter().map(|p| p.tris.len()).sum()
+    }
+
+    /// Bytes held by the BVHs and their triangles.
+    pub fn resident_bytes(&self) -> usize {
+        self.parts
+            .iter()
+            .map(|p| {
+                std::mem::size_of_val(p.bvh.nodes.as_slice())
+                    + std::mem::size_of_val(p.bvh.primitive_indices.as_slice())
+                    + std::mem::size_of_val(p.tris.as_slice())
+                    + std::mem::size_of_val(p.tri_patch.as_slice())
+            })
+            .sum()
+    }
+}
+
+fn push_triangles(v: &[DVec3], patch: u32, tris: &mut Vec<Triangle>, tp: &mut Vec<u32>) {
+    let f = |p: DVec3| Vec3A::new(p.x as f32, p.y as f32, p.z as f32);
+    for k in 1..v.len().saturating_sub(1) {
+        tris.push(Triangle {
+            v0: f(v[0]),
+            v1: f(v[k]),
+            v2: f(v[k + 1]),
+        });
+        tp.push(patch);
+    }
+}

@@ -1,0 +1,217 @@
+//! [`Column`]: one growable array of `Pod` records on RAM or on a memory-mapped file.
+//!
+//! The mmap backend creates an anonymous-named file in the scratch directory (removed
+//! on drop), sizes it to the capacity, maps it read-write and doubles it (remapping)
+//! when full. Slices of the mapping are cast with bytemuck; the mapping is page
+//! aligned, so every `Pod` type up to page alignment is correctly aligned.
+
+use std::fs::{File, OpenOptions};
+use std::marker::PhantomData;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use bytemuck::Pod;
+use memmap2::MmapMut;
+
+use crate::{Error, Result};
+
+/// Where new columns live.
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
+pub enum Storage {
+    /// Plain heap memory.
+    #[default]
+    Ram,
+    /// Files in this directory, mapped with memmap2.
+    Mmap(PathBuf),
+}
+
+enum Backing<T: Pod> {
+    Ram(Vec<T>),
+    Mmap {
+        file: File,
+        path: PathBuf,
+        map: MmapMut,
+        /// Capacity in records.
+        cap: usize,
+    },
+}
+
+/// A growable array of `T` on a [`Storage`] backend.
+pub struct Column<T: Pod> {
+    backing: Backing<T>,
+    len: usize,
+    _t: PhantomData<T>,
+}
+
+static COLUMN_SERIAL: AtomicU64 = AtomicU64::new(0);
+
+impl<T: Pod> Column<T> {
+    /// An empty column on `storage`; `name` labels the scratch file.
+    pub fn new(storage: &Storage, name: &str) -> Result<Self> {
+        let backing = match storage {
+            Storage::Ram => Backing::Ram(Vec::new()),
+            Storage::Mmap(dir) => {
+                let serial = COLUMN_SERIAL.fetch_add(1, Ordering::Relaxed);
+                let path = dir.join(format!("rhier-{}-{serial}-{name}.col", std::process::id()));
+                let file = OpenOptions::new()
+                    .read(true)
+                    .write(true)
+                    .create_new(true)
+                    .open(&path)
+                    .map_err(|e| Error::io(&path, e))?;
+                let cap = (4096 / std::mem::size_of::<T>().max(1)).max(1);
+                let map = map_file(&file, &path, cap * std::mem::size_of::<T>())?;
+                Backing::Mmap {
+                    file,
+                    path,
+                    map,
+                    cap,
+                }
+            }
+        };
+        Ok(Column {
+            backing,
+            len: 0,
+            _t: PhantomData,
+        })
+    }
+
+    /// Number of records.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// True if empty.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Appends a record, growing the backing store if needed; returns its index.
+    pub fn push(&mut self, value: T) -> Result<u32> {
+        let index = self.len;
+        if index >= u32::MAX as usize {
+            return Err(Error::Usage(
+                "pool is full: more than 2^32 - 1 records".into(),
+            ));
+        }
+        match &mut self.backing {
+            Backing::Ram(v) => v.push(value),
+            Backing::Mmap {
+                file,
+                path,
+                map,
+                cap,
+            } => {
+                if index == *cap {
+                    let new_cap = (*cap * 2).max(1);
+                    map.flush_async().map_err(|e| Error::io(&*path, e))?;
+                    *map = map_file(file, path, new_cap * std::mem::size_of::<T>())?;
+                    *cap = new_cap;
+                }
+                let bytes: &mut [T] =
+                    bytemuck::cast_slice_mut(&mut map[..*cap * std::mem::size_of::<T>()]);
+                bytes[index] = value;
+            }
+        }
+        self.len += 1;
+        Ok(index as u32)
+    }
+
+    /// The records.
+    #[inline]
+    pub fn as_slice(&self) -> &[T] {
+        match &self.backing {
+            Backing::Ram(v) => v,
+            Backing::Mmap { map, .. } => {
+                bytemuck::cast_slice(&map[..self.len * std::mem::size_of::<T>()])
+            }
+        }
+    }
+
+    /// The records, mutable.
+    #[inline]
+    pub fn as_mut_slice(&mut self) -> &mut [T] {
+        let n = self.len * std::mem::size_of::<T>();
+        match &mut self.backing {
+            Backing::Ram(v) => v,
+            Backing::Mmap { map, .. } => bytemuck::cast_slice_mut(&mut map[..n]),
+        }
+    }
+
+    /// Drops every record (keeps the allocation / file).
+    pub fn clear(&mut self) {
+        if let Backing::Ram(v) = &mut self.backing {
+            v.clear();
+        }
+        self.len = 0;
+    }
+
+    /// Bytes the column holds (its length, not its capacity).
+    pub fn bytes(&self) -> usize {
+        self.len * std::mem::size_of::<T>()
+    }
+
+    /// True if this column lives in a mapped file.
+    pub fn is_mapped(&self) -> bool {
+        matches!(self.backing, Backing::Mmap { .. })
+    }
+}
+
+impl<T: Pod> Drop for Column<T> {
+    fn drop(&mut self) {
+        if let Backing::Mmap { path, .. } = &self.backing {
+            // Best effort: a scratch file left behind is harmless and named as ours.
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+impl<T: Pod + std::fmt::Debug> std::fmt::Debug for Column<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Column")
+            .field("len", &self.len)
+            .field("mapped", &self.is_mapped())
+            .finish()
+    }
+}
+
+fn map_file(file: &File, path: &Path, bytes: usize) -> Result<MmapMut> {
+    file.set_len(bytes.max(1) as u64)
+        .map_err(|e| Error::io(path, e))?;
+    // SAFETY: the file was created by this process with create_new in the scratch
+    // directory and is only ever accessed through this one mapping; nothing else
+    // truncates it while mapped (the column owns it until drop).
+    unsafe { MmapMut::map_mut(file) }.map_err(|e| Error::io(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn exercise(storage: &Storage) {
+        let mut c: Column<[f32; 3]> = Column::new(storage, "test").unwrap();
+        for i in 0..10_000u32 {
+            assert_eq!(c.push([i as f32, 1.0, 2.0]).unwrap(), i);
+        }
+        assert_eq!(c.len(), 10_000);
+        c.as_mut_slice()[1234][1] = 7.0;
+        let s = c.as_slice();
+        assert_eq!(s[9999][0], 9999.0);
+        assert_eq!(s[1234], [1234.0, 7.0, 2.0]);
+        assert_eq!(c.bytes(), 10_000 * 12);
+    }
+
+    #[test]
+    fn ram_column_grows() {
+        exercise(&Storage::Ram);
+    }
+
+    #[test]
+    fn mmap_column_grows_and_cleans_up() {
+        let dir = tempfile::tempdir().unwrap();
+        exercise(&Storage::Mmap(dir.path().to_owned()));
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+}

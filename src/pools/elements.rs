@@ -1,0 +1,224 @@
+//! [`ElementPool`]: the hierarchy's elements as columns.
+//!
+//! An element is either a **cluster** (a group of patches, Smits/Sillion clustering:
+//! no plane, a bounding box) or a **surface** element (a parametric sub-domain of one
+//! patch: the patch's root element or one of its descendants). Every element has a time
+//! range `[t0, t1]` (a static solve gives every element the whole time domain).
+//! Children of an element are contiguous (`first_child .. first_child + child_count`),
+//! so the tree needs no pointers: a surface element splits into 4, a cluster has 2 or
+//! more children.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::column::{Column, Storage};
+use super::ids::ElementId;
+use crate::{Error, Result};
+
+/// What an element is.
+#[repr(u8)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ElementKind {
+    /// A group of patches (bounding box in `geom.corners[0..2]`).
+    Cluster = 0,
+    /// A parametric sub-domain of one patch.
+    Surface = 1,
+}
+
+/// Tree links of an element. `repr(C)`, Pod, 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Node {
+    /// Parent, or `u32::MAX` for a root.
+    pub parent: u32,
+    /// First child (valid when `child_count > 0`).
+    pub first_child: u32,
+    /// Number of children.
+    pub child_count: u32,
+    /// [`ElementKind`] as u8.
+    pub kind: u8,
+    /// Depth below the patch root (surface) or the scene root (cluster).
+    pub depth: u8,
+    /// Unused, zero.
+    pub pad: [u8; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<Node>() == 16);
+
+/// Geometry of an element. `repr(C)`, Pod, 168 bytes.
+///
+/// Surface: world corners (3 or 4) counter-clockwise seen from the front, their
+/// parameter-space positions, the unit normal, the area. Cluster: `corners[0]` and
+/// `corners[1]` are the box's min and max, `area` the summed area of its patches,
+/// `normal` zero.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Geom {
+    /// World corners.
+    pub corners: [[f64; 3]; 4],
+    /// Unit normal (zero for clusters).
+    pub normal: [f64; 3],
+    /// Area.
+    pub area: f64,
+    /// Parameter-space corners in the patch.
+    pub uv: [[f32; 2]; 4],
+    /// Patch index (`u32::MAX` for clusters).
+    pub patch: u32,
+    /// Number of valid corners (3 or 4; 2 for clusters).
+    pub n: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<Geom>() == 168);
+
+/// The element arena.
+#[derive(Debug)]
+pub struct ElementPool {
+    /// Tree links.
+    pub nodes: Column<Node>,
+    /// Geometry.
+    pub geoms: Column<Geom>,
+    /// Time range `[t0, t1]`.
+    pub times: Column<[f32; 2]>,
+    /// Radiosity `B` (RGB): at leaves the solution, above the area average (pull).
+    pub radiosities: Column<[f32; 3]>,
+    /// Irradiance gathered through the element's own links in the last gather.
+    pub irradiances: Column<[f32; 3]>,
+}
+
+impl ElementPool {
+    /// An empty pool on `storage`.
+    pub fn new(storage: &Storage) -> Result<Self> {
+        Ok(ElementPool {
+            nodes: Column::new(storage, "elem-nodes")?,
+            geoms: Column::new(storage, "elem-geoms")?,
+            times: Column::new(storage, "elem-times")?,
+            radiosities: Column::new(storage, "elem-b")?,
+            irradiances: Column::new(storage, "elem-h")?,
+        })
+    }
+
+    /// Number of elements.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// True if empty.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Appends an element with no children.
+    pub fn push(&mut self, node: Node, geom: Geom, time: [f32; 2]) -> Result<ElementId> {
+        let id = self.nodes.push(node)?;
+        self.geoms.push(geom)?;
+        self.times.push(time)?;
+        self.radiosities.push([0.0; 3])?;
+        self.irradiances.push([0.0; 3])?;
+        Ok(ElementId(id))
+    }
+
+    /// Children of `e` as a range of ids.
+    #[inline]
+    pub fn children(&self, e: ElementId) -> std::ops::Range<u32> {
+        let n = &self.nodes.as_slice()[e.ix()];
+        n.first_child..n.first_child + n.child_count
+    }
+
+    /// Kind of `e`.
+    #[inline]
+    pub fn kind(&self, e: ElementId) -> ElementKind {
+        if self.nodes.as_slice()[e.ix()].kind == ElementKind::Cluster as u8 {
+            ElementKind::Cluster
+        } else {
+            ElementKind::Surface
+        }
+    }
+
+    /// Bytes held by all columns.
+    pub fn bytes(&self) -> usize {
+        self.nodes.bytes()
+            + self.geoms.bytes()
+            + self.times.bytes()
+            + self.radiosities.bytes()
+            + self.irradiances.bytes()
+    }
+
+    /// Checks the tree's invariants: equal column lengths, children in range with
+    /// `parent` pointing back, positive finite areas, finite radiosity, a surface
+    /// child's area summing to its parent's within round-off.
+    pub fn validate(&self) -> Result<()> {
+        let n = self.len();
+        let bad = |place: String, expected: &str, found: String| {
+            Err(Error::invalid("<element pool>", place, expected, found))
+        };
+        for len in [
+            self.geoms.len(),
+            self.times.len(),
+            self.radiosities.len(),
+            self.irradiances.len(),
+        ] {
+            if len != n {
+                return bad(
+                    "columns".into(),
+                    &format!("{n} records in every column"),
+                    len.to_string(),
+                );
+            }
+        }
+        let nodes = self.nodes.as_slice();
+        let geoms = self.geoms.as_slice();
+        for (i, node) in nodes.iter().enumerate() {
+            let g = &geoms[i];
+            if !(g.area.is_finite() && g.area >= 0.0) {
+                return bad(
+                    format!("element {i}"),
+                    "finite area >= 0",
+                    g.area.to_string(),
+                );
+            }
+            if self.radiosities.as_slice()[i]
+                .iter()
+                .any(|b| !b.is_finite())
+            {
+                return bad(
+                    format!("element {i}"),
+                    "finite radiosity",
+                    format!("{:?}", self.radiosities.as_slice()[i]),
+                );
+            }
+            let end = node.first_child as usize + node.child_count as usize;
+            if node.child_count > 0 && end > n {
+                return bad(
+                    format!("element {i}"),
+                    &format!("children below {n}"),
+                    format!("{}..{end}", node.first_child),
+                );
+            }
+            let mut child_area = 0.0;
+            for c in node.first_child as usize..if node.child_count > 0 {
+                end
+            } else {
+                node.first_child as usize
+            } {
+                if nodes[c].parent != i as u32 {
+                    return bad(
+                        format!("element {c}"),
+                        &format!("parent {i}"),
+                        nodes[c].parent.to_string(),
+                    );
+                }
+                child_area += geoms[c].area;
+            }
+            if node.child_count > 0 && node.kind == ElementKind::Surface as u8 {
+                let rel = (child_area - g.area).abs() / g.area.max(f64::MIN_POSITIVE);
+                if rel > 1e-9 {
+                    return bad(
+                        format!("element {i}"),
+                        "children's areas summing to the parent's",
+                        format!("relative difference {rel:e}"),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}

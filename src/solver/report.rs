@@ -1,0 +1,99 @@
+//! Error against run time: one [`RoundRecord`] per refine-and-solve round, printed by
+//! `solve` and written as CSV by `--report`.
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::{Error, Result};
+
+/// What one round cost and reached.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RoundRecord {
+    /// Round number (0 = first refinement of the root link).
+    pub round: u32,
+    /// Seconds since the solve started (after loading).
+    pub seconds: f64,
+    /// Elements (all levels, clusters included).
+    pub elements: u64,
+    /// Leaves (the unknowns).
+    pub leaves: u64,
+    /// Active links.
+    pub links_active: u64,
+    /// Passive (refined) links.
+    pub links_passive: u64,
+    /// Bytes in the element pool.
+    pub bytes_elements: u64,
+    /// Bytes in the link pool.
+    pub bytes_links: u64,
+    /// Bytes in the BVHs.
+    pub bytes_bvh: u64,
+    /// Occlusion rays cast this round.
+    pub rays: u64,
+    /// Links settled by a shaft without rays this round.
+    pub shaft_clear: u64,
+    /// Estimated relative RMS error from the active links' error bounds.
+    pub estimated_error: f64,
+    /// Relative residual of the linear solve.
+    pub residual: f64,
+    /// True relative RMS error at the reference points (with `--reference`).
+    pub true_error: Option<f64>,
+}
+
+impl RoundRecord {
+    /// CSV header matching [`RoundRecord::csv_row`].
+    pub const CSV_HEADER: &'static str = "round,seconds,elements,leaves,links_active,links_passive,bytes_elements,bytes_links,bytes_bvh,rays,shaft_clear,estimated_error,residual,true_error";
+
+    /// One CSV row.
+    pub fn csv_row(&self) -> String {
+        format!(
+            "{},{:.6},{},{},{},{},{},{},{},{},{},{:.6e},{:.3e},{}",
+            self.round,
+            self.seconds,
+            self.elements,
+            self.leaves,
+            self.links_active,
+            self.links_passive,
+            self.bytes_elements,
+            self.bytes_links,
+            self.bytes_bvh,
+            self.rays,
+            self.shaft_clear,
+            self.estimated_error,
+            self.residual,
+            self.true_error
+                .map_or(String::new(), |e| format!("{e:.6e}"))
+        )
+    }
+
+    /// A one-line human summary.
+    pub fn summary(&self) -> String {
+        let mut s = format!(
+            "round {:>2}  {:>8.3} s  {:>8} elements  {:>8} leaves  {:>9} links ({} passive)  {:>7.1} MiB  est. error {:.3e}  residual {:.1e}",
+            self.round,
+            self.seconds,
+            self.elements,
+            self.leaves,
+            self.links_active,
+            self.links_passive,
+            (self.bytes_elements + self.bytes_links + self.bytes_bvh) as f64 / (1024.0 * 1024.0),
+            self.estimated_error,
+            self.residual
+        );
+        if let Some(e) = self.true_error {
+            s.push_str(&format!("  true error {e:.3e}"));
+        }
+        s
+    }
+}
+
+/// Writes the records as CSV to `path`.
+pub fn write_csv(path: &Path, records: &[RoundRecord]) -> Result<()> {
+    let mut out = String::from(RoundRecord::CSV_HEADER);
+    out.push('\n');
+    for r in records {
+        out.push_str(&r.csv_row());
+        out.push('\n');
+    }
+    let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
+    f.write_all(out.as_bytes()).map_err(|e| Error::io(path, e))
+}

@@ -1,0 +1,75 @@
+//! Scenes built in code for the integration tests.
+#![allow(dead_code)]
+
+use glam::DVec3;
+use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
+
+/// An axis-aligned box `[lo, hi]` as 6 quads facing inwards, each split into
+/// `n × n` quads; all faces use material 0 unless `material_of_face` says otherwise.
+pub fn closed_box(
+    lo: DVec3,
+    hi: DVec3,
+    n: usize,
+    material_of_face: impl Fn(usize) -> u32,
+) -> Vec<Polygon> {
+    let mut polys = Vec::new();
+    // Each face: origin, edge u, edge v with u × v pointing inwards.
+    let d = hi - lo;
+    let faces = [
+        (lo, DVec3::new(d.x, 0.0, 0.0), DVec3::new(0.0, d.y, 0.0)), // z = lo, +z
+        (
+            DVec3::new(lo.x, lo.y, hi.z),
+            DVec3::new(0.0, d.y, 0.0),
+            DVec3::new(d.x, 0.0, 0.0),
+        ), // z = hi, -z
+        (lo, DVec3::new(0.0, d.y, 0.0), DVec3::new(0.0, 0.0, d.z)), // x = lo, +x
+        (
+            DVec3::new(hi.x, lo.y, lo.z),
+            DVec3::new(0.0, 0.0, d.z),
+            DVec3::new(0.0, d.y, 0.0),
+        ), // x = hi, -x
+        (lo, DVec3::new(0.0, 0.0, d.z), DVec3::new(d.x, 0.0, 0.0)), // y = lo, +y
+        (
+            DVec3::new(lo.x, hi.y, lo.z),
+            DVec3::new(d.x, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, d.z),
+        ), // y = hi, -y
+    ];
+    for (fi, (o, u, v)) in faces.iter().enumerate() {
+        for i in 0..n {
+            for j in 0..n {
+                let (a, b) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
+                let (c, e) = (j as f64 / n as f64, (j + 1) as f64 / n as f64);
+                polys.push(Polygon {
+                    vertices: vec![
+                        *o + a * *u + c * *v,
+                        *o + b * *u + c * *v,
+                        *o + b * *u + e * *v,
+                        *o + a * *u + e * *v,
+                    ],
+                    material: MaterialId(material_of_face(fi)),
+                });
+            }
+        }
+    }
+    polys
+}
+
+/// A closed unit cube with uniform exitance `e` and reflectance `rho` everywhere.
+pub fn uniform_enclosure(rho: f64, e: f64, scale: f64, n: usize) -> Scene {
+    let polys = closed_box(DVec3::ZERO, DVec3::splat(scale), n, |_| 0);
+    Scene {
+        materials: vec![Material {
+            name: "m".into(),
+            rho: [rho; 3],
+            emission: [e; 3],
+        }],
+        objects: vec![Object {
+            name: "box".into(),
+            polygons: polys,
+            motion: None,
+        }],
+        ..Default::default()
+    }
+}
+pub mod probe;
