@@ -11,12 +11,13 @@ use super::SolutionView;
 use crate::error::Result;
 use crate::solver::Leaf;
 
-/// A patch in world space at the frame's time. 128 bytes (4 + 4 padding + 4 × 24 +
-/// 24).
+/// A patch in world space at the frame's time. 128 bytes (4 + 4 + 4 × 24 + 24).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WorldPatch {
     /// 3 or 4.
     pub corners: u32,
+    /// Material index (smooth shading does not average across materials).
+    pub material: u32,
     /// World corners (the 4th unused for triangles).
     pub v: [DVec3; 4],
     /// Unit normal (right-hand rule on the corners; zero for a degenerate patch).
@@ -85,6 +86,7 @@ impl Frame {
                 };
                 WorldPatch {
                     corners: p.corners,
+                    material: p.material,
                     v,
                     normal: n.normalize_or_zero(),
                 }

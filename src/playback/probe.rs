@@ -292,6 +292,7 @@ mod tests {
         .map(|x| rot * x + DVec3::new(5.0, -1.0, 2.0));
         let patch = WorldPatch {
             corners: 4,
+            material: 0,
             v,
             normal: rot * DVec3::Z,
         };
