@@ -13,6 +13,7 @@ use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
+use rhier::playback::nearest::nearest_brute_force;
 use rhier::playback::raster::{FrameMesh, Shading, auto_camera, render};
 use rhier::playback::{Frame, ProbePoint, probe};
 use rhier::solver::Leaf;
@@ -94,12 +95,16 @@ fn open_and_play(c: &mut Criterion) {
     let dir = tempfile::tempdir().unwrap();
     let mut g = c.benchmark_group("open_and_play");
     g.sample_size(20);
-    for frames in [24u32, 240, 2400] {
+    g.measurement_time(std::time::Duration::from_secs(3));
+    for frames in [24u32, 240, 2400, 24000] {
         let path = dir.path().join(format!("a{frames}.rhier"));
         write_space_time(&path, &animated_box(8, frames));
         let bytes = std::fs::metadata(&path).unwrap().len();
         println!("open_and_play: {frames} chunks, {bytes} bytes");
-        g.bench_function(format!("{frames}_chunks"), |b| {
+        g.bench_function(format!("open_{frames}_chunks"), |b| {
+            b.iter(|| black_box(Reader::open(&path).unwrap()))
+        });
+        g.bench_function(format!("open_play_{frames}_chunks"), |b| {
             b.iter(|| {
                 let r = Reader::open(&path).unwrap();
                 let frame = Frame::build(&r, 0.5).unwrap();
@@ -150,6 +155,17 @@ fn probe_throughput(c: &mut Criterion) {
     g.bench_function("10k_points_100k_patches_frame_built", |b| {
         b.iter(|| {
             black_box(rhier::playback::probe::probe_frame(Path::new("x"), &frame, &points).unwrap())
+        })
+    });
+    // Baseline: the plain scan over every patch, on 1% of the points.
+    let ids: Vec<u32> = (0..frame.patches.len() as u32).collect();
+    g.throughput(Throughput::Elements(100));
+    g.bench_function("100_points_100k_patches_brute_force_nearest", |b| {
+        b.iter(|| {
+            for p in &points[..100] {
+                let facing = |k: u32| frame.patches[k as usize].normal.dot(p.n) > 0.0;
+                black_box(nearest_brute_force(&frame.patches, &ids, p.p, facing));
+            }
         })
     });
     g.finish();

@@ -301,3 +301,66 @@ fn cli_exit_codes() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn smooth_shading_averages_only_within_a_material() {
+    // Two coplanar unit quads sharing the edge x = 1, B = 1 on the left, 5 on the
+    // right: with one material the shared corners average to 3; with two (a light
+    // beside a ceiling) they keep 1 and 5.
+    for (right_material, want_left, want_right) in [(0u32, 3.0, 3.0), (1, 1.0, 5.0)] {
+        let quad = |x0: f64| {
+            [
+                DVec3::new(x0, 0.0, 0.0),
+                DVec3::new(x0 + 1.0, 0.0, 0.0),
+                DVec3::new(x0 + 1.0, 1.0, 0.0),
+                DVec3::new(x0, 1.0, 0.0),
+            ]
+        };
+        let patches = vec![
+            PatchGeometry {
+                object: 0,
+                material: 0,
+                corners: 4,
+                vertices: quad(0.0),
+            },
+            PatchGeometry {
+                object: 0,
+                material: right_material,
+                corners: 4,
+                vertices: quad(1.0),
+            },
+        ];
+        let mut leaves = uniform_leaves(0, &patches[0], 1, [0.0, 0.0], |_| [1.0; 3]);
+        leaves.extend(uniform_leaves(1, &patches[1], 1, [0.0, 0.0], |_| [5.0; 3]));
+        let m = Material {
+            name: "m".into(),
+            rho: [0.5; 3],
+            emission: [0.0; 3],
+        };
+        let scene = Scene {
+            materials: vec![m.clone(), m],
+            objects: vec![Object {
+                name: "o".into(),
+                polygons: Vec::new(),
+                motion: None,
+            }],
+            ..Scene::default()
+        };
+        let sol = Solution {
+            scene,
+            patches,
+            leaves,
+            stats: SolveStats::default(),
+        };
+        let frame = Frame::build(&sol, 0.0).unwrap();
+        let mesh = FrameMesh::build(&frame, Shading::Smooth);
+        // Colour of the vertex at (1, 0, 0) as used by each patch's first triangle.
+        let at = |tri: &[u32; 3]| {
+            tri.iter()
+                .find(|&&i| mesh.positions[i as usize].distance(DVec3::X) < 1e-12)
+                .map(|&i| mesh.colors[i as usize][0])
+        };
+        assert_eq!(at(&mesh.triangles[0]), Some(want_left));
+        assert_eq!(at(&mesh.triangles[2]), Some(want_right));
+    }
+}

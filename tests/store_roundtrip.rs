@@ -67,7 +67,15 @@ fn sorted(mut v: Vec<Leaf>) -> Vec<Leaf> {
 fn static_box_round_trip_and_known_answer() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("box.rhier");
-    let sol = box_solution(4);
+    let mut sol = box_solution(4);
+    sol.scene.camera = Some(rhier::scene::Camera {
+        eye: DVec3::new(0.5, 0.5, 3.0),
+        target: DVec3::splat(0.5),
+        up: DVec3::Y,
+        fov_y: 0.8,
+    });
+    // The writer keeps whatever order the solver hands leaves in.
+    sol.leaves.reverse();
     write_solution(&path, &sol, WriteOptions::default()).unwrap();
     assert!(!dir.path().join("box.rhier.tmp").exists());
     let r = Reader::open(&path).unwrap();

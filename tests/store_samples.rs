@@ -98,7 +98,7 @@ fn corruptions(valid: &[u8]) -> Vec<(&'static str, Vec<u8>, &'static str)> {
     out.push((
         "huge_raw_length.rhier",
         b,
-        "1099511627776 bytes once decompressed",
+        "expected 880 bytes for 9 chunk records, found 1099511627776 bytes",
     ));
     let mut b = valid.to_vec();
     b[..HEADER_LEN].fill(0);

@@ -41,10 +41,10 @@ pub struct Args {
     /// Output directory (created if missing).
     #[arg(short = 'o', long = "out")]
     pub out: PathBuf,
-    /// Picture width in pixels.
+    /// Picture width in pixels (1..=4096).
     #[arg(long, default_value_t = 640)]
     pub width: u32,
-    /// Picture height in pixels.
+    /// Picture height in pixels (1..=4096).
     #[arg(long, default_value_t = 480)]
     pub height: u32,
     /// Exposure multiplier (default: automatic, 99th-percentile luminance → 1).
@@ -88,9 +88,9 @@ fn frame_times(args: &Args) -> anyhow::Result<Vec<f64>> {
 
 /// Runs `rhier play`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if args.width == 0 || args.height == 0 || args.width > 16384 || args.height > 16384 {
+    if args.width == 0 || args.height == 0 || args.width > 4096 || args.height > 4096 {
         anyhow::bail!(
-            "--width/--height: expected 1..=16384, found {}x{}",
+            "--width/--height: expected 1..=4096, found {}x{}",
             args.width,
             args.height
         );

@@ -11,16 +11,20 @@ use super::SolutionView;
 use crate::error::Result;
 use crate::solver::Leaf;
 
-/// A patch in world space at the frame's time. 4 × 24 + 24 + 8 bytes.
+/// A patch in world space at the frame's time. 128 bytes (4 + 4 + 4 × 24 + 24).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WorldPatch {
     /// 3 or 4.
     pub corners: u32,
+    /// Material index (smooth shading does not average across materials).
+    pub material: u32,
     /// World corners (the 4th unused for triangles).
     pub v: [DVec3; 4],
     /// Unit normal (right-hand rule on the corners; zero for a degenerate patch).
     pub normal: DVec3,
 }
+
+const _: () = assert!(std::mem::size_of::<WorldPatch>() == 128);
 
 impl WorldPatch {
     /// World point at parameter `(u, v)`.
@@ -82,13 +86,24 @@ impl Frame {
                 };
                 WorldPatch {
                     corners: p.corners,
+                    material: p.material,
                     v,
                     normal: n.normalize_or_zero(),
                 }
             })
             .collect();
-        // Stable sort keeps the stored order (time, then patch) inside a patch.
-        leaves.sort_by_key(|l| l.patch);
+        // A canonical order (patch, start time, first corner), whatever order the view
+        // hands leaves in, so that a solution and its file pick the same leaf where
+        // two domains touch.
+        leaves.sort_by(|a, b| {
+            a.patch
+                .cmp(&b.patch)
+                .then(a.time[0].total_cmp(&b.time[0]))
+                .then(a.uv[0][1].total_cmp(&b.uv[0][1]))
+                .then(a.uv[0][0].total_cmp(&b.uv[0][0]))
+                .then(a.uv[1][0].total_cmp(&b.uv[1][0]))
+                .then(a.uv[2][1].total_cmp(&b.uv[2][1]))
+        });
         let mut first_leaf = vec![0u32; patches.len() + 1];
         for l in &leaves {
             if let Some(c) = first_leaf.get_mut(l.patch as usize + 1) {

@@ -255,6 +255,7 @@ mod tests {
             let corners = if k % 3 == 0 { 3 } else { 4 };
             patches.push(WorldPatch {
                 corners,
+                material: 0,
                 v: [o, o + a, o + a + b, o + b],
                 normal: a.cross(b).normalize(),
             });
@@ -276,6 +277,7 @@ mod tests {
     fn closest_point_on_unit_square() {
         let sq = WorldPatch {
             corners: 4,
+            material: 0,
             v: [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
             normal: DVec3::Z,
         };

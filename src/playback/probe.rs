@@ -12,6 +12,7 @@
 use std::path::Path;
 
 use glam::DVec3;
+use rayon::prelude::*;
 use serde_json::Value;
 
 use super::SolutionView;
@@ -211,14 +212,17 @@ pub fn patch_params(patch: &WorldPatch, q: DVec3) -> (f64, f64) {
 }
 
 /// The leaf of `leaves` (one patch's) holding `(u, v)`: the first whose domain
-/// contains it, else (a point in a crack between f32 domains) the one whose domain is
-/// nearest.
+/// contains it, else the first within `1e-6` (a point in a crack between f32
+/// domains), else the one whose domain centre is nearest.
 pub fn leaf_at(leaves: &[Leaf], u: f64, v: f64) -> Option<&Leaf> {
-    leaves.iter().find(|l| l.contains(u, v, 1e-6)).or_else(|| {
-        leaves
-            .iter()
-            .min_by(|a, b| domain_distance(a, u, v).total_cmp(&domain_distance(b, u, v)))
-    })
+    let found = leaves.iter().find(|l| l.contains(u, v, 0.0));
+    found
+        .or_else(|| leaves.iter().find(|l| l.contains(u, v, 1e-6)))
+        .or_else(|| {
+            leaves
+                .iter()
+                .min_by(|a, b| domain_distance(a, u, v).total_cmp(&domain_distance(b, u, v)))
+        })
 }
 
 fn domain_distance(l: &Leaf, u: f64, v: f64) -> f64 {
@@ -240,27 +244,29 @@ pub fn probe_frame(name: &Path, frame: &Frame, points: &[ProbePoint]) -> Result<
         })
         .collect();
     let index = NearestIndex::build(&frame.patches, with_leaves);
-    let mut out = Vec::with_capacity(points.len());
-    for (i, pt) in points.iter().enumerate() {
-        let facing = |k: u32| frame.patches[k as usize].normal.dot(pt.n) > 0.0;
-        let Some((patch, q, _)) = index.nearest(&frame.patches, pt.p, facing) else {
-            return Err(Error::invalid(
-                name,
-                format!("probe point {i} at time {}", frame.t),
-                format!(
-                    "a surface with leaves whose normal faces along n = {:?}",
-                    pt.n.to_array()
-                ),
-                "none",
-            ));
-        };
-        let (u, v) = patch_params(&frame.patches[patch as usize], q);
-        let leaves = frame.patch_leaves(patch as usize);
-        // `with_leaves` guarantees at least one leaf.
-        let b = leaf_at(leaves, u, v).map_or([0.0; 3], |l| l.eval(u, v));
-        out.push(b);
-    }
-    Ok(out)
+    // Points are independent: evaluate them in parallel, results in input order.
+    points
+        .par_iter()
+        .enumerate()
+        .map(|(i, pt)| {
+            let facing = |k: u32| frame.patches[k as usize].normal.dot(pt.n) > 0.0;
+            let Some((patch, q, _)) = index.nearest(&frame.patches, pt.p, facing) else {
+                return Err(Error::invalid(
+                    name,
+                    format!("probe point {i} at time {}", frame.t),
+                    format!(
+                        "a surface with leaves whose normal faces along n = {:?}",
+                        pt.n.to_array()
+                    ),
+                    "none",
+                ));
+            };
+            let (u, v) = patch_params(&frame.patches[patch as usize], q);
+            let leaves = frame.patch_leaves(patch as usize);
+            // `with_leaves` guarantees at least one leaf.
+            Ok(leaf_at(leaves, u, v).map_or([0.0; 3], |l| l.eval(u, v)))
+        })
+        .collect()
 }
 
 /// Radiosity at `points` at time `t` of any solution view: see the module header.
@@ -286,6 +292,7 @@ mod tests {
         .map(|x| rot * x + DVec3::new(5.0, -1.0, 2.0));
         let patch = WorldPatch {
             corners: 4,
+            material: 0,
             v,
             normal: rot * DVec3::Z,
         };

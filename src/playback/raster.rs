@@ -5,7 +5,8 @@
 //! (a quad leaf `c0 c1 c2 c3` into `c0 c1 c2` and `c0 c2 c3`). With
 //! [`Shading::Smooth`] each vertex carries the radiosity of the leaf corners averaged
 //! over every leaf corner at the same world position on a surface of the same normal
-//! (so walls meeting at an edge are not blurred together); with [`Shading::Flat`] each
+//! and material (so walls meeting at an edge, or a light and the ceiling around it,
+//! are not blurred together); with [`Shading::Flat`] each
 //! leaf carries its mean [`Leaf::mean`]. [`render`] projects with a pinhole camera,
 //! clips against the near plane, culls back faces (surfaces are lit on their front
 //! side only), and fills pixels whose centre is inside a triangle (top-left rule not
@@ -51,8 +52,8 @@ impl FrameMesh {
             .bounds()
             .map_or(1.0, |(lo, hi)| (hi - lo).length().max(1e-300));
         let q = 1e-7 * diag;
-        // Smooth: one vertex per (quantised position, quantised normal).
-        let mut shared: HashMap<([i64; 3], [i64; 3]), u32> = HashMap::new();
+        // Smooth: one vertex per (quantised position, quantised normal, material).
+        let mut shared: HashMap<([i64; 3], [i64; 3], u32), u32> = HashMap::new();
         let mut sums: Vec<([f64; 3], f64)> = Vec::new();
         for (p, patch) in frame.patches.iter().enumerate() {
             for leaf in frame.patch_leaves(p) {
@@ -73,6 +74,7 @@ impl FrameMesh {
                             let key = (
                                 (pos / q).round().as_i64vec3().to_array(),
                                 (patch.normal * 1e4).round().as_i64vec3().to_array(),
+                                patch.material,
                             );
                             let id = *shared.entry(key).or_insert_with(|| {
                                 mesh.positions.push(pos);

@@ -11,8 +11,9 @@
 //!
 //! What it does not do: it never trusts a length before comparing it to the bytes that
 //! exist; decompression grows its buffer with the data actually produced and stops at
-//! the stated raw length, so a lying length cannot cause a huge allocation. It keeps no
-//! cache of decoded chunks (the OS page cache serves mapped raw chunks).
+//! the stated raw length, so a lying length cannot cause a huge allocation. It keeps
+//! only the chunks decoded by the last [`Reader::leaves_at`] (so that playing frames
+//! in order decodes the long-lived chunks once); memory stays that of one frame.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -78,6 +79,8 @@ pub struct Reader {
     patches: Vec<PatchGeometry>,
     chunks: Vec<ChunkRecord>,
     stats: SolveStats,
+    /// Chunks decoded by the last `leaves_at`: `(chunk, leaves)`.
+    recent: std::sync::Mutex<Vec<(usize, std::sync::Arc<Vec<Leaf>>)>>,
 }
 
 impl std::fmt::Debug for Reader {
@@ -136,6 +139,19 @@ impl Reader {
             let at = range.start + i * ENTRY_LEN;
             sections.push(SectionEntry::decode(&path, i, at, b, header.table_offset)?);
         }
+        for (i, e) in sections.iter().enumerate() {
+            if let Err(expected) = check_raw_len(e.kind, e.items, e.raw_len) {
+                return Err(Error::invalid(
+                    &path,
+                    format!(
+                        "byte {} (section {i}, raw length)",
+                        range.start + i * ENTRY_LEN + 24
+                    ),
+                    expected,
+                    format!("{} bytes, {} records", e.raw_len, e.items),
+                ));
+            }
+        }
         let single = |kind: SectionKind| -> Result<usize> {
             let mut found = sections.iter().enumerate().filter(|(_, e)| e.kind == kind);
             match (found.next(), found.next()) {
@@ -166,6 +182,7 @@ impl Reader {
             patches: Vec::new(),
             chunks: Vec::new(),
             stats: SolveStats::default(),
+            recent: std::sync::Mutex::new(Vec::new()),
         };
         reader.load_scene(i_scene)?;
         reader.load_patches(i_patches)?;
@@ -507,14 +524,23 @@ impl Reader {
     /// The leaves live at `t` ([`Leaf::is_live`]), reading only the chunks that need it.
     pub fn leaves_at(&self, t: f64) -> Result<Vec<Leaf>> {
         check_time(&self.path, self.time, t)?;
+        // A poisoned lock only means another thread panicked mid-update: start afresh.
+        let mut recent = self.recent.lock().unwrap_or_else(|p| {
+            let mut g = p.into_inner();
+            g.clear();
+            g
+        });
+        let mut kept = Vec::new();
         let mut out = Vec::new();
         for k in self.chunks_for(t) {
-            out.extend(
-                self.chunk_leaves(k)?
-                    .into_iter()
-                    .filter(|l| l.is_live(t, self.time.end)),
-            );
+            let leaves = match recent.iter().find(|(j, _)| *j == k) {
+                Some((_, l)) => l.clone(),
+                None => std::sync::Arc::new(self.chunk_leaves(k)?),
+            };
+            out.extend(leaves.iter().filter(|l| l.is_live(t, self.time.end)));
+            kept.push((k, leaves));
         }
+        *recent = kept;
         Ok(out)
     }
 
@@ -601,6 +627,41 @@ impl Reader {
     /// Bytes of the header and section table.
     pub fn table_bytes(&self) -> u64 {
         (HEADER_LEN + self.sections.len() * ENTRY_LEN) as u64
+    }
+}
+
+/// What the raw length of a section with `items` records must be: fixed-size records
+/// then the 16-byte root (`ArchivedVec`: 8-byte relative pointer, 8-byte length);
+/// one stats record; one scene record of any length. `Err` holds what was expected.
+fn check_raw_len(kind: SectionKind, items: u64, raw_len: u64) -> std::result::Result<(), String> {
+    use std::mem::size_of;
+    let record = match kind {
+        SectionKind::Patches => size_of::<super::records::ArchivedPatchRecord>(),
+        SectionKind::Chunk => size_of::<ArchivedLeafRecord>(),
+        SectionKind::ChunkIndex => size_of::<super::records::ArchivedChunkRecord>(),
+        SectionKind::Links => size_of::<super::records::ArchivedLinkRecord>(),
+        SectionKind::Stats => {
+            let want = size_of::<ArchivedStatsRecord>() as u64;
+            return if items == 1 && raw_len == want {
+                Ok(())
+            } else {
+                Err(format!("1 stats record of {want} bytes"))
+            };
+        }
+        SectionKind::Scene => {
+            return if items == 1 {
+                Ok(())
+            } else {
+                Err("1 scene record".into())
+            };
+        }
+    } as u64;
+    match items.checked_mul(record).and_then(|x| x.checked_add(16)) {
+        Some(want) if want == raw_len => Ok(()),
+        Some(want) => Err(format!("{want} bytes for {items} {} records", kind.name())),
+        None => Err(format!(
+            "a record count whose size fits in 64 bits, not {items}"
+        )),
     }
 }
 
