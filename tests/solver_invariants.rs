@@ -3,6 +3,11 @@
 //! scale and scale linearly with emission, and degenerate geometry gives no NaN,
 //! infinity or negative radiosity.
 
+#![expect(
+    clippy::needless_range_loop,
+    reason = "dense matrix code reads best with indices"
+)]
+
 mod common;
 
 use glam::DVec3;

@@ -255,8 +255,8 @@ fn evaluate_surfaces(
     let (polr, pols) = (poly(gr), poly(gs));
     let q = samples(gr);
     let mut fq = [0.0f64; 4];
-    for i in 0..q.count {
-        fq[i] = point_to_polygon(q.points[i], nr, &pols);
+    for (f, &x) in fq.iter_mut().zip(&q.points).take(q.count) {
+        *f = point_to_polygon(x, nr, &pols);
     }
     // Unoccluded spread over quadrature points and corners.
     let mut fmin = f64::INFINITY;
@@ -289,9 +289,9 @@ fn evaluate_surfaces(
     let m = set.rays_per_point.max(1);
     let mut vq = [0.0f64; 4];
     let mut rays = 0;
-    for i in 0..q.count {
+    for (i, (v, &x)) in vq.iter_mut().zip(&q.points).take(q.count).enumerate() {
         let key = hash3(set.seed, r.0 as u64, (s.0 as u64) << 8 | i as u64);
-        vq[i] = visible_fraction(bvh, q.points[i], nr, gs, &pols, ns, m, key, skip);
+        *v = visible_fraction(bvh, x, nr, gs, &pols, ns, m, key, skip);
         rays += m;
     }
     let _ = patches;

@@ -901,54 +901,6 @@ impl<'a> Solver<'a> {
         Some(self.gather_point(leaf, self.patches.point(patch as usize, u, v), 0))
     }
 
-    /// Debug: the chain links of the leaf holding `(patch, u, v)` as
-    /// (receiver, source, source kind, source area, source radiosity, transfer).
-    #[doc(hidden)]
-    pub fn debug_chain(
-        &self,
-        patch: u32,
-        u: f64,
-        v: f64,
-    ) -> Vec<(u32, u32, u8, f64, [f32; 3], [f64; 3])> {
-        let Some(leaf) = self.leaves.iter().copied().find(|&l| {
-            let g = &self.elems.geoms.as_slice()[l.ix()];
-            g.patch == patch
-                && Leaf {
-                    patch,
-                    corners: g.n,
-                    time: self.time,
-                    uv: g.uv,
-                    b: [[0.0; 3]; 4],
-                }
-                .contains(u, v, 1e-9)
-        }) else {
-            return Vec::new();
-        };
-        let x = self.patches.point(patch as usize, u, v);
-        let n = DVec3::from_array(self.elems.geoms.as_slice()[leaf.ix()].normal);
-        let mut out = Vec::new();
-        let mut e = leaf.0;
-        while e != u32::MAX {
-            for &l in self.links_of(e as usize) {
-                let t = self.links.transports.as_slice()[l as usize];
-                let s = self.links.ends.as_slice()[l as usize].source as usize;
-                let v =
-                    self.point_transfer(x, n, patch, s, t.shaft_clear(), t.visibility as f64, 1);
-                let g = self.elems.geoms.as_slice()[s];
-                out.push((
-                    e,
-                    s as u32,
-                    self.elems.nodes.as_slice()[s].kind,
-                    g.area,
-                    self.elems.radiosities.as_slice()[s],
-                    v,
-                ));
-            }
-            e = self.elems.nodes.as_slice()[e as usize].parent;
-        }
-        out
-    }
-
     /// Piecewise-constant radiosity of every leaf (element averages), for tests.
     pub fn leaf_radiosities(&self) -> Vec<(u32, [f32; 2], [f32; 3])> {
         self.leaves
