@@ -51,21 +51,23 @@ fn cornell_error_vs_time() {
             let recon_tol: f64 = std::env::var("RECON")
                 .ok()
                 .and_then(|s| s.parse().ok())
-                .unwrap_or(0.005);
+                .unwrap_or(0.02);
             let (sol, recs) = solve(
                 &scene,
                 SolveOptions {
                     eps,
                     recon_tol,
+                    contact_meshing: std::env::var("NOCONTACT").is_err(),
                     ..Default::default()
                 },
             )
             .unwrap();
             let secs = t.elapsed().as_secs_f64();
-            let b: Vec<[f64; 3]> = pts
+            let points: Vec<rhier::playback::ProbePoint> = pts
                 .iter()
-                .map(|&(p, n)| common::probe::probe(&sol, &patches, p, n))
+                .map(|&(p, n)| rhier::playback::ProbePoint { p, n })
                 .collect();
+            let b = rhier::playback::probe(&sol, &points, 0.0).unwrap();
             let err = common::probe::rel_rms(&b, &refb);
             let err_contact = if pts.len() > n_grid {
                 common::probe::rel_rms(&b[n_grid..], &refb[n_grid..])

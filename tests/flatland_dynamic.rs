@@ -35,7 +35,10 @@ fn update_equals_full_recompute_along_the_path() {
             for i in 0..n {
                 for j in 0..n {
                     let (a, b) = (ff.f(i, j), full.f(i, j));
-                    assert!((a - b).abs() < 1e-12, "{mesh:?} t {t}: F({i},{j}) {a} vs {b}");
+                    assert!(
+                        (a - b).abs() < 1e-12,
+                        "{mesh:?} t {t}: F({i},{j}) {a} vs {b}"
+                    );
                 }
             }
             let b_dyn = solve_with(&scene, t, dynamic.geometry().clone(), &ff);
@@ -48,8 +51,10 @@ fn update_equals_full_recompute_along_the_path() {
             // Topological changes: pairs that start or stop seeing each other.
             let now: HashSet<(u32, u32)> = full.mu.keys().copied().collect();
             if let Some(p) = &prev {
-                created += now.difference(p).count();
-                destroyed += p.difference(&now).count();
+                let (c, d) = (now.difference(p).count(), p.difference(&now).count());
+                assert_eq!((rep.pairs_appeared, rep.pairs_vanished), (c, d), "t {t}");
+                created += c;
+                destroyed += d;
             }
             prev = Some(now);
             assert_eq!(rep.ff_total, full.nonzeros());
@@ -57,8 +62,14 @@ fn update_equals_full_recompute_along_the_path() {
                 partial += 1;
             }
         }
-        assert!(created > 0 && destroyed > 0, "{mesh:?}: no visibility event on the path");
-        assert!(partial >= 15, "{mesh:?}: only {partial} steps were partial updates");
+        assert!(
+            created > 0 && destroyed > 0,
+            "{mesh:?}: no visibility event on the path"
+        );
+        assert!(
+            partial >= 15,
+            "{mesh:?}: only {partial} steps were partial updates"
+        );
     }
 }
 
@@ -81,4 +92,115 @@ fn discontinuity_mesh_steps_are_full_and_exact() {
     let full = solve(&scene, 0.5, Mesh::Discontinuity);
     assert_eq!(dynamic.geometry().elements.len(), full.geom.elements.len());
     assert!(full.geom.elements.len() > full.geom.segments.len());
+}
+
+#[test]
+fn window_sweep_over_the_whole_scene_equals_the_full_sweep() {
+    use rhier::flatland::window::window_sweep;
+    let scene = load(scene_path()).unwrap();
+    for mesh in [Mesh::None, Mesh::Uniform(2)] {
+        let g = geometry_at(&scene, 0.3, mesh);
+        let (full, _) = form_factors(&g);
+        // A region containing every line that meets the scene.
+        let big = [[-10.0, -10.0], [14.0, -10.0], [14.0, 13.0], [-10.0, 13.0]];
+        let w = window_sweep(&g, &big);
+        assert_eq!(w.mu.len(), full.mu.len());
+        for (k, v) in &full.mu {
+            assert!((w.mu[k] - v).abs() < 1e-12, "{k:?}: {} vs {v}", w.mu[k]);
+        }
+        // A small region: the window sweep and the full sweep clipped gap by gap
+        // (two independent restrictions) agree, up to the window's 1e-9 growth.
+        let k = [[1.0, 1.0], [1.6, 1.1], [1.2, 1.7]];
+        let w = window_sweep(&g, &k);
+        let clip = rhier::flatland::complex::Clip::new(vec![k.to_vec()]);
+        let c = rhier::flatland::complex::sweep(&g, Some(&clip), false);
+        assert!(!c.mu.is_empty());
+        for (key, v) in &c.mu {
+            let got = w.mu.get(key).copied().unwrap_or(0.0);
+            assert!((got - v).abs() < 1e-7, "{key:?}: window {got}, clipped {v}");
+        }
+        for key in w.mu.keys() {
+            assert!(c.mu.contains_key(key) || w.mu[key] < 1e-7);
+        }
+    }
+}
+
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+#[test]
+fn update_equals_full_recompute_on_random_scenes_and_motions() {
+    use rhier::flatland::scene::{first_crossing, parse};
+    let mut tested = 0;
+    for seed in 1..40u64 {
+        let mut rng = Lcg(seed);
+        let mut segs = String::new();
+        for k in 0..6 {
+            let a = [3.0 * rng.next(), 3.0 * rng.next()];
+            let ang = rng.next() * std::f64::consts::TAU;
+            let b = [a[0] + 0.6 * ang.cos(), a[1] + 0.6 * ang.sin()];
+            if k > 0 {
+                segs.push(',');
+            }
+            segs.push_str(&format!(
+                r#"{{"a": [{}, {}], "b": [{}, {}], "reflectance": 0.5, "emission": {}}}"#,
+                a[0],
+                a[1],
+                b[0],
+                b[1],
+                if k == 0 { 1.0 } else { 0.0 }
+            ));
+        }
+        let (x, y) = (3.0 * rng.next(), 3.0 * rng.next());
+        let (dx, dy, rot) = (
+            2.0 * rng.next() - 1.0,
+            2.0 * rng.next() - 1.0,
+            3.0 * rng.next(),
+        );
+        let text = format!(
+            r#"{{"rhier_flatland": 1, "objects": [{{"name": "static", "segments": [{segs}]}},
+            {{"name": "tri", "segments": [
+              {{"a": [{x}, {y}], "b": [{x1}, {y}], "reflectance": 0.3}},
+              {{"a": [{x1}, {y}], "b": [{x}, {y1}], "reflectance": 0.3}},
+              {{"a": [{x}, {y1}], "b": [{x}, {y}], "reflectance": 0.3}}],
+             "motion": [{{"t": 0}}, {{"t": 1, "translation": [{dx}, {dy}], "rotation": {rot}}}]}}]}}"#,
+            x1 = x + 0.3,
+            y1 = y + 0.3
+        );
+        let Ok(scene) = parse(Path::new("random"), &text) else {
+            continue;
+        };
+        let times: Vec<f64> = (0..=8).map(|k| k as f64 / 8.0).collect();
+        if times
+            .iter()
+            .any(|&t| first_crossing(&scene.posed(t)).is_some())
+        {
+            continue;
+        }
+        tested += 1;
+        let (mut dynamic, _) = Dynamic::new(&scene, Mesh::None, 0.0);
+        for &t in &times[1..] {
+            dynamic.step(t);
+            let ff = dynamic.form_factors();
+            let (full, _) = form_factors(&geometry_at(&scene, t, Mesh::None));
+            for i in 0..9 {
+                for j in 0..9 {
+                    let (a, b) = (ff.f(i, j), full.f(i, j));
+                    assert!(
+                        (a - b).abs() < 1e-11,
+                        "seed {seed} t {t} F({i},{j}): {a} vs {b}"
+                    );
+                }
+            }
+        }
+    }
+    assert!(tested >= 10, "only {tested} random scenes were valid");
 }

@@ -17,7 +17,10 @@ fn geom(segs: Vec<PosedSegment>) -> FlatGeometry {
 #[test]
 fn facing_unit_segments_match_hottel() {
     // i: floor (0,0)-(1,0), lit side up; j: ceiling (1,1)-(0,1), lit side down.
-    let g = geom(vec![seg([0.0, 0.0], [1.0, 0.0]), seg([1.0, 1.0], [0.0, 1.0])]);
+    let g = geom(vec![
+        seg([0.0, 0.0], [1.0, 0.0]),
+        seg([1.0, 1.0], [0.0, 1.0]),
+    ]);
     let (ff, _) = form_factors(&g);
     let want = 2f64.sqrt() - 1.0; // (2 sqrt 2 - 2) / 2
     assert!((ff.f(0, 1) - want).abs() < 1e-14, "{}", ff.f(0, 1));
@@ -27,7 +30,10 @@ fn facing_unit_segments_match_hottel() {
 #[test]
 fn back_facing_pair_has_no_factor() {
     // Both lit sides face down: the ceiling's lit side looks away from the floor's.
-    let g = geom(vec![seg([0.0, 0.0], [1.0, 0.0]), seg([0.0, 1.0], [1.0, 1.0])]);
+    let g = geom(vec![
+        seg([0.0, 0.0], [1.0, 0.0]),
+        seg([0.0, 1.0], [1.0, 1.0]),
+    ]);
     let (ff, _) = form_factors(&g);
     assert_eq!(ff.f(0, 1), 0.0);
 }
@@ -46,7 +52,11 @@ fn partly_hidden_pair_strings_stretch_around_the_obstacle() {
     let crossed = 2.0 * 2f64.sqrt();
     let uncrossed = 1.0 + 2.0 * (0.4f64 * 0.4 + 0.25).sqrt();
     let want = (crossed - uncrossed) / 2.0;
-    assert!((ff.f(0, 1) - want).abs() < 1e-14, "{} vs {want}", ff.f(0, 1));
+    assert!(
+        (ff.f(0, 1) - want).abs() < 1e-14,
+        "{} vs {want}",
+        ff.f(0, 1)
+    );
 }
 
 /// A closed room (lit inside) with a box (lit outside) whose corners are collinear
@@ -177,5 +187,45 @@ fn string_rule_matches_quadrature_on_random_scenes() {
             }
         }
     }
-    assert!(checked_hidden >= 3, "only {checked_hidden} partly hidden pairs");
+    assert!(
+        checked_hidden >= 3,
+        "only {checked_hidden} partly hidden pairs"
+    );
+}
+
+#[test]
+fn closure_holds_with_massively_collinear_points() {
+    // A room with a 3 x 3 lattice of boxes: many points on common lines (rows,
+    // columns, diagonals), so most events are degenerate blocks.
+    let mut segs = Vec::new();
+    let room = [[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]];
+    for k in 0..4 {
+        segs.push(seg(room[k], room[(k + 1) % 4]));
+    }
+    for i in 0..3 {
+        for j in 0..3 {
+            let (x, y) = (1.0 + i as f64, 1.0 + j as f64);
+            let b = [
+                [x - 0.25, y - 0.25],
+                [x - 0.25, y + 0.25],
+                [x + 0.25, y + 0.25],
+                [x + 0.25, y - 0.25],
+            ];
+            for k in 0..4 {
+                segs.push(seg(b[k], b[(k + 1) % 4]));
+            }
+        }
+    }
+    let n = segs.len();
+    for splits in [1usize, 2] {
+        let ts: Vec<f64> = (1..splits).map(|k| k as f64 / splits as f64).collect();
+        let g = FlatGeometry::new(segs.clone(), &vec![ts; n]);
+        let (ff, stats) = form_factors(&g);
+        let m = g.elements.len() as u32;
+        for i in 0..m {
+            let sum: f64 = (0..m).map(|j| ff.f(i, j)).sum();
+            assert!((sum - 1.0).abs() < 1e-12, "splits {splits} row {i}: {sum}");
+        }
+        assert!(stats.events > 0);
+    }
 }

@@ -56,7 +56,9 @@ fn crossing_segments_are_refused() {
     assert!(expected.contains("do not cross"));
     assert_eq!(found, "crossing segments");
     // Collinear overlap counts as crossing; shared endpoints do not.
-    err(&one(&format!(r#"{SEG_OK}, {{"a": [0.5, 0], "b": [2, 0]}}"#)));
+    err(&one(&format!(
+        r#"{SEG_OK}, {{"a": [0.5, 0], "b": [2, 0]}}"#
+    )));
     parse(
         Path::new("x"),
         &one(&format!(r#"{SEG_OK}, {{"a": [1, 0], "b": [1, 1]}}"#)),
@@ -86,8 +88,9 @@ fn zero_length_segment_is_refused() {
 #[test]
 fn reflectance_outside_unit_interval_is_refused() {
     for bad in ["1.0", "-0.1", "[0.5, 1.2, 0.5]"] {
-        let (place, expected, found) =
-            err(&one(&format!(r#"{{"a": [0, 0], "b": [1, 0], "reflectance": {bad}}}"#)));
+        let (place, expected, found) = err(&one(&format!(
+            r#"{{"a": [0, 0], "b": [1, 0], "reflectance": {bad}}}"#
+        )));
         assert_eq!(place, "object \"room\", segment 0, \"reflectance\"");
         assert_eq!(expected, "values in [0, 1)");
         assert!(["1", "-0.1", "1.2"].contains(&found.as_str()), "{found}");

@@ -593,3 +593,50 @@ fn gltf_unsorted_animation_input_is_refused() {
         "t = 1 after t = 2",
     );
 }
+
+#[test]
+fn huge_coordinates_are_refused() {
+    let huge = "[[0,0,0],[1e200,0,0],[0,1,0]]";
+    let err = load_native(&native("[0.5,0.5,0.5]", "[1,1,1]", &[TRI, huge], None)).unwrap_err();
+    assert_invalid(
+        err,
+        "bad.json",
+        "object \"obj\", polygon 1",
+        "magnitude <= 1e100",
+        "vertex 1 = [1e200, 0, 0]",
+    );
+}
+
+#[test]
+fn gltf_node_cycle_and_missing_scene_are_refused() {
+    let mut v = sample_gltf();
+    v["nodes"][3]["children"] = serde_json::json!([2]); // cube -> mover -> cube
+    let err = load_gltf(&v).unwrap_err();
+    assert_invalid(
+        err,
+        "bad.gltf",
+        "node 2",
+        "a node tree",
+        "two parents or a cycle",
+    );
+    let mut v = sample_gltf();
+    v.as_object_mut().unwrap().remove("scene");
+    v["scenes"] = serde_json::json!([]);
+    let err = load_gltf(&v).unwrap_err();
+    assert_invalid(err, "bad.gltf", "glTF document", "a scene", "no scene");
+}
+
+#[test]
+fn gltf_textures_are_ignored_with_a_warning() {
+    let mut v = sample_gltf();
+    v["images"] = serde_json::json!([{"uri": "missing.png"}]);
+    v["textures"] = serde_json::json!([{"source": 0}]);
+    v["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = serde_json::json!({"index": 0});
+    let s = load_gltf(&v).unwrap();
+    assert!(
+        s.warnings.iter().any(|w| w
+            == "material \"white\": textures are ignored (only the constant factors are read)"),
+        "{:?}",
+        s.warnings
+    );
+}

@@ -29,8 +29,8 @@ pub struct Args {
     /// Elements: none (the input segments), discontinuity, or uniform:N.
     #[arg(long, default_value = "none", value_parser = parse_mesh)]
     pub mesh: Mesh,
-    /// Draw the scene coloured by radiosity to this SVG file (one file per frame,
-    /// suffixed `_NNN`, when there are several times).
+    /// Draw the scene coloured by radiosity to this SVG file, or PNG if the name ends
+    /// in `.png` (one file per frame, suffixed `_NNN`, when there are several times).
     #[arg(long)]
     pub svg: Option<PathBuf>,
     /// Also draw the visibility complex in the dual plane (faces related to moving
@@ -48,8 +48,19 @@ pub struct Args {
     pub verify: bool,
 }
 
+/// Largest number of elements solved (dense matrix of 8 * N^2 bytes: 128 MB).
+const MAX_ELEMENTS: usize = 4000;
+
 fn parse_mesh(s: &str) -> Result<Mesh, String> {
     s.parse()
+}
+
+fn mesh_name(m: Mesh) -> String {
+    match m {
+        Mesh::None => "none".to_string(),
+        Mesh::Discontinuity => "discontinuity".to_string(),
+        Mesh::Uniform(n) => format!("uniform:{n}"),
+    }
 }
 
 /// Runs `rhier flatland`.
@@ -58,6 +69,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let times = frame_times(&scene, &args)?;
     for &t in &times {
         scene.check_at(&args.scene, t)?;
+    }
+    // The solve is dense (N^2 form factors, N^3 elimination) and the sweep visits all
+    // point pairs: refuse sizes that would exhaust memory rather than abort.
+    let elements = rhier::flatland::geometry_at(&scene, times[0], args.mesh)
+        .elements
+        .len();
+    if elements > MAX_ELEMENTS {
+        anyhow::bail!(
+            "{}: expected at most {MAX_ELEMENTS} elements for the dense exact solve, found {elements} \
+             (with --mesh {}); use a coarser mesh",
+            args.scene.display(),
+            mesh_name(args.mesh)
+        );
     }
     let (mut dynamic, mut report) = Dynamic::new(&scene, args.mesh, times[0]);
     let mut frames = Vec::with_capacity(times.len());
@@ -69,10 +93,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let sol = solve_with(&scene, t, dynamic.geometry().clone(), &ff);
         let mut update = json!({
             "full": report.full,
+            "faces_visited": report.faces_visited,
             "cells_visited": report.cells_visited,
             "labels_visited": report.labels_visited,
             "form_factors_recomputed": report.ff_recomputed,
             "form_factors_total": report.ff_total,
+            "pairs_appeared": report.pairs_appeared,
+            "pairs_vanished": report.pairs_vanished,
             "lines_cast": report.casts,
             "seconds": report.seconds,
         });
@@ -88,14 +115,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .fold(0.0, f64::max);
             update["verify"] = json!({"max_abs_dF": df, "max_abs_dB": db});
         }
+        let what = if report.full {
+            format!("full solve, {} cells", report.cells_visited)
+        } else {
+            format!(
+                "update: {} recomputed, {} faces ({} cells) visited",
+                report.ff_recomputed, report.faces_visited, report.cells_visited
+            )
+        };
         let _ = writeln!(
             std::io::stdout(),
-            "t = {t}: {} elements, {} non-zero form factors; {}: {} recomputed, {} cells visited, {:.3} ms",
+            "t = {t}: {} elements, {} non-zero form factors; {what}, {:.3} ms",
             sol.geom.elements.len(),
             report.ff_total,
-            if report.full { "full solve" } else { "update" },
-            report.ff_recomputed,
-            report.cells_visited,
             report.seconds * 1e3
         );
         if let Some(path) = &args.svg {
@@ -113,11 +145,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         frames.push(frame);
     }
-    let mesh = match args.mesh {
-        Mesh::None => "none".to_string(),
-        Mesh::Discontinuity => "discontinuity".to_string(),
-        Mesh::Uniform(n) => format!("uniform:{n}"),
-    };
+    let mesh = mesh_name(args.mesh);
     let doc = if frames.len() == 1 {
         let mut f = frames.pop().unwrap_or_default();
         f["rhier_flatland_result"] = json!(1);
@@ -166,8 +194,12 @@ fn max_ff_diff(
 }
 
 fn suffixed(path: &Path, k: usize) -> PathBuf {
-    let stem = path.file_stem().map_or("frame".into(), |s| s.to_string_lossy());
-    let ext = path.extension().map_or("svg".into(), |s| s.to_string_lossy());
+    let stem = path
+        .file_stem()
+        .map_or("frame".into(), |s| s.to_string_lossy());
+    let ext = path
+        .extension()
+        .map_or("svg".into(), |s| s.to_string_lossy());
     path.with_file_name(format!("{stem}_{k:03}.{ext}"))
 }
 
@@ -184,7 +216,10 @@ fn segments_json(scene: &FlatScene, sol: &FlatSolution) -> Vec<Value> {
         .collect();
     (0..g.segments.len())
         .map(|s| {
-            let (lo, hi) = (g.segment_elements[s] as usize, g.segment_elements[s + 1] as usize);
+            let (lo, hi) = (
+                g.segment_elements[s] as usize,
+                g.segment_elements[s + 1] as usize,
+            );
             let elems: Vec<Value> = (lo..hi)
                 .map(|e| {
                     let el = &g.elements[e];
@@ -199,27 +234,38 @@ fn segments_json(scene: &FlatScene, sol: &FlatSolution) -> Vec<Value> {
 }
 
 fn write_svg(scene: &FlatScene, sol: &FlatSolution, path: &Path, dual: bool) -> anyhow::Result<()> {
-    let text = if dual {
-        let out = sweep(&sol.geom, None, true);
-        let complex = out.complex.unwrap_or_default();
-        let movers: Vec<u32> = (0..scene.objects.len() as u32)
-            .filter(|&o| !scene.objects[o as usize].motion.is_empty())
-            .collect();
-        let g = &sol.geom;
-        let elems: Vec<u32> = (0..g.elements.len() as u32)
-            .filter(|&e| movers.contains(&g.segments[g.elements[e as usize].segment as usize].object))
-            .collect();
-        let points: Vec<u32> = (0..g.points.len() as u32)
-            .filter(|&p| {
-                g.point_segments[p as usize]
-                    .iter()
-                    .any(|&s| movers.contains(&g.segments[s as usize].object))
-            })
-            .collect();
-        let related = complex.related_faces(&elems, &points);
-        svg::draw(sol, Some((&complex, &related)))
-    } else {
-        svg::draw(sol, None)
+    let complex = dual.then(|| sweep(&sol.geom, None, true).complex.unwrap_or_default());
+    let related = match &complex {
+        Some(c) => {
+            let movers: Vec<u32> = (0..scene.objects.len() as u32)
+                .filter(|&o| !scene.objects[o as usize].motion.is_empty())
+                .collect();
+            let g = &sol.geom;
+            let of = |s: u32| g.segments[s as usize].object;
+            let elems: Vec<u32> = (0..g.elements.len() as u32)
+                .filter(|&e| movers.contains(&of(g.elements[e as usize].segment)))
+                .collect();
+            let points: Vec<u32> = (0..g.points.len() as u32)
+                .filter(|&p| {
+                    g.point_segments[p as usize]
+                        .iter()
+                        .any(|&s| movers.contains(&of(s)))
+                })
+                .collect();
+            c.related_faces(&elems, &points)
+        }
+        None => Vec::new(),
     };
-    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+    let cx = complex.as_ref().map(|c| (c, related.as_slice()));
+    let png = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if png {
+        svg::raster(sol, cx)
+            .save(path)
+            .with_context(|| format!("writing {}", path.display()))
+    } else {
+        std::fs::write(path, svg::draw(sol, cx))
+            .with_context(|| format!("writing {}", path.display()))
+    }
 }

@@ -1,29 +1,303 @@
-//! `rhier solve`: load a scene (or the embedded Cornell box), solve, report, probe,
-//! write the `.rhier` file.
+//! `rhier solve`: load a scene (or the embedded Cornell box), solve, report error
+//! against run time, probe, write the `.rhier` file.
 
-use std::path::PathBuf;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use rhier::playback::{ProbePoint, probe, read_probe_points, write_probe_results};
+use rhier::pools::Storage;
+use rhier::scene::Scene;
+use rhier::solver::{RoundRecord, SolveOptions, Solver, report};
+use rhier::store::{MemoryReport, WriteOptions, write_solution};
+
+/// Storage backend of the pools.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum StorageKind {
+    /// Heap memory.
+    Ram,
+    /// Memory-mapped files in `--scratch`.
+    Mmap,
+}
 
 /// Arguments of `rhier solve`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Scene file (.json native, .gltf/.glb, .obj); none = the embedded Cornell box.
     pub scene: Option<PathBuf>,
-    /// Output `.rhier` file.
+    /// Output `.rhier` file (default: `<scene stem>.rhier` in the working directory).
     #[arg(short = 'o', long = "out")]
     pub out: Option<PathBuf>,
+    /// Solve the Cornell box with the two published blocks (embedded scene only).
+    #[arg(long)]
+    pub blocks: bool,
+    /// Where the element and link pools live.
+    #[arg(long, value_enum, default_value = "ram")]
+    pub storage: StorageKind,
+    /// Directory for `--storage mmap` files (default: the system temp directory).
+    #[arg(long)]
+    pub scratch: Option<PathBuf>,
+    /// Refinement threshold, relative to the RMS reflected radiosity.
+    #[arg(long, default_value_t = SolveOptions::default().eps)]
+    pub eps: f64,
+    /// Smallest element edge as a fraction of the scene's diameter.
+    #[arg(long, default_value_t = SolveOptions::default().min_size)]
+    pub min_size: f64,
+    /// Reconstruction tolerance, relative to the RMS reflected radiosity.
+    #[arg(long, default_value_t = SolveOptions::default().recon_tol)]
+    pub recon_tol: f64,
+    /// Most refine-and-solve rounds.
+    #[arg(long, default_value_t = SolveOptions::default().max_rounds)]
+    pub max_rounds: u32,
+    /// Stop when the estimated relative error is below this.
+    #[arg(long)]
+    pub target_error: Option<f64>,
+    /// Start no new round after this many seconds.
+    #[arg(long)]
+    pub time_budget: Option<f64>,
+    /// Write one CSV row per round (error against run time).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Reference points with known radiosity (`rhier reference` output, or any JSON
+    /// array of `{"p":..,"n":..,"B":[r,g,b]}`): adds the true error per round.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Probe points to evaluate after the solve (JSON array of `{"p":..,"n":..}`).
+    #[arg(long, requires = "probe_out")]
+    pub probe: Option<PathBuf>,
+    /// Where to write the probe results.
+    #[arg(long, requires = "probe")]
+    pub probe_out: Option<PathBuf>,
+    /// Keep the links in the output file.
+    #[arg(long)]
+    pub keep_links: bool,
+    /// Print the memory counters of the run.
+    #[arg(long)]
+    pub stats: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Seed of the ray jitter.
+    #[arg(long, default_value_t = SolveOptions::default().seed)]
+    pub seed: u64,
+    /// Print nothing but errors and warnings.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 impl Args {
     /// The job `rhier` runs with no subcommand: the embedded scene, default output.
     pub fn default_job() -> Self {
-        Args {
-            scene: None,
-            out: None,
+        use clap::FromArgMatches;
+        let cmd = <Args as clap::Args>::augment_args(clap::Command::new("solve"));
+        let matches = cmd.get_matches_from(["solve"]);
+        match Args::from_arg_matches(&matches) {
+            Ok(a) => a,
+            Err(e) => e.exit(),
+        }
+    }
+}
+
+/// Reads reference points `{"p","n","B"}`.
+fn read_reference(path: &Path) -> anyhow::Result<(Vec<ProbePoint>, Vec<[f64; 3]>)> {
+    let points = read_probe_points(path)?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
+    let mut b = Vec::with_capacity(points.len());
+    for (i, v) in value.as_array().into_iter().flatten().enumerate() {
+        let arr = v
+            .get("B")
+            .and_then(|x| x.as_array())
+            .filter(|a| a.len() == 3);
+        let vals: Option<Vec<f64>> = arr.map(|a| a.iter().filter_map(|x| x.as_f64()).collect());
+        match vals {
+            Some(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => {
+                b.push([v[0], v[1], v[2]])
+            }
+            _ => anyhow::bail!(
+                "{}: point {i}, \"B\": expected an array of 3 finite numbers, found {}",
+                path.display(),
+                v.get("B")
+                    .map_or("no such field".to_string(), |x| x.to_string())
+            ),
+        }
+    }
+    Ok((points, b))
+}
+
+/// Relative RMS error `sqrt(Σ(B − B_ref)² / Σ B_ref²)` over points and channels.
+pub fn relative_rms(b: &[[f64; 3]], reference: &[[f64; 3]]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (x, y) in b.iter().zip(reference) {
+        for c in 0..3 {
+            num += (x[c] - y[c]).powi(2);
+            den += y[c] * y[c];
+        }
+    }
+    if den > 0.0 {
+        (num / den).sqrt()
+    } else {
+        num.sqrt()
+    }
+}
+
+fn load(args: &Args) -> anyhow::Result<(Scene, String)> {
+    match &args.scene {
+        Some(path) => {
+            let scene = rhier::scene::load(path)?;
+            let stem = path
+                .file_stem()
+                .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+            Ok((scene, stem))
+        }
+        None => {
+            let name = if args.blocks {
+                "cornell_blocks"
+            } else {
+                "cornell"
+            };
+            Ok((rhier::scene::cornell_box(args.blocks), name.to_string()))
         }
     }
 }
 
 /// Runs `rhier solve`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("rhier solve is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(n) = args.threads {
+        // Only fails if a pool exists already, which cannot happen this early.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global();
+    }
+    let start = std::time::Instant::now();
+    let (scene, stem) = load(&args)?;
+    for w in &scene.warnings {
+        eprintln!("rhier: warning: {w}");
+    }
+    if scene.has_motion() {
+        eprintln!(
+            "rhier: warning: the scene moves, but space-time solving is not implemented yet: solving the scene as it stands at t = {}",
+            scene.time.start
+        );
+    }
+    let storage = match args.storage {
+        StorageKind::Ram => Storage::Ram,
+        StorageKind::Mmap => Storage::Mmap(args.scratch.clone().unwrap_or_else(std::env::temp_dir)),
+    };
+    let opts = SolveOptions {
+        storage,
+        eps: args.eps,
+        min_size: args.min_size,
+        recon_tol: args.recon_tol,
+        max_rounds: args.max_rounds,
+        target_error: args.target_error,
+        time_budget: args.time_budget,
+        seed: args.seed,
+        ..SolveOptions::default()
+    };
+    let reference = args.reference.as_deref().map(read_reference).transpose()?;
+    let probes = args.probe.as_deref().map(read_probe_points).transpose()?;
+    let t = scene.time.start;
+
+    let show_progress =
+        !args.quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
+    let bar = show_progress.then(|| {
+        let b = indicatif::ProgressBar::new_spinner();
+        b.set_message("refining");
+        b.enable_steady_tick(std::time::Duration::from_millis(120));
+        b
+    });
+    let mut solver = Solver::new(&scene, opts)?;
+    let quiet = args.quiet;
+    let mut true_error_failure = None;
+    let records: Vec<RoundRecord> = solver.run(|rec, s| {
+        if let Some((pts, b_ref)) = &reference {
+            let sol = s.solution();
+            match probe(&sol, pts, t) {
+                Ok(b) => rec.true_error = Some(relative_rms(&b, b_ref)),
+                Err(e) => true_error_failure = Some(e),
+            }
+        }
+        let line = rec.summary();
+        match &bar {
+            Some(b) => b.println(line),
+            None if !quiet => eprintln!("{line}"),
+            None => {}
+        }
+    })?;
+    if let Some(e) = true_error_failure {
+        return Err(e).context("measuring the true error against the reference");
+    }
+    if let Some(b) = &bar {
+        b.set_message("reconstructing");
+    }
+    let mut solution = solver.solution();
+    solution.stats.seconds = start.elapsed().as_secs_f64();
+    solution.stats.iterations = records.len() as u32;
+    if let Some(last) = records.last() {
+        solution.stats.estimated_error = last.estimated_error;
+        solution.stats.residual = last.residual;
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    if let Some(path) = &args.report {
+        report::write_csv(path, &records)?;
+    }
+    if let (Some(points), Some(out)) = (&probes, &args.probe_out) {
+        let values = probe(&solution, points, t)?;
+        write_probe_results(out, &values)?;
+    }
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{stem}.rhier")));
+    write_solution(
+        &out,
+        &solution,
+        WriteOptions {
+            keep_links: args.keep_links,
+            ..WriteOptions::default()
+        },
+    )
+    .with_context(|| format!("writing {}", out.display()))?;
+    if !args.quiet {
+        eprintln!(
+            "solved {} patches in {:.3} s: {} stored cells, {} elements, {} active / {} passive links; wrote {}",
+            solution.patches.len(),
+            solution.stats.seconds,
+            solution.leaves.len(),
+            solution.stats.elements,
+            solution.stats.links_active,
+            solution.stats.links_passive,
+            out.display()
+        );
+    }
+    if args.stats {
+        let mut m = MemoryReport::for_run(&stem);
+        m.add_pool(
+            "elements",
+            solver.elems.len() as u64,
+            solver.elems.bytes() as u64,
+        );
+        m.add_pool(
+            "links",
+            solver.links.len() as u64,
+            solver.links.bytes() as u64,
+        );
+        m.add_pool(
+            "bvh",
+            solver.bvh.triangle_count() as u64,
+            solver.bvh.resident_bytes() as u64,
+        );
+        m.add_pool(
+            "stored cells",
+            solution.leaves.len() as u64,
+            (solution.leaves.len() * std::mem::size_of::<rhier::solver::Leaf>()) as u64,
+        );
+        println!("{m}");
+    }
+    Ok(())
 }

@@ -60,7 +60,7 @@
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
-use super::geometry::{FlatGeometry, Hit, big_n, proj};
+use super::geometry::{FlatGeometry, Hit, PairMap, big_n, proj};
 
 /// Index of a cell in [`Complex::cells`].
 #[repr(transparent)]
@@ -211,76 +211,86 @@ pub struct SweepStats {
 pub struct SweepOut {
     /// `mu[(i, j)]`, `i < j`: measure of lines whose free segment joins the lit sides
     /// of elements `i` and `j` (restricted to the clip region when one was given).
-    pub mu: HashMap<(u32, u32), f64>,
+    pub mu: PairMap,
     /// Counters.
     pub stats: SweepStats,
     /// The complex, when asked for.
     pub complex: Option<Complex>,
 }
 
-/// A region of the dual plane: the lines meeting the convex hull of any of 1 or 2
-/// point sets (the moving object at two times, §5).
+/// A region of the dual plane: the lines meeting the convex hull of a point set
+/// (for §5: the moving geometry at both times, i.e. the hull of its swept corners).
 #[derive(Clone, Debug)]
 pub struct Clip {
-    sets: Vec<Vec<[f64; 2]>>,
-    /// Directions (in `[0, pi)`) of lines through two points of the sets.
+    /// Convex hull, counter-clockwise, no repeated points.
+    hull: Vec<[f64; 2]>,
+    /// Bounding circle (centre, radius) for quick rejection.
+    circle: ([f64; 2], f64),
+    /// Directions (in `[0, pi)`, sorted) of the hull's edges: where the support
+    /// function `max_q q . n(theta)` and its opposite change vertex.
     set_angles: Vec<f64>,
 }
 
 impl Clip {
-    /// The lines meeting `hull(sets[0])` or `hull(sets[1])`; 1 or 2 non-empty sets.
+    /// The lines meeting the convex hull of all the points of `sets`.
     pub fn new(sets: Vec<Vec<[f64; 2]>>) -> Self {
-        let sets: Vec<Vec<[f64; 2]>> = sets.into_iter().filter(|s| !s.is_empty()).collect();
-        let all: Vec<[f64; 2]> = sets.iter().flatten().copied().collect();
-        let mut set_angles = Vec::new();
-        for i in 0..all.len() {
-            for j in i + 1..all.len() {
-                if all[i] != all[j] {
-                    set_angles.push(line_angle(all[i], all[j]));
-                }
-            }
-        }
+        let mut pts: Vec<[f64; 2]> = sets.into_iter().flatten().collect();
+        pts.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+        pts.dedup();
+        let hull = convex_hull(&pts);
+        let mut set_angles: Vec<f64> = (0..hull.len())
+            .filter(|&i| hull.len() > 1 && hull[i] != hull[(i + 1) % hull.len()])
+            .map(|i| line_angle(hull[i], hull[(i + 1) % hull.len()]))
+            .collect();
         set_angles.sort_by(f64::total_cmp);
         set_angles.dedup();
-        Clip { sets, set_angles }
+        let k = hull.len().max(1) as f64;
+        let c = [
+            hull.iter().map(|q| q[0]).sum::<f64>() / k,
+            hull.iter().map(|q| q[1]).sum::<f64>() / k,
+        ];
+        let r = hull
+            .iter()
+            .map(|q| (q[0] - c[0]).hypot(q[1] - c[1]))
+            .fold(0.0, f64::max);
+        Clip {
+            hull,
+            circle: (c, r * (1.0 + 1e-12) + 1e-300),
+            set_angles,
+        }
     }
 
     /// Measure of the lines of the gap `(u below, w above)` over `[a, b]` in the region.
     pub fn area(&self, u: [f64; 2], w: [f64; 2], a: f64, b: f64) -> f64 {
-        // Quick rejection: the gap's p-range over [a, b] misses a set's p-range.
-        let (u_lo, _) = curve_range(u, a, b);
-        let (_, w_hi) = curve_range(w, a, b);
-        let meets = |si: usize| {
-            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-            for &q in &self.sets[si] {
-                let (l, h) = curve_range(q, a, b);
-                lo = lo.min(l);
-                hi = hi.max(h);
-            }
-            w_hi > lo && u_lo < hi
-        };
-        match self.sets.len() {
-            0 => 0.0,
-            1 => {
-                if meets(0) {
-                    self.band(u, w, &[0], a, b)
-                } else {
-                    0.0
-                }
-            }
-            _ => match (meets(0), meets(1)) {
-                (false, false) => 0.0,
-                (true, false) => self.band(u, w, &[0], a, b),
-                (false, true) => self.band(u, w, &[1], a, b),
-                (true, true) => {
-                    self.band(u, w, &[0], a, b) + self.band(u, w, &[1], a, b)
-                        - self.band(u, w, &[0, 1], a, b)
-                }
-            },
-        }
+        let ((sa, ca), (sb, cb)) = (a.sin_cos(), b.sin_cos());
+        self.area_sc(u, w, (a, sa, ca), (b, sb, cb))
     }
 
-    fn band(&self, u: [f64; 2], w: [f64; 2], which: &[usize], a: f64, b: f64) -> f64 {
+    /// [`Clip::area`] with `(angle, sin, cos)` of both ends given.
+    pub fn area_sc(
+        &self,
+        u: [f64; 2],
+        w: [f64; 2],
+        (a, sa, ca): (f64, f64, f64),
+        (b, sb, cb): (f64, f64, f64),
+    ) -> f64 {
+        if self.hull.is_empty() {
+            return 0.0;
+        }
+        // Quick rejection: the lines meeting the hull lie within `r` of the curve of
+        // its bounding circle's centre `c`; the gap misses them if `w` stays below
+        // `c - r` or `u` above `c + r` over [a, b] (exact extremes of one sinusoid).
+        let (c, r) = self.circle;
+        let (sa, sb) = ((sa, ca), (sb, cb));
+        let (_, w_hi) = curve_range([w[0] - c[0], w[1] - c[1]], sa, sb);
+        let (u_lo, _) = curve_range([u[0] - c[0], u[1] - c[1]], sa, sb);
+        if w_hi <= -r || u_lo >= r {
+            return 0.0;
+        }
+        self.band(u, w, a, b)
+    }
+
+    fn band(&self, u: [f64; 2], w: [f64; 2], a: f64, b: f64) -> f64 {
         let mut bps = vec![a, b];
         let push = |ang: f64, bps: &mut Vec<f64>| {
             // The representative of `ang` (mod pi) inside (a, b), if any.
@@ -290,14 +300,12 @@ impl Clip {
             }
         };
         push(line_angle(u, w), &mut bps);
-        for &si in which {
-            for &q in &self.sets[si] {
-                if q != u {
-                    push(line_angle(u, q), &mut bps);
-                }
-                if q != w {
-                    push(line_angle(w, q), &mut bps);
-                }
+        for &q in &self.hull {
+            if q != u {
+                push(line_angle(u, q), &mut bps);
+            }
+            if q != w {
+                push(line_angle(w, q), &mut bps);
             }
         }
         // Precomputed set-set directions inside (a, b), found by binary search.
@@ -317,28 +325,27 @@ impl Clip {
             if s[1] <= s[0] {
                 continue;
             }
-            let m = 0.5 * (s[0] + s[1]);
-            let (mut lo, mut lo_p) = (u, proj(u, m));
-            let (mut hi, mut hi_p) = (w, proj(w, m));
-            for &si in which {
-                let set = &self.sets[si];
-                let (mut smin, mut smin_p) = (set[0], proj(set[0], m));
-                let (mut smax, mut smax_p) = (smin, smin_p);
-                for &q in &set[1..] {
-                    let pq = proj(q, m);
-                    if pq < smin_p {
-                        (smin, smin_p) = (q, pq);
-                    }
-                    if pq > smax_p {
-                        (smax, smax_p) = (q, pq);
-                    }
+            let (sm, cm) = (0.5 * (s[0] + s[1])).sin_cos();
+            let pj = |v: [f64; 2]| -v[0] * sm + v[1] * cm;
+            let (mut lo, mut lo_p) = (u, pj(u));
+            let (mut hi, mut hi_p) = (w, pj(w));
+            let set = &self.hull;
+            let (mut smin, mut smin_p) = (set[0], pj(set[0]));
+            let (mut smax, mut smax_p) = (smin, smin_p);
+            for &q in &set[1..] {
+                let pq = pj(q);
+                if pq < smin_p {
+                    (smin, smin_p) = (q, pq);
                 }
-                if smin_p > lo_p {
-                    (lo, lo_p) = (smin, smin_p);
+                if pq > smax_p {
+                    (smax, smax_p) = (q, pq);
                 }
-                if smax_p < hi_p {
-                    (hi, hi_p) = (smax, smax_p);
-                }
+            }
+            if smin_p > lo_p {
+                (lo, lo_p) = (smin, smin_p);
+            }
+            if smax_p < hi_p {
+                (hi, hi_p) = (smax, smax_p);
             }
             if hi_p > lo_p {
                 let (n0, n1) = (big_n(s[0]), big_n(s[1]));
@@ -349,18 +356,42 @@ impl Clip {
     }
 }
 
-/// Exact `(min, max)` of the curve `v . n(theta)` over `[a, b]` (`b - a <= pi`).
-fn curve_range(v: [f64; 2], a: f64, b: f64) -> (f64, f64) {
-    let (pa, pb) = (proj(v, a), proj(v, b));
+/// Convex hull (Andrew's monotone chain) of points sorted by `(x, y)`, deduplicated.
+fn convex_hull(pts: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    use super::scene::orient;
+    if pts.len() < 3 {
+        return pts.to_vec();
+    }
+    let mut h: Vec<[f64; 2]> = Vec::with_capacity(2 * pts.len());
+    for pass in 0..2 {
+        let start = h.len();
+        let iter: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
+            Box::new(pts.iter())
+        } else {
+            Box::new(pts.iter().rev())
+        };
+        for &p in iter {
+            while h.len() >= start + 2 && orient(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
+                h.pop();
+            }
+            h.push(p);
+        }
+        h.pop();
+    }
+    h
+}
+
+/// Exact `(min, max)` of the curve `v . n(theta)` over `[a, b]` (`b - a <= pi`),
+/// given `(sin, cos)` of `a` and `b`. Its derivative is `-v . d(theta)`; an interior
+/// sign change means an interior extremum, of value `+- |v|`.
+fn curve_range(v: [f64; 2], sa: (f64, f64), sb: (f64, f64)) -> (f64, f64) {
+    let (pa, pb) = (-v[0] * sa.0 + v[1] * sa.1, -v[0] * sb.0 + v[1] * sb.1);
+    let (da, db) = (-(v[0] * sa.1 + v[1] * sa.0), -(v[0] * sb.1 + v[1] * sb.0));
     let (mut lo, mut hi) = (pa.min(pb), pa.max(pb));
-    // Interior extrema where v . d(theta) = 0: theta = angle(v) + pi/2 (mod pi).
-    let r = v[0].hypot(v[1]);
-    let ext = v[1].atan2(v[0]) + 0.5 * PI;
-    let t = ext + PI * ((a - ext) / PI).ceil();
-    if t > a && t < b {
-        let pt = proj(v, t);
-        lo = lo.min(pt).max(-r);
-        hi = hi.max(pt).min(r);
+    if da > 0.0 && db < 0.0 {
+        hi = (v[0] * v[0] + v[1] * v[1]).sqrt();
+    } else if da < 0.0 && db > 0.0 {
+        lo = -(v[0] * v[0] + v[1] * v[1]).sqrt();
     }
     (lo, hi)
 }
@@ -377,11 +408,25 @@ pub fn line_angle(a: [f64; 2], b: [f64; 2]) -> f64 {
     t
 }
 
+/// An angle with its sine and cosine (computed once per event).
+#[derive(Clone, Copy, Debug)]
+struct Angle {
+    t: f64,
+    s: f64,
+    c: f64,
+}
+
+impl Angle {
+    fn new(t: f64) -> Self {
+        let (s, c) = t.sin_cos();
+        Angle { t, s, c }
+    }
+}
+
 /// Measure of the lines of the gap `(u below, w above)` over `[a, b]`.
 #[inline]
-fn gap_area(u: [f64; 2], w: [f64; 2], a: f64, b: f64) -> f64 {
-    let (n0, n1) = (big_n(a), big_n(b));
-    (w[0] - u[0]) * (n1[0] - n0[0]) + (w[1] - u[1]) * (n1[1] - n0[1])
+fn gap_area(u: [f64; 2], w: [f64; 2], a: Angle, b: Angle) -> f64 {
+    (w[0] - u[0]) * (b.c - a.c) + (w[1] - u[1]) * (b.s - a.s)
 }
 
 /// Sweeps the dual plane of `geom` (see the module header). With `clip`, only the
@@ -453,21 +498,26 @@ pub fn sweep(geom: &FlatGeometry, clip: Option<&Clip>, record: bool) -> SweepOut
                 comp[ru as usize] = rw;
             }
         }
-        let mut blocks: HashMap<u32, (usize, usize, usize)> = HashMap::new();
+        // (root, min position, max position, count) per block; groups are small.
+        let mut blocks: Vec<(u32, usize, usize, usize)> = Vec::new();
         for &v in &involved {
             let r = find(&mut comp, v);
             let p = st.pos[v as usize] as usize;
-            let e = blocks.entry(r).or_insert((p, p, 0));
-            e.0 = e.0.min(p);
-            e.1 = e.1.max(p);
-            e.2 += 1;
+            match blocks.iter_mut().find(|b| b.0 == r) {
+                Some(e) => {
+                    e.1 = e.1.min(p);
+                    e.2 = e.2.max(p);
+                    e.3 += 1;
+                }
+                None => blocks.push((r, p, p, 1)),
+            }
         }
         for &v in &involved {
             comp[v as usize] = NONE;
         }
-        let mut ranges: Vec<(usize, usize)> = blocks.values().map(|b| (b.0, b.1)).collect();
+        let mut ranges: Vec<(usize, usize)> = blocks.iter().map(|b| (b.1, b.2)).collect();
         ranges.sort_unstable();
-        let contiguous = blocks.values().all(|b| b.1 - b.0 + 1 == b.2);
+        let contiguous = blocks.iter().all(|b| b.2 - b.1 + 1 == b.3);
         let mut changes = if contiguous {
             // Each block of collinear points reverses its order.
             let c: Vec<(usize, Vec<u32>)> = ranges
@@ -552,8 +602,8 @@ struct State<'g> {
     record: bool,
     order: Vec<u32>,
     pos: Vec<u32>,
-    birth: Vec<f64>,
-    probe: Vec<f64>,
+    birth: Vec<Angle>,
+    probe: Vec<Angle>,
     hits: Vec<Vec<Hit>>,
     cast_done: Vec<bool>,
     out: SweepOut,
@@ -583,8 +633,8 @@ impl<'g> State<'g> {
             record,
             order,
             pos,
-            birth: vec![theta0; ng],
-            probe: vec![mid; ng],
+            birth: vec![Angle::new(theta0); ng],
+            probe: vec![Angle::new(mid); ng],
             hits: vec![Vec::new(); ng],
             cast_done: vec![false; ng],
             out: SweepOut::default(),
@@ -594,8 +644,9 @@ impl<'g> State<'g> {
             st.rec.gid = vec![NONE; ng];
             st.rec.adj_start = vec![theta0; np];
         }
+        let (a0, am) = (Angle::new(theta0), Angle::new(mid));
         for k in 0..ng {
-            st.born(k, theta0, mid);
+            st.born(k, a0, am);
         }
         if record {
             st.rec.initial = st.rec.gid.clone();
@@ -614,14 +665,16 @@ impl<'g> State<'g> {
             }
             self.order[k]
         };
+        let (sn, cs) = theta.sin_cos();
+        let pj = |v: u32| {
+            let q = self.geom.points[v as usize];
+            -q[0] * sn + q[1] * cs
+        };
         for (s, vs) in changes {
             let lo = s.saturating_sub(1);
             let hi = (s + vs.len()).min(np - 1);
             for k in lo..hi {
-                let (a, b) = (at(k), at(k + 1));
-                if proj(self.geom.points[a as usize], theta)
-                    > proj(self.geom.points[b as usize], theta)
-                {
+                if pj(at(k)) > pj(at(k + 1)) {
                     return false;
                 }
             }
@@ -655,16 +708,16 @@ impl<'g> State<'g> {
             let th = self.probe[k];
             let u = self.geom.points[self.order[k] as usize];
             let w = self.geom.points[self.order[k + 1] as usize];
-            let p = 0.5 * (proj(u, th) + proj(w, th));
+            let p = 0.5 * (-(u[0] + w[0]) * th.s + (u[1] + w[1]) * th.c);
             let mut hits = std::mem::take(&mut self.hits[k]);
-            self.geom.cast(th, p, &mut hits);
+            self.geom.cast_sc((th.s, th.c), p, &mut hits);
             self.hits[k] = hits;
             self.cast_done[k] = true;
             self.out.stats.casts += 1;
         }
     }
 
-    fn born(&mut self, k: usize, theta: f64, mid: f64) {
+    fn born(&mut self, k: usize, theta: Angle, mid: Angle) {
         self.birth[k] = theta;
         self.probe[k] = mid;
         self.cast_done[k] = false;
@@ -675,10 +728,10 @@ impl<'g> State<'g> {
             let c0 = self.rec.cells.len() as u32;
             let (lower, upper) = (self.order[k], self.order[k + 1]);
             for h in self.hits[k].windows(2) {
-                let front = self.geom.fronts_face(mid, &h[0], &h[1]);
+                let front = self.geom.fronts_face_sc((mid.s, mid.c), &h[0], &h[1]);
                 let id = self.rec.cells.len() as u32;
                 self.rec.cells.push(Cell {
-                    theta: [theta, theta],
+                    theta: [theta.t, theta.t],
                     area: 0.0,
                     lower,
                     upper,
@@ -694,18 +747,18 @@ impl<'g> State<'g> {
         }
     }
 
-    fn died(&mut self, k: usize, theta: f64) {
+    fn died(&mut self, k: usize, theta: Angle) {
         let u = self.geom.points[self.order[k] as usize];
         let w = self.geom.points[self.order[k + 1] as usize];
         let t0 = self.birth[k];
         let area = match self.clip {
             None => gap_area(u, w, t0, theta),
-            Some(c) => c.area(u, w, t0, theta),
+            Some(c) => c.area_sc(u, w, (t0.t, t0.s, t0.c), (theta.t, theta.s, theta.c)),
         };
         if self.record {
             let [c0, c1] = self.rec.gap_cells[self.rec.gid[k] as usize];
             for c in &mut self.rec.cells[c0 as usize..c1 as usize] {
-                c.theta[1] = theta;
+                c.theta[1] = theta.t;
                 c.area = gap_area(u, w, t0, theta);
             }
         }
@@ -713,7 +766,7 @@ impl<'g> State<'g> {
             self.ensure_cast(k);
             let th = self.probe[k];
             for h in self.hits[k].windows(2) {
-                if self.geom.fronts_face(th, &h[0], &h[1]) {
+                if self.geom.fronts_face_sc((th.s, th.c), &h[0], &h[1]) {
                     let key = (h[0].elem.min(h[1].elem), h[0].elem.max(h[1].elem));
                     *self.out.mu.entry(key).or_insert(0.0) += area;
                     self.out.stats.cells += 1;
@@ -792,6 +845,7 @@ impl<'g> State<'g> {
 
     /// Applies the order changes of one event group at `theta`.
     fn apply(&mut self, changes: &[(usize, Vec<u32>)], theta: f64, mid: f64) {
+        let (at, am) = (Angle::new(theta), Angle::new(mid));
         let np = self.order.len();
         let ng = np - 1;
         // Affected gap ranges (per change) and point positions (adjacencies).
@@ -818,7 +872,7 @@ impl<'g> State<'g> {
             Vec::new()
         };
         for &k in &gaps {
-            self.died(k, theta);
+            self.died(k, at);
         }
         for (s, vs) in changes {
             for (i, &v) in vs.iter().enumerate() {
@@ -827,7 +881,7 @@ impl<'g> State<'g> {
             }
         }
         for &k in &gaps {
-            self.born(k, theta, mid);
+            self.born(k, at, am);
         }
         if self.record {
             for &j in &adj {
@@ -868,8 +922,9 @@ impl<'g> State<'g> {
                 self.end_adjacency(j, theta_end);
             }
         }
+        let ae = Angle::new(theta_end);
         for k in 0..np - 1 {
-            self.died(k, theta_end);
+            self.died(k, ae);
         }
         if self.record {
             // Glue the seam: the order at theta0 + pi is the reverse of the order at
@@ -891,7 +946,7 @@ impl Rec {
         let mut face_of_root: HashMap<u32, u32> = HashMap::new();
         let mut faces: Vec<CFace> = Vec::new();
         let mut cell_face = vec![0u32; nc];
-        for c in 0..nc {
+        for (c, cf) in cell_face.iter_mut().enumerate() {
             let r = find(&mut self.parent, c as u32);
             let f = *face_of_root.entry(r).or_insert_with(|| {
                 let cell = &self.cells[c];
@@ -906,7 +961,7 @@ impl Rec {
                 });
                 (faces.len() - 1) as u32
             });
-            cell_face[c] = f;
+            *cf = f;
         }
         let mut cells = self.cells;
         for (c, cell) in cells.iter_mut().enumerate() {
@@ -1006,6 +1061,73 @@ impl Rec {
 }
 
 impl Complex {
+    /// Checks the structure's invariants: every index in range, cells grouped by face
+    /// with the face's label and side, measures adding up, chains sorted by angle and
+    /// made of the face's own edges, edge ends at vertices through the edge's point.
+    /// Returns the first violation found.
+    pub fn validate(&self, geom: &FlatGeometry) -> Result<(), String> {
+        let np = geom.points.len() as u32;
+        let ne = geom.elements.len() as u32;
+        for (i, c) in self.cells.iter().enumerate() {
+            if c.lower >= np || c.upper >= np || c.from >= ne || c.to >= ne {
+                return Err(format!("cell {i}: index out of range"));
+            }
+            if c.face.0 as usize >= self.faces.len()
+                || c.theta[0].partial_cmp(&c.theta[1]) == Some(std::cmp::Ordering::Greater)
+                || c.theta.iter().any(|t| t.is_nan())
+            {
+                return Err(format!("cell {i}: bad face or angles"));
+            }
+        }
+        for (fi, f) in self.faces.iter().enumerate() {
+            let cells = &self.face_cells[f.cells[0] as usize..f.cells[1] as usize];
+            let mut sum = 0.0;
+            for id in cells {
+                let c = &self.cells[id.0 as usize];
+                let label = [c.from.min(c.to), c.from.max(c.to)];
+                if c.face.0 as usize != fi || label != f.objects || c.front != f.front {
+                    return Err(format!("face {fi}: cell {} does not belong", id.0));
+                }
+                sum += c.area;
+            }
+            if (sum - f.measure).abs() > 1e-12 * (1.0 + sum.abs()) {
+                return Err(format!(
+                    "face {fi}: measure {} != sum of cells {sum}",
+                    f.measure
+                ));
+            }
+            for (range, side) in [(f.lower, Side::Lower), (f.upper, Side::Upper)] {
+                let chain = &self.chain_edges[range[0] as usize..range[1] as usize];
+                for (k, e) in chain.iter().enumerate() {
+                    let edge = &self.edges[e.0 as usize];
+                    if edge.face.0 as usize != fi || edge.side != side || edge.point >= np {
+                        return Err(format!("face {fi}: chain edge {} is foreign", e.0));
+                    }
+                    if k > 0 && self.edges[chain[k - 1].0 as usize].theta[0] > edge.theta[0] {
+                        return Err(format!("face {fi}: chain not sorted"));
+                    }
+                }
+            }
+        }
+        for (ei, e) in self.edges.iter().enumerate() {
+            for v in e.ends.iter().flatten() {
+                let v = self
+                    .vertices
+                    .get(v.0 as usize)
+                    .ok_or(format!("edge {ei}: end"))?;
+                if v.u != e.point && v.w != e.point {
+                    return Err(format!("edge {ei}: end vertex misses its point"));
+                }
+            }
+        }
+        for (vi, v) in self.vertices.iter().enumerate() {
+            if v.u >= np || v.w >= np || v.u == v.w {
+                return Err(format!("vertex {vi}: bad points"));
+            }
+        }
+        Ok(())
+    }
+
     /// The cells containing the line `(theta, p)` (any angle; mapped into the chart).
     pub fn locate(&self, geom: &FlatGeometry, theta: f64, p: f64) -> Vec<CellId> {
         let k = ((theta - self.theta0) / PI).floor();

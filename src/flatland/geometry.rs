@@ -59,6 +59,7 @@ pub struct FlatGeometry {
 }
 
 /// A hit of a cast line with an element, at abscissa `s` along the line's direction.
+/// 16 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     /// Abscissa along `d`.
@@ -68,6 +69,8 @@ pub struct Hit {
     /// Its input segment.
     pub segment: u32,
 }
+
+const _: () = assert!(std::mem::size_of::<Hit>() == 16);
 
 impl FlatGeometry {
     /// Builds the geometry from posed segments and, per segment, the sorted interior
@@ -140,8 +143,12 @@ impl FlatGeometry {
 
     /// Intersects the line `(theta, p)` with every segment; hits sorted along `d`.
     pub fn cast(&self, theta: f64, p: f64, out: &mut Vec<Hit>) {
+        self.cast_sc(theta.sin_cos(), p, out);
+    }
+
+    /// [`FlatGeometry::cast`] with `(sin theta, cos theta)` given.
+    pub fn cast_sc(&self, (sn, cs): (f64, f64), p: f64, out: &mut Vec<Hit>) {
         out.clear();
-        let (sn, cs) = theta.sin_cos();
         let d = [cs, sn];
         let n = [-sn, cs];
         for (si, seg) in self.segments.iter().enumerate() {
@@ -164,7 +171,11 @@ impl FlatGeometry {
     /// Whether the free segment between consecutive hits `h0` then `h1` (along `d` of
     /// angle `theta`) leaves `h0`'s lit side and arrives on `h1`'s lit side.
     pub fn fronts_face(&self, theta: f64, h0: &Hit, h1: &Hit) -> bool {
-        let (sn, cs) = theta.sin_cos();
+        self.fronts_face_sc(theta.sin_cos(), h0, h1)
+    }
+
+    /// [`FlatGeometry::fronts_face`] with `(sin theta, cos theta)` given.
+    pub fn fronts_face_sc(&self, (sn, cs): (f64, f64), h0: &Hit, h1: &Hit) -> bool {
         let n0 = self.segments[h0.segment as usize].n;
         let n1 = self.segments[h1.segment as usize].n;
         cs * n0[0] + sn * n0[1] > 0.0 && cs * n1[0] + sn * n1[1] < 0.0
@@ -204,6 +215,31 @@ impl FlatGeometry {
             }
         }
         true
+    }
+}
+
+/// A map keyed by element pairs `(i, j)`, `i < j`, with a fast multiplicative hash
+/// (keys are small integers chosen by the program, not by an adversary).
+pub type PairMap = HashMap<(u32, u32), f64, std::hash::BuildHasherDefault<PairHasher>>;
+
+/// The hasher of [`PairMap`]: one multiply-rotate per written integer (FxHash style).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PairHasher(u64);
+
+impl std::hash::Hasher for PairHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_u32(&mut self, x: u32) {
+        self.write_u64(x as u64);
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
     }
 }
 

@@ -37,9 +37,9 @@ impl std::str::FromStr for Mesh {
             "none" => Ok(Mesh::None),
             "discontinuity" => Ok(Mesh::Discontinuity),
             _ => match s.strip_prefix("uniform:").map(str::parse::<u32>) {
-                Some(Ok(n)) if n >= 1 => Ok(Mesh::Uniform(n)),
+                Some(Ok(n)) if (1..=10_000).contains(&n) => Ok(Mesh::Uniform(n)),
                 _ => Err(format!(
-                    "expected none, discontinuity or uniform:N (N >= 1), found {s:?}"
+                    "expected none, discontinuity or uniform:N (1 <= N <= 10000), found {s:?}"
                 )),
             },
         }
@@ -166,6 +166,7 @@ mod tests {
         assert_eq!("uniform:4".parse::<Mesh>(), Ok(Mesh::Uniform(4)));
         assert_eq!("discontinuity".parse::<Mesh>(), Ok(Mesh::Discontinuity));
         assert!("uniform:0".parse::<Mesh>().is_err());
+        assert!("uniform:4000000000".parse::<Mesh>().is_err());
         assert!("fine".parse::<Mesh>().is_err());
     }
 

@@ -11,7 +11,7 @@
 //! ```
 //!
 //! Moving objects: [`dynamic::Dynamic`] re-sweeps only the lines meeting the moving
-//! geometry (§5). Pictures: [`svg`]. The crate's 3D solver does not depend on this
+//! geometry ([`window`], §5) and keeps every other form factor. Pictures: [`svg`]. The crate's 3D solver does not depend on this
 //! module; it is our exact reference for the ideas it borrows (string rule, exact
 //! visibility events).
 //!
@@ -26,6 +26,7 @@ pub mod mesh;
 pub mod radiosity;
 pub mod scene;
 pub mod svg;
+pub mod window;
 
 use geometry::FlatGeometry;
 use radiosity::FormFactors;

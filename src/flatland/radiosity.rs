@@ -15,10 +15,8 @@
 //! `O(N^2)` memory and `O(N^3)` time in the number of elements `N` (fine up to a few
 //! thousand elements).
 
-use std::collections::HashMap;
-
 use super::complex::{SweepStats, sweep};
-use super::geometry::FlatGeometry;
+use super::geometry::{FlatGeometry, PairMap};
 
 /// Sparse exact form factors between the elements of one geometry.
 #[derive(Clone, Debug, Default)]
@@ -26,12 +24,12 @@ pub struct FormFactors {
     /// Element lengths.
     pub lens: Vec<f64>,
     /// `mu[(i, j)]`, `i < j`: measure of the free lines joining the lit sides.
-    pub mu: HashMap<(u32, u32), f64>,
+    pub mu: PairMap,
 }
 
 impl FormFactors {
     /// Form factors from measures (see the module header).
-    pub fn from_mu(geom: &FlatGeometry, mu: HashMap<(u32, u32), f64>) -> Self {
+    pub fn from_mu(geom: &FlatGeometry, mu: PairMap) -> Self {
         FormFactors {
             lens: geom.elements.iter().map(|e| e.len).collect(),
             mu,
@@ -41,7 +39,9 @@ impl FormFactors {
     /// `F_ij`: the fraction of the energy leaving `i` that reaches `j` (eq. 1).
     pub fn f(&self, i: u32, j: u32) -> f64 {
         let key = (i.min(j), i.max(j));
-        self.mu.get(&key).map_or(0.0, |m| m / (2.0 * self.lens[i as usize]))
+        self.mu
+            .get(&key)
+            .map_or(0.0, |m| m / (2.0 * self.lens[i as usize]))
     }
 
     /// The dense row-major matrix `F` (`N x N`).
@@ -82,9 +82,10 @@ pub fn solve_radiosity(ff: &FormFactors, rho: &[[f64; 3]], e: &[[f64; 3]]) -> Ve
     let mut done: Vec<([f64; 3], usize)> = Vec::new();
     for c in 0..3 {
         // Channels with identical rho and E share the answer.
-        if let Some(&(_, prev)) = done.iter().find(|(_, p)| {
-            (0..n).all(|i| rho[i][c] == rho[i][*p] && e[i][c] == e[i][*p])
-        }) {
+        if let Some(&(_, prev)) = done
+            .iter()
+            .find(|(_, p)| (0..n).all(|i| rho[i][c] == rho[i][*p] && e[i][c] == e[i][*p]))
+        {
             for bi in b.iter_mut() {
                 bi[c] = bi[prev];
             }

@@ -33,7 +33,7 @@ pub struct FlatSegment {
     pub emission: [f64; 3],
 }
 
-/// One rigid keyframe.
+/// One rigid keyframe. 32 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FlatKey {
     /// Time of the key.
@@ -66,7 +66,8 @@ pub struct FlatScene {
     pub grey: bool,
 }
 
-/// A posed segment (world space at one time) with its derived quantities.
+/// A posed segment (world space at one time) with its derived quantities. 64 bytes
+/// (60 + padding).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PosedSegment {
     /// First endpoint.
@@ -80,6 +81,9 @@ pub struct PosedSegment {
     /// Index of the owning object.
     pub object: u32,
 }
+
+const _: () = assert!(std::mem::size_of::<FlatKey>() == 32);
+const _: () = assert!(std::mem::size_of::<PosedSegment>() == 64);
 
 impl FlatScene {
     /// Number of segments over all objects.

@@ -177,10 +177,14 @@ mod tests {
         }
         let total: f64 = faces.iter().map(|f| point_to_polygon(x, DVec3::Z, f)).sum();
         assert!((total - 1.0).abs() < 1e-13, "{total}");
-        // A point on an edge of the floor: still a closed hemisphere.
-        let e = DVec3::new(0.0, 0.3, 0.0);
+        // Approaching an edge of the floor the hemisphere stays closed…
+        let e = DVec3::new(1e-9, 0.3, 0.0);
         let total: f64 = faces.iter().map(|f| point_to_polygon(e, DVec3::Z, f)).sum();
-        assert!((total - 1.0).abs() < 1e-12, "{total}");
+        assert!((total - 1.0).abs() < 1e-8, "{total}");
+        // …but on the edge itself the wall x = 0 is seen edge-on and gives 0: the jump
+        // the reconstruction avoids by evaluating corners a hair inside their cell.
+        let on = DVec3::new(0.0, 0.3, 0.0);
+        assert_eq!(point_to_polygon(on, DVec3::Z, &faces[3]), 0.0);
     }
 
     #[test]

@@ -13,14 +13,18 @@
 //! ray end points are offset relative to the segment length, so results do not depend
 //! on the scene's scale.
 
+mod contact;
 mod formfactor;
 mod nearest;
 mod patches;
 mod polygon;
 mod visibility;
 
-pub use formfactor::{point_to_point_kernel, point_to_polygon};
+pub use contact::{ContactStats, split_at_contacts};
+pub use formfactor::{
+    contour_integral as formfactor_contour, point_to_point_kernel, point_to_polygon,
+};
 pub use nearest::{closest_point_on_polygon, nearest_facing};
 pub use patches::{PatchId, Patches};
 pub use polygon::Poly;
-pub use visibility::{Hit, RayCounters, SceneBvh};
+pub use visibility::{Hit, RayCounters, SEGMENT_TRIM, SceneBvh};

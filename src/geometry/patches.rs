@@ -45,24 +45,48 @@ impl Patches {
                 let mut verts = [DVec3::ZERO; 4];
                 verts[..k].copy_from_slice(&poly.vertices[..k]);
                 let world: Vec<DVec3> = verts[..k].iter().map(|&v| m.transform_point3(v)).collect();
-                let wp = Poly::new(&world);
-                let mat = &scene.materials[poly.material.0 as usize];
-                p.normals.push(wp.normal());
-                p.areas.push(wp.area());
-                p.polys.push(wp);
-                p.rhos.push(mat.rho);
-                p.emissions.push(mat.emission);
-                p.objects.push(oi as u32);
-                p.geometry.push(PatchGeometry {
-                    object: oi as u32,
-                    material: poly.material.0,
-                    corners: k as u32,
-                    vertices: verts,
-                });
+                p.push(
+                    scene,
+                    Poly::new(&world),
+                    verts,
+                    k,
+                    oi as u32,
+                    poly.material.0,
+                );
             }
         }
         p.diameter = p.scene_diameter();
         p
+    }
+
+    /// Appends a patch: its world polygon and its object-space corners.
+    pub fn push(
+        &mut self,
+        scene: &Scene,
+        world: Poly,
+        object_space: [DVec3; 4],
+        corners: usize,
+        object: u32,
+        material: u32,
+    ) {
+        let mat = &scene.materials[material as usize];
+        self.normals.push(world.normal());
+        self.areas.push(world.area());
+        self.polys.push(world);
+        self.rhos.push(mat.rho);
+        self.emissions.push(mat.emission);
+        self.objects.push(object);
+        self.geometry.push(PatchGeometry {
+            object,
+            material,
+            corners: corners as u32,
+            vertices: object_space,
+        });
+    }
+
+    /// Recomputes the cached diameter (after pushing patches by hand).
+    pub fn finish(&mut self) {
+        self.diameter = self.scene_diameter();
     }
 
     /// Number of patches.

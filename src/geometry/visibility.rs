@@ -99,28 +99,26 @@ pub struct SceneBvh {
 }
 
 impl SceneBvh {
-    /// Builds the BVHs of `scene` placed at time `t`; `patches` must be
-    /// `Patches::at_time(scene, t)` (it gives the patch numbering).
+    /// Builds the BVHs of `patches` (which must be placed at time `t`): patches of
+    /// static objects in one world-space BVH, those of each moving object in a BVH in
+    /// object space placed by the object's motion at `t`.
     pub fn build(scene: &Scene, patches: &Patches, t: f64) -> SceneBvh {
         let mut parts = Vec::new();
         let (mut st, mut sp) = (Vec::new(), Vec::new());
-        let mut first = 0u32;
-        for obj in &scene.objects {
-            let count = obj.polygons.len() as u32;
-            let patch_ids = first..first + count;
-            first += count;
-            if obj.is_moving() {
-                // Object-space triangles, placed by the motion at t.
-                let (mut tris, mut tp) = (Vec::new(), Vec::new());
-                for (pi, poly) in patch_ids.zip(&obj.polygons) {
-                    push_triangles(&poly.vertices, pi, &mut tris, &mut tp);
-                }
-                parts.extend(Part::build(tris, tp, obj.to_world(t)));
+        let mut moving: Vec<(Vec<Triangle>, Vec<u32>)> =
+            vec![(Vec::new(), Vec::new()); scene.objects.len()];
+        for i in 0..patches.len() {
+            let obj = patches.objects[i] as usize;
+            if scene.objects.get(obj).is_some_and(|o| o.is_moving()) {
+                let g = &patches.geometry[i];
+                let (tris, tp) = &mut moving[obj];
+                push_triangles(&g.vertices[..g.corners as usize], i as u32, tris, tp);
             } else {
-                for pi in patch_ids {
-                    push_triangles(patches.polys[pi as usize].corners(), pi, &mut st, &mut sp);
-                }
+                push_triangles(patches.polys[i].corners(), i as u32, &mut st, &mut sp);
             }
+        }
+        for (obj, (tris, tp)) in moving.into_iter().enumerate() {
+            parts.extend(Part::build(tris, tp, scene.objects[obj].to_world(t)));
         }
         parts.extend(Part::build(st, sp, DAffine3::IDENTITY));
         SceneBvh { parts }
@@ -129,12 +127,24 @@ impl SceneBvh {
     /// True if something blocks the open segment between `a` and `b` (both ends
     /// trimmed by [`SEGMENT_TRIM`] of its length).
     pub fn occluded(&self, a: DVec3, b: DVec3) -> bool {
+        self.occluded_except(a, b, [u32::MAX; 2])
+    }
+
+    /// [`SceneBvh::occluded`], ignoring the patches `skip` (the planar patches the
+    /// segment starts and ends on cannot block it; their hits are round-off, which
+    /// grazing segments make larger than any trim).
+    pub fn occluded_except(&self, a: DVec3, b: DVec3, skip: [u32; 2]) -> bool {
         let d = b - a;
         for part in &self.parts {
             let ray = part.local_ray(a, d, SEGMENT_TRIM, 1.0 - SEGMENT_TRIM);
-            let hit = !part
-                .bvh
-                .ray_traverse_miss(ray, |r, id| part.tris[id].intersect(r));
+            let hit = !part.bvh.ray_traverse_miss(ray, |r, id| {
+                let p = part.tri_patch[id];
+                if p == skip[0] || p == skip[1] {
+                    f32::INFINITY
+                } else {
+                    part.tris[id].intersect(r)
+                }
+            });
             if hit {
                 return true;
             }

@@ -255,8 +255,8 @@ fn evaluate_surfaces(
     let (polr, pols) = (poly(gr), poly(gs));
     let q = samples(gr);
     let mut fq = [0.0f64; 4];
-    for i in 0..q.count {
-        fq[i] = point_to_polygon(q.points[i], nr, &pols);
+    for (f, &x) in fq.iter_mut().zip(&q.points).take(q.count) {
+        *f = point_to_polygon(x, nr, &pols);
     }
     // Unoccluded spread over quadrature points and corners.
     let mut fmin = f64::INFINITY;
@@ -289,9 +289,9 @@ fn evaluate_surfaces(
     let m = set.rays_per_point.max(1);
     let mut vq = [0.0f64; 4];
     let mut rays = 0;
-    for i in 0..q.count {
+    for (i, (v, &x)) in vq.iter_mut().zip(&q.points).take(q.count).enumerate() {
         let key = hash3(set.seed, r.0 as u64, (s.0 as u64) << 8 | i as u64);
-        vq[i] = visible_fraction(bvh, q.points[i], nr, gs, &pols, ns, m, key);
+        *v = visible_fraction(bvh, x, nr, gs, &pols, ns, m, key, skip);
         rays += m;
     }
     let _ = patches;
@@ -316,7 +316,7 @@ fn evaluate_surfaces(
 }
 
 /// Kernel-weighted fraction of source `gs` visible from `x` (normal `n`), with `m`
-/// jittered stratified rays.
+/// jittered stratified rays, ignoring hits on the patches `skip`.
 #[allow(clippy::too_many_arguments)]
 pub fn visible_fraction(
     bvh: &SceneBvh,
@@ -327,6 +327,7 @@ pub fn visible_fraction(
     ns: DVec3,
     m: u32,
     key: u64,
+    skip: [u32; 2],
 ) -> f64 {
     let side = (m as f64).sqrt().ceil() as u32;
     let (mut wsum, mut vsum, mut plain) = (0.0, 0.0, 0.0);
@@ -340,7 +341,11 @@ pub fn visible_fraction(
         );
         let y = point_in(gs, pols, su, sv.min(1.0));
         let k = point_to_point_kernel(x, n, y, ns);
-        let vis = if bvh.occluded(x, y) { 0.0 } else { 1.0 };
+        let vis = if bvh.occluded_except(x, y, skip) {
+            0.0
+        } else {
+            1.0
+        };
         wsum += k;
         vsum += k * vis;
         plain += vis;

@@ -8,7 +8,9 @@
 //!    panic inside the `gltf` crate.
 //! 2. The default scene (else the first) is walked from its roots; each node with a
 //!    mesh becomes one [`Object`] named after the node (else its mesh, else
-//!    `node N`). Primitives must be `TRIANGLES` (indexed or not).
+//!    `node N`). Primitives must be `TRIANGLES` (indexed or not); consecutive
+//!    triangles `(a, b, c)`, `(a, c, d)` forming a planar convex quad are merged back
+//!    into that quad.
 //! 3. A node whose chain of ancestors has no animation channel is static: its world
 //!    matrix (product of the parent chain) is baked into the vertices, exactly. A node
 //!    with animated ancestors (or itself animated) keeps mesh-space vertices and gets
@@ -431,8 +433,8 @@ impl<'a> Reader<'a> {
                         MaterialId(materials.len() as u32 - 1)
                     }),
                 };
-                for tri in self.triangles(&prim, &place)? {
-                    let mut v: Vec<DVec3> = tri
+                for poly in merge_quads(&self.triangles(&prim, &place)?) {
+                    let mut v: Vec<DVec3> = poly
                         .iter()
                         .map(|p| vertex_map.transform_point3(*p))
                         .collect();
@@ -640,6 +642,39 @@ impl<'a> Reader<'a> {
     }
 }
 
+/// Merges each pair of consecutive triangles `(a, b, c)`, `(a, c, d)` (the second in
+/// any rotation) that share the diagonal `a-c`, both have non-zero area and form a
+/// planar convex quad (the validation tolerances) into the quad `(a, b, c, d)`; this
+/// undoes the usual export of quads as triangle pairs. Other triangles are kept.
+fn merge_quads(tris: &[[DVec3; 3]]) -> Vec<Vec<DVec3>> {
+    let mut out = Vec::with_capacity(tris.len());
+    let mut i = 0;
+    while i < tris.len() {
+        let [a, b, c] = tris[i];
+        let quad = tris.get(i + 1).and_then(|t| {
+            let d = (0..3).find_map(|r| {
+                let (x, y, z) = (t[r], t[(r + 1) % 3], t[(r + 2) % 3]);
+                (x == a && y == c).then_some(z)
+            })?;
+            let q = [a, b, c, d];
+            let nonzero =
+                (b - a).cross(c - a) != DVec3::ZERO && (c - a).cross(d - a) != DVec3::ZERO;
+            (nonzero && validate::quad_problem(&q).is_none()).then(|| q.to_vec())
+        });
+        match quad {
+            Some(q) => {
+                out.push(q);
+                i += 2;
+            }
+            None => {
+                out.push(tris[i].to_vec());
+                i += 1;
+            }
+        }
+    }
+    out
+}
+
 /// Node rest pose: exact matrix and its TRS decomposition.
 fn rest_of(node: &gl::Node<'_>) -> NodeRest {
     match node.transform() {
@@ -738,6 +773,27 @@ mod tests {
             times: vec![1.0, 3.0],
             values: values.to_vec(),
         }
+    }
+
+    #[test]
+    fn triangle_pairs_merge_into_quads_only_when_planar_and_convex() {
+        let (a, b, c, d) = (DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y);
+        // (a, b, c) + (a, c, d), and the second written as (c, d, a).
+        assert_eq!(merge_quads(&[[a, b, c], [a, c, d]]), vec![vec![a, b, c, d]]);
+        assert_eq!(merge_quads(&[[a, b, c], [c, d, a]]), vec![vec![a, b, c, d]]);
+        // Not sharing the diagonal a-c in the same direction: kept.
+        assert_eq!(merge_quads(&[[a, b, c], [c, a, d]]).len(), 2);
+        // Bent out of plane: kept as two triangles.
+        let lifted = DVec3::new(0.0, 1.0, 0.1);
+        assert_eq!(merge_quads(&[[a, b, c], [a, c, lifted]]).len(), 2);
+        // Concave union (reflex corner at c; both triangles counter-clockwise): kept.
+        let dent = DVec3::new(2.0, 3.0, 0.0);
+        assert_eq!(merge_quads(&[[a, b, c], [a, c, dent]]).len(), 2);
+        // Third triangle alone stays a triangle.
+        assert_eq!(
+            merge_quads(&[[a, b, c], [a, c, d], [a, b, d]]),
+            vec![vec![a, b, c, d], vec![a, b, d]]
+        );
     }
 
     #[test]

@@ -44,6 +44,14 @@ pub const ZERO_AREA_TOLERANCE: f64 = 1e-12;
 /// normalised.
 pub const QUATERNION_TOLERANCE: f64 = 1e-3;
 
+/// Largest coordinate magnitude accepted (vertices, translations), so that
+/// diameters and areas stay finite.
+pub const MAX_COORDINATE: f64 = 1e100;
+
+fn in_range(v: DVec3) -> bool {
+    v.is_finite() && v.abs().max_element() <= MAX_COORDINATE
+}
+
 /// The warning given for a scene in which no polygon emits.
 pub const NO_EMITTER_WARNING: &str = "scene has no emitter: the solution is zero";
 
@@ -63,9 +71,19 @@ pub fn validate(mut scene: Scene, path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
+/// A number for messages: shortest round-trip form, in exponent notation when very
+/// large or very small.
+pub(crate) fn fmt_num(x: f64) -> String {
+    if x.is_finite() && x != 0.0 && !(1e-6..1e16).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 /// `[a, b, c]` with full precision, for messages.
 pub(crate) fn fmt3(v: [f64; 3]) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
+    format!("[{}, {}, {}]", fmt_num(v[0]), fmt_num(v[1]), fmt_num(v[2]))
 }
 
 fn fmt_vec(v: DVec3) -> String {
@@ -149,11 +167,11 @@ fn check_polygons(scene: &Scene, path: &Path) -> Result<()> {
                     format!("{n} vertices"),
                 ));
             }
-            if let Some((k, v)) = p.vertices.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            if let Some((k, v)) = p.vertices.iter().enumerate().find(|(_, v)| !in_range(**v)) {
                 return Err(Error::invalid(
                     path,
                     place(),
-                    "finite vertex coordinates",
+                    format!("finite vertex coordinates of magnitude <= {MAX_COORDINATE:e}"),
                     format!("vertex {k} = {}", fmt_vec(*v)),
                 ));
             }
@@ -170,8 +188,26 @@ fn check_polygons(scene: &Scene, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Planarity and convexity of a quad with non-zero area.
-fn check_quad(v: &[DVec3], n: DVec3, place: impl Fn() -> String, path: &Path) -> Result<()> {
+/// What makes a quad (of non-zero area) invalid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum QuadProblem {
+    /// `vertex` lies `distance` off the mean plane, beyond `tolerance`.
+    NotPlanar {
+        vertex: usize,
+        distance: f64,
+        tolerance: f64,
+    },
+    /// The corner at `vertex` turns against the normal.
+    Concave { vertex: usize },
+}
+
+/// Checks planarity (every vertex within [`PLANARITY_TOLERANCE`] × diameter of the
+/// plane through the centroid with the quad's normal) and convexity (no corner
+/// turning against the normal; collinear corners accepted) of a 4-vertex polygon of
+/// non-zero area.
+pub(crate) fn quad_problem(v: &[DVec3]) -> Option<QuadProblem> {
+    let n =
+        ((v[1] - v[0]).cross(v[2] - v[0]) + (v[2] - v[0]).cross(v[3] - v[0])).normalize_or_zero();
     let c = v.iter().copied().sum::<DVec3>() / 4.0;
     let mut diam: f64 = 0.0;
     for i in 0..4 {
@@ -179,36 +215,50 @@ fn check_quad(v: &[DVec3], n: DVec3, place: impl Fn() -> String, path: &Path) ->
             diam = diam.max(v[i].distance(v[j]));
         }
     }
-    let tol = PLANARITY_TOLERANCE * diam;
-    let (k, dev) = (0..4)
+    let tolerance = PLANARITY_TOLERANCE * diam;
+    let (vertex, distance) = (0..4)
         .map(|k| (k, n.dot(v[k] - c).abs()))
         .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
-    if dev > tol {
-        return Err(Error::invalid(
+    if distance > tolerance {
+        return Some(QuadProblem::NotPlanar {
+            vertex,
+            distance,
+            tolerance,
+        });
+    }
+    (0..4)
+        .find(|&k| {
+            let turn = (v[(k + 1) % 4] - v[k]).cross(v[(k + 2) % 4] - v[(k + 1) % 4]);
+            turn.dot(n) < -1e-9 * diam * diam
+        })
+        .map(|k| QuadProblem::Concave {
+            vertex: (k + 1) % 4,
+        })
+}
+
+/// Planarity and convexity of a quad with non-zero area, as an error.
+fn check_quad(v: &[DVec3], place: impl Fn() -> String, path: &Path) -> Result<()> {
+    match quad_problem(v) {
+        None => Ok(()),
+        Some(QuadProblem::NotPlanar {
+            vertex,
+            distance,
+            tolerance,
+        }) => Err(Error::invalid(
             path,
             place(),
             format!(
-                "a planar quad (every vertex within {PLANARITY_TOLERANCE} x diameter = {tol:.3e} of the mean plane)"
+                "a planar quad (every vertex within {PLANARITY_TOLERANCE} x diameter = {tolerance:.3e} of the mean plane)"
             ),
-            format!("vertex {k} is {dev:.3e} off the plane"),
-        ));
+            format!("vertex {vertex} is {distance:.3e} off the plane"),
+        )),
+        Some(QuadProblem::Concave { vertex }) => Err(Error::invalid(
+            path,
+            place(),
+            "a convex quad, counter-clockwise seen from its lit side",
+            format!("a reflex corner at vertex {vertex}"),
+        )),
     }
-    // Convex: every corner turns the same way as the polygon's normal (collinear
-    // corners accepted).
-    for k in 0..4 {
-        let turn = (v[(k + 1) % 4] - v[k])
-            .cross(v[(k + 2) % 4] - v[(k + 1) % 4])
-            .dot(n);
-        if turn < -1e-9 * diam * diam {
-            return Err(Error::invalid(
-                path,
-                place(),
-                "a convex quad, counter-clockwise seen from its lit side",
-                format!("a reflex corner at vertex {}", (k + 1) % 4),
-            ));
-        }
-    }
-    Ok(())
 }
 
 fn check_motion(scene: &mut Scene, path: &Path) -> Result<()> {
@@ -235,11 +285,11 @@ fn check_motion(scene: &mut Scene, path: &Path) -> Result<()> {
                     format!("t = {}", key.t),
                 ));
             }
-            if !key.translation.is_finite() {
+            if !in_range(key.translation) {
                 return Err(Error::invalid(
                     path,
                     place(),
-                    "a finite translation",
+                    format!("a finite translation of magnitude <= {MAX_COORDINATE:e}"),
                     fmt_vec(key.translation),
                 ));
             }
@@ -262,7 +312,11 @@ fn check_motion(scene: &mut Scene, path: &Path) -> Result<()> {
                     format!("[{}, {}, {}, {}] of length {len}", q.x, q.y, q.z, q.w),
                 ));
             }
-            key.rotation = q / len;
+            // Normalise, leaving quaternions already unit to round-off untouched so
+            // that validating twice changes nothing.
+            if (len - 1.0).abs() > 4.0 * f64::EPSILON {
+                key.rotation = q / len;
+            }
             let sign = (s.x * s.y * s.z).signum();
             if let Some((t0, sign0)) = previous {
                 if key.t <= t0 {
@@ -320,7 +374,7 @@ fn drop_degenerate(scene: &mut Scene, path: &Path) -> Result<()> {
             }
             if p.vertices.len() == 4 {
                 let place = || format!("object \"{}\", polygon {i}", o.name);
-                check_quad(&p.vertices, a.normalize(), place, path)?;
+                check_quad(&p.vertices, place, path)?;
             }
             kept.push(p);
         }

@@ -46,7 +46,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::Result;
-use crate::geometry::{Patches, SceneBvh, point_to_polygon};
+use crate::geometry::{Patches, SceneBvh, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
 use crate::pools::{ElementId, ElementKind, ElementPool, LinkId, LinkPool, LinkState, Storage};
 use crate::scene::Scene;
@@ -89,6 +89,8 @@ pub struct SolveOptions {
     pub recon_tol: f64,
     /// Smallest reconstruction cell edge, as a fraction of the scene's diameter.
     pub recon_min_size: f64,
+    /// Cut patches along contact lines before solving ([`split_at_contacts`]).
+    pub contact_meshing: bool,
 }
 
 impl Default for SolveOptions {
@@ -107,6 +109,7 @@ impl Default for SolveOptions {
             seed: 0x5eed,
             recon_tol: 0.02,
             recon_min_size: 1.0 / 512.0,
+            contact_meshing: true,
         }
     }
 }
@@ -145,7 +148,10 @@ impl<'a> Solver<'a> {
     /// Places the scene at its start time, builds BVHs, clusters and patch roots.
     pub fn new(scene: &'a Scene, opts: SolveOptions) -> Result<Self> {
         let t = scene.time.start;
-        let patches = Patches::at_time(scene, t);
+        let mut patches = Patches::at_time(scene, t);
+        if opts.contact_meshing {
+            patches = split_at_contacts(scene, &patches, t).0;
+        }
         let bvh = SceneBvh::build(scene, &patches, t);
         let mut elems = ElementPool::new(&opts.storage)?;
         let links = LinkPool::new(&opts.storage)?;
@@ -646,10 +652,12 @@ impl<'a> Solver<'a> {
     /// Radiosity transported from source `s` to the point `x` (normal `n`): exact
     /// point-to-polygon factor, visibility by rays unless `clear`, sources that look
     /// large from `x` opened into their children.
+    #[allow(clippy::too_many_arguments)]
     fn point_transfer(
         &self,
         x: DVec3,
         n: DVec3,
+        receiver_patch: u32,
         s: usize,
         clear: bool,
         vis: f64,
@@ -667,6 +675,7 @@ impl<'a> Solver<'a> {
                 let v = self.point_transfer(
                     x,
                     n,
+                    receiver_patch,
                     ch as usize,
                     clear,
                     vis,
@@ -697,14 +706,24 @@ impl<'a> Solver<'a> {
                     self.opts.corner_rays
                 };
                 let ns = DVec3::from_array(gs.normal);
-                f * oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key)
+                f * oracle::visible_fraction(
+                    &self.bvh,
+                    x,
+                    n,
+                    gs,
+                    &ps,
+                    ns,
+                    m,
+                    key,
+                    [receiver_patch, gs.patch],
+                )
             }
         };
         [f * b[0] as f64, f * b[1] as f64, f * b[2] as f64]
     }
 
     /// Final gather at point `x` of leaf `leaf`: `(B(x), valid)`.
-    fn gather_point(&self, leaf: ElementId, x: DVec3) -> ([f64; 3], bool) {
+    fn gather_point(&self, leaf: ElementId, x: DVec3, point_key: u64) -> ([f64; 3], bool) {
         let geoms = self.elems.geoms.as_slice();
         let nodes = self.elems.nodes.as_slice();
         let ends = self.links.ends.as_slice();
@@ -724,12 +743,16 @@ impl<'a> Solver<'a> {
             for &l in self.links_of(e as usize) {
                 let t = &tr[l as usize];
                 let s = ends[l as usize].source as usize;
-                let key = oracle::hash3(
-                    self.opts.seed,
-                    l as u64,
-                    x.x.to_bits() ^ x.y.to_bits().rotate_left(21) ^ x.z.to_bits().rotate_left(42),
+                let key = oracle::hash3(self.opts.seed, l as u64, point_key);
+                let v = self.point_transfer(
+                    x,
+                    n,
+                    p as u32,
+                    s,
+                    t.shaft_clear(),
+                    t.visibility as f64,
+                    key,
                 );
-                let v = self.point_transfer(x, n, s, t.shaft_clear(), t.visibility as f64, key);
                 for k in 0..3 {
                     h[k] += v[k];
                 }
@@ -788,7 +811,10 @@ impl<'a> Solver<'a> {
                 }
                 ids.push((corners, cache.register(c, centre, centre)));
             }
-            cache.evaluate(|leaf, x| self.gather_point(leaf, x), &self.patches);
+            cache.evaluate(
+                |leaf, x, key| self.gather_point(leaf, x, key),
+                &self.patches,
+            );
             let mut next = Vec::new();
             for (c, (corners, centre)) in cells.into_iter().zip(ids) {
                 let vals = corner_values(
@@ -872,54 +898,7 @@ impl<'a> Solver<'a> {
                 }
                 .contains(u, v, 1e-9)
         })?;
-        Some(self.gather_point(leaf, self.patches.point(patch as usize, u, v)))
-    }
-
-    /// Debug: the chain links of the leaf holding `(patch, u, v)` as
-    /// (receiver, source, source kind, source area, source radiosity, transfer).
-    #[doc(hidden)]
-    pub fn debug_chain(
-        &self,
-        patch: u32,
-        u: f64,
-        v: f64,
-    ) -> Vec<(u32, u32, u8, f64, [f32; 3], [f64; 3])> {
-        let Some(leaf) = self.leaves.iter().copied().find(|&l| {
-            let g = &self.elems.geoms.as_slice()[l.ix()];
-            g.patch == patch
-                && Leaf {
-                    patch,
-                    corners: g.n,
-                    time: self.time,
-                    uv: g.uv,
-                    b: [[0.0; 3]; 4],
-                }
-                .contains(u, v, 1e-9)
-        }) else {
-            return Vec::new();
-        };
-        let x = self.patches.point(patch as usize, u, v);
-        let n = DVec3::from_array(self.elems.geoms.as_slice()[leaf.ix()].normal);
-        let mut out = Vec::new();
-        let mut e = leaf.0;
-        while e != u32::MAX {
-            for &l in self.links_of(e as usize) {
-                let t = self.links.transports.as_slice()[l as usize];
-                let s = self.links.ends.as_slice()[l as usize].source as usize;
-                let v = self.point_transfer(x, n, s, t.shaft_clear(), t.visibility as f64, 1);
-                let g = self.elems.geoms.as_slice()[s];
-                out.push((
-                    e,
-                    s as u32,
-                    self.elems.nodes.as_slice()[s].kind,
-                    g.area,
-                    self.elems.radiosities.as_slice()[s],
-                    v,
-                ));
-            }
-            e = self.elems.nodes.as_slice()[e as usize].parent;
-        }
-        out
+        Some(self.gather_point(leaf, self.patches.point(patch as usize, u, v), 0))
     }
 
     /// Piecewise-constant radiosity of every leaf (element averages), for tests.
@@ -1027,19 +1006,20 @@ impl VertexCache {
 
     fn evaluate(
         &mut self,
-        gather: impl Fn(ElementId, DVec3) -> ([f64; 3], bool) + Sync,
+        gather: impl Fn(ElementId, DVec3, u64) -> ([f64; 3], bool) + Sync,
         patches: &Patches,
     ) {
         let from = self.values.len();
         let new: Vec<_> = self.points[from..]
             .par_iter()
-            .map(|&(leaf, patch, uv, toward)| {
+            .enumerate()
+            .map(|(k, &(leaf, patch, uv, toward))| {
                 let x = patches.point(patch as usize, uv[0] as f64, uv[1] as f64);
                 let c = patches.point(patch as usize, toward[0] as f64, toward[1] as f64);
                 // Evaluate a hair inside the cell: on an edge shared with a
                 // perpendicular wall the factor jumps (the wall is seen edge-on), and
                 // the interpolant wants the limit from inside.
-                gather(leaf, x + CORNER_INSET * (c - x))
+                gather(leaf, x + CORNER_INSET * (c - x), (from + k) as u64)
             })
             .collect();
         self.values.extend(new);

@@ -1,0 +1,183 @@
+//! Contact meshing: cut patches along the lines where other polygons rest on them, and
+//! drop the pieces hidden underneath.
+//!
+//! A block standing on a floor darkens the floor right up to its base and is dark
+//! itself near the floor: radiosity has a derivative discontinuity (and the floor
+//! under the block a value discontinuity) along the contact line. An element that
+//! straddles that line averages light and dark, which no refinement of links repairs;
+//! the published hierarchical systems stall there. So before solving, every patch of
+//! a static object is cut by the lines of **contact segments**: edges of other static
+//! polygons that lie in the patch's plane (within a tolerance of 1e-6 of the scene's
+//! diameter) and stand on its front side, or every edge of a coplanar polygon that
+//! faces the opposite way (a resting face). Each cut splits a convex polygon into two
+//! convex polygons; pieces with more than four corners are fanned into triangles.
+//! A piece whose centre, raised a hair along the normal, first meets a back face
+//! straight above (it lies inside the solid resting on it) is dropped: it exchanges no
+//! light with the rest of the scene.
+//!
+//! What it does not do: contacts of moving objects (they change over time) are left
+//! to the refinement; shadow boundaries away from contacts are meshed by the
+//! reconstruction's adaptive cells, not here.
+
+use glam::DVec3;
+
+use super::patches::Patches;
+use super::polygon::Poly;
+use super::visibility::SceneBvh;
+use crate::scene::Scene;
+
+/// What contact meshing did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ContactStats {
+    /// Patches that were cut.
+    pub patches_cut: u32,
+    /// Pieces dropped as hidden under a resting solid.
+    pub pieces_hidden: u32,
+}
+
+/// Returns `patches` with every static patch cut along its contact lines and hidden
+/// pieces removed (see the module docs).
+pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, ContactStats) {
+    let bvh = SceneBvh::build(scene, patches, t);
+    let tol = patches.diameter * 1e-6;
+    let moving = |i: usize| {
+        scene
+            .objects
+            .get(patches.objects[i] as usize)
+            .is_some_and(|o| o.is_moving())
+    };
+    let mut out = Patches::default();
+    let mut stats = ContactStats::default();
+    for i in 0..patches.len() {
+        let poly = patches.polys[i];
+        let g = patches.geometry[i];
+        if moving(i) {
+            out.push(
+                scene,
+                poly,
+                g.vertices,
+                g.corners as usize,
+                patches.objects[i],
+                g.material,
+            );
+            continue;
+        }
+        let n = patches.normals[i];
+        let d = n.dot(poly.v[0]);
+        // Contact lines: (point, in-plane direction).
+        let mut lines: Vec<(DVec3, DVec3)> = Vec::new();
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for &c in poly.corners() {
+            lo = lo.min(c);
+            hi = hi.max(c);
+        }
+        let pad = DVec3::splat(tol * 2.0);
+        let mut seen = Vec::new();
+        bvh.for_each_triangle_in_box(lo - pad, hi + pad, |j, _| {
+            let j = j as usize;
+            if j != i && !moving(j) && !seen.contains(&j) {
+                seen.push(j);
+            }
+            true
+        });
+        for &j in &seen {
+            let other = &patches.polys[j];
+            let nj = patches.normals[j];
+            let dist: Vec<f64> = other.corners().iter().map(|&v| n.dot(v) - d).collect();
+            let coplanar = dist.iter().all(|x| x.abs() <= tol);
+            let k = other.n;
+            if coplanar {
+                if n.dot(nj) < -0.99 {
+                    for e in 0..k {
+                        lines.push((other.v[e], other.v[(e + 1) % k] - other.v[e]));
+                    }
+                }
+                continue;
+            }
+            if dist.iter().any(|&x| x < -tol) {
+                continue; // not standing on the front side
+            }
+            for e in 0..k {
+                let (a, b) = (e, (e + 1) % k);
+                if dist[a].abs() <= tol && dist[b].abs() <= tol {
+                    lines.push((other.v[a], other.v[b] - other.v[a]));
+                }
+            }
+        }
+        // Cut by each line that crosses the polygon's interior.
+        let mut pieces = vec![poly];
+        for (p0, dir) in lines {
+            let cut_n = n.cross(dir);
+            let len = cut_n.length();
+            if len <= 0.0 {
+                continue;
+            }
+            let cut_n = cut_n / len;
+            let mut next = Vec::with_capacity(pieces.len() + 1);
+            for piece in pieces {
+                let s: Vec<f64> = piece.corners().iter().map(|&v| cut_n.dot(v - p0)).collect();
+                let crosses = s.iter().any(|&x| x > tol) && s.iter().any(|&x| x < -tol);
+                if !crosses {
+                    next.push(piece);
+                    continue;
+                }
+                for side in [cut_n, -cut_n] {
+                    let half = piece.clip_front(p0, side);
+                    if half.n >= 3 && half.area() > tol * tol {
+                        next.push(half);
+                    }
+                }
+            }
+            pieces = next;
+        }
+        if pieces.len() == 1 {
+            out.push(
+                scene,
+                poly,
+                g.vertices,
+                g.corners as usize,
+                patches.objects[i],
+                g.material,
+            );
+            continue;
+        }
+        stats.patches_cut += 1;
+        let to_object = scene.objects[patches.objects[i] as usize]
+            .to_world(t)
+            .inverse();
+        for piece in pieces {
+            // Hidden under a resting solid?
+            let c = piece.centroid() + n * (tol * 4.0);
+            if let Some(h) = bvh.intersect(c, n * patches.diameter, 0.0, 1.0)
+                && patches.normals[h.patch as usize].dot(n) > 0.0
+            {
+                stats.pieces_hidden += 1;
+                continue;
+            }
+            let corners = piece.corners();
+            let mut emit = |w: &[DVec3]| {
+                let mut obj = [DVec3::ZERO; 4];
+                for (o, &v) in obj.iter_mut().zip(w) {
+                    *o = to_object.transform_point3(v);
+                }
+                out.push(
+                    scene,
+                    Poly::new(w),
+                    obj,
+                    w.len(),
+                    patches.objects[i],
+                    g.material,
+                );
+            };
+            if corners.len() <= 4 {
+                emit(corners);
+            } else {
+                for k in 1..corners.len() - 1 {
+                    emit(&[corners[0], corners[k], corners[k + 1]]);
+                }
+            }
+        }
+    }
+    out.finish();
+    (out, stats)
+}

@@ -1,0 +1,71 @@
+#!/usr/bin/env python3
+"""Writes a native rhier scene: a closed room with a lamp and an N x N grid of small
+cubes on the floor (6 quads each), for scale benchmarks.
+
+usage: tools/gen_cubes.py N OUT.json      (N=129 gives 6*129*129 + 10 ≈ 100k polygons)
+"""
+import json
+import sys
+
+
+def quad(a, b, c, d, m):
+    return {"vertices": [a, b, c, d], "material": m}
+
+
+def room(size, h):
+    s = size
+    return [
+        quad([0, 0, 0], [0, 0, s], [s, 0, s], [s, 0, 0], "white"),  # floor, +y
+        quad([0, h, 0], [s, h, 0], [s, h, s], [0, h, s], "white"),  # ceiling, -y
+        quad([0, 0, s], [0, h, s], [s, h, s], [s, 0, s], "white"),  # back z=s, -z
+        quad([0, 0, 0], [s, 0, 0], [s, h, 0], [0, h, 0], "white"),  # front z=0, +z
+        quad([0, 0, 0], [0, h, 0], [0, h, s], [0, 0, s], "red"),    # x=0, +x
+        quad([s, 0, 0], [s, 0, s], [s, h, s], [s, h, 0], "green"),  # x=s, -x
+    ]
+
+
+def cube(x0, z0, w, hgt):
+    x1, z1, y1 = x0 + w, z0 + w, hgt
+    return [
+        quad([x0, y1, z0], [x0, y1, z1], [x1, y1, z1], [x1, y1, z0], "white"),  # top +y
+        quad([x0, 0, z0], [x1, 0, z0], [x1, y1, z0], [x0, y1, z0], "white"),    # -z
+        quad([x1, 0, z1], [x0, 0, z1], [x0, y1, z1], [x1, y1, z1], "white"),    # +z
+        quad([x0, 0, z1], [x0, 0, z0], [x0, y1, z0], [x0, y1, z1], "white"),    # -x
+        quad([x1, 0, z0], [x1, 0, z1], [x1, y1, z1], [x1, y1, z0], "white"),    # +x
+        quad([x0, 0, z0], [x0, 0, z1], [x1, 0, z1], [x1, 0, z0], "white"),      # bottom -y
+    ]
+
+
+def main():
+    n, out = int(sys.argv[1]), sys.argv[2]
+    size, h = 10.0, 4.0
+    polys = room(size, h)
+    l0, l1 = 4.0, 6.0
+    lamp = [quad([l0, h - 0.01, l0], [l1, h - 0.01, l0], [l1, h - 0.01, l1], [l0, h - 0.01, l1], "lamp")]
+    cubes = []
+    pitch = (size - 1.0) / n
+    for i in range(n):
+        for j in range(n):
+            hgt = 0.05 + 0.3 * (((i * 7 + j * 13) % 11) / 10.0)
+            cubes += cube(0.5 + i * pitch, 0.5 + j * pitch, pitch * 0.6, hgt)
+    scene = {
+        "rhier_scene": 1,
+        "materials": {
+            "white": {"reflectance": [0.7, 0.7, 0.7]},
+            "red": {"reflectance": [0.6, 0.1, 0.1]},
+            "green": {"reflectance": [0.1, 0.6, 0.1]},
+            "lamp": {"reflectance": [0.5, 0.5, 0.5], "emission": [20.0, 20.0, 20.0]},
+        },
+        "objects": [
+            {"name": "room", "polygons": polys},
+            {"name": "lamp", "polygons": lamp},
+            {"name": "cubes", "polygons": cubes},
+        ],
+    }
+    with open(out, "w") as f:
+        json.dump(scene, f)
+    print(f"{len(polys) + len(lamp) + len(cubes)} polygons -> {out}")
+
+
+if __name__ == "__main__":
+    main()
