@@ -411,3 +411,37 @@ fn cli_play_frame_range_writes_one_picture_per_frame() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--frames"));
 }
+
+/// `rhier inspect big.rhier | head` must not panic when the pipe closes (regression:
+/// `println!` panicked with "failed printing to stdout: Broken pipe").
+#[test]
+fn cli_inspect_into_a_closed_pipe_does_not_panic() {
+    use rhier::store::samples::animated_box;
+    use rhier::store::{SolutionHeader, Writer};
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("long.rhier");
+    // 3000 chunks: the chunk table alone is ~250 KB of text, beyond a pipe's buffer.
+    let s = animated_box(1, 3000);
+    let mut w = Writer::create(
+        &file,
+        &SolutionHeader::of(&s.solution),
+        WriteOptions::default(),
+    )
+    .unwrap();
+    for (t0, t1, leaves) in &s.chunks {
+        w.write_chunk(*t0, *t1, leaves).unwrap();
+    }
+    w.finish(&s.solution.stats).unwrap();
+    let mut child = rhier()
+        .arg("inspect")
+        .arg(&file)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+}
