@@ -364,3 +364,84 @@ fn smooth_shading_averages_only_within_a_material() {
         assert_eq!(at(&mesh.triangles[2]), Some(want_right));
     }
 }
+
+#[test]
+fn cli_play_frame_range_writes_one_picture_per_frame() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let dir = tempfile::tempdir().unwrap();
+    let out = rhier()
+        .arg("play")
+        .arg(data.join("v1_animated.rhier"))
+        .args([
+            "--frames", "0..1", "--fps", "4", "--width", "32", "--height", "24", "-o",
+        ])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Frames at 0, 0.25, 0.5, 0.75, 1.
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let want: Vec<String> = (0..5).map(|k| format!("frame_{k:05}.png")).collect();
+    assert_eq!(names, want);
+    // The plate moves: the first and last frames differ.
+    let a = image::open(dir.path().join("frame_00000.png"))
+        .unwrap()
+        .to_rgb8();
+    let b = image::open(dir.path().join("frame_00004.png"))
+        .unwrap()
+        .to_rgb8();
+    assert_eq!(a.dimensions(), (32, 24));
+    assert_ne!(a, b);
+    // A bad range is a usage error of the job: exit 1 with the flag named.
+    let out = rhier()
+        .arg("play")
+        .arg(data.join("v1_animated.rhier"))
+        .args(["--frames", "1..0", "--fps", "4", "-o"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--frames"));
+}
+
+/// `rhier inspect big.rhier | head` must not panic when the pipe closes (regression:
+/// `println!` panicked with "failed printing to stdout: Broken pipe").
+#[test]
+fn cli_inspect_into_a_closed_pipe_does_not_panic() {
+    use rhier::store::samples::animated_box;
+    use rhier::store::{SolutionHeader, Writer};
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("long.rhier");
+    // 3000 chunks: the chunk table alone is ~250 KB of text, beyond a pipe's buffer.
+    let s = animated_box(1, 3000);
+    let mut w = Writer::create(
+        &file,
+        &SolutionHeader::of(&s.solution),
+        WriteOptions::default(),
+    )
+    .unwrap();
+    for (t0, t1, leaves) in &s.chunks {
+        w.write_chunk(*t0, *t1, leaves).unwrap();
+    }
+    w.finish(&s.solution.stats).unwrap();
+    let mut child = rhier()
+        .arg("inspect")
+        .arg(&file)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+}

@@ -112,12 +112,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         memory: MemoryReport::from_reader(&r),
     };
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-        return Ok(());
+        let mut text = serde_json::to_string_pretty(&report)?;
+        text.push('\n');
+        return super::probe::print_stdout(&text);
     }
+    use std::fmt::Write;
+    let mut text = String::new();
     let hj = &report.header;
-    println!("file: {}", report.file);
-    println!(
+    writeln!(text, "file: {}", report.file)?;
+    writeln!(
+        text,
         "header: version {} (readable by version >= {}), flags {:#x} [moving: {}, links: {}, compressed: {}], {} sections, table at byte {}",
         hj.version,
         hj.min_reader_version,
@@ -127,14 +131,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         hj.compressed,
         hj.sections,
         hj.table_offset
-    );
+    )?;
     let sc = &report.scene;
-    println!(
+    writeln!(
+        text,
         "scene: time [{}, {}] s, {} materials, {} objects ({} moving), {} patches, camera: {}",
         sc.time[0], sc.time[1], sc.materials, sc.objects, sc.moving_objects, sc.patches, sc.camera
-    );
+    )?;
     let st = &report.stats;
-    println!(
+    writeln!(
+        text,
         "solve: {:.3} s, {} iterations, {} elements, {} active + {} passive links, estimated error {:.3e}, residual {:.3e}",
         st.seconds,
         st.iterations,
@@ -143,14 +149,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         st.links_passive,
         st.estimated_error,
         st.residual
-    );
+    )?;
     match report.verified_leaves {
-        Some(n) => println!(
+        Some(n) => writeln!(
+            text,
             "verified: {} chunks, {n} leaves, all checksums and records valid",
             r.chunks().len()
         ),
-        None => println!("verified: header, table and metadata only (--no-verify)"),
-    }
-    print!("{}", report.memory);
-    Ok(())
+        None => writeln!(
+            text,
+            "verified: header, table and metadata only (--no-verify)"
+        ),
+    }?;
+    write!(text, "{}", report.memory)?;
+    super::probe::print_stdout(&text)
 }

@@ -133,7 +133,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 path
             }
         };
-        println!("{} (t = {t}, {} leaves)", out.display(), frame.leaves.len());
+        super::probe::print_stdout(&format!(
+            "{} (t = {t}, {} leaves)\n",
+            out.display(),
+            frame.leaves.len()
+        ))?;
     }
     Ok(())
 }

@@ -33,7 +33,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("probing {} at time {t}", args.file.display()))?;
     match &args.out {
         Some(out) => write_probe_results(out, &values)?,
-        None => print!("{}", probe_results_json(&values)),
+        None => print_stdout(&probe_results_json(&values))?,
     }
     Ok(())
+}
+
+/// Writes `text` to standard output; a closed pipe (`rhier ... | head`) ends quietly
+/// instead of panicking as `print!` would.
+pub(crate) fn print_stdout(text: &str) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => Ok(r.context("writing to standard output")?),
+    }
 }
