@@ -9,7 +9,9 @@ use rhier::playback::{ProbePoint, probe, read_probe_points, write_probe_results}
 use rhier::pools::Storage;
 use rhier::scene::Scene;
 use rhier::solver::{RoundRecord, SolveOptions, Solver, report};
-use rhier::store::{MemoryReport, WriteOptions, write_solution};
+use rhier::store::{
+    LinkRecord, MemoryReport, SolutionHeader, WriteOptions, Writer, write_solution,
+};
 
 /// Storage backend of the pools.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -254,15 +256,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("{stem}.rhier")));
-    write_solution(
-        &out,
-        &solution,
-        WriteOptions {
-            keep_links: args.keep_links,
-            ..WriteOptions::default()
-        },
-    )
-    .with_context(|| format!("writing {}", out.display()))?;
+    let write_opts = WriteOptions {
+        keep_links: args.keep_links,
+        ..WriteOptions::default()
+    };
+    if args.keep_links {
+        let mut w = Writer::create(&out, &SolutionHeader::of(&solution), write_opts)?;
+        w.write_chunk(
+            solution.scene.time.start,
+            solution.scene.time.end,
+            &solution.leaves,
+        )?;
+        w.write_links(&link_records(&solver));
+        w.finish(&solution.stats)
+            .with_context(|| format!("writing {}", out.display()))?;
+    } else {
+        write_solution(&out, &solution, write_opts)
+            .with_context(|| format!("writing {}", out.display()))?;
+    }
     if !args.quiet {
         eprintln!(
             "solved {} patches in {:.3} s: {} stored cells, {} elements, {} active / {} passive links; wrote {}",
@@ -300,4 +311,40 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("{m}");
     }
     Ok(())
+}
+
+/// The solver's links (active and passive) as the store records them: element ids in
+/// solver numbering, coefficient `ρ_receiver · F` per channel (clusters use 1), the
+/// link's spread as its error bound.
+fn link_records(solver: &Solver) -> Vec<LinkRecord> {
+    let geoms = solver.elems.geoms.as_slice();
+    let times = solver.elems.times.as_slice();
+    solver
+        .links
+        .ends
+        .as_slice()
+        .iter()
+        .zip(solver.links.transports.as_slice())
+        .map(|(e, t)| {
+            let g = &geoms[e.receiver as usize];
+            let rho = if g.patch == u32::MAX {
+                [1.0; 3]
+            } else {
+                solver.patches.rhos[g.patch as usize]
+            };
+            LinkRecord {
+                receiver: e.receiver as u64,
+                source: e.source as u64,
+                time: times[e.receiver as usize],
+                coefficient: [
+                    (rho[0] * t.f as f64) as f32,
+                    (rho[1] * t.f as f64) as f32,
+                    (rho[2] * t.f as f64) as f32,
+                ],
+                error: t.spread,
+                active: (t.state() == rhier::pools::LinkState::Active) as u32,
+                reserved: 0,
+            }
+        })
+        .collect()
 }

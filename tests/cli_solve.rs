@@ -1,0 +1,118 @@
+//! The real `rhier` binary: the default job, solve's probe against `rhier probe` on
+//! the file it wrote, `--keep-links`, `--report`, exit codes.
+
+use std::process::Command;
+
+fn rhier() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rhier"))
+}
+
+#[test]
+fn default_job_writes_the_cornell_box() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = rhier()
+        .current_dir(dir.path())
+        .arg("--help")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let out = rhier().current_dir(dir.path()).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let file = dir.path().join("cornell.rhier");
+    let reader = rhier::store::Reader::open(&file).unwrap();
+    assert_eq!(reader.patches().len(), 10);
+    assert!(reader.stats().links_active > 0);
+}
+
+#[test]
+fn solve_probe_equals_file_probe_and_report_has_rounds() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = dir.path().join("p.json");
+    std::fs::write(&pts, r#"[{"p":[278,0,278],"n":[0,1,0]},{"p":[0,274,278],"n":[1,0,0]},{"p":[278,548.8,278],"n":[0,-1,0]}]"#).unwrap();
+    let (vals, file, csv) = (
+        dir.path().join("v.json"),
+        dir.path().join("b.rhier"),
+        dir.path().join("r.csv"),
+    );
+    let out = rhier()
+        .args(["solve", "--blocks", "-q", "--keep-links", "--probe"])
+        .arg(&pts)
+        .arg("--probe-out")
+        .arg(&vals)
+        .arg("--report")
+        .arg(&csv)
+        .arg("-o")
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let from_solve: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&vals).unwrap()).unwrap();
+    let out = rhier()
+        .arg("probe")
+        .arg(&file)
+        .arg("--points")
+        .arg(&pts)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let from_file: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (a, b) = (
+        from_solve.as_array().unwrap(),
+        from_file.as_array().unwrap(),
+    );
+    assert_eq!(a.len(), 3);
+    for (x, y) in a.iter().zip(b) {
+        for k in 0..3 {
+            let (x, y) = (x["B"][k].as_f64().unwrap(), y["B"][k].as_f64().unwrap());
+            assert!((x - y).abs() <= 1e-12 * x.abs().max(1.0), "{x} vs {y}");
+        }
+    }
+    // The lamp point reads at least its exitance; the floor under the lamp is lit.
+    assert!(a[2]["B"][0].as_f64().unwrap() >= 17.0);
+    assert!(a[0]["B"][0].as_f64().unwrap() > 0.1);
+    // Links kept: every link of the run, active and passive.
+    let reader = rhier::store::Reader::open(&file).unwrap();
+    let links = reader.links().unwrap();
+    let stats = reader.stats();
+    assert_eq!(links.len() as u64, stats.links_active + stats.links_passive);
+    assert_eq!(
+        links.iter().filter(|l| l.active == 1).count() as u64,
+        stats.links_active
+    );
+    let csv = std::fs::read_to_string(&csv).unwrap();
+    assert!(csv.starts_with("round,seconds,elements"));
+    assert!(csv.lines().count() >= 2);
+}
+
+#[test]
+fn bad_input_exits_1_and_bad_usage_exits_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.json");
+    std::fs::write(&bad, r#"{"rhier_scene": 1, "materials": {}, "objects": [{"name": "o", "polygons": [{"vertices": [[0,0,0],[1,0,0],[0,1,0]], "material": "nope"}]}]}"#).unwrap();
+    let out = rhier()
+        .arg("solve")
+        .arg(&bad)
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.json") && err.contains("nope"), "{err}");
+    assert!(!dir.path().join("bad.rhier").exists());
+    let out = rhier().args(["solve", "--eps"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let out = rhier()
+        .args(["solve", "/nonexistent/scene.json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+}
