@@ -89,7 +89,10 @@ pub struct SolveOptions {
     pub recon_tol: f64,
     /// Smallest reconstruction cell edge, as a fraction of the scene's diameter.
     pub recon_min_size: f64,
-    /// Cut patches along contact lines before solving ([`split_at_contacts`]).
+    /// Cut patches along contact lines before solving ([`split_at_contacts`]). Off
+    /// by default: on the Cornell blocks it changed the contact points' error from
+    /// 16.7% to 16.2% while multiplying patches in cluttered scenes (2407 → 3773
+    /// on a room of 400 boxes, 5× the solve time).
     pub contact_meshing: bool,
 }
 
@@ -109,7 +112,7 @@ impl Default for SolveOptions {
             seed: 0x5eed,
             recon_tol: 0.02,
             recon_min_size: 1.0 / 512.0,
-            contact_meshing: true,
+            contact_meshing: false,
         }
     }
 }
