@@ -34,15 +34,6 @@ pub struct Hit {
     pub t: f64,
 }
 
-/// Counters of visibility work (summed by the solver per iteration).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RayCounters {
-    /// Occlusion rays cast.
-    pub rays: u64,
-    /// Links whose visibility was settled by a shaft test without rays.
-    pub shaft_culled: u64,
-}
-
 /// One BVH with the triangles it indexes.
 struct Part {
     bvh: CwBvh,

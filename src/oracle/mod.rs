@@ -23,7 +23,7 @@
 
 use glam::DVec3;
 
-use crate::geometry::{Patches, Poly, SceneBvh, point_to_point_kernel, point_to_polygon};
+use crate::geometry::{Poly, SceneBvh, point_to_point_kernel, point_to_polygon};
 use crate::pools::elements::Geom;
 use crate::pools::links::Transport;
 use crate::pools::{ElementId, ElementKind, ElementPool, LinkState};
@@ -170,7 +170,6 @@ fn cluster_factor(area_s: f64, cr: f64, cs: f64, d2: f64) -> f64 {
 /// Evaluates the link receiver `r` ← source `s`.
 pub fn evaluate(
     elems: &ElementPool,
-    patches: &Patches,
     bvh: &SceneBvh,
     r: ElementId,
     s: ElementId,
@@ -198,7 +197,7 @@ pub fn evaluate(
         return empty;
     }
     if r_surface && s_surface {
-        return evaluate_surfaces(gr, gs, patches, bvh, r, s, set);
+        return evaluate_surfaces(gr, gs, bvh, r, s, set);
     }
     // A cluster is involved: isotropic estimate, error = whole transport.
     let (cr_c, rr) = sphere(gr);
@@ -244,7 +243,6 @@ pub fn evaluate(
 fn evaluate_surfaces(
     gr: &Geom,
     gs: &Geom,
-    patches: &Patches,
     bvh: &SceneBvh,
     r: ElementId,
     s: ElementId,
@@ -294,7 +292,6 @@ fn evaluate_surfaces(
         *v = visible_fraction(bvh, x, nr, gs, &pols, ns, m, key, skip);
         rays += m;
     }
-    let _ = patches;
     let f: f64 = (0..q.count).map(|i| q.weights[i] * fq[i] * vq[i]).sum();
     let v = if funocc > 0.0 { f / funocc } else { 0.0 };
     let vmin = vq[..q.count].iter().copied().fold(1.0, f64::min);

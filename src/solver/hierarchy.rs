@@ -176,29 +176,7 @@ pub fn subdivide(pool: &mut ElementPool, patches: &Patches, e: ElementId) -> Res
     let time = pool.times.as_slice()[e.ix()];
     let b = pool.radiosities.as_slice()[e.ix()];
     let n = g.n as usize;
-    let m = |a: [f32; 2], b: [f32; 2]| [(a[0] + b[0]) * 0.5, (a[1] + b[1]) * 0.5];
-    let uv = g.uv;
-    let kids: [[[f32; 2]; 4]; 4] = if n == 3 {
-        let (a, b, c) = (uv[0], uv[1], uv[2]);
-        let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
-        let z = [0.0; 2];
-        [
-            [a, ab, ca, z],
-            [ab, b, bc, z],
-            [ca, bc, c, z],
-            [bc, ca, ab, z],
-        ]
-    } else {
-        let (u0, v0, u1, v1) = (uv[0][0], uv[0][1], uv[2][0], uv[2][1]);
-        let (um, vm) = ((u0 + u1) * 0.5, (v0 + v1) * 0.5);
-        let r = |a: f32, b: f32, c: f32, d: f32| [[a, b], [c, b], [c, d], [a, d]];
-        [
-            r(u0, v0, um, vm),
-            r(um, v0, u1, vm),
-            r(um, vm, u1, v1),
-            r(u0, vm, um, v1),
-        ]
-    };
+    let kids = child_domains(n, &g.uv);
     let first = pool.len() as u32;
     let patch = g.patch as usize;
     let mut geoms: Vec<Geom> = kids
@@ -228,4 +206,33 @@ pub fn subdivide(pool: &mut ElementPool, patches: &Patches, e: ElementId) -> Res
     parent.first_child = first;
     parent.child_count = 4;
     Ok(())
+}
+
+/// Parameter corners of the 4 children of a domain with `n` corners `uv`: a quad
+/// rectangle split at its parametric midpoints, a triangle into its 3 corner
+/// triangles and the middle one. Shared by element subdivision and reconstruction
+/// cells.
+pub fn child_domains(n: usize, uv: &[[f32; 2]; 4]) -> [[[f32; 2]; 4]; 4] {
+    let m = |a: [f32; 2], b: [f32; 2]| [(a[0] + b[0]) * 0.5, (a[1] + b[1]) * 0.5];
+    if n == 3 {
+        let (a, b, c) = (uv[0], uv[1], uv[2]);
+        let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
+        let z = [0.0; 2];
+        [
+            [a, ab, ca, z],
+            [ab, b, bc, z],
+            [ca, bc, c, z],
+            [bc, ca, ab, z],
+        ]
+    } else {
+        let (u0, v0, u1, v1) = (uv[0][0], uv[0][1], uv[2][0], uv[2][1]);
+        let (um, vm) = ((u0 + u1) * 0.5, (v0 + v1) * 0.5);
+        let r = |a: f32, b: f32, c: f32, d: f32| [[a, b], [c, b], [c, d], [a, d]];
+        [
+            r(u0, v0, um, vm),
+            r(um, v0, u1, vm),
+            r(um, vm, u1, v1),
+            r(u0, vm, um, v1),
+        ]
+    }
 }

@@ -223,7 +223,6 @@ impl<'a> Solver<'a> {
             let changed = if round == 0 {
                 let ev = oracle::evaluate(
                     &self.elems,
-                    &self.patches,
                     &self.bvh,
                     root,
                     root,
@@ -384,11 +383,10 @@ impl<'a> Solver<'a> {
                 return Ok(changed);
             }
             let set = self.settings();
-            let (elems, patches, bvh, eps_len) =
-                (&self.elems, &self.patches, &self.bvh, self.eps_len);
+            let (elems, bvh, eps_len) = (&self.elems, &self.bvh, self.eps_len);
             let evals: Vec<_> = pairs
                 .par_iter()
-                .map(|&(r, s)| oracle::evaluate(elems, patches, bvh, r, s, &set, eps_len))
+                .map(|&(r, s)| oracle::evaluate(elems, bvh, r, s, &set, eps_len))
                 .collect();
             wave = Vec::with_capacity(evals.len());
             for ((r, s), ev) in pairs.into_iter().zip(evals) {
@@ -886,24 +884,6 @@ impl<'a> Solver<'a> {
         }
     }
 
-    /// Final gather at the point of patch `patch` with parameters `(u, v)`, through
-    /// the links of the leaf holding it: `(B, valid)`. What the stored corners hold.
-    pub fn gather_at(&self, patch: u32, u: f64, v: f64) -> Option<([f64; 3], bool)> {
-        let leaf = self.leaves.iter().copied().find(|&l| {
-            let g = &self.elems.geoms.as_slice()[l.ix()];
-            g.patch == patch
-                && Leaf {
-                    patch,
-                    corners: g.n,
-                    time: self.time,
-                    uv: g.uv,
-                    b: [[0.0; 3]; 4],
-                }
-                .contains(u, v, 1e-9)
-        })?;
-        Some(self.gather_point(leaf, self.patches.point(patch as usize, u, v), 0))
-    }
-
     /// Piecewise-constant radiosity of every leaf (element averages), for tests.
     pub fn leaf_radiosities(&self) -> Vec<(u32, [f32; 2], [f32; 3])> {
         self.leaves
@@ -957,29 +937,7 @@ impl Cell {
     }
 
     fn split(&self) -> [Cell; 4] {
-        let m = |a: [f32; 2], b: [f32; 2]| [(a[0] + b[0]) * 0.5, (a[1] + b[1]) * 0.5];
-        let uv = self.uv;
-        let kids: [[[f32; 2]; 4]; 4] = if self.n == 3 {
-            let (a, b, c) = (uv[0], uv[1], uv[2]);
-            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
-            let z = [0.0; 2];
-            [
-                [a, ab, ca, z],
-                [ab, b, bc, z],
-                [ca, bc, c, z],
-                [bc, ca, ab, z],
-            ]
-        } else {
-            let (u0, v0, u1, v1) = (uv[0][0], uv[0][1], uv[2][0], uv[2][1]);
-            let (um, vm) = ((u0 + u1) * 0.5, (v0 + v1) * 0.5);
-            let r = |a: f32, b: f32, c: f32, d: f32| [[a, b], [c, b], [c, d], [a, d]];
-            [
-                r(u0, v0, um, vm),
-                r(um, v0, u1, vm),
-                r(um, vm, u1, v1),
-                r(u0, vm, um, v1),
-            ]
-        };
+        let kids = hierarchy::child_domains(self.n as usize, &self.uv);
         kids.map(|uv| Cell {
             uv,
             area: self.area / 4.0,

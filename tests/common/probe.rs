@@ -1,47 +1,8 @@
-//! Evaluating a `Solution` at surface points for tests that do not go through the
-//! store: nearest facing patch, inverse parameterisation by Newton, leaf lookup.
+//! Probe-point sets and the error measure for accuracy tests.
 #![allow(dead_code)]
 
 use glam::DVec3;
-use rhier::geometry::{Patches, nearest_facing};
-use rhier::solver::Solution;
-
-/// `(u, v)` of world point `x` on patch `i` (planar), by Newton on the bilinear map.
-pub fn uv_of(patches: &Patches, i: usize, x: DVec3) -> (f64, f64) {
-    let (mut u, mut v) = (0.5, 0.5);
-    for _ in 0..30 {
-        let p = patches.point(i, u, v);
-        let h = 1e-6;
-        let du = (patches.point(i, u + h, v) - p) / h;
-        let dv = (patches.point(i, u, v + h) - p) / h;
-        let r = x - p;
-        // Least squares 2x2.
-        let (a, b, c) = (du.dot(du), du.dot(dv), dv.dot(dv));
-        let (ru, rv) = (du.dot(r), dv.dot(r));
-        let det = a * c - b * b;
-        if det.abs() < 1e-300 {
-            break;
-        }
-        u += (c * ru - b * rv) / det;
-        v += (a * rv - b * ru) / det;
-    }
-    (u, v)
-}
-
-/// Radiosity of `sol` at the surface point nearest `p` facing `n`.
-pub fn probe(sol: &Solution, patches: &Patches, p: DVec3, n: DVec3) -> [f64; 3] {
-    let Some((i, x)) = nearest_facing(&patches.polys, &patches.normals, p, n) else {
-        return [0.0; 3];
-    };
-    let (u, v) = uv_of(patches, i, x);
-    let leaves: Vec<_> = sol.leaves.iter().filter(|l| l.patch == i as u32).collect();
-    for eps in [1e-9, 1e-6, 1e-3] {
-        if let Some(l) = leaves.iter().find(|l| l.contains(u, v, eps)) {
-            return l.eval(u, v);
-        }
-    }
-    [0.0; 3]
-}
+use rhier::geometry::Patches;
 
 /// A grid of probe points on every patch of a scene, `k × k` per patch, inset.
 pub fn grid_points(patches: &Patches, k: usize) -> Vec<(DVec3, DVec3)> {
