@@ -57,7 +57,7 @@ fn cornell_error_vs_time() {
                 SolveOptions {
                     eps,
                     recon_tol,
-                    contact_meshing: std::env::var("CONTACT").is_ok(),
+                    contact_meshing: std::env::var("NOCONTACT").is_err(),
                     ..Default::default()
                 },
             )

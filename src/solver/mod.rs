@@ -13,14 +13,17 @@
 //!    element sums `F · B_source` over its active links, in parallel) and push
 //!    (irradiance down to the leaves).
 //!
-//! **Leaf closure correction.** A leaf gathers through links that live at different
-//! levels of its ancestry, each averaged over a different receiver; their factors do
-//! not sum exactly to the leaf's true total, and with `ρ → 1` that small defect is
-//! amplified by `1/(1 − ρ)`. Each leaf's gathered irradiance is therefore scaled by
-//! `S_exact / S_hier`, where `S_hier` is the sum of the coefficients it gathers through
-//! and `S_exact` the same sources' factors (with the links' visibility) re-integrated
-//! over the leaf itself. In a closed room `S_exact = 1` to round-off, so `B = E/(1−ρ)`
-//! holds at `ρ = 0.999`.
+//! **Leaf-level coefficients.** The link hierarchy decides *which* sources a leaf
+//! gathers from and at what level (the links of the leaf and of its ancestors, which
+//! cover the scene exactly once); the coefficient of each of those sources is then
+//! re-integrated over the leaf itself: `F = Σ_q w_q F(x_q → A_s) · V_link` at the leaf's
+//! quadrature points, exact inner factor, the link's visibility. Pushing an
+//! ancestor's irradiance down instead would hand every leaf the ancestor's average
+//! coupling: next to a wall or a block a small leaf's coupling to the adjacent surface
+//! is far larger than its parent's, and with `ρ → 1` the rows' small defects are
+//! amplified by `1/(1 − ρ)`. At every quadrature point the factors of a partition of a
+//! closed room sum to 1 exactly, so `B = E/(1−ρ)` holds to round-off at `ρ = 0.999`.
+//! The price: a GMRES step costs `Σ_leaves chain length` instead of the link count.
 //!
 //! **Reconstruction.** A piecewise-constant solution is a poor point answer, so the
 //! stored leaves carry radiosity at their corners, computed by a final gather at each
@@ -89,10 +92,10 @@ pub struct SolveOptions {
     pub recon_tol: f64,
     /// Smallest reconstruction cell edge, as a fraction of the scene's diameter.
     pub recon_min_size: f64,
-    /// Cut patches along contact lines before solving ([`split_at_contacts`]). Off
-    /// by default: on the Cornell blocks it changed the contact points' error from
-    /// 16.7% to 16.2% while multiplying patches in cluttered scenes (2407 → 3773
-    /// on a room of 400 boxes, 5× the solve time).
+    /// Cut patches along contact lines before solving ([`split_at_contacts`]). On
+    /// by default: on the Cornell blocks it takes the contact points from 17% to 12%
+    /// RMS error (eps 0.5); in cluttered scenes it multiplies patches (2407 → 3773 on
+    /// a room of 400 boxes).
     pub contact_meshing: bool,
 }
 
@@ -112,7 +115,7 @@ impl Default for SolveOptions {
             seed: 0x5eed,
             recon_tol: 0.02,
             recon_min_size: 1.0 / 512.0,
-            contact_meshing: false,
+            contact_meshing: true,
         }
     }
 }
@@ -141,8 +144,11 @@ pub struct Solver<'a> {
     /// Active links by receiver (CSR over element ids).
     csr_start: Vec<u32>,
     csr_links: Vec<u32>,
-    /// Closure correction per leaf.
-    closure: Vec<f64>,
+    /// Leaf rows (CSR over leaves): sources of the leaf's chain links and their
+    /// coefficients re-integrated over the leaf.
+    row_start: Vec<u32>,
+    row_sources: Vec<u32>,
+    row_coefs: Vec<f64>,
     rays: u64,
     shaft_clear: u64,
 }
@@ -182,7 +188,9 @@ impl<'a> Solver<'a> {
             leaf_of: Vec::new(),
             csr_start: Vec::new(),
             csr_links: Vec::new(),
-            closure: Vec::new(),
+            row_start: Vec::new(),
+            row_sources: Vec::new(),
+            row_coefs: Vec::new(),
             rays: 0,
             shaft_clear: 0,
         };
@@ -245,7 +253,7 @@ impl<'a> Solver<'a> {
                 break;
             }
             self.index_links();
-            self.compute_closure();
+            self.compute_leaf_rows();
             let residual = self.solve_leaves()?;
             b_ref = self.rms_radiosity().max(f64::MIN_POSITIVE);
             #[cfg(debug_assertions)]
@@ -441,47 +449,57 @@ impl<'a> Solver<'a> {
         &self.csr_links[self.csr_start[e] as usize..self.csr_start[e + 1] as usize]
     }
 
-    /// Closure correction `S_exact / S_hier` of every leaf (see module docs).
-    fn compute_closure(&mut self) {
+    /// Leaf rows: every chain link's source with its coefficient re-integrated over
+    /// the leaf (see module docs).
+    fn compute_leaf_rows(&mut self) {
         let elems = &self.elems;
         let geoms = elems.geoms.as_slice();
         let nodes = elems.nodes.as_slice();
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
-        self.closure = self
+        let rows: Vec<Vec<(u32, f64)>> = self
             .leaves
             .par_iter()
             .map(|&leaf| {
                 let g = &geoms[leaf.ix()];
                 let q = oracle::samples(g);
                 let n = DVec3::from_array(g.normal);
-                let (mut hier, mut exact) = (0.0, 0.0);
+                let mut row = Vec::new();
                 let mut e = leaf.0;
                 while e != u32::MAX {
                     for &l in self.links_of(e as usize) {
                         let t = &tr[l as usize];
-                        let s = ends[l as usize].source as usize;
-                        hier += t.f as f64;
-                        let gs = &geoms[s];
-                        if gs.patch == u32::MAX {
-                            exact += t.f as f64;
+                        let s = ends[l as usize].source;
+                        let gs = &geoms[s as usize];
+                        let coef = if gs.patch == u32::MAX {
+                            t.f as f64
                         } else {
                             let ps = oracle::poly(gs);
                             let f: f64 = (0..q.count)
                                 .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
                                 .sum();
-                            exact += f * t.visibility as f64;
+                            f * t.visibility as f64
+                        };
+                        if coef > 0.0 {
+                            row.push((s, coef));
                         }
                     }
                     e = nodes[e as usize].parent;
                 }
-                if hier > 0.0 {
-                    (exact / hier).clamp(0.5, 2.0)
-                } else {
-                    1.0
-                }
+                row
             })
             .collect();
+        self.row_start.clear();
+        self.row_sources.clear();
+        self.row_coefs.clear();
+        self.row_start.push(0);
+        for row in rows {
+            for (s, c) in row {
+                self.row_sources.push(s);
+                self.row_coefs.push(c);
+            }
+            self.row_start.push(self.row_sources.len() as u32);
+        }
     }
 
     /// Area-weighted pull of the pool's radiosities (leaves → root).
@@ -513,14 +531,8 @@ impl<'a> Solver<'a> {
         }
     }
 
-    /// Applies `A = I − ρ·c·(push ∘ gather ∘ pull)` to leaf radiosities `x` (3 per leaf).
-    fn apply(
-        &self,
-        x: &[f64],
-        out: &mut [f64],
-        scratch_b: &mut [[f64; 3]],
-        scratch_h: &mut [[f64; 3]],
-    ) {
+    /// Applies `A = I − ρ·(rows ∘ pull)` to leaf radiosities `x` (3 per leaf).
+    fn apply(&self, x: &[f64], out: &mut [f64], scratch_b: &mut [[f64; 3]]) {
         let nodes = self.elems.nodes.as_slice();
         let geoms = self.elems.geoms.as_slice();
         // Pull.
@@ -547,40 +559,24 @@ impl<'a> Solver<'a> {
                 [0.0; 3]
             };
         }
-        // Gather.
-        let ends = self.links.ends.as_slice();
-        let tr = self.links.transports.as_slice();
+        // Gather each leaf's row, then B − ρ H.
         let b = &*scratch_b;
-        scratch_h.par_iter_mut().enumerate().for_each(|(e, h)| {
-            let mut acc = [0.0; 3];
-            for &l in self.links_of(e) {
-                let f = tr[l as usize].f as f64;
-                let s = ends[l as usize].source as usize;
-                for k in 0..3 {
-                    acc[k] += f * b[s][k];
+        out.par_chunks_mut(3)
+            .zip(x.par_chunks(3))
+            .enumerate()
+            .for_each(|(li, (o, xi))| {
+                let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
+                let mut h = [0.0; 3];
+                for (s, c) in self.row_sources[r0..r1].iter().zip(&self.row_coefs[r0..r1]) {
+                    for k in 0..3 {
+                        h[k] += c * b[*s as usize][k];
+                    }
                 }
-            }
-            *h = acc;
-        });
-        // Push (parents precede children), then B − ρ c H at the leaves.
-        for i in 0..nodes.len() {
-            let p = nodes[i].parent;
-            if p != u32::MAX {
-                let ph = scratch_h[p as usize];
+                let rho = self.patches.rhos[geoms[self.leaves[li].ix()].patch as usize];
                 for k in 0..3 {
-                    scratch_h[i][k] += ph[k];
+                    o[k] = xi[k] - rho[k] * h[k];
                 }
-            }
-            let li = self.leaf_of[i];
-            if li != u32::MAX {
-                let rho = self.patches.rhos[geoms[i].patch as usize];
-                let c = self.closure[li as usize];
-                let j = li as usize * 3;
-                for k in 0..3 {
-                    out[j + k] = x[j + k] - rho[k] * c * scratch_h[i][k];
-                }
-            }
-        }
+            });
     }
 
     /// Solves the leaf system with GMRES from the current radiosities; writes the
@@ -599,9 +595,8 @@ impl<'a> Solver<'a> {
             }
         }
         let mut sb = vec![[0.0; 3]; n];
-        let mut sh = vec![[0.0; 3]; n];
         let outcome = gmres::solve(
-            |v, out| self.apply(v, out, &mut sb, &mut sh),
+            |v, out| self.apply(v, out, &mut sb),
             &rhs,
             &mut x,
             self.opts.tolerance,
