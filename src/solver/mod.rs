@@ -9,9 +9,9 @@
 //!    as *passive*. The first round starts from the root cluster's self-link, so no
 //!    `n²` initial linking happens.
 //! 2. *solve*: `(I − ρK) B = E` over the leaves with GMRES ([`gmres`]), the operator
-//!    applied matrix-free as pull (area-weighted averages up the tree), gather (each
-//!    element sums `F · B_source` over its active links, in parallel) and push
-//!    (irradiance down to the leaves).
+//!    applied matrix-free as pull (area-weighted averages up the tree) and a gather of
+//!    each leaf's row (the sources of its chain links with leaf-level coefficients,
+//!    below), leaves in parallel.
 //!
 //! **Leaf-level coefficients.** The link hierarchy decides *which* sources a leaf
 //! gathers from and at what level (the links of the leaf and of its ancestors, which
