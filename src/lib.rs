@@ -10,7 +10,8 @@
 //! ```text
 //! scene file ─▶ scene::Scene ─▶ geometry (patches, form factors, obvhs visibility)
 //!            ─▶ pools (element / link arenas on RAM or mmap storage)
-//!            ─▶ solver (refine with oracle → gather → push-pull, iterated)
+//!            ─▶ solver (refine with the oracle → GMRES on leaf rows, in rounds;
+//!               then a final gather at reconstruction-cell corners)
 //!            ─▶ store (.rhier) ─▶ playback (frames, probes), inspect
 //! ```
 //!
@@ -20,7 +21,7 @@
 //! | [`geometry`] | patches in world space, form-factor kernels, ray visibility (the only obvhs user) |
 //! | [`pools`] | storage backends (RAM, mmap) and struct-of-arrays arenas with `u32` ids |
 //! | [`oracle`] | refinement decisions: keep a link, split receiver, split source |
-//! | [`solver`] | hierarchical radiosity: clusters, refinement, gather, push-pull, GMRES |
+//! | [`solver`] | hierarchical radiosity: clusters, refinement, GMRES, reconstruction |
 //! | [`shafts`] | shafts between elements (Haines & Wallace) for visibility culling |
 //! | [`store`] | the `.rhier` file: writer, reader, validation |
 //! | [`playback`] | evaluation of a stored solution: probes, frames, exports |
