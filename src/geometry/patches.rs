@@ -101,15 +101,9 @@ impl Patches {
 
     /// World point of patch `i` at parameter `(u, v)` (see [`crate::solver::solution`]).
     pub fn point(&self, i: usize, u: f64, v: f64) -> DVec3 {
-        let c = &self.polys[i].v;
-        if self.polys[i].n == 3 {
-            c[0] + u * (c[1] - c[0]) + v * (c[2] - c[0])
-        } else {
-            (1.0 - u) * (1.0 - v) * c[0]
-                + u * (1.0 - v) * c[1]
-                + u * v * c[2]
-                + (1.0 - u) * v * c[3]
-        }
+        let p = &self.polys[i];
+        let c = [p.v[0], p.v[1], p.v[2], p.v[3]];
+        crate::solver::solution::param_point(&c, p.n as u32, u, v)
     }
 
     /// Diameter of the bounding box of all patches (cached at construction).

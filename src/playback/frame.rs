@@ -29,15 +29,7 @@ const _: () = assert!(std::mem::size_of::<WorldPatch>() == 128);
 impl WorldPatch {
     /// World point at parameter `(u, v)`.
     pub fn point(&self, u: f64, v: f64) -> DVec3 {
-        let p = &self.v;
-        if self.corners == 3 {
-            p[0] + u * (p[1] - p[0]) + v * (p[2] - p[0])
-        } else {
-            (1.0 - u) * (1.0 - v) * p[0]
-                + u * (1.0 - v) * p[1]
-                + u * v * p[2]
-                + (1.0 - u) * v * p[3]
-        }
+        crate::solver::solution::param_point(&self.v, self.corners, u, v)
     }
 
     /// Corners in use.

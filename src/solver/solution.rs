@@ -156,15 +156,17 @@ pub struct PatchGeometry {
 impl PatchGeometry {
     /// Point of the patch at parameter `(u, v)`, in the patch's own (object) space.
     pub fn point(&self, u: f64, v: f64) -> DVec3 {
-        let p = &self.vertices;
-        if self.corners == 3 {
-            p[0] + u * (p[1] - p[0]) + v * (p[2] - p[0])
-        } else {
-            (1.0 - u) * (1.0 - v) * p[0]
-                + u * (1.0 - v) * p[1]
-                + u * v * p[2]
-                + (1.0 - u) * v * p[3]
-        }
+        param_point(&self.vertices, self.corners, u, v)
+    }
+}
+
+/// The patch parameterisation (module docs): affine on a triangle (`corners == 3`),
+/// bilinear on a quad. The one definition every module uses.
+pub fn param_point(p: &[DVec3; 4], corners: u32, u: f64, v: f64) -> DVec3 {
+    if corners == 3 {
+        p[0] + u * (p[1] - p[0]) + v * (p[2] - p[0])
+    } else {
+        (1.0 - u) * (1.0 - v) * p[0] + u * (1.0 - v) * p[1] + u * v * p[2] + (1.0 - u) * v * p[3]
     }
 }
 
