@@ -16,8 +16,10 @@
 //! **Leaf-level coefficients.** The link hierarchy decides *which* sources a leaf
 //! gathers from and at what level (the links of the leaf and of its ancestors, which
 //! cover the scene exactly once); the coefficient of each of those sources is then
-//! re-integrated over the leaf itself: `F = Σ_q w_q F(x_q → A_s) · V_link` at the leaf's
-//! quadrature points, exact inner factor, the link's visibility. Pushing an
+//! re-integrated over the leaf itself: `F = Σ_q w_q F(x_q → A_s) · V(x_q, s)` at the
+//! leaf's quadrature points, exact inner factor; `V = 1` for links a shaft proved clear,
+//! otherwise re-cast from the leaf's own points (an ancestor's average visibility is
+//! wrong next to a contact or a shadow edge). Pushing an
 //! ancestor's irradiance down instead would hand every leaf the ancestor's average
 //! coupling: next to a wall or a block a small leaf's coupling to the adjacent surface
 //! is far larger than its parent's, and with `ρ → 1` the rows' small defects are
@@ -473,12 +475,42 @@ impl<'a> Solver<'a> {
                         let gs = &geoms[s as usize];
                         let coef = if gs.patch == u32::MAX {
                             t.f as f64
-                        } else {
+                        } else if t.shaft_clear() {
                             let ps = oracle::poly(gs);
-                            let f: f64 = (0..q.count)
+                            (0..q.count)
                                 .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
-                                .sum();
-                            f * t.visibility as f64
+                                .sum()
+                        } else {
+                            // Partly hidden: visibility from the leaf's own points, not
+                            // the ancestor's average.
+                            let ps = oracle::poly(gs);
+                            let ns = DVec3::from_array(gs.normal);
+                            let m = self.opts.rays_per_point;
+                            (0..q.count)
+                                .map(|i| {
+                                    let f = point_to_polygon(q.points[i], n, &ps);
+                                    if f <= 0.0 {
+                                        return 0.0;
+                                    }
+                                    let key = oracle::hash3(
+                                        self.opts.seed ^ 0x1eaf,
+                                        l as u64,
+                                        (leaf.0 as u64) << 3 | i as u64,
+                                    );
+                                    let v = oracle::visible_fraction(
+                                        &self.bvh,
+                                        q.points[i],
+                                        n,
+                                        gs,
+                                        &ps,
+                                        ns,
+                                        m,
+                                        key,
+                                        [g.patch, gs.patch],
+                                    );
+                                    q.weights[i] * f * v
+                                })
+                                .sum()
                         };
                         if coef > 0.0 {
                             row.push((s, coef));
