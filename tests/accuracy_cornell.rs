@@ -21,7 +21,7 @@ fn error_against_reference(blocks: bool) -> f64 {
     let (sol, _) = solve(&scene, SolveOptions::default()).unwrap();
     let points: Vec<ProbePoint> = pts.iter().map(|&(p, n)| ProbePoint { p, n }).collect();
     let b = probe(&sol, &points, 0.0).unwrap();
-    common::probe::rel_rms(&b, &reference)
+    rhier::solver::report::relative_rms(&b, &reference)
 }
 
 #[test]

@@ -68,9 +68,9 @@ fn cornell_error_vs_time() {
                 .map(|&(p, n)| rhier::playback::ProbePoint { p, n })
                 .collect();
             let b = rhier::playback::probe(&sol, &points, 0.0).unwrap();
-            let err = common::probe::rel_rms(&b, &refb);
+            let err = rhier::solver::report::relative_rms(&b, &refb);
             let err_contact = if pts.len() > n_grid {
-                common::probe::rel_rms(&b[n_grid..], &refb[n_grid..])
+                rhier::solver::report::relative_rms(&b[n_grid..], &refb[n_grid..])
             } else {
                 0.0
             };

@@ -8,7 +8,8 @@ use anyhow::Context;
 use rhier::playback::{ProbePoint, probe, read_probe_points, write_probe_results};
 use rhier::pools::Storage;
 use rhier::scene::Scene;
-use rhier::solver::{RoundRecord, SolveOptions, Solver, report};
+use rhier::solver::report::{self, relative_rms};
+use rhier::solver::{RoundRecord, SolveOptions, Solver};
 use rhier::store::{
     LinkRecord, MemoryReport, SolutionHeader, WriteOptions, Writer, write_solution,
 };
@@ -131,22 +132,6 @@ fn read_reference(path: &Path) -> anyhow::Result<(Vec<ProbePoint>, Vec<[f64; 3]>
         }
     }
     Ok((points, b))
-}
-
-/// Relative RMS error `sqrt(Σ(B − B_ref)² / Σ B_ref²)` over points and channels.
-pub fn relative_rms(b: &[[f64; 3]], reference: &[[f64; 3]]) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (x, y) in b.iter().zip(reference) {
-        for c in 0..3 {
-            num += (x[c] - y[c]).powi(2);
-            den += y[c] * y[c];
-        }
-    }
-    if den > 0.0 {
-        (num / den).sqrt()
-    } else {
-        num.sqrt()
-    }
 }
 
 fn load(args: &Args) -> anyhow::Result<(Scene, String)> {

@@ -106,13 +106,8 @@ impl Patches {
         crate::solver::solution::param_point(&c, p.n as u32, u, v)
     }
 
-    /// Diameter of the bounding box of all patches (cached at construction).
-    pub fn scene_diameter_cached(&self) -> f64 {
-        self.diameter
-    }
-
-    /// Diameter of the bounding box of all patches (the scene's length scale).
-    pub fn scene_diameter(&self) -> f64 {
+    /// Diameter of the bounding box of all patches (what `diameter` caches).
+    fn scene_diameter(&self) -> f64 {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         for p in &self.polys {

@@ -94,7 +94,7 @@ pub fn radiosity_at(
             em.cdf.push(em.total);
         }
     }
-    let diam = patches.scene_diameter().max(f64::MIN_POSITIVE);
+    let diam = patches.diameter.max(f64::MIN_POSITIVE);
     points
         .par_iter()
         .enumerate()

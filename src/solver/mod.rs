@@ -53,6 +53,7 @@ use rayon::prelude::*;
 use crate::Result;
 use crate::geometry::{Patches, SceneBvh, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
+use crate::pools::elements::{Geom, Node};
 use crate::pools::{ElementId, ElementKind, ElementPool, LinkId, LinkPool, LinkState, Storage};
 use crate::scene::Scene;
 
@@ -168,7 +169,7 @@ impl<'a> Solver<'a> {
         let links = LinkPool::new(&opts.storage)?;
         let time = [scene.time.start as f32, scene.time.end as f32];
         let root = hierarchy::build(&mut elems, &patches, time)?;
-        let diam = patches.scene_diameter();
+        let diam = patches.diameter;
         let rho_max = patches
             .rhos
             .iter()
@@ -536,30 +537,20 @@ impl<'a> Solver<'a> {
 
     /// Area-weighted pull of the pool's radiosities (leaves → root).
     fn pull_pool(&mut self) {
-        let n = self.elems.len();
-        for i in (0..n).rev() {
-            let node = self.elems.nodes.as_slice()[i];
-            if node.child_count == 0 {
-                continue;
-            }
-            let mut acc = [0.0f64; 3];
-            let mut area = 0.0;
-            for c in node.first_child..node.first_child + node.child_count {
-                let a = self.elems.geoms.as_slice()[c as usize].area;
-                let b = self.elems.radiosities.as_slice()[c as usize];
-                for k in 0..3 {
-                    acc[k] += a * b[k] as f64;
-                }
-                area += a;
-            }
-            let out = &mut self.elems.radiosities.as_mut_slice()[i];
-            for k in 0..3 {
-                out[k] = if area > 0.0 {
-                    (acc[k] / area) as f32
-                } else {
-                    0.0
-                };
-            }
+        let mut b: Vec<[f64; 3]> = self
+            .elems
+            .radiosities
+            .as_slice()
+            .iter()
+            .map(|v| [v[0] as f64, v[1] as f64, v[2] as f64])
+            .collect();
+        pull(
+            self.elems.nodes.as_slice(),
+            self.elems.geoms.as_slice(),
+            &mut b,
+        );
+        for (out, v) in self.elems.radiosities.as_mut_slice().iter_mut().zip(&b) {
+            *out = [v[0] as f32, v[1] as f32, v[2] as f32];
         }
     }
 
@@ -568,29 +559,10 @@ impl<'a> Solver<'a> {
         let nodes = self.elems.nodes.as_slice();
         let geoms = self.elems.geoms.as_slice();
         // Pull.
-        for i in (0..nodes.len()).rev() {
-            let li = self.leaf_of[i];
-            if li != u32::MAX {
-                let j = li as usize * 3;
-                scratch_b[i] = [x[j], x[j + 1], x[j + 2]];
-                continue;
-            }
-            let node = nodes[i];
-            let mut acc = [0.0; 3];
-            let mut area = 0.0;
-            for c in node.first_child..node.first_child + node.child_count {
-                let a = geoms[c as usize].area;
-                for k in 0..3 {
-                    acc[k] += a * scratch_b[c as usize][k];
-                }
-                area += a;
-            }
-            scratch_b[i] = if area > 0.0 {
-                [acc[0] / area, acc[1] / area, acc[2] / area]
-            } else {
-                [0.0; 3]
-            };
+        for (li, l) in self.leaves.iter().enumerate() {
+            scratch_b[l.ix()] = [x[li * 3], x[li * 3 + 1], x[li * 3 + 2]];
         }
+        pull(nodes, geoms, scratch_b);
         // Gather each leaf's row, then B − ρ H.
         let b = &*scratch_b;
         out.par_chunks_mut(3)
@@ -760,7 +732,7 @@ impl<'a> Solver<'a> {
         let n = DVec3::from_array(g.normal);
         let p = g.patch as usize;
         // Inside a solid? The first thing straight above is a back face.
-        let diam = self.patches.scene_diameter_cached();
+        let diam = self.patches.diameter;
         let valid = match self.bvh.intersect(x, n * diam, 1e-7, 1.0) {
             Some(h) => self.patches.normals[h.patch as usize].dot(n) <= 0.0,
             None => true,
@@ -811,7 +783,7 @@ impl<'a> Solver<'a> {
         let geoms = self.elems.geoms.as_slice();
         let b_ref = self.rms_radiosity();
         let tol = self.opts.recon_tol * b_ref;
-        let min_area = (self.opts.recon_min_size * self.patches.scene_diameter_cached()).powi(2);
+        let min_area = (self.opts.recon_min_size * self.patches.diameter).powi(2);
         let mut cache = VertexCache::default();
         let mut cells: Vec<Cell> = self
             .leaves
@@ -940,6 +912,32 @@ pub fn solve(scene: &Scene, opts: SolveOptions) -> Result<(Solution, Vec<RoundRe
         sol.stats.residual = last.residual;
     }
     Ok((sol, records))
+}
+
+/// Area-weighted pull: every element with children gets the area-weighted mean of its
+/// children's `b`; childless elements keep theirs. Children follow their parent in id
+/// order, so the reverse sweep is bottom-up.
+fn pull(nodes: &[Node], geoms: &[Geom], b: &mut [[f64; 3]]) {
+    for i in (0..nodes.len()).rev() {
+        let node = nodes[i];
+        if node.child_count == 0 {
+            continue;
+        }
+        let mut acc = [0.0; 3];
+        let mut area = 0.0;
+        for c in node.first_child..node.first_child + node.child_count {
+            let a = geoms[c as usize].area;
+            for k in 0..3 {
+                acc[k] += a * b[c as usize][k];
+            }
+            area += a;
+        }
+        b[i] = if area > 0.0 {
+            [acc[0] / area, acc[1] / area, acc[2] / area]
+        } else {
+            [0.0; 3]
+        };
+    }
 }
 
 /// A reconstruction cell: a parameter sub-domain of a leaf's patch.

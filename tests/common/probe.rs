@@ -23,18 +23,6 @@ pub fn grid_points(patches: &Patches, k: usize) -> Vec<(DVec3, DVec3)> {
     out
 }
 
-/// Relative RMS error `sqrt(Σ(B − B_ref)² / Σ B_ref²)` over points and channels.
-pub fn rel_rms(b: &[[f64; 3]], r: &[[f64; 3]]) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (x, y) in b.iter().zip(r) {
-        for c in 0..3 {
-            num += (x[c] - y[c]).powi(2);
-            den += y[c] * y[c];
-        }
-    }
-    (num / den).sqrt()
-}
-
 /// Points near contact edges: for every patch with an edge on the plane `y = 0`
 /// (a block side resting on the floor), points on the floor at distances `ds` from
 /// the middle of that edge, outside, and on the side itself at heights `ds`.
