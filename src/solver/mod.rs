@@ -157,9 +157,17 @@ pub struct Solver<'a> {
 }
 
 impl<'a> Solver<'a> {
-    /// Places the scene at its start time, builds BVHs, clusters and patch roots.
+    /// Places the scene at its start time, builds BVHs, clusters and patch roots; the
+    /// solution's leaves hold over the whole time domain.
     pub fn new(scene: &'a Scene, opts: SolveOptions) -> Result<Self> {
-        let t = scene.time.start;
+        let range = [scene.time.start as f32, scene.time.end as f32];
+        Self::at_time(scene, opts, scene.time.start, range)
+    }
+
+    /// Places the scene as it stands at time `t` (one frame of an animation) and
+    /// labels the solution's leaves with the time range `range`. The patch set does
+    /// not depend on `t`: contact meshing only cuts along static objects.
+    pub fn at_time(scene: &'a Scene, opts: SolveOptions, t: f64, range: [f32; 2]) -> Result<Self> {
         let mut patches = Patches::at_time(scene, t);
         if opts.contact_meshing {
             patches = split_at_contacts(scene, &patches, t).0;
@@ -167,7 +175,7 @@ impl<'a> Solver<'a> {
         let bvh = SceneBvh::build(scene, &patches, t);
         let mut elems = ElementPool::new(&opts.storage)?;
         let links = LinkPool::new(&opts.storage)?;
-        let time = [scene.time.start as f32, scene.time.end as f32];
+        let time = range;
         let root = hierarchy::build(&mut elems, &patches, time)?;
         let diam = patches.diameter;
         let rho_max = patches
