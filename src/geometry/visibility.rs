@@ -45,10 +45,17 @@ struct Part {
     world_to_local: DAffine3,
     /// Part → world.
     local_to_world: DAffine3,
+    /// Object placed by this part's motion (`u32::MAX` for the static part).
+    object: u32,
 }
 
 impl Part {
-    fn build(tris: Vec<Triangle>, tri_patch: Vec<u32>, local_to_world: DAffine3) -> Option<Part> {
+    fn build(
+        tris: Vec<Triangle>,
+        tri_patch: Vec<u32>,
+        local_to_world: DAffine3,
+        object: u32,
+    ) -> Option<Part> {
         if tris.is_empty() {
             return None;
         }
@@ -69,6 +76,7 @@ impl Part {
             tri_patch,
             world_to_local: local_to_world.inverse(),
             local_to_world,
+            object,
         })
     }
 
@@ -109,10 +117,26 @@ impl SceneBvh {
             }
         }
         for (obj, (tris, tp)) in moving.into_iter().enumerate() {
-            parts.extend(Part::build(tris, tp, scene.objects[obj].to_world(t)));
+            parts.extend(Part::build(
+                tris,
+                tp,
+                scene.objects[obj].to_world(t),
+                obj as u32,
+            ));
         }
-        parts.extend(Part::build(st, sp, DAffine3::IDENTITY));
+        parts.extend(Part::build(st, sp, DAffine3::IDENTITY, u32::MAX));
         SceneBvh { parts }
+    }
+
+    /// Moves every moving object's BVH to its place at time `t` (no rebuild: only
+    /// the part's transform changes).
+    pub fn place(&mut self, scene: &Scene, t: f64) {
+        for part in &mut self.parts {
+            if let Some(obj) = scene.objects.get(part.object as usize) {
+                part.local_to_world = obj.to_world(t);
+                part.world_to_local = part.local_to_world.inverse();
+            }
+        }
     }
 
     /// True if something blocks the open segment between `a` and `b` (both ends

@@ -148,6 +148,18 @@ impl<T: Pod> Column<T> {
         self.len = 0;
     }
 
+    /// Drops the records from `len` on (keeps the allocation / file): how a finished
+    /// time window releases what it appended.
+    pub fn truncate(&mut self, len: usize) {
+        if len >= self.len {
+            return;
+        }
+        if let Backing::Ram(v) = &mut self.backing {
+            v.truncate(len);
+        }
+        self.len = len;
+    }
+
     /// Bytes the column holds (its length, not its capacity).
     pub fn bytes(&self) -> usize {
         self.len * std::mem::size_of::<T>()

@@ -116,6 +116,15 @@ impl ElementPool {
         Ok(ElementId(id))
     }
 
+    /// Drops the elements from `len` on (see [`Column::truncate`]).
+    pub fn truncate(&mut self, len: usize) {
+        self.nodes.truncate(len);
+        self.geoms.truncate(len);
+        self.times.truncate(len);
+        self.radiosities.truncate(len);
+        self.irradiances.truncate(len);
+    }
+
     /// Children of `e` as a range of ids.
     #[inline]
     pub fn children(&self, e: ElementId) -> std::ops::Range<u32> {

@@ -43,7 +43,8 @@ pub struct Transport {
     pub spread: f32,
     /// Estimated visible fraction (1 = shaft proved it clear).
     pub visibility: f32,
-    /// [`LinkState`] in byte 0; visibility class in byte 1 (0 rays, 1 shaft-clear).
+    /// [`LinkState`] in byte 0; visibility class in byte 1 (0 rays, 1 shaft-clear);
+    /// time class in byte 2 (0 constant in the current window, 1 varying).
     pub flags: [u8; 4],
 }
 
@@ -62,6 +63,13 @@ impl Transport {
     /// True if a shaft test proved the link unoccluded.
     pub fn shaft_clear(&self) -> bool {
         self.flags[1] == 1
+    }
+
+    /// True if the link's transport changes in the current time window: an end
+    /// moves, or a moving object's swept box meets its shaft (byte 2 of `flags`).
+    /// Always false in a static solve.
+    pub fn varying(&self) -> bool {
+        self.flags[2] == 1
     }
 }
 
@@ -106,6 +114,17 @@ impl LinkPool {
     /// Marks a link passive (refined).
     pub fn set_passive(&mut self, l: LinkId) {
         self.transports.as_mut_slice()[l.ix()].flags[0] = LinkState::Passive as u8;
+    }
+
+    /// Marks a link active again (a time window released the links that refined it).
+    pub fn set_active(&mut self, l: LinkId) {
+        self.transports.as_mut_slice()[l.ix()].flags[0] = LinkState::Active as u8;
+    }
+
+    /// Drops the links from `len` on (see [`super::Column::truncate`]).
+    pub fn truncate(&mut self, len: usize) {
+        self.ends.truncate(len);
+        self.transports.truncate(len);
     }
 
     /// (active, passive) counts.

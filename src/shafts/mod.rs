@@ -93,6 +93,34 @@ impl Shaft {
         }
     }
 
+    /// True if no point of the box `[lo, hi]` can lie on a segment between the two
+    /// polygons (the box is outside the shaft's box, behind an end, or outside a hull
+    /// plane). Conservative: `false` does not prove an overlap.
+    pub fn misses_box(&self, lo: DVec3, hi: DVec3) -> bool {
+        let eps = self.eps;
+        if (0..3).any(|a| hi[a] < self.lo[a] - eps || lo[a] > self.hi[a] + eps) {
+            return true;
+        }
+        let corners: [DVec3; 8] = std::array::from_fn(|i| {
+            DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            )
+        });
+        for &(n, d) in &self.ends {
+            if corners.iter().all(|v| n.dot(*v) - d <= eps) {
+                return true;
+            }
+        }
+        for &(n, d) in &self.planes[..self.count] {
+            if corners.iter().all(|v| n.dot(*v) - d >= -eps) {
+                return true;
+            }
+        }
+        false
+    }
+
     /// True if the triangle `t` cannot meet any segment between the two polygons.
     pub fn culls(&self, t: &[DVec3; 3]) -> bool {
         let eps = self.eps;
