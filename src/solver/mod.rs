@@ -43,6 +43,7 @@ pub mod gmres;
 pub mod hierarchy;
 pub mod report;
 pub mod solution;
+pub mod spacetime;
 
 use std::collections::HashMap;
 use std::time::Instant;
@@ -59,6 +60,9 @@ use crate::scene::Scene;
 
 pub use report::RoundRecord;
 pub use solution::{Leaf, PatchGeometry, Shape, Solution, SolveStats};
+
+/// Most refine-and-solve passes in one space-time frame.
+const FRAME_PASSES: usize = 3;
 
 /// Fraction of the way from a corner to its leaf's centroid where the corner's
 /// final gather is evaluated.
@@ -154,7 +158,99 @@ pub struct Solver<'a> {
     row_coefs: Vec<f64>,
     rays: u64,
     shaft_clear: u64,
+    /// Per patch: its object moves somewhere in the time domain.
+    moving_patch: Vec<bool>,
+    /// Per element built by the cluster tree (clusters and patch roots): it contains
+    /// a moving patch. Surface elements below take their patch's flag.
+    tree_moving: Vec<bool>,
+    /// Space-time state of the current time window (`None` in a static solve).
+    window: Option<Window>,
+    /// Solving the part shared by all windows: varying links are not refined.
+    shared_phase: bool,
 }
+
+/// What a time window needs beyond the static solver (see [`spacetime`]).
+#[derive(Default)]
+struct Window {
+    /// Boxes swept by the moving objects over the window.
+    swept: Vec<(DVec3, DVec3)>,
+    /// Pool lengths when the window began: what lies beyond is the window's own.
+    elems_len: usize,
+    links_len: usize,
+    /// Links older than the window that it made passive, and elements older than the
+    /// window that it subdivided: restored when the window is released.
+    passivated: Vec<LinkId>,
+    subdivided: Vec<ElementId>,
+    /// Leaf-row coefficients of constant links on static leaves: `(leaf, link) → F`.
+    rows: HashMap<(u32, u32), f64>,
+    /// Final-gather terms that hold over the window at static reconstruction points.
+    points: std::sync::Mutex<HashMap<PointKey, PointTerms>>,
+}
+
+/// The final-gather terms of a point that hold over a window: `Σ factor · B_element`
+/// over `terms` is what the links `links` bring to the point.
+#[derive(Default)]
+struct PointTerms {
+    /// Links covered, sorted.
+    links: Vec<u32>,
+    /// `(element, factor)`, merged per element.
+    terms: Vec<(u32, f64)>,
+}
+
+impl PointTerms {
+    fn add(&mut self, link: u32, terms: &[(u32, f64)]) {
+        if let Err(at) = self.links.binary_search(&link) {
+            self.links.insert(at, link);
+        }
+        for &(e, f) in terms {
+            match self.terms.iter_mut().find(|t| t.0 == e) {
+                Some(t) => t.1 += f,
+                None => self.terms.push((e, f)),
+            }
+        }
+    }
+}
+
+/// True if nothing inside the boxes `swept` can lie between the point `x` (normal
+/// `n`) and element `g` (the convex hull of the point and a surface element, or the
+/// box around the point and a cluster).
+fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> bool {
+    if g.patch == u32::MAX {
+        let lo = x.min(DVec3::from_array(g.corners[0]));
+        let hi = x.max(DVec3::from_array(g.corners[1]));
+        return swept
+            .iter()
+            .all(|&(a, b)| (0..3).any(|k| b[k] < lo[k] || a[k] > hi[k]));
+    }
+    let corners: Vec<DVec3> = g.corners[..g.n as usize]
+        .iter()
+        .map(|&c| DVec3::from_array(c))
+        .collect();
+    let shaft = crate::shafts::Shaft::new(&[x], n, &corners, DVec3::from_array(g.normal));
+    swept.iter().all(|&(lo, hi)| shaft.misses_box(lo, hi))
+}
+
+/// What one space-time frame cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameCost {
+    /// Varying links re-evaluated.
+    pub varying_links: u64,
+    /// Rays cast in the frame (link evaluation and leaf rows; not reconstruction).
+    pub rays: u64,
+    /// GMRES relative residual.
+    pub residual: f64,
+}
+
+/// A reconstruction point: patch and quantised parameters.
+type PointKey = (u32, u32, u32);
+
+/// Terms of links a point gathers that hold over the window, computed now: `(link,
+/// [(element, factor)])`.
+type FreshTerms = Vec<(u32, Vec<(u32, f64)>)>;
+
+/// A point to gather: the leaf whose links gather, the patch, the parameter point,
+/// the parameter point it is inset towards, and its key.
+type GatherPoint = (ElementId, u32, [f32; 2], [f32; 2], PointKey);
 
 impl<'a> Solver<'a> {
     /// Places the scene at its start time, builds BVHs, clusters and patch roots; the
@@ -204,7 +300,34 @@ impl<'a> Solver<'a> {
             row_coefs: Vec::new(),
             rays: 0,
             shaft_clear: 0,
+            moving_patch: Vec::new(),
+            tree_moving: Vec::new(),
+            window: None,
+            shared_phase: false,
         };
+        s.moving_patch = (0..s.patches.len())
+            .map(|i| {
+                scene
+                    .objects
+                    .get(s.patches.objects[i] as usize)
+                    .is_some_and(|o| o.is_moving())
+            })
+            .collect();
+        if s.moving_patch.iter().any(|&m| m) {
+            let nodes = s.elems.nodes.as_slice();
+            let geoms = s.elems.geoms.as_slice();
+            let mut tm = vec![false; nodes.len()];
+            for i in (0..nodes.len()).rev() {
+                let g = &geoms[i];
+                tm[i] = if g.patch != u32::MAX {
+                    s.moving_patch[g.patch as usize]
+                } else {
+                    let n = nodes[i];
+                    (n.first_child..n.first_child + n.child_count).any(|c| tm[c as usize])
+                };
+            }
+            s.tree_moving = tm;
+        }
         // Initial guess B = E at the patch roots, pulled up.
         for i in 0..s.elems.len() {
             let g = s.elems.geoms.as_slice()[i];
@@ -375,50 +498,319 @@ impl<'a> Solver<'a> {
                 let ends = self.links.ends.as_slice()[l.ix()];
                 let (r, s) = (ElementId(ends.receiver), ElementId(ends.source));
                 let forced = r == s || t.spread.is_infinite() || t.spread >= f32::MAX;
-                if !forced && self.link_error(l) <= thr {
+                if !forced && (self.link_error(l) <= thr || (self.shared_phase && t.varying())) {
                     continue;
                 }
-                match oracle::choose_split(&self.elems, r, s, self.min_area) {
-                    Split::Keep => {}
-                    Split::Receiver => {
-                        hierarchy::subdivide(&mut self.elems, &self.patches, r)?;
-                        for c in self.elems.children(r) {
-                            pairs.push((ElementId(c), s));
-                        }
-                        self.links.set_passive(l);
-                        changed = true;
+                let split = match oracle::choose_split(&self.elems, r, s, self.min_area) {
+                    Split::Keep => continue,
+                    Split::Receiver => r,
+                    Split::Source => s,
+                };
+                if let Some(w) = &mut self.window {
+                    if split.ix() < w.elems_len
+                        && self.elems.nodes.as_slice()[split.ix()].child_count == 0
+                        && self.elems.kind(split) == ElementKind::Surface
+                    {
+                        w.subdivided.push(split);
                     }
-                    Split::Source => {
-                        hierarchy::subdivide(&mut self.elems, &self.patches, s)?;
-                        for c in self.elems.children(s) {
-                            pairs.push((r, ElementId(c)));
-                        }
-                        self.links.set_passive(l);
-                        changed = true;
+                    if l.ix() < w.links_len {
+                        w.passivated.push(l);
                     }
                 }
+                hierarchy::subdivide(&mut self.elems, &self.patches, split)?;
+                for c in self.elems.children(split) {
+                    pairs.push(if split == r {
+                        (ElementId(c), s)
+                    } else {
+                        (r, ElementId(c))
+                    });
+                }
+                self.links.set_passive(l);
+                changed = true;
             }
             if pairs.is_empty() {
                 return Ok(changed);
             }
             let set = self.settings();
-            let (elems, bvh, eps_len) = (&self.elems, &self.bvh, self.eps_len);
+            let this = &*self;
             let evals: Vec<_> = pairs
                 .par_iter()
-                .map(|&(r, s)| oracle::evaluate(elems, bvh, r, s, &set, eps_len))
+                .map(|&(r, s)| {
+                    let ev = oracle::evaluate(&this.elems, &this.bvh, r, s, &set, this.eps_len);
+                    (ev, this.varying(r, s))
+                })
                 .collect();
             wave = Vec::with_capacity(evals.len());
-            for ((r, s), ev) in pairs.into_iter().zip(evals) {
-                if ev.empty {
+            for ((r, s), (ev, varying)) in pairs.into_iter().zip(evals) {
+                if ev.empty && !varying {
                     continue;
                 }
                 self.rays += ev.rays as u64;
                 if ev.transport.shaft_clear() {
                     self.shaft_clear += 1;
                 }
-                wave.push(self.links.push(r, s, ev.transport)?);
+                let mut t = ev.transport;
+                t.flags[2] = varying as u8;
+                wave.push(self.links.push(r, s, t)?);
             }
         }
+    }
+
+    /// True if element `e` holds a moving patch.
+    fn elem_moving(&self, e: ElementId) -> bool {
+        if let Some(&m) = self.tree_moving.get(e.ix()) {
+            return m;
+        }
+        let p = self.elems.geoms.as_slice()[e.ix()].patch;
+        p != u32::MAX && self.moving_patch[p as usize]
+    }
+
+    /// True if the link `r ← s` changes within the current window: an end moves, or
+    /// a box swept by a moving object meets the shaft between two surfaces (Damez &
+    /// Sillion §5.2: "same motion → kernel constant; shaft never crossed by a moving
+    /// object → visibility constant"; the swept boxes are the motion volumes of §7
+    /// item 1, so no time sampling decides it). A cluster link carries no visibility,
+    /// so between static ends it is constant. Always false in a static solve.
+    fn varying(&self, r: ElementId, s: ElementId) -> bool {
+        let Some(w) = &self.window else {
+            return false;
+        };
+        if self.elem_moving(r) || self.elem_moving(s) {
+            return true;
+        }
+        let geoms = self.elems.geoms.as_slice();
+        let (gr, gs) = (&geoms[r.ix()], &geoms[s.ix()]);
+        if gr.patch == u32::MAX || gs.patch == u32::MAX {
+            return false;
+        }
+        let (pr, ps) = (oracle::poly(gr), oracle::poly(gs));
+        let shaft = crate::shafts::Shaft::new(
+            pr.corners(),
+            DVec3::from_array(gr.normal),
+            ps.corners(),
+            DVec3::from_array(gs.normal),
+        );
+        w.swept.iter().any(|&(lo, hi)| !shaft.misses_box(lo, hi))
+    }
+
+    /// True if the scene has moving patches.
+    pub fn has_motion(&self) -> bool {
+        !self.tree_moving.is_empty()
+    }
+
+    /// Places the moving objects at time `t`: their patches, their elements (corners
+    /// and normals from the patch at `t`, area unchanged), the boxes of the clusters
+    /// that hold them, and their BVHs. A static scene does nothing.
+    pub fn set_time(&mut self, t: f64) {
+        if !self.has_motion() {
+            return;
+        }
+        for i in 0..self.patches.len() {
+            if !self.moving_patch[i] {
+                continue;
+            }
+            let m = self.scene.objects[self.patches.objects[i] as usize].to_world(t);
+            let g = self.patches.geometry[i];
+            let k = g.corners as usize;
+            let world: Vec<DVec3> = g.vertices[..k]
+                .iter()
+                .map(|&v| m.transform_point3(v))
+                .collect();
+            let poly = crate::geometry::Poly::new(&world);
+            self.patches.normals[i] = poly.normal();
+            self.patches.polys[i] = poly;
+        }
+        let n = self.elems.len();
+        for e in 0..n {
+            let g = self.elems.geoms.as_slice()[e];
+            if g.patch == u32::MAX || !self.moving_patch[g.patch as usize] {
+                continue;
+            }
+            let placed =
+                hierarchy::surface_geom(&self.patches, g.patch as usize, g.n as usize, &g.uv);
+            self.elems.geoms.as_mut_slice()[e] = Geom {
+                area: g.area,
+                ..placed
+            };
+        }
+        for e in (0..self.tree_moving.len()).rev() {
+            let geoms = self.elems.geoms.as_slice();
+            if !self.tree_moving[e] || geoms[e].patch != u32::MAX {
+                continue;
+            }
+            let node = self.elems.nodes.as_slice()[e];
+            let mut lo = DVec3::splat(f64::INFINITY);
+            let mut hi = DVec3::splat(f64::NEG_INFINITY);
+            for c in node.first_child..node.first_child + node.child_count {
+                let gc = &geoms[c as usize];
+                let k = if gc.patch == u32::MAX {
+                    2
+                } else {
+                    gc.n as usize
+                };
+                for p in &gc.corners[..k] {
+                    lo = lo.min(DVec3::from_array(*p));
+                    hi = hi.max(DVec3::from_array(*p));
+                }
+            }
+            let g = &mut self.elems.geoms.as_mut_slice()[e];
+            g.corners[0] = lo.to_array();
+            g.corners[1] = hi.to_array();
+        }
+        self.bvh.place(self.scene, t);
+    }
+
+    /// Starts a time window whose moving objects sweep the boxes `swept`: what the
+    /// pools hold now is the shared part, kept for every window; what the window adds
+    /// is released by [`Solver::release_window`]. Every active link is classified as
+    /// constant or varying over the window; a link that was varying and is now
+    /// constant is re-evaluated once (it may have been evaluated with a moving object
+    /// in its shaft).
+    pub fn begin_window(&mut self, swept: Vec<(DVec3, DVec3)>) {
+        self.window = Some(Window {
+            swept,
+            elems_len: self.elems.len(),
+            links_len: self.links.len(),
+            ..Window::default()
+        });
+        let active: Vec<LinkId> = (0..self.links.len() as u32)
+            .map(LinkId)
+            .filter(|l| self.links.transports.as_slice()[l.ix()].state() == LinkState::Active)
+            .collect();
+        let classes: Vec<bool> = active
+            .par_iter()
+            .map(|l| {
+                let e = self.links.ends.as_slice()[l.ix()];
+                self.varying(ElementId(e.receiver), ElementId(e.source))
+            })
+            .collect();
+        let mut stale = Vec::new();
+        for (&l, v) in active.iter().zip(classes) {
+            let t = &mut self.links.transports.as_mut_slice()[l.ix()];
+            if t.varying() && !v {
+                stale.push(l);
+            }
+            t.flags[2] = v as u8;
+        }
+        self.reevaluate(&stale);
+    }
+
+    /// Solves the part of a space-time solve that all windows share: the usual
+    /// rounds at the current time, with links classified against the boxes `swept`
+    /// over the whole animation and only constant links refined (a varying link stays
+    /// as coarse as it was created; each window refines it for its own frames).
+    pub fn run_shared(
+        &mut self,
+        swept: Vec<(DVec3, DVec3)>,
+        on_round: impl FnMut(&mut RoundRecord, &Solver),
+    ) -> Result<Vec<RoundRecord>> {
+        self.window = Some(Window {
+            swept,
+            ..Window::default()
+        });
+        self.shared_phase = true;
+        let records = self.run(on_round);
+        self.shared_phase = false;
+        self.window = None;
+        records
+    }
+
+    /// Drops what the current window added to the pools and restores the shared part
+    /// as it was when the window began.
+    pub fn release_window(&mut self) {
+        let Some(w) = self.window.take() else {
+            return;
+        };
+        self.elems.truncate(w.elems_len);
+        self.links.truncate(w.links_len);
+        for l in w.passivated {
+            self.links.set_active(l);
+        }
+        for e in w.subdivided {
+            let node = &mut self.elems.nodes.as_mut_slice()[e.ix()];
+            node.first_child = 0;
+            node.child_count = 0;
+        }
+        self.pull_pool();
+    }
+
+    /// Re-evaluates the links `ids` where the geometry stands now (state and time
+    /// class kept).
+    fn reevaluate(&mut self, ids: &[LinkId]) {
+        if ids.is_empty() {
+            return;
+        }
+        let set = self.settings();
+        let this = &*self;
+        let evals: Vec<_> = ids
+            .par_iter()
+            .map(|&l| {
+                let e = this.links.ends.as_slice()[l.ix()];
+                oracle::evaluate(
+                    &this.elems,
+                    &this.bvh,
+                    ElementId(e.receiver),
+                    ElementId(e.source),
+                    &set,
+                    this.eps_len,
+                )
+            })
+            .collect();
+        for (&l, ev) in ids.iter().zip(evals) {
+            self.rays += ev.rays as u64;
+            let tr = &mut self.links.transports.as_mut_slice()[l.ix()];
+            let flags = tr.flags;
+            *tr = ev.transport;
+            tr.flags[0] = flags[0];
+            tr.flags[2] = flags[2];
+        }
+    }
+
+    /// One frame of a space-time solve at time `t` (inside the current window): the
+    /// moving objects are placed at `t`, the window's varying links re-evaluated and
+    /// refined against `eps · b_ref`, and the leaf system solved again, warm-started
+    /// from the previous frame. Constant links keep their coefficients, leaf rows
+    /// and final-gather terms from earlier frames of the window.
+    pub fn frame(&mut self, t: f64, b_ref: f64) -> Result<FrameCost> {
+        let rays0 = self.rays;
+        self.set_time(t);
+        let varying: Vec<LinkId> = (0..self.links.len() as u32)
+            .map(LinkId)
+            .filter(|l| {
+                let tr = &self.links.transports.as_slice()[l.ix()];
+                tr.state() == LinkState::Active && tr.varying()
+            })
+            .collect();
+        self.reevaluate(&varying);
+        let n_varying = varying.len() as u64;
+        let mut residual = 0.0;
+        // Refine and solve again while refining changes something (radiosity moved
+        // by the new links can push others over the threshold), as the rounds of a
+        // static solve do.
+        let mut wave = varying;
+        for pass in 0..FRAME_PASSES {
+            let changed = self.refine(wave, self.opts.eps * b_ref)?;
+            if pass > 0 && !changed {
+                break;
+            }
+            self.index_links();
+            self.compute_leaf_rows();
+            residual = self.solve_leaves()?;
+            wave = (0..self.links.len() as u32)
+                .map(LinkId)
+                .filter(|l| self.links.transports.as_slice()[l.ix()].state() == LinkState::Active)
+                .collect();
+        }
+        Ok(FrameCost {
+            varying_links: n_varying,
+            rays: self.rays - rays0,
+            residual,
+        })
+    }
+
+    /// Area-weighted RMS of the leaves' reflected radiosity (the error scale).
+    pub fn radiosity_scale(&self) -> f64 {
+        self.rms_radiosity()
     }
 
     /// Rebuilds the leaf list and the by-receiver index of active links.
@@ -468,20 +860,36 @@ impl<'a> Solver<'a> {
         let nodes = elems.nodes.as_slice();
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
-        let rows: Vec<Vec<(u32, f64)>> = self
+        let cache = self.window.as_ref().map(|w| &w.rows);
+        type Fresh = Vec<((u32, u32), f64)>;
+        let rows: Vec<(Vec<(u32, f64)>, Fresh)> = self
             .leaves
             .par_iter()
             .map(|&leaf| {
                 let g = &geoms[leaf.ix()];
                 let q = oracle::samples(g);
                 let n = DVec3::from_array(g.normal);
+                let leaf_moving = self.elem_moving(leaf);
                 let mut row = Vec::new();
+                let mut fresh = Vec::new();
                 let mut e = leaf.0;
                 while e != u32::MAX {
                     for &l in self.links_of(e as usize) {
                         let t = &tr[l as usize];
                         let s = ends[l as usize].source;
                         let gs = &geoms[s as usize];
+                        // Constant link, static leaf: the coefficient of an earlier
+                        // frame of the window holds.
+                        let cacheable = !leaf_moving && !t.varying();
+                        if let Some(&c) = cache
+                            .filter(|_| cacheable)
+                            .and_then(|c| c.get(&(leaf.0, l)))
+                        {
+                            if c > 0.0 {
+                                row.push((s, c));
+                            }
+                            continue;
+                        }
                         let coef = if gs.patch == u32::MAX {
                             t.f as f64
                         } else if t.shaft_clear() {
@@ -521,20 +929,26 @@ impl<'a> Solver<'a> {
                                 })
                                 .sum()
                         };
+                        if cache.is_some() && cacheable {
+                            fresh.push(((leaf.0, l), coef));
+                        }
                         if coef > 0.0 {
                             row.push((s, coef));
                         }
                     }
                     e = nodes[e as usize].parent;
                 }
-                row
+                (row, fresh)
             })
             .collect();
         self.row_start.clear();
         self.row_sources.clear();
         self.row_coefs.clear();
         self.row_start.push(0);
-        for row in rows {
+        for (row, fresh) in rows {
+            if let Some(w) = &mut self.window {
+                w.rows.extend(fresh);
+            }
             for (s, c) in row {
                 self.row_sources.push(s);
                 self.row_coefs.push(c);
@@ -657,11 +1071,12 @@ impl<'a> Solver<'a> {
         }
     }
 
-    /// Radiosity transported from source `s` to the point `x` (normal `n`): exact
-    /// point-to-polygon factor, visibility by rays unless `clear`, sources that look
-    /// large from `x` opened into their children.
+    /// Transfer terms from source `s` to the point `x` (normal `n`): `(element,
+    /// factor)` pairs whose `Σ factor · B_element` is the radiosity the point gathers
+    /// from `s`; exact point-to-polygon factors, visibility by rays unless `clear`,
+    /// sources that look large from `x` opened into their children.
     #[allow(clippy::too_many_arguments)]
-    fn point_transfer(
+    fn point_terms(
         &self,
         x: DVec3,
         n: DVec3,
@@ -670,7 +1085,8 @@ impl<'a> Solver<'a> {
         clear: bool,
         vis: f64,
         key: u64,
-    ) -> [f64; 3] {
+        out: &mut Vec<(u32, f64)>,
+    ) {
         let geoms = self.elems.geoms.as_slice();
         let nodes = self.elems.nodes.as_slice();
         let gs = &geoms[s];
@@ -678,9 +1094,8 @@ impl<'a> Solver<'a> {
         let (c, rad) = oracle::sphere(gs);
         let d = c.distance(x).max(f64::MIN_POSITIVE);
         if node.child_count > 0 && rad / d > self.opts.open_ratio {
-            let mut acc = [0.0; 3];
             for ch in node.first_child..node.first_child + node.child_count {
-                let v = self.point_transfer(
+                self.point_terms(
                     x,
                     n,
                     receiver_patch,
@@ -688,14 +1103,11 @@ impl<'a> Solver<'a> {
                     clear,
                     vis,
                     oracle::hash3(key, ch as u64, 1),
+                    out,
                 );
-                for k in 0..3 {
-                    acc[k] += v[k];
-                }
             }
-            return acc;
+            return;
         }
-        let b = self.elems.radiosities.as_slice()[s];
         let f = if gs.patch == u32::MAX {
             let u = (c - x) / d;
             gs.area * n.dot(u).max(0.0) * 0.25 / (std::f64::consts::PI * d * d) * vis
@@ -727,11 +1139,26 @@ impl<'a> Solver<'a> {
                 )
             }
         };
-        [f * b[0] as f64, f * b[1] as f64, f * b[2] as f64]
+        if f > 0.0 {
+            out.push((s as u32, f));
+        }
     }
 
-    /// Final gather at point `x` of leaf `leaf`: `(B(x), valid)`.
-    fn gather_point(&self, leaf: ElementId, x: DVec3, point_key: u64) -> ([f64; 3], bool) {
+    /// Final gather at point `x` of leaf `leaf`: `(B(x), valid, fresh)`.
+    ///
+    /// In a time window, the terms that stay constant over the window at a static
+    /// point are kept in `known` (one merged linear form per point, with the links it
+    /// covers): constant links, and varying links whose shaft from the point to the
+    /// source misses every box the moving objects sweep. `fresh` returns the terms of
+    /// such links computed now, to be merged into `known` by the caller.
+    fn gather_point(
+        &self,
+        leaf: ElementId,
+        x: DVec3,
+        point_key: u64,
+        known: Option<&HashMap<PointKey, PointTerms>>,
+        pk: PointKey,
+    ) -> ([f64; 3], bool, FreshTerms) {
         let geoms = self.elems.geoms.as_slice();
         let nodes = self.elems.nodes.as_slice();
         let ends = self.links.ends.as_slice();
@@ -745,14 +1172,34 @@ impl<'a> Solver<'a> {
             Some(h) => self.patches.normals[h.patch as usize].dot(n) <= 0.0,
             None => true,
         };
+        let b = self.elems.radiosities.as_slice();
+        let window = self.window.as_ref().filter(|_| !self.elem_moving(leaf));
+        let cached = known.and_then(|m| m.get(&pk));
         let mut h = [0.0; 3];
+        if let Some(c) = cached {
+            for &(src, f) in &c.terms {
+                for k in 0..3 {
+                    h[k] += f * b[src as usize][k] as f64;
+                }
+            }
+        }
+        let mut fresh = Vec::new();
+        let mut terms = Vec::new();
         let mut e = leaf.0;
         while e != u32::MAX {
             for &l in self.links_of(e as usize) {
                 let t = &tr[l as usize];
                 let s = ends[l as usize].source as usize;
+                let keep = window.is_some_and(|w| {
+                    !self.elem_moving(ElementId(s as u32))
+                        && (!t.varying() || point_shaft_clear(x, n, &geoms[s], &w.swept))
+                });
+                if keep && cached.is_some_and(|c| c.links.binary_search(&l).is_ok()) {
+                    continue;
+                }
+                terms.clear();
                 let key = oracle::hash3(self.opts.seed, l as u64, point_key);
-                let v = self.point_transfer(
+                self.point_terms(
                     x,
                     n,
                     p as u32,
@@ -760,9 +1207,15 @@ impl<'a> Solver<'a> {
                     t.shaft_clear(),
                     t.visibility as f64,
                     key,
+                    &mut terms,
                 );
-                for k in 0..3 {
-                    h[k] += v[k];
+                for &(src, f) in &terms {
+                    for k in 0..3 {
+                        h[k] += f * b[src as usize][k] as f64;
+                    }
+                }
+                if keep {
+                    fresh.push((l, terms.clone()));
                 }
             }
             e = nodes[e as usize].parent;
@@ -776,6 +1229,7 @@ impl<'a> Solver<'a> {
                 em[2] + rho[2] * h[2],
             ],
             valid,
+            fresh,
         )
     }
 
@@ -788,7 +1242,33 @@ impl<'a> Solver<'a> {
     /// meshes the stored answer to where `B(x)` bends (room edges, contact lines,
     /// shadow boundaries) without refining the link hierarchy there.
     pub fn solution(&self) -> Solution {
+        let leaves = self.reconstruct();
+        let (active, passive) = self.links.counts();
+        Solution {
+            scene: self.scene.clone(),
+            patches: self.patches.geometry.clone(),
+            leaves,
+            stats: SolveStats {
+                seconds: 0.0,
+                iterations: 0,
+                elements: self.elems.len() as u64,
+                links_active: active,
+                links_passive: passive,
+                estimated_error: 0.0,
+                residual: 0.0,
+            },
+        }
+    }
+
+    /// The reconstruction cells of [`Solver::solution`] as stored leaves (time range
+    /// the solver's), sorted by patch and parameters.
+    pub fn reconstruct(&self) -> Vec<Leaf> {
         let geoms = self.elems.geoms.as_slice();
+        // The window's kept terms, taken out of their lock for the parallel gathers.
+        let mut known = self
+            .window
+            .as_ref()
+            .map(|w| std::mem::take(&mut *w.points.lock().unwrap_or_else(|e| e.into_inner())));
         let b_ref = self.rms_radiosity();
         let tol = self.opts.recon_tol * b_ref;
         let min_area = (self.opts.recon_min_size * self.patches.diameter).powi(2);
@@ -819,10 +1299,18 @@ impl<'a> Solver<'a> {
                 }
                 ids.push((corners, cache.register(c, centre, centre)));
             }
-            cache.evaluate(
-                |leaf, x, key| self.gather_point(leaf, x, key),
+            let fresh = cache.evaluate(
+                |leaf, x, key, pk| self.gather_point(leaf, x, key, known.as_ref(), pk),
                 &self.patches,
             );
+            if let Some(m) = known.as_mut() {
+                for (pk, links) in fresh {
+                    let entry = m.entry(pk).or_default();
+                    for (l, terms) in links {
+                        entry.add(l, &terms);
+                    }
+                }
+            }
             let mut next = Vec::new();
             for (c, (corners, centre)) in cells.into_iter().zip(ids) {
                 let vals = corner_values(
@@ -874,21 +1362,10 @@ impl<'a> Solver<'a> {
                 .then(a.uv[0][0].total_cmp(&b.uv[0][0]))
                 .then(a.uv[0][1].total_cmp(&b.uv[0][1]))
         });
-        let (active, passive) = self.links.counts();
-        Solution {
-            scene: self.scene.clone(),
-            patches: self.patches.geometry.clone(),
-            leaves,
-            stats: SolveStats {
-                seconds: 0.0,
-                iterations: 0,
-                elements: self.elems.len() as u64,
-                links_active: active,
-                links_passive: passive,
-                estimated_error: 0.0,
-                residual: 0.0,
-            },
+        if let (Some(w), Some(m)) = (&self.window, known) {
+            *w.points.lock().unwrap_or_else(|e| e.into_inner()) = m;
         }
+        leaves
     }
 
     /// Piecewise-constant radiosity of every leaf (element averages), for tests.
@@ -983,8 +1460,9 @@ impl Cell {
 #[derive(Default)]
 struct VertexCache {
     index: HashMap<(u32, u32, u32), usize>,
-    /// (leaf whose links gather, parameter point, point inset towards this uv).
-    points: Vec<(ElementId, u32, [f32; 2], [f32; 2])>,
+    /// (leaf whose links gather, patch, parameter point, point inset towards this
+    /// uv, the point's key).
+    points: Vec<GatherPoint>,
     values: Vec<([f64; 3], bool)>,
 }
 
@@ -993,30 +1471,42 @@ impl VertexCache {
         let q = |x: f32| (x as f64 * (1u64 << 24) as f64).round() as u32;
         let key = (c.patch, q(uv[0]), q(uv[1]));
         *self.index.entry(key).or_insert_with(|| {
-            self.points.push((c.leaf, c.patch, uv, toward));
+            self.points.push((c.leaf, c.patch, uv, toward, key));
             self.points.len() - 1
         })
     }
 
+    /// Gathers the points registered since the last call; returns the terms to keep
+    /// (see [`Solver::gather_point`]).
+    #[allow(clippy::type_complexity)]
     fn evaluate(
         &mut self,
-        gather: impl Fn(ElementId, DVec3, u64) -> ([f64; 3], bool) + Sync,
+        gather: impl Fn(ElementId, DVec3, u64, PointKey) -> ([f64; 3], bool, FreshTerms) + Sync,
         patches: &Patches,
-    ) {
+    ) -> Vec<(PointKey, FreshTerms)> {
         let from = self.values.len();
         let new: Vec<_> = self.points[from..]
             .par_iter()
             .enumerate()
-            .map(|(k, &(leaf, patch, uv, toward))| {
+            .map(|(k, &(leaf, patch, uv, toward, pk))| {
                 let x = patches.point(patch as usize, uv[0] as f64, uv[1] as f64);
                 let c = patches.point(patch as usize, toward[0] as f64, toward[1] as f64);
                 // Evaluate a hair inside the cell: on an edge shared with a
                 // perpendicular wall the factor jumps (the wall is seen edge-on), and
                 // the interpolant wants the limit from inside.
-                gather(leaf, x + CORNER_INSET * (c - x), (from + k) as u64)
+                let (b, valid, fresh) =
+                    gather(leaf, x + CORNER_INSET * (c - x), (from + k) as u64, pk);
+                ((b, valid), (pk, fresh))
             })
             .collect();
-        self.values.extend(new);
+        let mut keep = Vec::new();
+        for (v, (pk, fresh)) in new {
+            self.values.push(v);
+            if !fresh.is_empty() {
+                keep.push((pk, fresh));
+            }
+        }
+        keep
     }
 }
 

@@ -1,0 +1,424 @@
+//! Space-time solve (issue 4) against the static solver, frame by frame.
+
+use glam::{DQuat, DVec3};
+use rhier::geometry::{Patches, SceneBvh};
+use rhier::playback::{ProbePoint, probe};
+use rhier::scene::{MotionKey, MotionTrack, Scene, cornell_box};
+use rhier::shafts::Shaft;
+use rhier::solver::report::relative_rms;
+use rhier::solver::spacetime::{
+    self, SpaceTime, SpaceTimeOptions, WindowOutput, frame_times, swept_boxes,
+};
+use rhier::solver::{Leaf, Solution, SolveOptions, SolveStats, Solver};
+
+fn key(t: f64, x: f64) -> MotionKey {
+    MotionKey {
+        t,
+        translation: DVec3::new(x, 0.0, 0.0),
+        rotation: DQuat::IDENTITY,
+        scale: DVec3::ONE,
+    }
+}
+
+/// The Cornell box with blocks whose short block slides `dx` mm along x over
+/// `[0, duration]`.
+fn sliding_block(dx: f64, duration: f64) -> Scene {
+    let mut scene = cornell_box(true);
+    scene.time.start = 0.0;
+    scene.time.end = duration;
+    let block = scene
+        .objects
+        .iter_mut()
+        .find(|o| o.name == "short_block")
+        .expect("the Cornell box has a short block");
+    block.motion = Some(MotionTrack {
+        keys: vec![key(0.0, 0.0), key(duration, dx)],
+    });
+    scene
+}
+
+fn opts() -> SolveOptions {
+    SolveOptions::default()
+}
+
+fn st(fps: f64, window: f64) -> SpaceTimeOptions {
+    SpaceTimeOptions {
+        fps,
+        window,
+        ..SpaceTimeOptions::default()
+    }
+}
+
+fn solve_all(scene: &Scene, st: &SpaceTimeOptions) -> Vec<WindowOutput> {
+    let mut out = Vec::new();
+    spacetime::solve(
+        scene,
+        opts(),
+        st,
+        |_| {},
+        |w| {
+            out.push(w);
+            Ok(())
+        },
+    )
+    .unwrap();
+    out
+}
+
+fn as_solution(scene: &Scene, patches: &Solution, windows: &[WindowOutput]) -> Solution {
+    Solution {
+        scene: scene.clone(),
+        patches: patches.patches.clone(),
+        leaves: windows.iter().flat_map(|w| w.leaves.clone()).collect(),
+        stats: SolveStats::default(),
+    }
+}
+
+/// Probe points on the Cornell box's floor, back wall and ceiling, away from where
+/// the short block slides (a point under a moving block has no surface to probe).
+fn cornell_points() -> Vec<ProbePoint> {
+    let mut pts = Vec::new();
+    for i in 0..8 {
+        for j in 0..8 {
+            let (u, v) = ((i as f64 + 0.5) / 8.0, (j as f64 + 0.5) / 8.0);
+            let (x, z) = (20.0 + 510.0 * u, 20.0 + 520.0 * v);
+            if !((0.0..320.0).contains(&x) && (40.0..300.0).contains(&z)) {
+                pts.push(ProbePoint {
+                    p: DVec3::new(x, 0.0, z),
+                    n: DVec3::Y,
+                });
+            }
+            pts.push(ProbePoint {
+                p: DVec3::new(x, 20.0 + 510.0 * v, 559.2),
+                n: -DVec3::Z,
+            });
+            if !((200.0..360.0).contains(&x) && (210.0..350.0).contains(&z)) {
+                pts.push(ProbePoint {
+                    p: DVec3::new(x, 548.8, z),
+                    n: -DVec3::Y,
+                });
+            }
+        }
+    }
+    pts
+}
+
+#[test]
+fn each_frame_is_as_accurate_as_the_static_solve_of_that_frame() {
+    // The tolerance is the per-frame solve's own discretisation error: against a fine
+    // static solve (eps 0.1) of the same frame, space-time must be as close as the
+    // static solve at the same eps (within 15%).
+    let scene = sliding_block(-60.0, 0.8);
+    let windows = solve_all(&scene, &st(5.0, 0.4));
+    assert_eq!(frame_times(0.0, 0.8, 5.0).len(), 5);
+    assert_eq!(
+        windows.len(),
+        3,
+        "2 frames per window: 0.0 0.2 | 0.4 0.6 | 0.8"
+    );
+    let pts = cornell_points();
+    let fixed = |eps: f64, t: f64| {
+        let o = SolveOptions { eps, ..opts() };
+        let mut s = Solver::at_time(&scene, o, t, [0.0, 0.8]).unwrap();
+        s.run(|_, _| {}).unwrap();
+        s.solution()
+    };
+    for t in [0.0, 0.4, 0.8] {
+        let base = fixed(0.5, t);
+        let fine = probe(&fixed(0.1, t), &pts, t).unwrap();
+        let per_frame = probe(&base, &pts, t).unwrap();
+        let space_time = probe(&as_solution(&scene, &base, &windows), &pts, t).unwrap();
+        let (e_pf, e_st) = (
+            relative_rms(&per_frame, &fine),
+            relative_rms(&space_time, &fine),
+        );
+        let apart = relative_rms(&space_time, &per_frame);
+        eprintln!(
+            "t = {t}: per-frame {:.3}%, space-time {:.3}% from the fine solve; {:.3}% apart",
+            e_pf * 100.0,
+            e_st * 100.0,
+            apart * 100.0
+        );
+        assert!(e_st <= 1.15 * e_pf, "t = {t}");
+        assert!(apart < 0.015, "t = {t}");
+    }
+}
+
+#[test]
+fn the_moving_shadow_moves() {
+    // Where the per-frame solves change most between the first and the last frame
+    // (the floor the block's shadow leaves or reaches), the stored leaves follow.
+    let scene = sliding_block(-60.0, 0.8);
+    let windows = solve_all(&scene, &st(5.0, 0.4));
+    let mut floor = Vec::new();
+    for i in 0..24 {
+        for j in 0..24 {
+            let (x, z) = (
+                10.0 + 530.0 * i as f64 / 23.0,
+                10.0 + 540.0 * j as f64 / 23.0,
+            );
+            // Not where the block itself passes.
+            if !((10.0..300.0).contains(&x) && (55.0..285.0).contains(&z)) {
+                floor.push(ProbePoint {
+                    p: DVec3::new(x, 0.0, z),
+                    n: DVec3::Y,
+                });
+            }
+        }
+    }
+    let fixed = |t: f64| {
+        let mut s = Solver::at_time(&scene, opts(), t, [0.0, 0.8]).unwrap();
+        s.run(|_, _| {}).unwrap();
+        s.solution()
+    };
+    let (s0, s1) = (fixed(0.0), fixed(0.8));
+    let r0 = probe(&s0, &floor, 0.0).unwrap();
+    let r1 = probe(&s1, &floor, 0.8).unwrap();
+    let sol = as_solution(&scene, &s0, &windows);
+    let b0 = probe(&sol, &floor, 0.0).unwrap();
+    let b1 = probe(&sol, &floor, 0.8).unwrap();
+    let change = |a: [f64; 3], b: [f64; 3]| (a[0] - b[0]).abs() / a[0].max(b[0]);
+    let k = (0..floor.len())
+        .max_by(|&a, &b| change(r0[a], r1[a]).total_cmp(&change(r0[b], r1[b])))
+        .unwrap();
+    eprintln!(
+        "at {:?}: per-frame {:?} → {:?}, space-time {:?} → {:?}",
+        floor[k].p, r0[k], r1[k], b0[k], b1[k]
+    );
+    assert!(change(r0[k], r1[k]) > 0.2, "the shadow moves");
+    let scale = r0[k][0].max(r1[k][0]);
+    assert!((b0[k][0] - r0[k][0]).abs() < 0.05 * scale);
+    assert!((b1[k][0] - r1[k][0]).abs() < 0.05 * scale);
+}
+
+#[test]
+fn a_static_scene_makes_no_varying_link_and_equals_the_static_solve() {
+    let scene = cornell_box(true);
+    let mut varying = 0;
+    let mut windows = Vec::new();
+    spacetime::solve(
+        &scene,
+        opts(),
+        &st(10.0, 0.2),
+        |f| varying += f.varying_links,
+        |w| {
+            windows.push(w);
+            Ok(())
+        },
+    )
+    .unwrap();
+    assert_eq!(varying, 0);
+    let mut s = Solver::new(&scene, opts()).unwrap();
+    s.run(|_, _| {}).unwrap();
+    let fixed = s.solution();
+    // One window (the domain is one instant), every cell stored once.
+    assert_eq!(windows.len(), 1);
+    let leaves = &windows[0].leaves;
+    assert_eq!(leaves.len(), fixed.leaves.len());
+    let key = |l: &Leaf| (l.patch, l.uv.map(|c| c.map(f32::to_bits)));
+    let mut a: Vec<&Leaf> = leaves.iter().collect();
+    let mut b: Vec<&Leaf> = fixed.leaves.iter().collect();
+    a.sort_by_key(|l| key(l));
+    b.sort_by_key(|l| key(l));
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!((x.patch, x.uv), (y.patch, y.uv));
+        for i in 0..x.corners as usize {
+            for c in 0..3 {
+                let d = (x.b[i][c] - y.b[i][c]).abs();
+                assert!(d <= 1e-5 * y.b[i][c].abs().max(1e-3), "{x:?} vs {y:?}");
+            }
+        }
+    }
+}
+
+/// Two closed rooms side by side, each lit by a ceiling lamp; a cube slides inside
+/// the first. Nothing in the second room can change.
+fn two_rooms() -> Scene {
+    use rhier::scene::{Material, MaterialId, Object, Polygon, TimeDomain};
+    let white = Material {
+        name: "white".into(),
+        rho: [0.7, 0.7, 0.7],
+        emission: [0.0; 3],
+    };
+    let lamp = Material {
+        name: "lamp".into(),
+        rho: [0.5, 0.5, 0.5],
+        emission: [10.0, 10.0, 10.0],
+    };
+    // Inward-facing box [lo, hi]: 6 quads and a lamp facing down.
+    let room = |name: &str, lo: DVec3, hi: DVec3| {
+        let c = |x: usize, y: usize, z: usize| {
+            DVec3::new(
+                if x == 0 { lo.x } else { hi.x },
+                if y == 0 { lo.y } else { hi.y },
+                if z == 0 { lo.z } else { hi.z },
+            )
+        };
+        // The corner lists below run clockwise seen from inside: reversed here.
+        let q = |v: [DVec3; 4], m: u32| Polygon {
+            vertices: v.iter().rev().copied().collect(),
+            material: MaterialId(m),
+        };
+        let mid = (lo + hi) * 0.5;
+        let lamp_quad = [
+            DVec3::new(mid.x - 0.2, hi.y - 1e-3, mid.z - 0.2),
+            DVec3::new(mid.x - 0.2, hi.y - 1e-3, mid.z + 0.2),
+            DVec3::new(mid.x + 0.2, hi.y - 1e-3, mid.z + 0.2),
+            DVec3::new(mid.x + 0.2, hi.y - 1e-3, mid.z - 0.2),
+        ];
+        Object {
+            name: name.into(),
+            polygons: vec![
+                q([c(0, 0, 0), c(1, 0, 0), c(1, 0, 1), c(0, 0, 1)], 0),
+                q([c(0, 1, 0), c(0, 1, 1), c(1, 1, 1), c(1, 1, 0)], 0),
+                q([c(0, 0, 0), c(0, 0, 1), c(0, 1, 1), c(0, 1, 0)], 0),
+                q([c(1, 0, 0), c(1, 1, 0), c(1, 1, 1), c(1, 0, 1)], 0),
+                q([c(0, 0, 0), c(0, 1, 0), c(1, 1, 0), c(1, 0, 0)], 0),
+                q([c(0, 0, 1), c(1, 0, 1), c(1, 1, 1), c(0, 1, 1)], 0),
+                q(lamp_quad, 1),
+            ],
+            motion: None,
+        }
+    };
+    let a = room("room_a", DVec3::ZERO, DVec3::new(2.0, 2.0, 2.0));
+    let b = room(
+        "room_b",
+        DVec3::new(3.0, 0.0, 0.0),
+        DVec3::new(5.0, 2.0, 2.0),
+    );
+    // An outward-facing cube of side 0.4 resting 1 cm above room A's floor.
+    let (lo, hi) = (DVec3::new(0.3, 0.01, 0.8), DVec3::new(0.7, 0.41, 1.2));
+    let c = |x: usize, y: usize, z: usize| {
+        DVec3::new(
+            if x == 0 { lo.x } else { hi.x },
+            if y == 0 { lo.y } else { hi.y },
+            if z == 0 { lo.z } else { hi.z },
+        )
+    };
+    let q = |v: [DVec3; 4]| Polygon {
+        vertices: v.iter().rev().copied().collect(),
+        material: MaterialId(0),
+    };
+    let cube = Object {
+        name: "cube".into(),
+        polygons: vec![
+            q([c(0, 0, 0), c(0, 0, 1), c(1, 0, 1), c(1, 0, 0)]),
+            q([c(0, 1, 0), c(1, 1, 0), c(1, 1, 1), c(0, 1, 1)]),
+            q([c(0, 0, 0), c(0, 1, 0), c(0, 1, 1), c(0, 0, 1)]),
+            q([c(1, 0, 0), c(1, 0, 1), c(1, 1, 1), c(1, 1, 0)]),
+            q([c(0, 0, 0), c(1, 0, 0), c(1, 1, 0), c(0, 1, 0)]),
+            q([c(0, 0, 1), c(0, 1, 1), c(1, 1, 1), c(1, 0, 1)]),
+        ],
+        motion: Some(MotionTrack {
+            keys: vec![key(0.0, 0.0), key(1.0, 0.9)],
+        }),
+    };
+    Scene {
+        time: TimeDomain {
+            start: 0.0,
+            end: 1.0,
+        },
+        materials: vec![white, lamp],
+        objects: vec![a, b, cube],
+        ..Scene::default()
+    }
+}
+
+#[test]
+fn where_nothing_changes_consecutive_frames_are_one_leaf() {
+    let scene = two_rooms();
+    let windows = solve_all(&scene, &st(10.0, 0.5));
+    assert_eq!(windows.len(), 3);
+    // Patches 7..14 are room B (room A's 7 polygons come first).
+    let mut in_b = 0;
+    for w in &windows {
+        for l in &w.leaves {
+            if (7..14).contains(&l.patch) {
+                in_b += 1;
+                assert_eq!(
+                    (l.time[0] as f64, l.time[1] as f64),
+                    (w.t0 as f32 as f64, w.t1 as f32 as f64),
+                    "a leaf of the static room holds over its whole window: {l:?}"
+                );
+            }
+        }
+    }
+    assert!(in_b > 0);
+    // And room A does change: some of its leaves are shorter than their window.
+    let short = windows
+        .iter()
+        .flat_map(|w| w.leaves.iter().map(move |l| (w, l)))
+        .filter(|(w, l)| l.patch < 7 && (l.time[1] - l.time[0]) < (w.t1 - w.t0) as f32 - 1e-6)
+        .count();
+    assert!(short > 0);
+}
+
+#[test]
+fn a_window_does_not_depend_on_the_ones_before_it() {
+    // What makes resume exact: solving window 1 alone gives what the full run gave.
+    let scene = sliding_block(-60.0, 0.8);
+    let full = solve_all(&scene, &st(5.0, 0.4));
+    let mut run = SpaceTime::new(&scene, opts(), st(5.0, 0.4), |_, _| {}).unwrap();
+    let w2 = run.solve_window(2, |_| {}).unwrap();
+    let w1 = run.solve_window(1, |_| {}).unwrap();
+    assert_eq!(w1, full[1]);
+    assert_eq!(w2, full[2]);
+}
+
+#[test]
+fn swept_shafts_catch_every_transient_blocker_that_time_sampling_sees() {
+    // Brute force: visibility between points of two static patches, sampled at 48
+    // times with the moving block placed at each; whenever it changes, the shaft
+    // between the patches must meet the block's swept box.
+    let scene = sliding_block(-200.0, 1.0);
+    let patches = Patches::at_time(&scene, 0.0);
+    let swept = swept_boxes(&scene, 0.0, 1.0);
+    assert_eq!(swept.len(), 1);
+    let moving: Vec<bool> = (0..patches.len())
+        .map(|i| scene.objects[patches.objects[i] as usize].is_moving())
+        .collect();
+    let mut bvh = SceneBvh::build(&scene, &patches, 0.0);
+    let stat: Vec<usize> = (0..patches.len()).filter(|&i| !moving[i]).collect();
+    let times: Vec<f64> = (0..48).map(|k| k as f64 / 47.0).collect();
+    let (mut changed, mut flagged, mut pairs) = (0, 0, 0);
+    for (ai, &a) in stat.iter().enumerate() {
+        for &b in &stat[ai + 1..] {
+            let (pa, pb) = (&patches.polys[a], &patches.polys[b]);
+            let shaft = Shaft::new(
+                pa.corners(),
+                patches.normals[a],
+                pb.corners(),
+                patches.normals[b],
+            );
+            let varying = swept.iter().any(|&(lo, hi)| !shaft.misses_box(lo, hi));
+            let mut seen: Option<Vec<bool>> = None;
+            let mut changes = false;
+            for &t in &times {
+                bvh.place(&scene, t);
+                let mut vis = Vec::new();
+                for i in 0..4 {
+                    for j in 0..4 {
+                        let x = patches.point(a, (i as f64 + 0.5) / 4.0, (j as f64 + 0.37) / 4.0);
+                        let y = patches.point(b, (j as f64 + 0.61) / 4.0, (i as f64 + 0.5) / 4.0);
+                        vis.push(bvh.occluded_except(x, y, [a as u32, b as u32]));
+                    }
+                }
+                if let Some(prev) = &seen {
+                    changes |= *prev != vis;
+                }
+                seen = Some(vis);
+            }
+            pairs += 1;
+            changed += changes as u32;
+            flagged += varying as u32;
+            assert!(
+                !changes || varying,
+                "patches {a} and {b}: visibility changes over time but the shaft misses the swept box"
+            );
+        }
+    }
+    eprintln!("{pairs} pairs: {changed} change over time, {flagged} flagged varying");
+    assert!(changed > 0, "the sliding block must block something");
+    // The swept box is conservative but not everything.
+    assert!(flagged < pairs);
+}
