@@ -7,6 +7,7 @@ mod play;
 mod probe;
 mod reference;
 mod solve;
+mod spacetime;
 
 use clap::{Parser, Subcommand};
 

@@ -90,6 +90,28 @@ pub struct Args {
     /// Print nothing but errors and warnings.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Frames per second at which a moving scene is solved.
+    #[arg(long, default_value_t = 25.0)]
+    pub fps: f64,
+    /// Seconds of animation per space-time window: frames are solved window by
+    /// window; each finished window is written and its memory released.
+    #[arg(long, default_value_t = 1.0)]
+    pub window: f64,
+    /// A stored cell keeps one value over consecutive frames while its corners stay
+    /// within this fraction of the RMS reflected radiosity of their mean.
+    #[arg(long, default_value_t = 0.01)]
+    pub merge_tol: f64,
+    /// Continue an interrupted space-time solve from its last finished window (kept
+    /// in OUT.rhier.partial/).
+    #[arg(long)]
+    pub resume: bool,
+    /// Memory budget of the pools in bytes: they live in memory-mapped files
+    /// (`--scratch`), and a window that exceeds it is reported.
+    #[arg(long)]
+    pub budget: Option<u64>,
+    /// Stop with an error after this many windows (to test --resume).
+    #[arg(long, hide = true)]
+    pub stop_after_windows: Option<u32>,
 }
 
 impl Args {
@@ -167,15 +189,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for w in &scene.warnings {
         eprintln!("rhier: warning: {w}");
     }
-    if scene.has_motion() {
-        eprintln!(
-            "rhier: warning: the scene moves, but space-time solving is not implemented yet: solving the scene as it stands at t = {}",
-            scene.time.start
-        );
-    }
-    let storage = match args.storage {
-        StorageKind::Ram => Storage::Ram,
-        StorageKind::Mmap => Storage::Mmap(args.scratch.clone().unwrap_or_else(std::env::temp_dir)),
+    let storage = match (args.storage, args.budget) {
+        (StorageKind::Ram, None) => Storage::Ram,
+        _ => Storage::Mmap(args.scratch.clone().unwrap_or_else(std::env::temp_dir)),
     };
     let opts = SolveOptions {
         storage,
@@ -189,6 +205,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         contact_meshing: !args.no_contact_meshing,
         ..SolveOptions::default()
     };
+    if scene.has_motion() {
+        return super::spacetime::run(&args, &scene, &stem, opts, start);
+    }
     let reference = args.reference.as_deref().map(read_reference).transpose()?;
     let probes = args.probe.as_deref().map(read_probe_points).transpose()?;
     let t = scene.time.start;

@@ -6,12 +6,14 @@
 //! of each section, [`writer`] streams a file chunk by chunk in time order and makes it
 //! valid only when finished (temporary name, fsync, rename), [`reader`] maps a file and
 //! validates it before any rkyv access, and [`memory`] holds the named counters that
-//! `inspect` and `solve --stats` print.
+//! `inspect` and `solve --stats` print, and [`journal`] keeps the finished windows of a space-time
+//! solve in progress so that `solve --resume` can continue it.
 //!
 //! It does not evaluate radiosity: that is [`crate::playback`], which runs the same
 //! code on a [`crate::solver::Solution`] in memory and on a [`Reader`].
 
 pub mod format;
+pub mod journal;
 pub mod memory;
 pub mod reader;
 pub mod records;

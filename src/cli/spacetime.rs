@@ -1,0 +1,258 @@
+//! The space-time branch of `rhier solve`: a scene with motion is solved window by
+//! window ([`rhier::solver::spacetime`]) and streamed into the `.rhier` file, one
+//! chunk per window, with a journal (`OUT.rhier.partial/`) that `--resume` continues
+//! from.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use rhier::playback::{probe, read_probe_points, write_probe_results};
+use rhier::scene::Scene;
+use rhier::solver::spacetime::{FrameRecord, SpaceTime, SpaceTimeOptions};
+use rhier::solver::{SolveOptions, SolveStats};
+use rhier::store::journal::{Journal, JournalWindow};
+use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
+
+use super::solve::Args;
+
+/// Checks the time settings: finite and positive.
+fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
+    for (name, v) in [
+        ("--fps", args.fps),
+        ("--window", args.window),
+        ("--merge-tol", args.merge_tol),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            anyhow::bail!("{name}: expected a finite number > 0, found {v}");
+        }
+    }
+    Ok(SpaceTimeOptions {
+        fps: args.fps,
+        window: args.window,
+        merge_tol: args.merge_tol,
+    })
+}
+
+/// What makes two solves produce the same windows: the scene and every setting that
+/// changes a result (not the storage, thread count being part of determinism).
+fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> String {
+    let settings = format!(
+        "eps {} min_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {} contact {} fps {} window {} merge {} threads {}",
+        opts.eps,
+        opts.min_size,
+        opts.rays_per_point,
+        opts.corner_rays,
+        opts.open_ratio,
+        opts.max_rounds,
+        opts.tolerance,
+        opts.seed,
+        opts.recon_tol,
+        opts.recon_min_size,
+        opts.contact_meshing,
+        st.fps,
+        st.window,
+        st.merge_tol,
+        rayon::current_num_threads(),
+    );
+    let scene_text = rhier::scene::to_json_string(scene);
+    format!(
+        "rhier space-time journal 1\n{settings}\nscene crc32 {:#010x}, {} bytes\n",
+        crc32fast::hash(scene_text.as_bytes()),
+        scene_text.len()
+    )
+}
+
+/// Runs the space-time solve of a moving scene.
+pub fn run(
+    args: &Args,
+    scene: &Scene,
+    stem: &str,
+    opts: SolveOptions,
+    start: Instant,
+) -> anyhow::Result<()> {
+    let st = options(args)?;
+    if args.reference.is_some() {
+        anyhow::bail!(
+            "--reference measures one static solve; for an animation compare probes at every frame (tools/spacetime_bench.py)"
+        );
+    }
+    if args.keep_links {
+        anyhow::bail!(
+            "--keep-links: a space-time solve releases each window's links when the window is written; nothing to keep"
+        );
+    }
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{stem}.rhier")));
+    let probes = args.probe.as_deref().map(read_probe_points).transpose()?;
+    let key = fingerprint(scene, &opts, &st);
+    let (journal, done) = if args.resume {
+        Journal::resume(&out, &key)?
+    } else {
+        (Journal::create(&out, &key)?, Vec::new())
+    };
+    let quiet = args.quiet;
+    let show_progress =
+        !quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
+    let bar = show_progress.then(|| {
+        let b = indicatif::ProgressBar::new_spinner();
+        b.set_message("shared part");
+        b.enable_steady_tick(std::time::Duration::from_millis(120));
+        b
+    });
+    let say = |line: String| match &bar {
+        Some(b) => b.println(line),
+        None if !quiet => eprintln!("{line}"),
+        None => {}
+    };
+    let mut run = SpaceTime::new(scene, opts, st, |rec, _| {
+        say(format!("shared {}", rec.summary()))
+    })?;
+    let n_windows = run.window_count();
+    if done.len() > n_windows {
+        anyhow::bail!(
+            "{}: {} windows journaled, but this solve has {n_windows}",
+            rhier::store::journal::journal_dir(&out).display(),
+            done.len()
+        );
+    }
+    if !done.is_empty() {
+        say(format!(
+            "resuming: {} of {n_windows} windows already solved",
+            done.len()
+        ));
+    }
+    let header = SolutionHeader {
+        scene,
+        patches: run.patches(),
+    };
+    let mut writer = Writer::create(&out, &header, WriteOptions::default())
+        .with_context(|| format!("creating {}", out.display()))?;
+    let mut frames: Vec<FrameRecord> = Vec::new();
+    let (mut stored, mut frame_cells) = (0u64, 0u64);
+    for w in &done {
+        writer.write_chunk(w.t0, w.t1, &w.leaves)?;
+        stored += w.leaves.len() as u64;
+        frame_cells += w.frame_cells;
+    }
+    let mut last_residual = 0.0;
+    for wi in done.len()..n_windows {
+        if args.stop_after_windows.is_some_and(|k| wi as u32 >= k) {
+            anyhow::bail!(
+                "stopped after {wi} windows as asked (--stop-after-windows); resume with --resume"
+            );
+        }
+        if let Some(b) = &bar {
+            b.set_message(format!("window {} of {n_windows}", wi + 1));
+        }
+        let w = run.solve_window(wi, |f| {
+            last_residual = f.residual;
+            say(f.summary());
+            frames.push(*f);
+        })?;
+        writer.write_chunk(w.t0, w.t1, &w.leaves)?;
+        journal.append(&JournalWindow {
+            index: w.index,
+            t0: w.t0,
+            t1: w.t1,
+            leaves: w.leaves.clone(),
+            frame_cells: w.frame_cells,
+        })?;
+        stored += w.leaves.len() as u64;
+        frame_cells += w.frame_cells;
+        if let Some(budget) = args.budget
+            && run.stats.peak_pool_bytes > budget
+        {
+            say(format!(
+                "rhier: warning: window {wi} held {} bytes of pools, over the budget of {budget}; use a shorter --window",
+                run.stats.peak_pool_bytes
+            ));
+        }
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let stats = SolveStats {
+        seconds: start.elapsed().as_secs_f64(),
+        iterations: run.stats.frames,
+        elements: run.stats.shared_elements,
+        links_active: run.stats.shared_links,
+        links_passive: 0,
+        estimated_error: run.stats.rounds.last().map_or(0.0, |r| r.estimated_error),
+        residual: last_residual,
+    };
+    writer
+        .finish(&stats)
+        .with_context(|| format!("writing {}", out.display()))?;
+    journal.finish()?;
+    if let Some(path) = &args.report {
+        let mut csv = String::from(
+            "frame,window,t,seconds,cells,elements,links,varying_links,rays,bytes_pools,residual\n",
+        );
+        for f in &frames {
+            csv.push_str(&format!(
+                "{},{},{},{:.6},{},{},{},{},{},{},{:e}\n",
+                f.frame,
+                f.window,
+                f.t,
+                f.seconds,
+                f.cells,
+                f.elements,
+                f.links,
+                f.varying_links,
+                f.rays,
+                f.bytes_pools,
+                f.residual
+            ));
+        }
+        std::fs::write(path, csv).with_context(|| format!("writing {}", path.display()))?;
+    }
+    if let (Some(points), Some(path)) = (&probes, &args.probe_out) {
+        let reader = Reader::open(&out)?;
+        let values = probe(&reader, points, scene.time.start)?;
+        write_probe_results(path, &values)?;
+    }
+    if !quiet {
+        eprintln!(
+            "solved {} frames ({} windows from the journal) of {} windows in {:.3} s ({:.3} s shared part): {} stored cells for {} frame cells ({:.1}x fewer); wrote {}",
+            run.stats.frames,
+            done.len(),
+            n_windows,
+            stats.seconds,
+            run.stats.shared_seconds,
+            stored,
+            frame_cells,
+            frame_cells as f64 / stored.max(1) as f64,
+            out.display()
+        );
+    }
+    if args.stats {
+        let mut m = MemoryReport::for_run(stem);
+        m.add_pool(
+            "shared elements",
+            run.stats.shared_elements,
+            run.solver().elems.bytes() as u64,
+        );
+        m.add_pool(
+            "shared links",
+            run.stats.shared_links,
+            run.solver().links.bytes() as u64,
+        );
+        m.add_pool("peak pools (a window)", 0, run.stats.peak_pool_bytes);
+        m.add_pool(
+            "bvh",
+            run.solver().bvh.triangle_count() as u64,
+            run.solver().bvh.resident_bytes() as u64,
+        );
+        m.add_pool(
+            "stored cells",
+            stored,
+            stored * std::mem::size_of::<rhier::solver::Leaf>() as u64,
+        );
+        println!("{m}");
+    }
+    Ok(())
+}

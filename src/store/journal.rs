@@ -1,0 +1,280 @@
+//! The journal of a space-time solve in progress: what `solve --resume` continues from.
+//!
+//! A space-time solve writes its `.rhier` file through a [`super::Writer`], which only
+//! makes the file valid at the end. So that an interrupted solve loses at most the
+//! window it was working on, every finished window is also written to the directory
+//! `<out>.partial/` as one file `window-NNNNN.bin`:
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 0..8 | magic `RHIERWIN` |
+//! | 8..12 | version `1` (u32 LE) |
+//! | 12..16 | window index (u32 LE) |
+//! | 16..24, 24..32 | `t0`, `t1` (f64 LE) |
+//! | 32..40 | leaf count `n` (u64 LE) |
+//! | 40..48 | the window's frame-cell count (u64 LE) |
+//! | 48..52 | CRC-32 of the leaf bytes (u32 LE) |
+//! | 52..56 | zero |
+//! | 56.. | `n` leaves as [`Leaf`] records (96 bytes each, little-endian) |
+//!
+//! Each is written to a temporary name, fsynced and renamed, so a window file is
+//! either whole or absent. The file `solve.key` holds a fingerprint of the scene and
+//! the settings; `--resume` refuses a journal made by a different solve, and reads
+//! the windows `0, 1, …` up to the first missing one, checking every field and the
+//! CRC (a damaged window is an error that names the file, not a silent re-solve).
+//! The directory is removed when the `.rhier` file is complete. Nothing in it looks
+//! like a `.rhier` file.
+
+use std::fs::{self, File};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use super::format::crc32;
+use crate::error::{Error, Result};
+use crate::solver::Leaf;
+
+const MAGIC: &[u8; 8] = b"RHIERWIN";
+const VERSION: u32 = 1;
+const HEADER: usize = 56;
+const LEAF: usize = std::mem::size_of::<Leaf>();
+
+/// One finished window as kept in the journal.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JournalWindow {
+    /// Window index.
+    pub index: u32,
+    /// Time range.
+    pub t0: f64,
+    /// End of the time range.
+    pub t1: f64,
+    /// Leaves starting in the window.
+    pub leaves: Vec<Leaf>,
+    /// Cells over the window's frames (statistics).
+    pub frame_cells: u64,
+}
+
+/// The journal directory of one output file.
+#[derive(Debug)]
+pub struct Journal {
+    dir: PathBuf,
+}
+
+/// Journal directory of the output `out`: `<out>.partial`.
+pub fn journal_dir(out: &Path) -> PathBuf {
+    let mut name = out.as_os_str().to_owned();
+    name.push(".partial");
+    PathBuf::from(name)
+}
+
+impl Journal {
+    /// Starts a fresh journal for `out` with fingerprint `key` (an old one is removed).
+    pub fn create(out: &Path, key: &str) -> Result<Journal> {
+        let dir = journal_dir(out);
+        if dir.exists() {
+            fs::remove_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        }
+        fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        let j = Journal { dir };
+        j.write_atomic("solve.key", key.as_bytes())?;
+        Ok(j)
+    }
+
+    /// Opens the journal of `out` to resume: checks the fingerprint and returns the
+    /// finished windows `0, 1, …` (none if there is no journal: a fresh start).
+    pub fn resume(out: &Path, key: &str) -> Result<(Journal, Vec<JournalWindow>)> {
+        let dir = journal_dir(out);
+        if !dir.exists() {
+            return Ok((Journal::create(out, key)?, Vec::new()));
+        }
+        let key_path = dir.join("solve.key");
+        let found = fs::read_to_string(&key_path).map_err(|e| Error::io(&key_path, e))?;
+        if found != key {
+            return Err(Error::invalid(
+                &key_path,
+                "fingerprint",
+                "the scene and settings of this solve (delete the directory or solve without --resume)",
+                "a journal of a different solve",
+            ));
+        }
+        let mut windows = Vec::new();
+        loop {
+            let path = dir.join(window_name(windows.len() as u32));
+            if !path.exists() {
+                break;
+            }
+            windows.push(read_window(&path, windows.len() as u32)?);
+        }
+        Ok((Journal { dir }, windows))
+    }
+
+    /// Records a finished window.
+    pub fn append(&self, w: &JournalWindow) -> Result<()> {
+        let mut bytes = Vec::with_capacity(HEADER + w.leaves.len() * LEAF);
+        let body: &[u8] = bytemuck::cast_slice(&w.leaves);
+        bytes.extend_from_slice(MAGIC);
+        bytes.extend_from_slice(&VERSION.to_le_bytes());
+        bytes.extend_from_slice(&w.index.to_le_bytes());
+        bytes.extend_from_slice(&w.t0.to_le_bytes());
+        bytes.extend_from_slice(&w.t1.to_le_bytes());
+        bytes.extend_from_slice(&(w.leaves.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&w.frame_cells.to_le_bytes());
+        bytes.extend_from_slice(&crc32(body).to_le_bytes());
+        bytes.extend_from_slice(&0u32.to_le_bytes());
+        bytes.extend_from_slice(body);
+        self.write_atomic(&window_name(w.index), &bytes)
+    }
+
+    /// Removes the journal (the output file is complete).
+    pub fn finish(self) -> Result<()> {
+        fs::remove_dir_all(&self.dir).map_err(|e| Error::io(&self.dir, e))
+    }
+
+    fn write_atomic(&self, name: &str, bytes: &[u8]) -> Result<()> {
+        let path = self.dir.join(name);
+        let tmp = self.dir.join(format!("{name}.tmp"));
+        let mut f = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        f.write_all(bytes).map_err(|e| Error::io(&tmp, e))?;
+        f.sync_all().map_err(|e| Error::io(&tmp, e))?;
+        fs::rename(&tmp, &path).map_err(|e| Error::io(&path, e))?;
+        if let Ok(d) = File::open(&self.dir) {
+            let _ = d.sync_all();
+        }
+        Ok(())
+    }
+}
+
+fn window_name(i: u32) -> String {
+    format!("window-{i:05}.bin")
+}
+
+fn read_window(path: &Path, index: u32) -> Result<JournalWindow> {
+    let bytes = fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bad = |place: &str, expected: String, found: String| {
+        Err(Error::invalid(path, place.to_string(), expected, found))
+    };
+    if bytes.len() < HEADER {
+        return bad(
+            "header",
+            format!("at least {HEADER} bytes"),
+            bytes.len().to_string(),
+        );
+    }
+    let u32_at =
+        |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+    let u64_at = |o: usize| {
+        let mut b = [0u8; 8];
+        b.copy_from_slice(&bytes[o..o + 8]);
+        u64::from_le_bytes(b)
+    };
+    if &bytes[0..8] != MAGIC {
+        return bad(
+            "bytes 0..8",
+            "magic RHIERWIN".into(),
+            format!("{:?}", &bytes[0..8]),
+        );
+    }
+    if u32_at(8) != VERSION {
+        return bad("version", VERSION.to_string(), u32_at(8).to_string());
+    }
+    if u32_at(12) != index {
+        return bad("window index", index.to_string(), u32_at(12).to_string());
+    }
+    let t0 = f64::from_bits(u64_at(16));
+    let t1 = f64::from_bits(u64_at(24));
+    if !(t0.is_finite() && t1.is_finite() && t0 <= t1) {
+        return bad(
+            "time range",
+            "finite t0 <= t1".into(),
+            format!("[{t0}, {t1}]"),
+        );
+    }
+    let n = u64_at(32);
+    let expected_len = (n as u128) * LEAF as u128 + HEADER as u128;
+    if expected_len != bytes.len() as u128 {
+        return bad(
+            "length",
+            format!("{expected_len} bytes for {n} leaves"),
+            bytes.len().to_string(),
+        );
+    }
+    let body = &bytes[HEADER..];
+    if crc32(body) != u32_at(48) {
+        return bad(
+            "leaves",
+            format!("CRC-32 {:#010x}", u32_at(48)),
+            format!("{:#010x}", crc32(body)),
+        );
+    }
+    let leaves: Vec<Leaf> = body
+        .chunks_exact(LEAF)
+        .map(bytemuck::pod_read_unaligned)
+        .collect();
+    Ok(JournalWindow {
+        index,
+        t0,
+        t1,
+        leaves,
+        frame_cells: u64_at(40),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn leaf(patch: u32, t: f32) -> Leaf {
+        Leaf {
+            patch,
+            corners: 4,
+            time: [t, t + 0.5],
+            uv: [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            b: [[0.25, 0.5, 1.0]; 4],
+        }
+    }
+
+    #[test]
+    fn windows_round_trip_and_damage_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("a.rhier");
+        let j = Journal::create(&out, "key-1").unwrap();
+        let w0 = JournalWindow {
+            index: 0,
+            t0: 0.0,
+            t1: 0.5,
+            leaves: vec![leaf(0, 0.0), leaf(3, 0.25)],
+            frame_cells: 7,
+        };
+        let w1 = JournalWindow {
+            index: 1,
+            t0: 0.5,
+            t1: 1.0,
+            leaves: vec![leaf(1, 0.5)],
+            frame_cells: 3,
+        };
+        j.append(&w0).unwrap();
+        j.append(&w1).unwrap();
+        let (_, got) = Journal::resume(&out, "key-1").unwrap();
+        assert_eq!(got, vec![w0.clone(), w1]);
+        // Another solve's journal is refused.
+        let e = Journal::resume(&out, "key-2").unwrap_err().to_string();
+        assert!(
+            e.contains("solve.key") && e.contains("different solve"),
+            "{e}"
+        );
+        // A flipped leaf byte is caught by the CRC and the file is named.
+        let p = journal_dir(&out).join("window-00001.bin");
+        let mut bytes = fs::read(&p).unwrap();
+        let last = bytes.len() - 1;
+        bytes[last] ^= 1;
+        fs::write(&p, &bytes).unwrap();
+        let e = Journal::resume(&out, "key-1").unwrap_err().to_string();
+        assert!(e.contains("window-00001.bin") && e.contains("CRC"), "{e}");
+        // A truncated file too.
+        fs::write(&p, &bytes[..40]).unwrap();
+        let e = Journal::resume(&out, "key-1").unwrap_err().to_string();
+        assert!(e.contains("header"), "{e}");
+        // Finishing removes the directory.
+        Journal::create(&out, "key-1").unwrap().finish().unwrap();
+        assert!(!journal_dir(&out).exists());
+    }
+}
