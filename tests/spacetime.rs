@@ -422,3 +422,61 @@ fn swept_shafts_catch_every_transient_blocker_that_time_sampling_sees() {
     // The swept box is conservative but not everything.
     assert!(flagged < pairs);
 }
+
+#[test]
+fn static_masks_plus_moving_rays_equal_full_visibility() {
+    // What lets a window keep the static half of every ray: for any point, source and
+    // time, the visible fraction from a static mask and rays against the moving
+    // objects only is exactly the fraction from full rays.
+    use rhier::oracle::{static_clear_mask, visible_fraction, visible_fraction_masked};
+    use rhier::pools::elements::Geom;
+    let scene = sliding_block(-200.0, 1.0);
+    let patches = Patches::at_time(&scene, 0.0);
+    let mut bvh = SceneBvh::build(&scene, &patches, 0.0);
+    let stat: Vec<usize> = (0..patches.len())
+        .filter(|&i| !scene.objects[patches.objects[i] as usize].is_moving())
+        .collect();
+    let geom = |i: usize| {
+        let p = &patches.polys[i];
+        let mut corners = [[0.0; 3]; 4];
+        for (c, v) in corners.iter_mut().zip(p.corners()) {
+            *c = v.to_array();
+        }
+        Geom {
+            corners,
+            normal: patches.normals[i].to_array(),
+            area: patches.areas[i],
+            uv: [[0.0; 2]; 4],
+            patch: i as u32,
+            n: p.corners().len() as u32,
+        }
+    };
+    let (mut compared, mut partial) = (0, 0);
+    for (k, t) in [0.0, 0.3, 0.7, 1.0].into_iter().enumerate() {
+        bvh.place(&scene, t);
+        for &a in &stat {
+            for &b in &stat {
+                if a == b {
+                    continue;
+                }
+                let gb = geom(b);
+                let pb = rhier::oracle::poly(&gb);
+                let x = patches.point(a, 0.37, 0.41);
+                let (na, nb) = (patches.normals[a], patches.normals[b]);
+                let key = (k * 1000 + a * 31 + b) as u64;
+                let skip = [a as u32, b as u32];
+                let full = visible_fraction(&bvh, x, na, &gb, &pb, nb, 32, key, skip);
+                let mask = static_clear_mask(&bvh, x, &gb, &pb, 32, key, skip);
+                let split =
+                    visible_fraction_masked(Some(&bvh), x, na, &gb, &pb, nb, 32, key, skip, mask);
+                assert_eq!(full.to_bits(), split.to_bits(), "t {t}, patches {a} → {b}");
+                compared += 1;
+                partial += (full > 0.0 && full < 1.0) as u32;
+            }
+        }
+    }
+    assert!(
+        compared > 500 && partial > 20,
+        "{compared} pairs, {partial} partly visible"
+    );
+}

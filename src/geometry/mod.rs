@@ -27,4 +27,4 @@ pub use formfactor::{
 pub use nearest::{closest_point_on_polygon, nearest_facing};
 pub use patches::{PatchId, Patches};
 pub use polygon::Poly;
-pub use visibility::{Hit, SEGMENT_TRIM, SceneBvh};
+pub use visibility::{Hit, Parts, SEGMENT_TRIM, SceneBvh};

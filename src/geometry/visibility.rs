@@ -25,6 +25,17 @@ use crate::scene::Scene;
 /// Relative trim of both ends of a visibility segment.
 pub const SEGMENT_TRIM: f64 = 1e-4;
 
+/// Which parts of a [`SceneBvh`] a query looks at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Parts {
+    /// Everything.
+    All,
+    /// The static objects only.
+    Static,
+    /// The moving objects only.
+    Moving,
+}
+
 /// A closest hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -47,6 +58,9 @@ struct Part {
     local_to_world: DAffine3,
     /// Object placed by this part's motion (`u32::MAX` for the static part).
     object: u32,
+    /// World box of the part where it is placed (segments that miss it skip the
+    /// part).
+    world_box: (DVec3, DVec3),
 }
 
 impl Part {
@@ -70,14 +84,66 @@ impl Part {
             .iter()
             .map(|&i| (tris[i as usize], tri_patch[i as usize]))
             .unzip();
-        Some(Part {
+        let mut part = Part {
             bvh,
             tris,
             tri_patch,
             world_to_local: local_to_world.inverse(),
             local_to_world,
             object,
-        })
+            world_box: (DVec3::ZERO, DVec3::ZERO),
+        };
+        part.update_box();
+        Some(part)
+    }
+
+    /// Recomputes `world_box` from the BVH's box and the placement.
+    fn update_box(&mut self) {
+        let b = &self.bvh.total_aabb;
+        let (lo, hi) = (
+            DVec3::new(b.min.x as f64, b.min.y as f64, b.min.z as f64),
+            DVec3::new(b.max.x as f64, b.max.y as f64, b.max.z as f64),
+        );
+        let mut wlo = DVec3::splat(f64::INFINITY);
+        let mut whi = DVec3::splat(f64::NEG_INFINITY);
+        for i in 0..8 {
+            let c = DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            let w = self.local_to_world.transform_point3(c);
+            wlo = wlo.min(w);
+            whi = whi.max(w);
+        }
+        // Pad by round-off of the f32 BVH.
+        let pad = DVec3::splat((whi - wlo).length() * 1e-6 + 1e-9);
+        self.world_box = (wlo - pad, whi + pad);
+    }
+
+    /// True if the segment `a + s·d`, `s ∈ [s0, s1]`, misses the part's world box.
+    fn misses_box(&self, a: DVec3, d: DVec3, s0: f64, s1: f64) -> bool {
+        let (lo, hi) = self.world_box;
+        let (mut t0, mut t1) = (s0, s1);
+        for k in 0..3 {
+            if d[k].abs() < 1e-300 {
+                if a[k] < lo[k] || a[k] > hi[k] {
+                    return true;
+                }
+                continue;
+            }
+            let inv = 1.0 / d[k];
+            let (mut ta, mut tb) = ((lo[k] - a[k]) * inv, (hi[k] - a[k]) * inv);
+            if ta > tb {
+                std::mem::swap(&mut ta, &mut tb);
+            }
+            t0 = t0.max(ta);
+            t1 = t1.min(tb);
+            if t0 > t1 {
+                return true;
+            }
+        }
+        false
     }
 
     fn local_ray(&self, o: DVec3, d: DVec3, tmin: f64, tmax: f64) -> Ray {
@@ -135,8 +201,18 @@ impl SceneBvh {
             if let Some(obj) = scene.objects.get(part.object as usize) {
                 part.local_to_world = obj.to_world(t);
                 part.world_to_local = part.local_to_world.inverse();
+                part.update_box();
             }
         }
+    }
+
+    /// World boxes of the moving objects where they are placed now.
+    pub fn moving_boxes(&self) -> Vec<(DVec3, DVec3)> {
+        self.parts
+            .iter()
+            .filter(|p| p.object != u32::MAX)
+            .map(|p| p.world_box)
+            .collect()
     }
 
     /// True if something blocks the open segment between `a` and `b` (both ends
@@ -149,8 +225,25 @@ impl SceneBvh {
     /// segment starts and ends on cannot block it; their hits are round-off, which
     /// grazing segments make larger than any trim).
     pub fn occluded_except(&self, a: DVec3, b: DVec3, skip: [u32; 2]) -> bool {
+        self.occluded_by(a, b, skip, Parts::All)
+    }
+
+    /// [`SceneBvh::occluded_except`] against only the static part or only the moving
+    /// objects: a segment is occluded iff one of the two says so, so a space-time
+    /// solve keeps the static answer of a ray and asks the (small) moving part again
+    /// at each frame.
+    pub fn occluded_by(&self, a: DVec3, b: DVec3, skip: [u32; 2], which: Parts) -> bool {
         let d = b - a;
         for part in &self.parts {
+            let moving = part.object != u32::MAX;
+            match which {
+                Parts::Static if moving => continue,
+                Parts::Moving if !moving => continue,
+                _ => {}
+            }
+            if moving && part.misses_box(a, d, SEGMENT_TRIM, 1.0 - SEGMENT_TRIM) {
+                continue;
+            }
             let ray = part.local_ray(a, d, SEGMENT_TRIM, 1.0 - SEGMENT_TRIM);
             let hit = !part.bvh.ray_traverse_miss(ray, |r, id| {
                 let p = part.tri_patch[id];

@@ -23,7 +23,7 @@
 
 use glam::DVec3;
 
-use crate::geometry::{Poly, SceneBvh, point_to_point_kernel, point_to_polygon};
+use crate::geometry::{Parts, Poly, SceneBvh, point_to_point_kernel, point_to_polygon};
 use crate::pools::elements::Geom;
 use crate::pools::links::Transport;
 use crate::pools::{ElementId, ElementKind, ElementPool, LinkState};
@@ -326,9 +326,58 @@ pub fn visible_fraction(
     key: u64,
     skip: [u32; 2],
 ) -> f64 {
+    weighted_fraction(x, n, gs, pols, ns, m, key, |_, y| {
+        !bvh.occluded_except(x, y, skip)
+    })
+}
+
+/// The rays of [`visible_fraction`] that nothing static blocks, as a bit mask (ray
+/// `j` → bit `j`; `m <= 64`).
+#[allow(clippy::too_many_arguments)]
+pub fn static_clear_mask(
+    bvh: &SceneBvh,
+    x: DVec3,
+    gs: &Geom,
+    pols: &Poly,
+    m: u32,
+    key: u64,
+    skip: [u32; 2],
+) -> u64 {
+    let mut mask = 0u64;
+    for (j, y) in ray_targets(gs, pols, m.min(64), key) {
+        if !bvh.occluded_by(x, y, skip, Parts::Static) {
+            mask |= 1 << j;
+        }
+    }
+    mask
+}
+
+/// [`visible_fraction`] from a [`static_clear_mask`]: only the rays the static part
+/// leaves clear are cast, against the moving objects only (`None`: the caller knows
+/// no moving object is in the way, and no ray is cast). Equal to
+/// [`visible_fraction`] with the same arguments.
+#[allow(clippy::too_many_arguments)]
+pub fn visible_fraction_masked(
+    bvh: Option<&SceneBvh>,
+    x: DVec3,
+    n: DVec3,
+    gs: &Geom,
+    pols: &Poly,
+    ns: DVec3,
+    m: u32,
+    key: u64,
+    skip: [u32; 2],
+    mask: u64,
+) -> f64 {
+    weighted_fraction(x, n, gs, pols, ns, m.min(64), key, |j, y| {
+        mask & (1 << j) != 0 && !bvh.is_some_and(|b| b.occluded_by(x, y, skip, Parts::Moving))
+    })
+}
+
+/// The `m` jittered stratified target points on `gs` for the rays of sample `key`.
+fn ray_targets(gs: &Geom, pols: &Poly, m: u32, key: u64) -> impl Iterator<Item = (u32, DVec3)> {
     let side = (m as f64).sqrt().ceil() as u32;
-    let (mut wsum, mut vsum, mut plain) = (0.0, 0.0, 0.0);
-    for j in 0..m {
+    (0..m).map(move |j| {
         let h = hash3(key, j as u64, 0x9e37);
         let ju = (h & 0xffff_ffff) as f64 / 4294967296.0;
         let jv = (h >> 32) as f64 / 4294967296.0;
@@ -336,13 +385,27 @@ pub fn visible_fraction(
             ((j % side) as f64 + ju) / side as f64,
             ((j / side) as f64 + jv) / side as f64,
         );
-        let y = point_in(gs, pols, su, sv.min(1.0));
+        (j, point_in(gs, pols, su, sv.min(1.0)))
+    })
+}
+
+/// Kernel-weighted mean of `visible(j, y)` over the ray targets (the plain mean when
+/// every kernel weight is zero).
+#[allow(clippy::too_many_arguments)]
+fn weighted_fraction(
+    x: DVec3,
+    n: DVec3,
+    gs: &Geom,
+    pols: &Poly,
+    ns: DVec3,
+    m: u32,
+    key: u64,
+    mut visible: impl FnMut(u32, DVec3) -> bool,
+) -> f64 {
+    let (mut wsum, mut vsum, mut plain) = (0.0, 0.0, 0.0);
+    for (j, y) in ray_targets(gs, pols, m, key) {
         let k = point_to_point_kernel(x, n, y, ns);
-        let vis = if bvh.occluded_except(x, y, skip) {
-            0.0
-        } else {
-            1.0
-        };
+        let vis = if visible(j, y) { 1.0 } else { 0.0 };
         wsum += k;
         vsum += k * vis;
         plain += vis;

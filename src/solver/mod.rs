@@ -167,6 +167,8 @@ pub struct Solver<'a> {
     window: Option<Window>,
     /// Solving the part shared by all windows: varying links are not refined.
     shared_phase: bool,
+    /// World boxes of the moving objects at the current time.
+    moving_now: Vec<(DVec3, DVec3)>,
 }
 
 /// What a time window needs beyond the static solver (see [`spacetime`]).
@@ -193,19 +195,78 @@ struct Window {
 struct PointTerms {
     /// Links covered, sorted.
     links: Vec<u32>,
-    /// `(element, factor)`, merged per element.
+    /// `(element, factor)`, merged per element: visibility included, constant.
     terms: Vec<(u32, f64)>,
+    /// Terms whose rays may be blocked by a moving object: re-cast each frame against
+    /// the moving objects only.
+    masked: Vec<MaskedTerm>,
 }
 
 impl PointTerms {
-    fn add(&mut self, link: u32, terms: &[(u32, f64)]) {
+    fn add(&mut self, link: u32, terms: &Terms) {
         if let Err(at) = self.links.binary_search(&link) {
             self.links.insert(at, link);
         }
-        for &(e, f) in terms {
-            match self.terms.iter_mut().find(|t| t.0 == e) {
-                Some(t) => t.1 += f,
-                None => self.terms.push((e, f)),
+        self.terms.extend_from_slice(&terms.fixed);
+        self.masked.extend(terms.masked.iter().map(|(m, _)| *m));
+    }
+
+    /// Merges the fixed terms per element (after a batch of [`PointTerms::add`]).
+    fn compact(&mut self) {
+        self.terms.sort_unstable_by_key(|t| t.0);
+        let mut out: Vec<(u32, f64)> = Vec::with_capacity(self.terms.len());
+        for &(e, f) in &self.terms {
+            match out.last_mut() {
+                Some(last) if last.0 == e => last.1 += f,
+                _ => out.push((e, f)),
+            }
+        }
+        self.terms = out;
+    }
+}
+
+/// A final-gather term from a static source to a static point whose rays a moving
+/// object may cross: the static part of each ray's visibility is kept as a mask (see
+/// [`oracle::static_clear_mask`]). 32 bytes.
+#[derive(Clone, Copy, Debug)]
+struct MaskedTerm {
+    /// Unoccluded point-to-element factor.
+    f: f64,
+    /// Jitter key of the rays.
+    key: u64,
+    /// Rays the static part leaves clear.
+    mask: u64,
+    /// Source element.
+    elem: u32,
+    /// Ray count.
+    m: u32,
+}
+
+/// The transfer terms of one link at one point.
+#[derive(Clone, Debug, Default)]
+struct Terms {
+    /// `(element, factor)` with visibility included.
+    fixed: Vec<(u32, f64)>,
+    /// Masked terms with their visibility now.
+    masked: Vec<(MaskedTerm, f64)>,
+}
+
+impl Terms {
+    fn clear(&mut self) {
+        self.fixed.clear();
+        self.masked.clear();
+    }
+
+    /// `Σ factor · visibility · B_element`.
+    fn gather(&self, b: &[[f32; 3]], h: &mut [f64; 3]) {
+        for &(e, f) in &self.fixed {
+            for k in 0..3 {
+                h[k] += f * b[e as usize][k] as f64;
+            }
+        }
+        for &(t, v) in &self.masked {
+            for k in 0..3 {
+                h[k] += t.f * v * b[t.elem as usize][k] as f64;
             }
         }
     }
@@ -246,7 +307,7 @@ type PointKey = (u32, u32, u32);
 
 /// Terms of links a point gathers that hold over the window, computed now: `(link,
 /// [(element, factor)])`.
-type FreshTerms = Vec<(u32, Vec<(u32, f64)>)>;
+type FreshTerms = Vec<(u32, Terms)>;
 
 /// A point to gather: the leaf whose links gather, the patch, the parameter point,
 /// the parameter point it is inset towards, and its key.
@@ -304,6 +365,7 @@ impl<'a> Solver<'a> {
             tree_moving: Vec::new(),
             window: None,
             shared_phase: false,
+            moving_now: Vec::new(),
         };
         s.moving_patch = (0..s.patches.len())
             .map(|i| {
@@ -313,6 +375,7 @@ impl<'a> Solver<'a> {
                     .is_some_and(|o| o.is_moving())
             })
             .collect();
+        s.moving_now = s.bvh.moving_boxes();
         if s.moving_patch.iter().any(|&m| m) {
             let nodes = s.elems.nodes.as_slice();
             let geoms = s.elems.geoms.as_slice();
@@ -658,6 +721,7 @@ impl<'a> Solver<'a> {
             g.corners[1] = hi.to_array();
         }
         self.bvh.place(self.scene, t);
+        self.moving_now = self.bvh.moving_boxes();
     }
 
     /// Starts a time window whose moving objects sweep the boxes `swept`: what the
@@ -1071,10 +1135,14 @@ impl<'a> Solver<'a> {
         }
     }
 
-    /// Transfer terms from source `s` to the point `x` (normal `n`): `(element,
-    /// factor)` pairs whose `Σ factor · B_element` is the radiosity the point gathers
-    /// from `s`; exact point-to-polygon factors, visibility by rays unless `clear`,
-    /// sources that look large from `x` opened into their children.
+    /// Transfer terms from source `s` to the point `x` (normal `n`): `Σ factor ·
+    /// visibility · B_element` over `out` is the radiosity the point gathers from `s`;
+    /// exact point-to-polygon factors, visibility by rays unless `clear`, sources
+    /// that look large from `x` opened into their children.
+    ///
+    /// With `swept` (a static point and a static source in a time window), a term
+    /// whose shaft from `x` meets a box swept by a moving object becomes a
+    /// [`MaskedTerm`] (its rays' static visibility kept); the others are fixed.
     #[allow(clippy::too_many_arguments)]
     fn point_terms(
         &self,
@@ -1085,7 +1153,8 @@ impl<'a> Solver<'a> {
         clear: bool,
         vis: f64,
         key: u64,
-        out: &mut Vec<(u32, f64)>,
+        swept: Option<&[(DVec3, DVec3)]>,
+        out: &mut Terms,
     ) {
         let geoms = self.elems.geoms.as_slice();
         let nodes = self.elems.nodes.as_slice();
@@ -1103,31 +1172,49 @@ impl<'a> Solver<'a> {
                     clear,
                     vis,
                     oracle::hash3(key, ch as u64, 1),
+                    swept,
                     out,
                 );
             }
             return;
         }
-        let f = if gs.patch == u32::MAX {
+        if gs.patch == u32::MAX {
             let u = (c - x) / d;
-            gs.area * n.dot(u).max(0.0) * 0.25 / (std::f64::consts::PI * d * d) * vis
+            let f = gs.area * n.dot(u).max(0.0) * 0.25 / (std::f64::consts::PI * d * d) * vis;
+            if f > 0.0 {
+                out.fixed.push((s as u32, f));
+            }
+            return;
+        }
+        let ps = oracle::poly(gs);
+        let f = point_to_polygon(x, n, &ps);
+        if f <= 0.0 {
+            return;
+        }
+        if clear {
+            out.fixed.push((s as u32, f));
+            return;
+        }
+        let emitter = self.patches.emissions[gs.patch as usize]
+            .iter()
+            .any(|&e| e > 0.0);
+        let m = if emitter {
+            self.opts.corner_rays * 4
         } else {
-            let ps = oracle::poly(gs);
-            let f = point_to_polygon(x, n, &ps);
-            if f <= 0.0 || clear {
-                f
-            } else {
-                let emitter = self.patches.emissions[gs.patch as usize]
-                    .iter()
-                    .any(|&e| e > 0.0);
-                let m = if emitter {
-                    self.opts.corner_rays * 4
-                } else {
-                    self.opts.corner_rays
-                };
-                let ns = DVec3::from_array(gs.normal);
-                f * oracle::visible_fraction(
-                    &self.bvh,
+            self.opts.corner_rays
+        };
+        let ns = DVec3::from_array(gs.normal);
+        let skip = [receiver_patch, gs.patch];
+        match swept {
+            Some(sw) if m <= 64 && !point_shaft_clear(x, n, gs, sw) => {
+                let mask = oracle::static_clear_mask(&self.bvh, x, gs, &ps, m, key, skip);
+                if mask == 0 {
+                    // Hidden by static geometry whatever moves.
+                    return;
+                }
+                let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                let v = oracle::visible_fraction_masked(
+                    near.then_some(&self.bvh),
                     x,
                     n,
                     gs,
@@ -1135,12 +1222,24 @@ impl<'a> Solver<'a> {
                     ns,
                     m,
                     key,
-                    [receiver_patch, gs.patch],
-                )
+                    skip,
+                    mask,
+                );
+                let t = MaskedTerm {
+                    f,
+                    key,
+                    mask,
+                    elem: s as u32,
+                    m,
+                };
+                out.masked.push((t, v));
             }
-        };
-        if f > 0.0 {
-            out.push((s as u32, f));
+            _ => {
+                let v = oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key, skip);
+                if v > 0.0 {
+                    out.fixed.push((s as u32, f * v));
+                }
+            }
         }
     }
 
@@ -1182,39 +1281,58 @@ impl<'a> Solver<'a> {
                     h[k] += f * b[src as usize][k] as f64;
                 }
             }
+            for t in &c.masked {
+                let gs = &geoms[t.elem as usize];
+                // Rays are only cast where a moving object is now.
+                let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                let v = oracle::visible_fraction_masked(
+                    near.then_some(&self.bvh),
+                    x,
+                    n,
+                    gs,
+                    &oracle::poly(gs),
+                    DVec3::from_array(gs.normal),
+                    t.m,
+                    t.key,
+                    [p as u32, gs.patch],
+                    t.mask,
+                );
+                for k in 0..3 {
+                    h[k] += t.f * v * b[t.elem as usize][k] as f64;
+                }
+            }
         }
         let mut fresh = Vec::new();
-        let mut terms = Vec::new();
+        let mut terms = Terms::default();
         let mut e = leaf.0;
         while e != u32::MAX {
             for &l in self.links_of(e as usize) {
                 let t = &tr[l as usize];
                 let s = ends[l as usize].source as usize;
-                let keep = window.is_some_and(|w| {
-                    !self.elem_moving(ElementId(s as u32))
-                        && (!t.varying() || point_shaft_clear(x, n, &geoms[s], &w.swept))
-                });
-                if keep && cached.is_some_and(|c| c.links.binary_search(&l).is_ok()) {
+                // A static source seen from a static point: what does not change in
+                // the window is kept (fixed terms, and the static part of the rays of
+                // the others).
+                let keep = window.filter(|_| !self.elem_moving(ElementId(s as u32)));
+                if keep.is_some() && cached.is_some_and(|c| c.links.binary_search(&l).is_ok()) {
                     continue;
                 }
                 terms.clear();
                 let key = oracle::hash3(self.opts.seed, l as u64, point_key);
+                // A varying link's shaft test holds for one frame only.
+                let clear = t.shaft_clear() && !t.varying();
                 self.point_terms(
                     x,
                     n,
                     p as u32,
                     s,
-                    t.shaft_clear(),
+                    clear || (keep.is_none() && t.shaft_clear()),
                     t.visibility as f64,
                     key,
+                    keep.map(|w| &w.swept[..]),
                     &mut terms,
                 );
-                for &(src, f) in &terms {
-                    for k in 0..3 {
-                        h[k] += f * b[src as usize][k] as f64;
-                    }
-                }
-                if keep {
+                terms.gather(b, &mut h);
+                if keep.is_some() {
                     fresh.push((l, terms.clone()));
                 }
             }
@@ -1309,6 +1427,7 @@ impl<'a> Solver<'a> {
                     for (l, terms) in links {
                         entry.add(l, &terms);
                     }
+                    entry.compact();
                 }
             }
             let mut next = Vec::new();
