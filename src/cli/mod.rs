@@ -3,6 +3,7 @@
 
 mod flatland;
 mod inspect;
+mod per_frame;
 mod play;
 mod probe;
 mod reference;

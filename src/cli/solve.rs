@@ -23,6 +23,35 @@ pub enum StorageKind {
     Mmap,
 }
 
+/// The embedded scenes of `--builtin` (see `rhier::scene::builtin`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Builtin {
+    /// The Cornell box.
+    #[value(name = "cornell")]
+    Cornell,
+    /// The Cornell box with its two blocks.
+    #[value(name = "cornell-blocks")]
+    CornellBlocks,
+    /// ACTOR, 75 frames (3 s).
+    #[value(name = "actor")]
+    Actor,
+    /// ACTOR, 150 frames (6 s).
+    #[value(name = "actor150")]
+    Actor150,
+    /// ACTOR, 750 frames (30 s).
+    #[value(name = "actor750")]
+    Actor750,
+    /// LIGHT, 75 frames (3 s).
+    #[value(name = "light")]
+    Light,
+    /// LIGHT, 150 frames (6 s).
+    #[value(name = "light150")]
+    Light150,
+    /// LIGHT, 750 frames (30 s).
+    #[value(name = "light750")]
+    Light750,
+}
+
 /// Arguments of `rhier solve`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -32,8 +61,16 @@ pub struct Args {
     #[arg(short = 'o', long = "out")]
     pub out: Option<PathBuf>,
     /// Solve the Cornell box with the two published blocks (embedded scene only).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "builtin")]
     pub blocks: bool,
+    /// Solve an embedded scene instead of a file: the Cornell box, or the animated
+    /// ACTOR / LIGHT scenes of 75 (3 s), 150 or 750 frames at 25 fps.
+    #[arg(long, value_enum, conflicts_with = "scene")]
+    pub builtin: Option<Builtin>,
+    /// Solve every frame independently (the frame-by-frame baseline) at `--fps`,
+    /// streaming one chunk per frame into the output file.
+    #[arg(long)]
+    pub per_frame: bool,
     /// Where the element and link pools live.
     #[arg(long, value_enum, default_value = "ram")]
     pub storage: StorageKind,
@@ -90,7 +127,8 @@ pub struct Args {
     /// Print nothing but errors and warnings.
     #[arg(short, long)]
     pub quiet: bool,
-    /// Frames per second at which a moving scene is solved.
+    /// Frames per second at which a moving scene is solved (space-time, or
+    /// `--per-frame`).
     #[arg(long, default_value_t = 25.0)]
     pub fps: f64,
     /// Seconds of animation per space-time window: frames are solved window by
@@ -156,7 +194,17 @@ fn read_reference(path: &Path) -> anyhow::Result<(Vec<ProbePoint>, Vec<[f64; 3]>
     Ok((points, b))
 }
 
-fn load(args: &Args) -> anyhow::Result<(Scene, String)> {
+/// The scene to solve and the stem of the default output name.
+pub(super) fn load(args: &Args) -> anyhow::Result<(Scene, String)> {
+    if let Some(b) = args.builtin {
+        use clap::ValueEnum;
+        let name = b
+            .to_possible_value()
+            .map_or_else(String::new, |v| v.get_name().to_string());
+        let scene = rhier::scene::builtin(&name)
+            .with_context(|| format!("no embedded scene called {name:?}"))?;
+        return Ok((scene, name.replace('-', "_")));
+    }
     match &args.scene {
         Some(path) => {
             let scene = rhier::scene::load(path)?;
@@ -176,24 +224,13 @@ fn load(args: &Args) -> anyhow::Result<(Scene, String)> {
     }
 }
 
-/// Runs `rhier solve`.
-pub fn run(args: Args) -> anyhow::Result<()> {
-    if let Some(n) = args.threads {
-        // Only fails if a pool exists already, which cannot happen this early.
-        let _ = rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
-            .build_global();
-    }
-    let start = std::time::Instant::now();
-    let (scene, stem) = load(&args)?;
-    for w in &scene.warnings {
-        eprintln!("rhier: warning: {w}");
-    }
+/// The solver settings the arguments ask for (shared by every mode of `solve`).
+pub(super) fn solve_options(args: &Args) -> SolveOptions {
     let storage = match (args.storage, args.budget) {
         (StorageKind::Ram, None) => Storage::Ram,
         _ => Storage::Mmap(args.scratch.clone().unwrap_or_else(std::env::temp_dir)),
     };
-    let opts = SolveOptions {
+    SolveOptions {
         storage,
         eps: args.eps,
         min_size: args.min_size,
@@ -204,7 +241,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seed: args.seed,
         contact_meshing: !args.no_contact_meshing,
         ..SolveOptions::default()
-    };
+    }
+}
+
+/// Runs `rhier solve`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(n) = args.threads {
+        // Only fails if a pool exists already, which cannot happen this early.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global();
+    }
+    if args.per_frame {
+        return super::per_frame::run(&args);
+    }
+    let start = std::time::Instant::now();
+    let (scene, stem) = load(&args)?;
+    for w in &scene.warnings {
+        eprintln!("rhier: warning: {w}");
+    }
+    let opts = solve_options(&args);
     if scene.has_motion() {
         return super::spacetime::run(&args, &scene, &stem, opts, start);
     }

@@ -11,9 +11,12 @@
 //! specified in `formats/scene.md`) and then calls [`validate::validate`], which
 //! refuses bad input with an error naming the file, object, polygon, what was expected
 //! and what was found, and records repairs as [`Scene::warnings`]. [`cornell_box`] is
-//! the embedded default scene. This module does not place geometry in world space and
-//! does not compute anything about light.
+//! the embedded default scene; [`actor_scene`] and [`light_scene`] the embedded
+//! animated scenes (after Damez & Sillion), [`builtin`] finds any of them by name.
+//! This module does not place geometry in world space and does not compute anything
+//! about light.
 
+mod animated;
 mod cornell;
 mod gltf;
 mod json;
@@ -23,6 +26,7 @@ pub mod validate;
 
 use std::path::Path;
 
+pub use animated::{BUILTIN_NAMES, LEG_SECONDS, SCENE_FPS, actor_scene, builtin, light_scene};
 pub use cornell::cornell_box;
 pub use json::{FORMAT_VERSION, to_json_string};
 pub use model::{

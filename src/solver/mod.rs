@@ -41,6 +41,7 @@
 
 pub mod gmres;
 pub mod hierarchy;
+pub mod per_frame;
 pub mod report;
 pub mod solution;
 pub mod spacetime;

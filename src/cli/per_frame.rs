@@ -1,0 +1,91 @@
+//! `rhier solve --per-frame --fps F`: the frame-by-frame baseline
+//! ([`rhier::solver::per_frame`]): one independent static solve per frame, streamed
+//! into the output `.rhier` file one chunk per frame. Prints one line per frame
+//! (unless `-q`) and with `--report CSV` writes one row per frame.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use rhier::Error;
+use rhier::solver::per_frame::{FrameReport, write_per_frame};
+use rhier::store::WriteOptions;
+
+use super::solve::{Args, load, solve_options};
+
+/// Runs `rhier solve --per-frame`.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let unsupported = [
+        (args.reference.is_some(), "--reference"),
+        (args.probe.is_some(), "--probe"),
+        (args.keep_links, "--keep-links"),
+    ];
+    if let Some((_, flag)) = unsupported.iter().find(|(on, _)| *on) {
+        anyhow::bail!(
+            "{flag} is not available with --per-frame (probe the output with `rhier probe FILE --time T`)"
+        );
+    }
+    let start = std::time::Instant::now();
+    let (scene, stem) = load(args)?;
+    for w in &scene.warnings {
+        eprintln!("rhier: warning: {w}");
+    }
+    let opts = solve_options(args);
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{stem}.rhier")));
+    let mut csv = match &args.report {
+        Some(path) => {
+            let file = std::fs::File::create(path)
+                .with_context(|| format!("creating {}", path.display()))?;
+            let mut w = std::io::BufWriter::new(file);
+            writeln!(w, "{}", FrameReport::CSV_HEADER)
+                .with_context(|| format!("writing {}", path.display()))?;
+            Some((w, path.clone()))
+        }
+        None => None,
+    };
+    let quiet = args.quiet;
+    let stats = write_per_frame(
+        &out,
+        &scene,
+        &opts,
+        args.fps,
+        WriteOptions::default(),
+        |report, _| {
+            if !quiet {
+                eprintln!("{}", report.summary());
+            }
+            if let Some((w, path)) = &mut csv {
+                writeln!(w, "{}", report.csv_row())
+                    .and_then(|()| w.flush())
+                    .map_err(|e| Error::io(path.clone(), e))?;
+            }
+            Ok(())
+        },
+    )
+    .with_context(|| format!("per-frame solve into {}", out.display()))?;
+    if !quiet {
+        eprintln!(
+            "solved {} frames at {} fps in {:.3} s ({:.3} s per frame): {} stored cells; wrote {}",
+            stats.frames,
+            args.fps,
+            start.elapsed().as_secs_f64(),
+            stats.stats.seconds / stats.frames.max(1) as f64,
+            stats.leaves,
+            out.display()
+        );
+    }
+    if args.stats {
+        println!(
+            "frames {}\nleaves {}\nlargest frame: elements {}, links {} active / {} passive",
+            stats.frames,
+            stats.leaves,
+            stats.stats.elements,
+            stats.stats.links_active,
+            stats.stats.links_passive
+        );
+    }
+    Ok(())
+}

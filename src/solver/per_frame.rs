@@ -1,0 +1,282 @@
+//! The frame-by-frame baseline (`rhier solve --per-frame --fps F`): an independent
+//! static solve of every frame of an animation with the same spatial parameters —
+//! the comparison Damez & Sillion make for space-time radiosity (section 6: "a static
+//! radiosity algorithm, for each frame, using the same spatial refinement
+//! parameters"), and a reference for it.
+//!
+//! How it works: [`frame_times`] places frame `i` at `t_i = start + i/F`, `i = 0 ..=
+//! floor((end − start)·F)`, and gives it the interval of the times nearer to it than to
+//! any other frame, `[t_i − 1/(2F), t_i + 1/(2F)]` clipped to the time domain (the last
+//! frame's interval reaches the domain's end, so that every time of the domain is
+//! covered by exactly one frame; consecutive intervals share their bounds, computed
+//! once, so that [`Leaf::is_live`] picks exactly one frame at a bound). Each frame is
+//! solved by [`Solver::at_time`] with its leaves labelled with that interval, run to
+//! completion and reconstructed; [`solve_per_frame`] hands each frame's [`Solution`]
+//! to a callback and drops it, and [`write_per_frame`] streams the frames' leaves into
+//! a `.rhier` file as one chunk per frame, in time order, through the store's
+//! [`Writer`], so memory holds one frame whatever the animation's length.
+//!
+//! What it does not do: share anything between frames (that is the space-time
+//! solver's job), or interpolate between frames: playback at `t` shows the frame
+//! whose interval holds `t`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use super::{Solution, SolveOptions, SolveStats, Solver};
+use crate::scene::{Scene, TimeDomain};
+use crate::store::{SolutionHeader, WriteOptions, Writer};
+use crate::{Error, Result};
+
+/// One frame of a per-frame solve: its time, interval and what the solve cost.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameReport {
+    /// Frame number, from 0.
+    pub index: u32,
+    /// The frame's time `t_i`.
+    pub t: f64,
+    /// The interval the frame's leaves hold over.
+    pub range: [f64; 2],
+    /// Wall-clock seconds of this frame (solve and reconstruction).
+    pub seconds: f64,
+    /// Refine-and-solve rounds run.
+    pub rounds: u32,
+    /// Stored leaves (reconstruction cells) of the frame.
+    pub leaves: u64,
+    /// Elements of the frame's hierarchy.
+    pub elements: u64,
+    /// Active links.
+    pub links_active: u64,
+    /// Passive (refined) links.
+    pub links_passive: u64,
+    /// Estimated relative error of the last round.
+    pub estimated_error: f64,
+}
+
+impl FrameReport {
+    /// CSV header matching [`FrameReport::csv_row`].
+    pub const CSV_HEADER: &'static str =
+        "frame,t,t0,t1,seconds,rounds,leaves,elements,links_active,links_passive,estimated_error";
+
+    /// One CSV row (no newline).
+    pub fn csv_row(&self) -> String {
+        format!(
+            "{},{},{},{},{:.6},{},{},{},{},{},{:.6e}",
+            self.index,
+            self.t,
+            self.range[0],
+            self.range[1],
+            self.seconds,
+            self.rounds,
+            self.leaves,
+            self.elements,
+            self.links_active,
+            self.links_passive,
+            self.estimated_error
+        )
+    }
+
+    /// The line `solve --per-frame` prints per frame.
+    pub fn summary(&self) -> String {
+        format!(
+            "frame {:4}  t {:8.4} s  {:8.3} s  {:7} leaves  {:8} links ({} passive)  est. error {:.3e}",
+            self.index,
+            self.t,
+            self.seconds,
+            self.leaves,
+            self.links_active + self.links_passive,
+            self.links_passive,
+            self.estimated_error
+        )
+    }
+}
+
+/// Totals of a per-frame solve.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PerFrameStats {
+    /// Frames solved.
+    pub frames: u32,
+    /// Leaves over all frames.
+    pub leaves: u64,
+    /// Statistics for the `.rhier` file: `seconds` and `iterations` summed over the
+    /// frames, the other counters the largest of any frame (what one frame holds in
+    /// memory), errors the worst frame's.
+    pub stats: SolveStats,
+}
+
+/// Frame times and intervals of `time` at `fps` frames per second (module header).
+/// A static domain (`start == end`) has the single frame `start` over `[start, start]`.
+/// An error if `fps` is not a positive finite number or the domain is not finite.
+pub fn frame_times(time: TimeDomain, fps: f64) -> Result<Vec<(f64, [f64; 2])>> {
+    let (start, end) = (time.start, time.end);
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(Error::Usage(format!(
+            "--fps: expected a positive number of frames per second, found {fps}"
+        )));
+    }
+    if !(start.is_finite() && end.is_finite() && end >= start) {
+        return Err(Error::Usage(format!(
+            "per-frame solve: expected a finite time domain with start <= end, found [{start}, {end}]"
+        )));
+    }
+    // Tolerate round-off in (end - start) * fps (0.3 s at 10 fps is 3 frames, not 2).
+    let last = ((end - start) * fps + 1e-9).floor();
+    if last > u32::MAX as f64 - 1.0 {
+        return Err(Error::Usage(format!(
+            "per-frame solve: {last} frames at {fps} fps is too many"
+        )));
+    }
+    let n = last as u32 + 1;
+    let t = |i: u32| start + i as f64 / fps;
+    // Bound between frame i and i + 1, computed once for both.
+    let bound = |i: u32| (start + (i as f64 + 0.5) / fps).clamp(start, end);
+    Ok((0..n)
+        .map(|i| {
+            let t0 = if i == 0 { start } else { bound(i - 1) };
+            let t1 = if i + 1 == n { end } else { bound(i) };
+            (t(i).min(end), [t0, t1])
+        })
+        .collect())
+}
+
+/// Solves every frame of `scene` at `fps` (see the module header) with `opts`,
+/// earliest first, and calls `on_frame` with each frame's report and solution before
+/// solving the next; an error from `on_frame` stops the loop and is returned.
+pub fn solve_per_frame(
+    scene: &Scene,
+    opts: &SolveOptions,
+    fps: f64,
+    mut on_frame: impl FnMut(&FrameReport, &Solution) -> Result<()>,
+) -> Result<PerFrameStats> {
+    let mut total = PerFrameStats::default();
+    for (index, (t, range)) in frame_times(scene.time, fps)?.into_iter().enumerate() {
+        let start = Instant::now();
+        let label = [range[0] as f32, range[1] as f32];
+        let mut solver = Solver::at_time(scene, opts.clone(), t, label)?;
+        let records = solver.run(|_, _| {})?;
+        let mut solution = solver.solution();
+        drop(solver);
+        let seconds = start.elapsed().as_secs_f64();
+        let s = &mut solution.stats;
+        s.seconds = seconds;
+        s.iterations = records.len() as u32;
+        if let Some(last) = records.last() {
+            s.estimated_error = last.estimated_error;
+            s.residual = last.residual;
+        }
+        let report = FrameReport {
+            index: index as u32,
+            t,
+            range,
+            seconds,
+            rounds: s.iterations,
+            leaves: solution.leaves.len() as u64,
+            elements: s.elements,
+            links_active: s.links_active,
+            links_passive: s.links_passive,
+            estimated_error: s.estimated_error,
+        };
+        let a = &mut total.stats;
+        a.seconds += seconds;
+        a.iterations += s.iterations;
+        a.elements = a.elements.max(s.elements);
+        a.links_active = a.links_active.max(s.links_active);
+        a.links_passive = a.links_passive.max(s.links_passive);
+        a.estimated_error = a.estimated_error.max(s.estimated_error);
+        a.residual = a.residual.max(s.residual);
+        total.frames += 1;
+        total.leaves += report.leaves;
+        on_frame(&report, &solution)?;
+    }
+    Ok(total)
+}
+
+/// [`solve_per_frame`] streamed into the `.rhier` file `path`: one chunk per frame
+/// (its interval, its leaves), in time order; `on_frame` sees each frame after its
+/// chunk is written. The file appears only when every frame is written.
+pub fn write_per_frame(
+    path: &Path,
+    scene: &Scene,
+    opts: &SolveOptions,
+    fps: f64,
+    write: WriteOptions,
+    mut on_frame: impl FnMut(&FrameReport, &Solution) -> Result<()>,
+) -> Result<PerFrameStats> {
+    let mut writer: Option<Writer> = None;
+    let mut patch_count = 0;
+    let stats = solve_per_frame(scene, opts, fps, |report, solution| {
+        let w = match &mut writer {
+            Some(w) => {
+                // The patch set does not depend on t (Solver::at_time); a change
+                // would make earlier chunks' patch numbers wrong.
+                if solution.patches.len() != patch_count {
+                    return Err(Error::invalid(
+                        path,
+                        format!("frame {} at t = {}", report.index, report.t),
+                        format!("the {patch_count} patches of frame 0"),
+                        format!("{} patches", solution.patches.len()),
+                    ));
+                }
+                w
+            }
+            None => {
+                patch_count = solution.patches.len();
+                writer.insert(Writer::create(
+                    path,
+                    &SolutionHeader {
+                        scene,
+                        patches: &solution.patches,
+                    },
+                    write,
+                )?)
+            }
+        };
+        w.write_chunk(report.range[0], report.range[1], &solution.leaves)?;
+        on_frame(report, solution)
+    })?;
+    match writer {
+        Some(w) => w.finish(&stats.stats)?,
+        None => {
+            return Err(Error::Usage(
+                "per-frame solve: no frame was solved".to_string(),
+            ));
+        }
+    }
+    Ok(stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn domain(start: f64, end: f64) -> TimeDomain {
+        TimeDomain { start, end }
+    }
+
+    #[test]
+    fn frames_tile_the_domain() {
+        let f = frame_times(domain(0.0, 3.0), 25.0).unwrap();
+        assert_eq!(f.len(), 76);
+        assert_eq!(f[0], (0.0, [0.0, 0.02]));
+        assert_eq!(f[75].0, 3.0);
+        assert_eq!(f[75].1, [2.98, 3.0]);
+        for w in f.windows(2) {
+            assert_eq!(w[0].1[1], w[1].1[0]);
+            assert!(w[0].1[0] < w[0].0 && w[0].0 < w[0].1[1]);
+        }
+        // Round-off in (end - start) * fps: 0.3 s at 10 fps is frames 0, 0.1, 0.2, 0.3.
+        assert_eq!(frame_times(domain(0.0, 0.3), 10.0).unwrap().len(), 4);
+        // The last frame reaches the end of a domain that is not a whole number of
+        // frames: frames 0 and 0.5 at 2 fps over [0, 0.9], the last over [0.25, 0.9].
+        let f = frame_times(domain(0.0, 0.9), 2.0).unwrap();
+        assert_eq!(f, vec![(0.0, [0.0, 0.25]), (0.5, [0.25, 0.9])]);
+        // A static domain: one frame at its instant.
+        assert_eq!(
+            frame_times(domain(1.5, 1.5), 25.0).unwrap(),
+            vec![(1.5, [1.5, 1.5])]
+        );
+        assert!(frame_times(domain(0.0, 1.0), 0.0).is_err());
+        assert!(frame_times(domain(0.0, 1.0), f64::NAN).is_err());
+        assert!(frame_times(domain(0.0, f64::INFINITY), 25.0).is_err());
+    }
+}
