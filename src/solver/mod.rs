@@ -65,6 +65,10 @@ pub use solution::{Leaf, PatchGeometry, Shape, Solution, SolveStats};
 /// Most refine-and-solve passes in one space-time frame.
 const FRAME_PASSES: usize = 3;
 
+/// Passes of the shared part that refine constant links against a radiosity solved
+/// with the varying links refined.
+const SHARED_PASSES: usize = 2;
+
 /// Fraction of the way from a corner to its leaf's centroid where the corner's
 /// final gather is evaluated.
 pub const CORNER_INSET: f64 = 1e-3;
@@ -170,6 +174,28 @@ pub struct Solver<'a> {
     shared_phase: bool,
     /// World boxes of the moving objects at the current time.
     moving_now: Vec<(DVec3, DVec3)>,
+    /// The time the moving objects are placed at.
+    now: f64,
+}
+
+/// Pool lengths at some moment, and what was done since to older records (links
+/// made passive, elements subdivided): enough to restore the pools to that moment.
+#[derive(Default)]
+struct Snapshot {
+    elems_len: usize,
+    links_len: usize,
+    passivated: Vec<LinkId>,
+    subdivided: Vec<ElementId>,
+}
+
+impl Snapshot {
+    fn of(elems: &ElementPool, links: &LinkPool) -> Self {
+        Snapshot {
+            elems_len: elems.len(),
+            links_len: links.len(),
+            ..Snapshot::default()
+        }
+    }
 }
 
 /// What a time window needs beyond the static solver (see [`spacetime`]).
@@ -177,71 +203,82 @@ pub struct Solver<'a> {
 struct Window {
     /// Boxes swept by the moving objects over the window.
     swept: Vec<(DVec3, DVec3)>,
-    /// Pool lengths when the window began: what lies beyond is the window's own.
-    elems_len: usize,
-    links_len: usize,
-    /// Links older than the window that it made passive, and elements older than the
-    /// window that it subdivided: restored when the window is released.
-    passivated: Vec<LinkId>,
-    subdivided: Vec<ElementId>,
+    /// The shared part, as the window found it (restored when it is released).
+    base: Snapshot,
+    /// The window's own base: the shared part plus the refinement of the links
+    /// that are constant in this window (restored before each frame).
+    frame: Snapshot,
+    /// True once the window's base is built: refinement now belongs to a frame.
+    in_frame: bool,
     /// Leaf-row coefficients of constant links on static leaves: `(leaf, link) → F`.
     rows: HashMap<(u32, u32), f64>,
     /// Final-gather terms that hold over the window at static reconstruction points.
     points: std::sync::Mutex<HashMap<PointKey, PointTerms>>,
 }
 
-/// The final-gather terms of a point that hold over a window: `Σ factor · B_element`
-/// over `terms` is what the links `links` bring to the point.
+/// The final-gather terms of a point that hold over a window, per source: a point is
+/// gathered through the chain of whichever leaf registers it first, which may change
+/// from frame to frame, so only the sources of the current chain are summed. Flat
+/// arrays (a few allocations per point, not per source).
 #[derive(Default)]
 struct PointTerms {
-    /// Links covered, sorted.
-    links: Vec<u32>,
-    /// `(element, factor)`, merged per element: visibility included, constant.
-    terms: Vec<(u32, f64)>,
-    /// Terms whose rays may be blocked by a moving object: re-cast each frame against
-    /// the moving objects only.
+    /// Sources covered (`source << 1 | clear`, clear: the link's shaft proved the
+    /// source visible), sorted, with the ranges of their terms in `fixed` and
+    /// `masked`: `(key, fixed start, fixed end, masked start, masked end)`.
+    index: Vec<(u32, u32, u32, u32, u32)>,
+    /// `(element, factor)`, visibility included, constant over the window.
+    fixed: Vec<(u32, f32)>,
+    /// Terms whose rays a moving object may cross: re-cast each frame against the
+    /// moving objects only.
     masked: Vec<MaskedTerm>,
 }
 
 impl PointTerms {
-    fn add(&mut self, link: u32, terms: &Terms) {
-        if let Err(at) = self.links.binary_search(&link) {
-            self.links.insert(at, link);
+    fn add(&mut self, key: u32, terms: &Terms) {
+        if let Err(at) = self.index.binary_search_by_key(&key, |e| e.0) {
+            let (f0, m0) = (self.fixed.len() as u32, self.masked.len() as u32);
+            self.fixed
+                .extend(terms.fixed.iter().map(|&(e, f)| (e, f as f32)));
+            self.masked.extend(terms.masked.iter().map(|(m, _)| *m));
+            let (f1, m1) = (self.fixed.len() as u32, self.masked.len() as u32);
+            self.index.insert(at, (key, f0, f1, m0, m1));
         }
-        self.terms.extend_from_slice(&terms.fixed);
-        self.masked.extend(terms.masked.iter().map(|(m, _)| *m));
     }
 
-    /// Merges the fixed terms per element (after a batch of [`PointTerms::add`]).
-    fn compact(&mut self) {
-        self.terms.sort_unstable_by_key(|t| t.0);
-        let mut out: Vec<(u32, f64)> = Vec::with_capacity(self.terms.len());
-        for &(e, f) in &self.terms {
-            match out.last_mut() {
-                Some(last) if last.0 == e => last.1 += f,
-                _ => out.push((e, f)),
-            }
-        }
-        self.terms = out;
+    /// The fixed and masked terms of source key `key`.
+    fn get(&self, key: u32) -> Option<TermSlices<'_>> {
+        self.index
+            .binary_search_by_key(&key, |e| e.0)
+            .ok()
+            .map(|i| {
+                let (_, f0, f1, m0, m1) = self.index[i];
+                (
+                    &self.fixed[f0 as usize..f1 as usize],
+                    &self.masked[m0 as usize..m1 as usize],
+                )
+            })
     }
 }
 
+/// The kept fixed and masked terms of one source at one point.
+type TermSlices<'a> = (&'a [(u32, f32)], &'a [MaskedTerm]);
+
 /// A final-gather term from a static source to a static point whose rays a moving
 /// object may cross: the static part of each ray's visibility is kept as a mask (see
-/// [`oracle::static_clear_mask`]). 32 bytes.
+/// [`oracle::static_clear_mask`]). 24 bytes.
 #[derive(Clone, Copy, Debug)]
 struct MaskedTerm {
-    /// Unoccluded point-to-element factor.
-    f: f64,
     /// Jitter key of the rays.
     key: u64,
     /// Rays the static part leaves clear.
     mask: u64,
+    /// Unoccluded point-to-element factor.
+    f: f32,
     /// Source element.
     elem: u32,
-    /// Ray count.
-    m: u32,
 }
+
+const _: () = assert!(std::mem::size_of::<MaskedTerm>() == 24);
 
 /// The transfer terms of one link at one point.
 #[derive(Clone, Debug, Default)]
@@ -267,7 +304,7 @@ impl Terms {
         }
         for &(t, v) in &self.masked {
             for k in 0..3 {
-                h[k] += t.f * v * b[t.elem as usize][k] as f64;
+                h[k] += t.f as f64 * v * b[t.elem as usize][k] as f64;
             }
         }
     }
@@ -306,8 +343,8 @@ pub struct FrameCost {
 /// A reconstruction point: patch and quantised parameters.
 type PointKey = (u32, u32, u32);
 
-/// Terms of links a point gathers that hold over the window, computed now: `(link,
-/// [(element, factor)])`.
+/// Terms a point gathers that hold over the window, computed now: `(source << 1 |
+/// clear, terms)`.
 type FreshTerms = Vec<(u32, Terms)>;
 
 /// A point to gather: the leaf whose links gather, the patch, the parameter point,
@@ -367,6 +404,7 @@ impl<'a> Solver<'a> {
             window: None,
             shared_phase: false,
             moving_now: Vec::new(),
+            now: t,
         };
         s.moving_patch = (0..s.patches.len())
             .map(|i| {
@@ -571,14 +609,19 @@ impl<'a> Solver<'a> {
                     Split::Source => s,
                 };
                 if let Some(w) = &mut self.window {
-                    if split.ix() < w.elems_len
+                    let snap = if w.in_frame {
+                        &mut w.frame
+                    } else {
+                        &mut w.base
+                    };
+                    if split.ix() < snap.elems_len
                         && self.elems.nodes.as_slice()[split.ix()].child_count == 0
                         && self.elems.kind(split) == ElementKind::Surface
                     {
-                        w.subdivided.push(split);
+                        snap.subdivided.push(split);
                     }
-                    if l.ix() < w.links_len {
-                        w.passivated.push(l);
+                    if l.ix() < snap.links_len {
+                        snap.passivated.push(l);
                     }
                 }
                 hierarchy::subdivide(&mut self.elems, &self.patches, split)?;
@@ -723,6 +766,7 @@ impl<'a> Solver<'a> {
         }
         self.bvh.place(self.scene, t);
         self.moving_now = self.bvh.moving_boxes();
+        self.now = t;
     }
 
     /// Starts a time window whose moving objects sweep the boxes `swept`: what the
@@ -731,11 +775,14 @@ impl<'a> Solver<'a> {
     /// constant or varying over the window; a link that was varying and is now
     /// constant is re-evaluated once (it may have been evaluated with a moving object
     /// in its shaft).
-    pub fn begin_window(&mut self, swept: Vec<(DVec3, DVec3)>) {
+    ///
+    /// Links that are constant in the window but were varying over the whole
+    /// animation were left coarse by the shared part: they are refined here, against
+    /// `eps · b_ref`, once for all the window's frames.
+    pub fn begin_window(&mut self, swept: Vec<(DVec3, DVec3)>, b_ref: f64) -> Result<()> {
         self.window = Some(Window {
             swept,
-            elems_len: self.elems.len(),
-            links_len: self.links.len(),
+            base: Snapshot::of(&self.elems, &self.links),
             ..Window::default()
         });
         let active: Vec<LinkId> = (0..self.links.len() as u32)
@@ -758,6 +805,16 @@ impl<'a> Solver<'a> {
             t.flags[2] = v as u8;
         }
         self.reevaluate(&stale);
+        self.shared_phase = true;
+        let refined = self.refine(stale, self.opts.eps * b_ref);
+        self.shared_phase = false;
+        refined?;
+        let frame = Snapshot::of(&self.elems, &self.links);
+        if let Some(w) = self.window.as_mut() {
+            w.frame = frame;
+            w.in_frame = true;
+        }
+        Ok(())
     }
 
     /// Solves the part of a space-time solve that all windows share: the usual
@@ -770,33 +827,88 @@ impl<'a> Solver<'a> {
         on_round: impl FnMut(&mut RoundRecord, &Solver),
     ) -> Result<Vec<RoundRecord>> {
         self.window = Some(Window {
-            swept,
+            swept: swept.clone(),
             ..Window::default()
         });
         self.shared_phase = true;
         let records = self.run(on_round);
         self.shared_phase = false;
         self.window = None;
-        records
+        let records = records?;
+        // The rounds' radiosity misses what the unrefined varying links carry, so the
+        // constant links were refined against too little light. Solve the start time
+        // with its varying links refined (in a window, released at once), take that
+        // radiosity, and refine the constant links against it.
+        let t = self.now;
+        for _ in 0..SHARED_PASSES {
+            let b_ref = self.rms_radiosity().max(f64::MIN_POSITIVE);
+            self.begin_window(swept.clone(), b_ref)?;
+            self.frame(t, b_ref)?;
+            let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
+            let b = self.elems.radiosities.as_slice()[..shared].to_vec();
+            self.release_window();
+            self.elems.radiosities.as_mut_slice().copy_from_slice(&b);
+            self.index_links();
+            let b_ref = self.rms_radiosity().max(f64::MIN_POSITIVE);
+            self.window = Some(Window {
+                swept: swept.clone(),
+                ..Window::default()
+            });
+            self.shared_phase = true;
+            let active: Vec<LinkId> = (0..self.links.len() as u32)
+                .map(LinkId)
+                .filter(|l| self.links.transports.as_slice()[l.ix()].state() == LinkState::Active)
+                .collect();
+            let changed = self.refine(active, self.opts.eps * b_ref);
+            self.shared_phase = false;
+            self.window = None;
+            if !changed? {
+                break;
+            }
+            self.index_links();
+            self.compute_leaf_rows();
+            self.solve_leaves()?;
+        }
+        self.index_links();
+        Ok(records)
     }
 
     /// Drops what the current window added to the pools and restores the shared part
     /// as it was when the window began.
     pub fn release_window(&mut self) {
-        let Some(w) = self.window.take() else {
-            return;
-        };
-        self.elems.truncate(w.elems_len);
-        self.links.truncate(w.links_len);
-        for l in w.passivated {
+        self.reset_frame();
+        if let Some(mut w) = self.window.take() {
+            self.restore(&mut w.base);
+        }
+        self.pull_pool();
+    }
+
+    /// Restores the pools to `snap` (see [`Snapshot`]).
+    fn restore(&mut self, snap: &mut Snapshot) {
+        self.elems.truncate(snap.elems_len);
+        self.links.truncate(snap.links_len);
+        for l in snap.passivated.drain(..) {
             self.links.set_active(l);
         }
-        for e in w.subdivided {
+        for e in snap.subdivided.drain(..) {
             let node = &mut self.elems.nodes.as_mut_slice()[e.ix()];
             node.first_child = 0;
             node.child_count = 0;
         }
-        self.pull_pool();
+    }
+
+    /// Drops the refinement of the previous frame: elements and links beyond the
+    /// window's start, and the passive state and children they gave to older ones.
+    /// A frame refines its varying links from the window's start again, so the
+    /// hierarchy near a moving object is as fine as this frame needs, not the union
+    /// over the window.
+    fn reset_frame(&mut self) {
+        if let Some(mut w) = self.window.take() {
+            if w.in_frame {
+                self.restore(&mut w.frame);
+            }
+            self.window = Some(w);
+        }
     }
 
     /// Re-evaluates the links `ids` where the geometry stands now (state and time
@@ -838,6 +950,7 @@ impl<'a> Solver<'a> {
     /// and final-gather terms from earlier frames of the window.
     pub fn frame(&mut self, t: f64, b_ref: f64) -> Result<FrameCost> {
         let rays0 = self.rays;
+        self.reset_frame();
         self.set_time(t);
         let varying: Vec<LinkId> = (0..self.links.len() as u32)
             .map(LinkId)
@@ -863,7 +976,10 @@ impl<'a> Solver<'a> {
             residual = self.solve_leaves()?;
             wave = (0..self.links.len() as u32)
                 .map(LinkId)
-                .filter(|l| self.links.transports.as_slice()[l.ix()].state() == LinkState::Active)
+                .filter(|l| {
+                    let tr = &self.links.transports.as_slice()[l.ix()];
+                    tr.state() == LinkState::Active && tr.varying()
+                })
                 .collect();
         }
         Ok(FrameCost {
@@ -945,7 +1061,11 @@ impl<'a> Solver<'a> {
                         let gs = &geoms[s as usize];
                         // Constant link, static leaf: the coefficient of an earlier
                         // frame of the window holds.
-                        let cacheable = !leaf_moving && !t.varying();
+                        let cacheable = !leaf_moving
+                            && !t.varying()
+                            && self.window.as_ref().is_some_and(|w| {
+                                leaf.ix() < w.frame.elems_len && (l as usize) < w.frame.links_len
+                            });
                         if let Some(&c) = cache
                             .filter(|_| cacheable)
                             .and_then(|c| c.get(&(leaf.0, l)))
@@ -1136,6 +1256,18 @@ impl<'a> Solver<'a> {
         }
     }
 
+    /// Rays from a reconstruction point to the surface element `gs` (4× to emitters).
+    fn corner_rays_to(&self, gs: &Geom) -> u32 {
+        let emitter = self.patches.emissions[gs.patch as usize]
+            .iter()
+            .any(|&e| e > 0.0);
+        if emitter {
+            self.opts.corner_rays * 4
+        } else {
+            self.opts.corner_rays
+        }
+    }
+
     /// Transfer terms from source `s` to the point `x` (normal `n`): `Σ factor ·
     /// visibility · B_element` over `out` is the radiosity the point gathers from `s`;
     /// exact point-to-polygon factors, visibility by rays unless `clear`, sources
@@ -1196,14 +1328,7 @@ impl<'a> Solver<'a> {
             out.fixed.push((s as u32, f));
             return;
         }
-        let emitter = self.patches.emissions[gs.patch as usize]
-            .iter()
-            .any(|&e| e > 0.0);
-        let m = if emitter {
-            self.opts.corner_rays * 4
-        } else {
-            self.opts.corner_rays
-        };
+        let m = self.corner_rays_to(gs);
         let ns = DVec3::from_array(gs.normal);
         let skip = [receiver_patch, gs.patch];
         match swept {
@@ -1227,11 +1352,10 @@ impl<'a> Solver<'a> {
                     mask,
                 );
                 let t = MaskedTerm {
-                    f,
+                    f: f as f32,
                     key,
                     mask,
                     elem: s as u32,
-                    m,
                 };
                 out.masked.push((t, v));
             }
@@ -1255,10 +1379,16 @@ impl<'a> Solver<'a> {
         &self,
         leaf: ElementId,
         x: DVec3,
-        point_key: u64,
         known: Option<&HashMap<PointKey, PointTerms>>,
         pk: PointKey,
     ) -> ([f64; 3], bool, FreshTerms) {
+        // Ray jitter from the point's place, so that a point gathered again (another
+        // frame, another cell) casts the same rays.
+        let point_key = oracle::hash3(
+            u64::from(pk.0),
+            u64::from(pk.1) << 32 | u64::from(pk.2),
+            0x9017,
+        );
         let geoms = self.elems.geoms.as_slice();
         let nodes = self.elems.nodes.as_slice();
         let ends = self.links.ends.as_slice();
@@ -1276,33 +1406,6 @@ impl<'a> Solver<'a> {
         let window = self.window.as_ref().filter(|_| !self.elem_moving(leaf));
         let cached = known.and_then(|m| m.get(&pk));
         let mut h = [0.0; 3];
-        if let Some(c) = cached {
-            for &(src, f) in &c.terms {
-                for k in 0..3 {
-                    h[k] += f * b[src as usize][k] as f64;
-                }
-            }
-            for t in &c.masked {
-                let gs = &geoms[t.elem as usize];
-                // Rays are only cast where a moving object is now.
-                let near = !point_shaft_clear(x, n, gs, &self.moving_now);
-                let v = oracle::visible_fraction_masked(
-                    near.then_some(&self.bvh),
-                    x,
-                    n,
-                    gs,
-                    &oracle::poly(gs),
-                    DVec3::from_array(gs.normal),
-                    t.m,
-                    t.key,
-                    [p as u32, gs.patch],
-                    t.mask,
-                );
-                for k in 0..3 {
-                    h[k] += t.f * v * b[t.elem as usize][k] as f64;
-                }
-            }
-        }
         let mut fresh = Vec::new();
         let mut terms = Terms::default();
         let mut e = leaf.0;
@@ -1313,14 +1416,43 @@ impl<'a> Solver<'a> {
                 // A static source seen from a static point: what does not change in
                 // the window is kept (fixed terms, and the static part of the rays of
                 // the others).
-                let keep = window.filter(|_| !self.elem_moving(ElementId(s as u32)));
-                if keep.is_some() && cached.is_some_and(|c| c.links.binary_search(&l).is_ok()) {
+                // Kept per source (the link may be this frame's: a varying link
+                // refined at the receiver's end keeps the older source).
+                let keep = window
+                    .filter(|w| !self.elem_moving(ElementId(s as u32)) && s < w.frame.elems_len);
+                // A varying link's shaft test holds for one frame only.
+                let clear = t.shaft_clear() && !t.varying();
+                let ck = (s as u32) << 1 | clear as u32;
+                if let Some((fixed, masked)) = keep.and(cached).and_then(|c| c.get(ck)) {
+                    for &(src, f) in fixed {
+                        for c in 0..3 {
+                            h[c] += f as f64 * b[src as usize][c] as f64;
+                        }
+                    }
+                    for t in masked {
+                        let gs = &geoms[t.elem as usize];
+                        // Rays are only cast where a moving object is now.
+                        let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                        let v = oracle::visible_fraction_masked(
+                            near.then_some(&self.bvh),
+                            x,
+                            n,
+                            gs,
+                            &oracle::poly(gs),
+                            DVec3::from_array(gs.normal),
+                            self.corner_rays_to(gs),
+                            t.key,
+                            [p as u32, gs.patch],
+                            t.mask,
+                        );
+                        for c in 0..3 {
+                            h[c] += t.f as f64 * v * b[t.elem as usize][c] as f64;
+                        }
+                    }
                     continue;
                 }
                 terms.clear();
-                let key = oracle::hash3(self.opts.seed, l as u64, point_key);
-                // A varying link's shaft test holds for one frame only.
-                let clear = t.shaft_clear() && !t.varying();
+                let key = oracle::hash3(self.opts.seed, s as u64, point_key);
                 self.point_terms(
                     x,
                     n,
@@ -1333,8 +1465,15 @@ impl<'a> Solver<'a> {
                     &mut terms,
                 );
                 terms.gather(b, &mut h);
-                if keep.is_some() {
-                    fresh.push((l, terms.clone()));
+                // Terms on elements of this frame's refinement are not kept: the
+                // next frame drops those elements.
+                if let Some(w) = keep {
+                    let shared = |e: u32| (e as usize) < w.frame.elems_len;
+                    if terms.fixed.iter().all(|t| shared(t.0))
+                        && terms.masked.iter().all(|t| shared(t.0.elem))
+                    {
+                        fresh.push((ck, terms.clone()));
+                    }
                 }
             }
             e = nodes[e as usize].parent;
@@ -1419,7 +1558,7 @@ impl<'a> Solver<'a> {
                 ids.push((corners, cache.register(c, centre, centre)));
             }
             let fresh = cache.evaluate(
-                |leaf, x, key, pk| self.gather_point(leaf, x, key, known.as_ref(), pk),
+                |leaf, x, pk| self.gather_point(leaf, x, known.as_ref(), pk),
                 &self.patches,
             );
             if let Some(m) = known.as_mut() {
@@ -1428,7 +1567,6 @@ impl<'a> Solver<'a> {
                     for (l, terms) in links {
                         entry.add(l, &terms);
                     }
-                    entry.compact();
                 }
             }
             let mut next = Vec::new();
@@ -1601,21 +1739,19 @@ impl VertexCache {
     #[allow(clippy::type_complexity)]
     fn evaluate(
         &mut self,
-        gather: impl Fn(ElementId, DVec3, u64, PointKey) -> ([f64; 3], bool, FreshTerms) + Sync,
+        gather: impl Fn(ElementId, DVec3, PointKey) -> ([f64; 3], bool, FreshTerms) + Sync,
         patches: &Patches,
     ) -> Vec<(PointKey, FreshTerms)> {
         let from = self.values.len();
         let new: Vec<_> = self.points[from..]
             .par_iter()
-            .enumerate()
-            .map(|(k, &(leaf, patch, uv, toward, pk))| {
+            .map(|&(leaf, patch, uv, toward, pk)| {
                 let x = patches.point(patch as usize, uv[0] as f64, uv[1] as f64);
                 let c = patches.point(patch as usize, toward[0] as f64, toward[1] as f64);
                 // Evaluate a hair inside the cell: on an edge shared with a
                 // perpendicular wall the factor jumps (the wall is seen edge-on), and
                 // the interpolant wants the limit from inside.
-                let (b, valid, fresh) =
-                    gather(leaf, x + CORNER_INSET * (c - x), (from + k) as u64, pk);
+                let (b, valid, fresh) = gather(leaf, x + CORNER_INSET * (c - x), pk);
                 ((b, valid), (pk, fresh))
             })
             .collect();

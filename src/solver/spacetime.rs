@@ -349,7 +349,7 @@ impl<'a> SpaceTime<'a> {
         let w1 = frame_range(first as usize + frames.len() - 1, fps, t_start, t_end)[1];
         let solver = &mut self.solver;
         solver.set_time(frames[0]);
-        solver.begin_window(swept_boxes(scene, w0, w1));
+        solver.begin_window(swept_boxes(scene, w0, w1), b_ref)?;
         let mut runs: HashMap<CellKey, Run> = HashMap::new();
         let mut done: Vec<Leaf> = Vec::new();
         let mut frame_cells = 0u64;
