@@ -1,0 +1,300 @@
+#!/usr/bin/env python3
+"""Error against run time of animation solvers on ACTOR / LIGHT (issue 4 benchmarks).
+
+For one scene it
+  1. builds a probe grid over the static surfaces (floor, walls, ceiling, furniture):
+     N points, area-weighted, deterministic, written as P.json ([{"p":..,"n":..}]);
+  2. makes a fine reference with the per-frame solver
+     (`rhier solve SCENE --per-frame --fps REF_FPS --eps REF_EPS`), cached in OUTDIR,
+     and probes it at every reference frame time (`rhier probe --time T`);
+  3. runs a METHOD command at each eps (placeholders below), measuring wall time and
+     peak RSS of the whole process (/usr/bin/time, else getrusage of the children),
+     probes the result at the same times and computes the relative RMS error
+         sqrt( sum (B - Bref)^2 / sum Bref^2 )  over points, channels and times;
+  4. appends rows (method, scene, eps, seconds, peak_rss_mb, error, ...) to a CSV and
+     redraws an SVG plot of error against run time for every (method, scene) in it.
+
+The method command is a template; placeholders: {rhier} (the binary), {scene} (the
+scene file), {eps}, {fps}, {out} (the .rhier file the command must write). Default:
+    {rhier} solve {scene} --per-frame --fps {fps} --eps {eps} -o {out} -q
+so a space-time solver plugs in as e.g.
+    --name space-time --method "{rhier} solve {scene} --eps {eps} -o {out} -q"
+
+Usage:
+    python3 tools/spacetime_bench.py --rhier target/release/rhier --scene actor \
+        --eps 1.0,0.5 --out-dir out/bench [--fps 25] [--ref-fps 5] [--ref-eps 0.1] \
+        [--points 200] [--csv tools/spacetime_bench.csv] [--name per-frame] \
+        [--method TEMPLATE] [--threads 2]
+
+--scene takes a builtin name with a JSON example (actor, actor150, actor750, light,
+light150, light750: formats/examples/NAME.json) or any native JSON scene path.
+Standard library only (no matplotlib: the plot is written as SVG by hand).
+"""
+
+import argparse
+import csv
+import json
+import math
+import os
+import random
+import resource
+import shlex
+import shutil
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DEFAULT_METHOD = "{rhier} solve {scene} --per-frame --fps {fps} --eps {eps} -o {out} -q"
+CSV_FIELDS = ["method", "scene", "eps", "seconds", "peak_rss_mb", "error", "frames_compared",
+              "ref", "command"]
+
+
+def scene_path(name):
+    if os.path.exists(name):
+        return os.path.abspath(name)
+    path = os.path.join(ROOT, "formats", "examples", name + ".json")
+    if not os.path.exists(path):
+        sys.exit(f"spacetime_bench: no scene file {name!r} and no {path}")
+    return path
+
+
+def sub(a, b):
+    return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def norm(a):
+    return math.sqrt(a[0] ** 2 + a[1] ** 2 + a[2] ** 2)
+
+
+def probe_grid(scene, n, seed=1):
+    """n points on static, non-emitting polygons, area-weighted, inset 5% from the
+    edges; points inside another static object's box (a solid resting on a wall or
+    the floor) are skipped."""
+    mats = scene["materials"]
+    static = [o for o in scene["objects"] if not o.get("motion")]
+
+    def box(o):
+        vs = [v for p in o["polygons"] for v in p["vertices"]]
+        lo = [min(v[k] for v in vs) for k in range(3)]
+        hi = [max(v[k] for v in vs) for k in range(3)]
+        return lo, hi
+
+    solids = [(o["name"], box(o)) for o in static]
+    solids = [(nm, b) for nm, b in solids if all(b[1][k] - b[0][k] > 1e-9 for k in range(3))]
+    polys = []
+    for o in static:
+        for p in o["polygons"]:
+            if any(e > 0 for e in mats[p["material"]].get("emission", [0, 0, 0])):
+                continue
+            v = p["vertices"]
+            a = cross(sub(v[1], v[0]), sub(v[2], v[0]))
+            if len(v) == 4:
+                b = cross(sub(v[2], v[0]), sub(v[3], v[0]))
+                a = [a[k] + b[k] for k in range(3)]
+            area = 0.5 * norm(a)
+            if area > 0:
+                polys.append((o["name"], v, [x / (2 * area) for x in a], area))
+    rng = random.Random(seed)
+    total = sum(p[3] for p in polys)
+    points = []
+    tries = 0
+    while len(points) < n and tries < 100 * n:
+        tries += 1
+        r = rng.random() * total
+        for name, v, nrm, area in polys:
+            r -= area
+            if r <= 0:
+                break
+        u, w = 0.05 + 0.9 * rng.random(), 0.05 + 0.9 * rng.random()
+        if len(v) == 4:
+            p = [(1 - u) * (1 - w) * v[0][k] + u * (1 - w) * v[1][k] + u * w * v[2][k]
+                 + (1 - u) * w * v[3][k] for k in range(3)]
+        else:
+            if u + w > 1:
+                u, w = 1 - u, 1 - w
+            p = [v[0][k] + u * (v[1][k] - v[0][k]) + w * (v[2][k] - v[0][k]) for k in range(3)]
+        inside = any(nm != name and all(lo[k] - 1e-9 <= p[k] <= hi[k] + 1e-9 for k in range(3))
+                     for nm, (lo, hi) in solids)
+        if not inside:
+            points.append({"p": p, "n": nrm})
+    return points
+
+
+def frame_times(start, end, fps):
+    last = math.floor((end - start) * fps + 1e-9)
+    return [min(start + i / fps, end) for i in range(last + 1)]
+
+
+def run_measured(cmd, log):
+    """Runs cmd (a list), returns (wall seconds, peak RSS in MB)."""
+    rss_file = log + ".rss"
+    timer = shutil.which("time") or ("/usr/bin/time" if os.path.exists("/usr/bin/time") else None)
+    full = [timer, "-f", "%M", "-o", rss_file] + cmd if timer else cmd
+    t0 = time.monotonic()
+    with open(log, "w") as f:
+        proc = subprocess.run(full, stdout=f, stderr=subprocess.STDOUT)
+    seconds = time.monotonic() - t0
+    if proc.returncode != 0:
+        sys.exit(f"spacetime_bench: command failed ({proc.returncode}): {shlex.join(cmd)}; see {log}")
+    if timer:
+        with open(rss_file) as f:
+            rss_mb = int(f.read().split()[-1]) / 1024.0
+    else:
+        # Largest child so far (Linux: kilobytes).
+        rss_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+    return seconds, rss_mb
+
+
+def probe_all(rhier, rhier_file, points_file, times):
+    out = []
+    for t in times:
+        res = subprocess.run([rhier, "probe", rhier_file, "--points", points_file,
+                              "--time", repr(t)], capture_output=True, text=True)
+        if res.returncode != 0:
+            sys.exit(f"spacetime_bench: probe of {rhier_file} at t = {t} failed: {res.stderr}")
+        out.append([r["B"] for r in json.loads(res.stdout)])
+    return out
+
+
+def relative_rms(values, ref):
+    num = den = 0.0
+    for vf, rf in zip(values, ref):
+        for b, br in zip(vf, rf):
+            for k in range(3):
+                num += (b[k] - br[k]) ** 2
+                den += br[k] ** 2
+    return math.sqrt(num / den) if den > 0 else float("nan")
+
+
+def expand(template, **kw):
+    return [part.format(**kw) for part in shlex.split(template)]
+
+
+def write_svg(rows, path):
+    """Error against seconds, log-log, one polyline per (method, scene)."""
+    series = {}
+    for r in rows:
+        try:
+            s, e = float(r["seconds"]), float(r["error"])
+        except ValueError:
+            continue
+        if s > 0 and e > 0:
+            series.setdefault((r["method"], r["scene"]), []).append((s, e, r["eps"]))
+    if not series:
+        return
+    W, H, L, R, T, B = 720, 460, 80, 200, 30, 60
+    xs = [p[0] for v in series.values() for p in v]
+    ys = [p[1] for v in series.values() for p in v]
+    x0, x1 = math.floor(math.log10(min(xs))), math.ceil(math.log10(max(xs)))
+    y0, y1 = math.floor(math.log10(min(ys))), math.ceil(math.log10(max(ys)))
+    x1, y1 = max(x1, x0 + 1), max(y1, y0 + 1)
+
+    def px(x):
+        return L + (math.log10(x) - x0) / (x1 - x0) * (W - L - R)
+
+    def py(y):
+        return H - B - (math.log10(y) - y0) / (y1 - y0) * (H - T - B)
+
+    colours = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2"]
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" '
+           f'font-family="sans-serif" font-size="12">',
+           f'<rect width="{W}" height="{H}" fill="white"/>']
+    for d in range(x0, x1 + 1):
+        x = L + (d - x0) / (x1 - x0) * (W - L - R)
+        out.append(f'<line x1="{x:.1f}" y1="{T}" x2="{x:.1f}" y2="{H - B}" stroke="#ddd"/>')
+        out.append(f'<text x="{x:.1f}" y="{H - B + 18}" text-anchor="middle">1e{d} s</text>')
+    for d in range(y0, y1 + 1):
+        y = H - B - (d - y0) / (y1 - y0) * (H - T - B)
+        out.append(f'<line x1="{L}" y1="{y:.1f}" x2="{W - R}" y2="{y:.1f}" stroke="#ddd"/>')
+        out.append(f'<text x="{L - 6}" y="{y + 4:.1f}" text-anchor="end">1e{d}</text>')
+    out.append(f'<rect x="{L}" y="{T}" width="{W - L - R}" height="{H - T - B}" fill="none" stroke="black"/>')
+    out.append(f'<text x="{(L + W - R) / 2}" y="{H - 15}" text-anchor="middle">run time (s, whole process)</text>')
+    out.append(f'<text x="18" y="{(T + H - B) / 2}" text-anchor="middle" '
+               f'transform="rotate(-90 18 {(T + H - B) / 2})">relative RMS error vs reference</text>')
+    for i, ((method, scene), pts) in enumerate(sorted(series.items())):
+        c = colours[i % len(colours)]
+        pts.sort()
+        line = " ".join(f"{px(s):.1f},{py(e):.1f}" for s, e, _ in pts)
+        out.append(f'<polyline points="{line}" fill="none" stroke="{c}" stroke-width="2"/>')
+        for s, e, eps in pts:
+            out.append(f'<circle cx="{px(s):.1f}" cy="{py(e):.1f}" r="4" fill="{c}"/>')
+            out.append(f'<text x="{px(s) + 6:.1f}" y="{py(e) - 6:.1f}" fill="{c}">{eps}</text>')
+        ly = T + 20 + 20 * i
+        out.append(f'<line x1="{W - R + 15}" y1="{ly}" x2="{W - R + 40}" y2="{ly}" stroke="{c}" stroke-width="2"/>')
+        out.append(f'<text x="{W - R + 46}" y="{ly + 4}">{method} / {scene}</text>')
+    out.append("</svg>")
+    with open(path, "w") as f:
+        f.write("\n".join(out) + "\n")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rhier", default=os.path.join(ROOT, "target", "release", "rhier"))
+    ap.add_argument("--scene", required=True)
+    ap.add_argument("--eps", default="1.0,0.5", help="comma-separated eps values")
+    ap.add_argument("--fps", type=float, default=25.0, help="frames per second of the method")
+    ap.add_argument("--name", default="per-frame", help="method label in the CSV")
+    ap.add_argument("--method", default=DEFAULT_METHOD, help="command template")
+    ap.add_argument("--ref-fps", type=float, default=5.0)
+    ap.add_argument("--ref-eps", type=float, default=0.1)
+    ap.add_argument("--points", type=int, default=200)
+    ap.add_argument("--threads", type=int, default=2, help="appended as --threads N (0: not)")
+    ap.add_argument("--out-dir", default="spacetime_bench_out")
+    ap.add_argument("--csv", default=os.path.join(ROOT, "tools", "spacetime_bench.csv"))
+    args = ap.parse_args()
+
+    os.makedirs(args.out_dir, exist_ok=True)
+    scene_file = scene_path(args.scene)
+    label = os.path.splitext(os.path.basename(scene_file))[0]
+    with open(scene_file) as f:
+        scene = json.load(f)
+    start, end = scene["time"]["start"], scene["time"]["end"]
+    threads = ["--threads", str(args.threads)] if args.threads > 0 else []
+
+    points_file = os.path.join(args.out_dir, f"{label}_points.json")
+    with open(points_file, "w") as f:
+        json.dump(probe_grid(scene, args.points), f)
+    times = frame_times(start, end, args.ref_fps)
+
+    ref_file = os.path.join(args.out_dir, f"{label}_ref_fps{args.ref_fps:g}_eps{args.ref_eps:g}.rhier")
+    if not os.path.exists(ref_file):
+        cmd = expand(DEFAULT_METHOD, rhier=args.rhier, scene=scene_file, eps=args.ref_eps,
+                     fps=args.ref_fps, out=ref_file) + threads
+        s, m = run_measured(cmd, ref_file + ".log")
+        print(f"reference: {shlex.join(cmd)}: {s:.1f} s, {m:.0f} MB", flush=True)
+    ref = probe_all(args.rhier, ref_file, points_file, times)
+    ref_desc = f"per-frame fps {args.ref_fps:g} eps {args.ref_eps:g}"
+
+    new_rows = []
+    for eps in [float(e) for e in args.eps.split(",") if e.strip()]:
+        out = os.path.join(args.out_dir, f"{label}_{args.name}_eps{eps:g}.rhier")
+        cmd = expand(args.method, rhier=args.rhier, scene=scene_file, eps=eps, fps=args.fps,
+                     out=out) + threads
+        seconds, rss = run_measured(cmd, out + ".log")
+        err = relative_rms(probe_all(args.rhier, out, points_file, times), ref)
+        row = {"method": args.name, "scene": label, "eps": f"{eps:g}", "seconds": f"{seconds:.2f}",
+               "peak_rss_mb": f"{rss:.1f}", "error": f"{err:.5f}",
+               "frames_compared": len(times), "ref": ref_desc, "command": shlex.join(cmd)}
+        print(",".join(str(row[k]) for k in CSV_FIELDS[:7]), flush=True)
+        new_rows.append(row)
+
+    rows = []
+    if os.path.exists(args.csv):
+        with open(args.csv) as f:
+            rows = list(csv.DictReader(f))
+    rows += new_rows
+    with open(args.csv, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=CSV_FIELDS)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: r.get(k, "") for k in CSV_FIELDS})
+    write_svg(rows, os.path.splitext(args.csv)[0] + ".svg")
+
+
+if __name__ == "__main__":
+    main()
