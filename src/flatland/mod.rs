@@ -6,8 +6,9 @@
 //!
 //! ```text
 //! scene::load ─▶ FlatScene::posed(t) ─▶ mesh::splits (none | uniform:N | discontinuity, §3.2)
-//!   ─▶ geometry::FlatGeometry (elements, points) ─▶ complex::sweep (dual plane, §2.3)
+//!   ─▶ geometry::FlatGeometry (elements, points) ─▶ views (rotational sweep per point)
 //!   ─▶ radiosity::form_factors (string rule, eq. 2–3) ─▶ radiosity::solve_radiosity
+//! (complex::sweep: the dual-plane sweep building faces with chains, §2.3)
 //! ```
 //!
 //! Moving objects: [`dynamic::Dynamic`] re-sweeps only the lines meeting the moving
@@ -26,6 +27,7 @@ pub mod mesh;
 pub mod radiosity;
 pub mod scene;
 pub mod svg;
+pub mod views;
 pub mod window;
 
 use geometry::FlatGeometry;
