@@ -11,8 +11,11 @@
 //! (complex::sweep: the dual-plane sweep building faces with chains, §2.3)
 //! ```
 //!
-//! Moving objects: [`dynamic::Dynamic`] re-sweeps only the lines meeting the moving
-//! geometry ([`window`], §5) and keeps every other form factor. Pictures: [`svg`]. The crate's 3D solver does not depend on this
+//! Moving objects: [`dynamic::Dynamic`] applies the visibility events of the motion
+//! ([`events`], §5.2) in time order from a priority queue, re-sweeping the two views
+//! each event changes, and re-evaluates only the terms of the points related to the
+//! moving object (§5.1); every other form factor is kept. ([`window`] measures the
+//! lines meeting a convex region, an earlier form of the update kept as a tool.) Pictures: [`svg`]. The crate's 3D solver does not depend on this
 //! module; it is our exact reference for the ideas it borrows (string rule, exact
 //! visibility events).
 //!
@@ -22,6 +25,7 @@
 
 pub mod complex;
 pub mod dynamic;
+pub mod events;
 pub mod geometry;
 pub mod mesh;
 pub mod radiosity;

@@ -78,7 +78,8 @@ const _: () = assert!(std::mem::size_of::<Boundary>() == 12);
 pub struct View {
     /// Boundaries, counter-clockwise.
     pub boundaries: Vec<Boundary>,
-    /// The element hit in every direction when there is no boundary.
+    /// The element hit in every direction when there is no boundary ([`NO_ELEM`]
+    /// otherwise).
     pub hit_all: u32,
 }
 
@@ -315,6 +316,7 @@ pub fn view_of(geom: &FlatGeometry, topo: &Topology, v: u32) -> (View, usize) {
     if let Some(k) = (0..out.len()).min_by_key(|&k| out[k].point) {
         out.rotate_left(k);
     }
+    let hit_all = if out.is_empty() { hit_all } else { NO_ELEM };
     (
         View {
             boundaries: out,
