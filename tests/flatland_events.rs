@@ -145,15 +145,16 @@ fn event_times_match_brute_force_sampling_of_the_visibility_graph() {
 }
 
 /// Views and form factors after every step equal a from-scratch computation.
-fn check_path(scene: &FlatScene, times: &[f64], mesh: Mesh) -> (usize, usize) {
+fn check_path(scene: &FlatScene, times: &[f64], mesh: Mesh) -> (usize, usize, usize) {
     let (mut d, _) = Dynamic::new(scene, mesh, times[0]);
-    let (mut events, mut candidates) = (0, 0);
+    let (mut events, mut candidates, mut spliced) = (0, 0, 0);
     for &t in &times[1..] {
         let rep = d.step(t);
         assert!(!rep.full, "t {t}: full step");
         assert!(rep.events <= rep.event_candidates);
         events += rep.events;
         candidates += rep.event_candidates;
+        spliced += rep.views_spliced;
         let g = geometry_at(scene, t, mesh);
         let topo = Topology::new(&g);
         let (views, _) = all_views(&g, &topo);
@@ -172,12 +173,12 @@ fn check_path(scene: &FlatScene, times: &[f64], mesh: Mesh) -> (usize, usize) {
         assert_eq!(rep.ff_total, full.nonzeros(), "t {t}");
         assert!(rep.ff_recomputed <= rep.ff_total + 2 * rep.pairs_vanished);
     }
-    (events, candidates)
+    (events, candidates, spliced)
 }
 
 #[test]
 fn event_by_event_update_equals_from_scratch_on_random_paths() {
-    let (mut tested, mut events) = (0, 0);
+    let (mut tested, mut events, mut spliced) = (0, 0, 0);
     for seed in 100..140u64 {
         let Some(scene) = random_moving_scene(seed, 6) else {
             continue;
@@ -185,9 +186,17 @@ fn event_by_event_update_equals_from_scratch_on_random_paths() {
         tested += 1;
         // Forwards in uneven steps, then backwards.
         let times = [0.0, 0.1, 0.35, 0.4, 0.8, 1.0, 0.6, 0.05];
-        events += check_path(&scene, &times, Mesh::None).0;
+        let (e, _, s) = check_path(&scene, &times, Mesh::None);
+        events += e;
+        spliced += s;
     }
     assert!(tested >= 10, "only {tested} valid scenes");
+    // Most event ends are updated by the local splice (and the views then equal the
+    // from-scratch views, checked in check_path).
+    assert!(
+        spliced * 2 >= events,
+        "only {spliced} local splices for {events} events"
+    );
     assert!(
         events >= 100,
         "only {events} topological events on the paths"
@@ -204,7 +213,7 @@ fn event_by_event_update_on_the_example_path_with_splits() {
     for mesh in [Mesh::None, Mesh::Uniform(2)] {
         // One large step through many events, then small ones.
         let times = [0.0, 1.0, 0.9, 0.85, 0.5, 0.45, 0.2];
-        let (events, candidates) = check_path(&scene, &times, mesh);
+        let (events, candidates, _) = check_path(&scene, &times, mesh);
         assert!(
             events >= 10,
             "{mesh:?}: only {events} events ({candidates} candidates)"

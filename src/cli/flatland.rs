@@ -97,6 +97,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "event_candidates": report.event_candidates,
             "event_groups": report.event_groups,
             "triples_tested": report.triples_tested,
+            "views_spliced": report.views_spliced,
             "views_reswept": report.views_reswept,
             "points_evaluated": report.points_evaluated,
             "edges_visited": report.edges_visited,

@@ -12,13 +12,19 @@
 //!    points become collinear (a point crossing the segment between two others) and
 //!    queues them in a [`std::collections::BinaryHeap`] by time.
 //! 2. **In order.** Events are popped earliest first; those within `1e-12 (t1 - t0)`
-//!    of each other form one group. For each group, the views of the event's two
-//!    outer points — the only views the elementary change of §5.2 (Figure 15)
-//!    modifies — are re-swept at the middle of the event-free interval that follows
-//!    (the geometry posed there). An event whose re-swept views differ from the
-//!    stored ones is a topological change of the complex and is counted in
-//!    [`StepReport::events`]; others (the collinear triple is hidden behind other
-//!    segments) change nothing. After the last event every view is the view at `t1`.
+//!    of each other form one group, applied on the geometry posed at the middle of
+//!    the event-free interval that follows. The elementary change of §5.2 (Figure
+//!    15: `p` crosses the segment `l r`) modifies only the views of `l` and `r`, and
+//!    only in the window of directions around the line `l p r`:
+//!    [`super::views::splice_event`] re-sweeps that window with the few elements that
+//!    can be hit there (the window's old hits, the elements at `p` and `r`, what `p`
+//!    and `r` see beyond themselves) and splices it into the view, `O(deg p + deg r)`
+//!    work independent of the scene size. When the local case does not apply (a
+//!    point in several simultaneous events, `l` seeing neither `p` nor an element
+//!    hiding it) the whole view is re-swept (`O(P log P)`). An event whose views
+//!    changed is a topological change of the complex ([`StepReport::events`]);
+//!    others (the triple hidden behind other segments) change nothing. After the last
+//!    event every view is the view at `t1` (tested against from-scratch views).
 //! 3. **Measures (§5.1).** Only the points whose contribution can have changed are
 //!    re-evaluated at `t1`: the moving points, the points whose view contains a moving
 //!    point (their edges end at vertices through the moving object: the faces
@@ -32,15 +38,20 @@
 //!
 //! # Local, and not
 //!
-//! Local: each event touches the views of its two outer points and nothing else; the
+//! Local: each event touches the views of its two outer points, and within them only
+//! the window of directions around the event's line (`O(deg)` work per event, the
+//! analogue of the paper's constant-time update once the triple is known); the
 //! measure update touches only the edges on the curves of the points listed in step 3
 //! (reported as `edges_visited`), and the form factors of the element pairs those
-//! edges bound (`ff_recomputed`). Not local, honestly: (a) an event re-sweeps its two
-//! views, `O(P log P)` each, instead of the paper's constant-time splice of the complex
-//! around the event's vertex; (b) finding the events tests all `O(k P^2)` triples
-//! with a moving point by sampling (see [`super::events`]) rather than the paper's
-//! kinetic queue of `O(log m_O)` per event; (c) finding the points whose view contains
-//! a moving point scans all views (`O(m)`, no reverse index). With the discontinuity
+//! edges bound (`ff_recomputed`). Not local, honestly: (a) a view spliced or re-swept
+//! is compared with the stored one (`O(deg)`), and the window's directions are found
+//! by computing the angles of `p`'s and `r`'s views (`O(deg p + deg r)`, not `O(1)`);
+//! simultaneous events at one point and the end-time re-sweeps cost `O(P log P)` per
+//! view; (b) finding the events tests all `O(k P^2)` triples with a moving point by
+//! sampling (see [`super::events`]) rather than the paper's kinetic queue of
+//! `O(log m_O)` per event; (c) the points re-evaluated at `t1` are re-integrated over
+//! their whole view (`O(deg)` each), and finding the points whose view contains a
+//! moving point scans all views (`O(m)`, no reverse index). With the discontinuity
 //! mesh the elements themselves move with the shadows, so each step is a full
 //! recomputation (reported as such); a step where two points coincide (the point set
 //! changes) or where a point crosses a segment (objects interpenetrating between
@@ -55,7 +66,9 @@ use super::geometry::{FlatGeometry, PairMap};
 use super::mesh::{Mesh, splits};
 use super::radiosity::FormFactors;
 use super::scene::FlatScene;
-use super::views::{Contributions, Topology, View, all_views, contributions, view_of};
+use super::views::{
+    Contributions, Topology, View, all_views, contributions, splice_event, view_of,
+};
 
 /// What one update step did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -71,7 +84,12 @@ pub struct StepReport {
     pub event_groups: usize,
     /// Point triples tested for collinearity.
     pub triples_tested: usize,
-    /// Views re-swept (the two ends of each event, plus the points of triples
+    /// Views updated locally at an event ([`super::views::splice_event`]: only the
+    /// window of directions around the event's line, `O(deg)` work).
+    pub views_spliced: usize,
+    /// Views re-swept in full, `O(P log P)` each (event ends where the local case
+    /// does not apply or that take part in several simultaneous events, plus the
+    /// points of triples
     /// collinear at the end time, see [`super::events::EventQueue::at_end`]).
     pub views_reswept: usize,
     /// Points whose contribution was re-evaluated.
@@ -249,11 +267,36 @@ impl<'s> Dynamic<'s> {
                 }
                 let mut ends: Vec<u32> = events[k..j].iter().flat_map(|e| e.ends).collect();
                 ends.sort_unstable();
+                let once: Vec<u32> = ends
+                    .iter()
+                    .copied()
+                    .filter(|v| ends.iter().filter(|w| *w == v).count() == 1)
+                    .collect();
                 ends.dedup();
                 let mut group_changed: Vec<u32> = Vec::new();
                 for v in ends {
-                    let (view, _) = view_of(&gm, &self.topo, v);
-                    rep.views_reswept += 1;
+                    // Local splice when v takes part in one event of the group only.
+                    let local = if once.contains(&v) {
+                        events[k..j]
+                            .iter()
+                            .find(|e| e.ends.contains(&v))
+                            .and_then(|e| {
+                                let other = if e.ends[0] == v { e.ends[1] } else { e.ends[0] };
+                                splice_event(&gm, &self.topo, &self.views, v, e.mid, other)
+                            })
+                    } else {
+                        None
+                    };
+                    let view = match local {
+                        Some(view) => {
+                            rep.views_spliced += 1;
+                            view
+                        }
+                        None => {
+                            rep.views_reswept += 1;
+                            view_of(&gm, &self.topo, v).0
+                        }
+                    };
                     if view != self.views[v as usize] {
                         self.views[v as usize] = view;
                         changed[v as usize] = true;

@@ -492,3 +492,224 @@ pub fn form_factors_mu(geom: &FlatGeometry) -> (PairMap, ViewStats) {
     mu.retain(|_, x| *x > 1e-13 * scale);
     (mu, stats)
 }
+
+/// The elements hit by `x`'s view around direction `phi` (the interval containing it
+/// and its two neighbours), at the positions of `geom`. `O(deg x)`.
+fn hits_near(geom: &FlatGeometry, view: &View, x: u32, phi: f64, out: &mut Vec<u32>) {
+    let c = geom.points[x as usize];
+    let n = view.boundaries.len();
+    if n == 0 {
+        out.push(view.hit_all);
+        return;
+    }
+    let mut bd: Vec<(f64, usize)> = view
+        .boundaries
+        .iter()
+        .enumerate()
+        .map(|(i, b)| (dir(c, geom.points[b.point as usize]), i))
+        .collect();
+    bd.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let k = bd.partition_point(|b| b.0 <= phi);
+    let at = |j: usize| view.boundaries[bd[j % n].1].hit_after;
+    // Interval containing phi starts at bd[k - 1] (cyclically).
+    for j in [k + 2 * n - 2, k + 2 * n - 1, k + 2 * n] {
+        out.push(at(j));
+    }
+}
+
+/// The local update of the view of `v` at the elementary event of §5.2 (Figure 15):
+/// `p` lies between `v` and `r` on one line, so `r` appears in or leaves `v`'s view
+/// right next to `p`. Only the window of directions between the boundaries around
+/// `p` (and `r`) changes; it is re-swept with the few elements that can be hit there:
+/// the old hits of the window, the elements at `p` and `r`, and what `p` and `r` see
+/// beyond themselves along the line (from their own views), so the cost is
+/// `O(deg p + deg r)`, independent of the scene size. `views` hold the views before
+/// the event; `geom` is posed just after it. `None` when the local case does not
+/// apply (`p` not seen by `v`, `r` seen but not next to `p`, fewer than four
+/// boundaries): the caller re-sweeps the whole view. When `v` does not see `p`
+/// because an element crosses the segment `v p` properly, the view is unchanged.
+pub fn splice_event(
+    geom: &FlatGeometry,
+    topo: &Topology,
+    views: &[View],
+    v: u32,
+    p: u32,
+    r: u32,
+) -> Option<View> {
+    let old = &views[v as usize];
+    let n = old.boundaries.len();
+    if n < 4 {
+        return None;
+    }
+    let pos = |w: u32| {
+        old.boundaries
+            .iter()
+            .position(|b| b.point == w && b.visible)
+    };
+    let pts = &geom.points;
+    let c = pts[v as usize];
+    let Some(ip) = pos(p) else {
+        // `v` does not see `p`: if the element `v` sees in `p`'s direction crosses the
+        // segment `v p` properly, it hides `r` on both sides of the event and the view
+        // does not change.
+        let mut h = Vec::new();
+        hits_near(geom, old, v, dir(c, pts[p as usize]), &mut h);
+        let e = h[1];
+        if e != NO_ELEM && pos(r).is_none() {
+            let [a, b] = topo.ends[e as usize].map(|i| pts[i as usize]);
+            let q = pts[p as usize];
+            if orient(a, b, c) * orient(a, b, q) < 0.0 && orient(c, q, a) * orient(c, q, b) < 0.0 {
+                return Some(old.clone());
+            }
+        }
+        return None;
+    };
+    let (first, last) = match pos(r) {
+        None => (ip, ip),
+        Some(ir) if ir == (ip + 1) % n => (ip, ir),
+        Some(ir) if ip == (ir + 1) % n => (ir, ip),
+        Some(_) => return None,
+    };
+    let lo = (first + n - 1) % n;
+    let hi = (last + 1) % n;
+    if hi == lo || hi == first {
+        return None;
+    }
+    // Candidate elements.
+    let mut elems: Vec<u32> = vec![old.boundaries[lo].hit_after];
+    let mut k = first;
+    loop {
+        elems.push(old.boundaries[k].hit_after);
+        if k == last {
+            break;
+        }
+        k = (k + 1) % n;
+    }
+    elems.extend(&topo.incident[p as usize]);
+    elems.extend(&topo.incident[r as usize]);
+    let along_p = dir(c, pts[p as usize]);
+    let along_r = dir(c, pts[r as usize]);
+    hits_near(geom, &views[p as usize], p, along_p, &mut elems);
+    hits_near(geom, &views[r as usize], r, along_r, &mut elems);
+    elems.retain(|&e| e != NO_ELEM);
+    elems.sort_unstable();
+    elems.dedup();
+    let mut points: Vec<u32> = elems
+        .iter()
+        .flat_map(|&e| topo.ends[e as usize])
+        .chain([p, r])
+        .filter(|&w| w != v)
+        .collect();
+    points.sort_unstable();
+    points.dedup();
+    // Sweep the window (lo, hi) with the candidates only.
+    let phi_lo = dir(c, pts[old.boundaries[lo].point as usize]);
+    let rel = |x: f64| (x - phi_lo).rem_euclid(TAU);
+    let width = rel(dir(c, pts[old.boundaries[hi].point as usize]));
+    let mut events: Vec<(f64, u8, u32)> = Vec::new();
+    let mut tree: BTreeSet<Act> = BTreeSet::new();
+    let mut acts: HashMap<u32, Act> = HashMap::new();
+    for &e in &elems {
+        let [ia, ib] = topo.ends[e as usize];
+        let seg = geom.elements[e as usize].segment;
+        if ia == v || ib == v || geom.point_segments[v as usize].contains(&seg) {
+            continue;
+        }
+        let (a, b) = (pts[ia as usize], pts[ib as usize]);
+        let o = orient(c, a, b);
+        if o == 0.0 {
+            continue;
+        }
+        let (s, t) = if o > 0.0 { (a, b) } else { (b, a) };
+        let (rs, rt) = (rel(dir(c, s)), rel(dir(c, t)));
+        let act = Act { a, b, c, elem: e };
+        acts.insert(e, act);
+        events.push((rs, 2, e));
+        events.push((rt, 0, e));
+        if rs > rt {
+            tree.insert(act);
+        }
+    }
+    for &w in &points {
+        events.push((rel(dir(c, pts[w as usize])), 1, w));
+    }
+    events.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    let first_of = |tree: &BTreeSet<Act>| tree.first().map_or(NO_ELEM, |a| a.elem);
+    let mut new: Vec<Boundary> = Vec::new();
+    let mut hit = first_of(&tree);
+    let mut hit_lo = hit;
+    let mut i = 0;
+    while i < events.len() {
+        let mut j = i + 1;
+        while j < events.len() && events[j].0 - events[j - 1].0 <= DIR_EPS {
+            j += 1;
+        }
+        let group = &events[i..j];
+        let at_lo = group[0].0 <= DIR_EPS;
+        if group[0].0 >= width - DIR_EPS {
+            break;
+        }
+        for &(_, kind, id) in group {
+            if kind == 0
+                && let Some(act) = acts.get(&id)
+                && !tree.remove(act)
+            {
+                tree.retain(|x| x.elem != id);
+            }
+        }
+        let d2 = |w: u32| {
+            let q = pts[w as usize];
+            (q[0] - c[0]).powi(2) + (q[1] - c[1]).powi(2)
+        };
+        let nearest = group
+            .iter()
+            .filter(|g| g.1 == 1)
+            .map(|g| g.2)
+            .min_by(|&x, &y| d2(x).total_cmp(&d2(y)));
+        let visible = nearest.is_some_and(|w| {
+            tree.first().is_none_or(|m| {
+                let q = pts[w as usize];
+                orient(m.a, m.b, q) * orient(m.a, m.b, c) >= 0.0
+            })
+        });
+        for &(_, kind, id) in group {
+            if kind == 2
+                && let Some(act) = acts.get(&id)
+            {
+                tree.insert(*act);
+            }
+        }
+        let new_hit = first_of(&tree);
+        if at_lo {
+            hit_lo = new_hit;
+        } else if let Some(w) = nearest
+            && (visible || new_hit != hit)
+        {
+            new.push(Boundary {
+                point: w,
+                hit_after: new_hit,
+                visible,
+            });
+        }
+        hit = new_hit;
+        i = j;
+    }
+    // Splice: boundaries lo, new..., hi, and the rest in order.
+    let mut out: Vec<Boundary> = Vec::with_capacity(n + 1);
+    let mut b_lo = old.boundaries[lo];
+    b_lo.hit_after = hit_lo;
+    out.push(b_lo);
+    out.extend(new);
+    let mut k = hi;
+    while k != lo {
+        out.push(old.boundaries[k]);
+        k = (k + 1) % n;
+    }
+    if let Some(k) = (0..out.len()).min_by_key(|&k| out[k].point) {
+        out.rotate_left(k);
+    }
+    Some(View {
+        boundaries: out,
+        hit_all: NO_ELEM,
+    })
+}
