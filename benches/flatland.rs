@@ -150,7 +150,8 @@ fn moving_update(c: &mut Criterion) {
             eprintln!(
                 "boxes {k}, step {t0} -> {t1}: segments {}, points {}, events {} of {} candidates \
                  ({} triples), views re-swept {}, points evaluated {}, edges {}, faces {}, \
-                 update recomputes {} of {} form factors ({:.1} %)",
+                 update recomputes {} of {} form factors ({:.1} %); \
+                 find {:.2} ms, apply {:.2} ms, measure {:.2} ms, total {:.2} ms",
                 d.geometry().segments.len(),
                 d.geometry().points.len(),
                 rep.events,
@@ -163,6 +164,10 @@ fn moving_update(c: &mut Criterion) {
                 rep.ff_recomputed,
                 rep.ff_total,
                 100.0 * rep.ff_recomputed as f64 / rep.ff_total as f64,
+                1e3 * rep.seconds_find,
+                1e3 * rep.seconds_apply,
+                1e3 * rep.seconds_measure,
+                1e3 * rep.seconds,
             );
             let id = format!("{k}_{t0}_{t1}");
             let (mut d, _) = Dynamic::new(&scene, Mesh::None, t0);

@@ -220,3 +220,64 @@ fn event_by_event_update_on_the_example_path_with_splits() {
         );
     }
 }
+
+/// Two triangles moving at once (one with a keyframe inside the path, translating then
+/// rotating), among random static segments.
+fn two_movers(seed: u64) -> Option<FlatScene> {
+    let mut rng = Lcg(seed);
+    let mut segs = String::new();
+    for i in 0..5 {
+        let a = [3.0 * rng.next(), 3.0 * rng.next()];
+        let ang = rng.next() * std::f64::consts::TAU;
+        let b = [a[0] + 0.6 * ang.cos(), a[1] + 0.6 * ang.sin()];
+        if i > 0 {
+            segs.push(',');
+        }
+        segs.push_str(&format!(
+            r#"{{"a": [{}, {}], "b": [{}, {}], "reflectance": 0.5, "emission": 1.0}}"#,
+            a[0], a[1], b[0], b[1]
+        ));
+    }
+    let mut tri = |name: &str| {
+        let (x, y) = (3.0 * rng.next(), 3.0 * rng.next());
+        let (dx, dy, rot) = (
+            2.0 * rng.next() - 1.0,
+            2.0 * rng.next() - 1.0,
+            3.0 * rng.next() - 1.5,
+        );
+        format!(
+            r#"{{"name": "{name}", "segments": [
+              {{"a": [{x}, {y}], "b": [{x1}, {y}], "reflectance": 0.3}},
+              {{"a": [{x1}, {y}], "b": [{x}, {y1}], "reflectance": 0.3}},
+              {{"a": [{x}, {y1}], "b": [{x}, {y}], "reflectance": 0.3}}],
+             "motion": [{{"t": 0}}, {{"t": 0.5, "translation": [{dx}, {dy}]}},
+                        {{"t": 1, "translation": [{dx}, {dy}], "rotation": {rot}}}]}}"#,
+            x1 = x + 0.3,
+            y1 = y + 0.3
+        )
+    };
+    let (a, b) = (tri("a"), tri("b"));
+    let text = format!(
+        r#"{{"rhier_flatland": 1, "objects": [{{"name": "static", "segments": [{segs}]}}, {a}, {b}]}}"#
+    );
+    let scene = parse(Path::new("random"), &text).ok()?;
+    if (0..=400).any(|k| first_crossing(&scene.posed(k as f64 / 400.0)).is_some()) {
+        return None;
+    }
+    Some(scene)
+}
+
+#[test]
+fn two_objects_moving_at_once_with_a_keyframe_inside_the_steps() {
+    let (mut tested, mut events) = (0, 0);
+    for seed in 200..260u64 {
+        let Some(scene) = two_movers(seed) else {
+            continue;
+        };
+        tested += 1;
+        let times = [0.0, 0.3, 0.7, 1.0, 0.2];
+        events += check_path(&scene, &times, Mesh::None).0;
+    }
+    assert!(tested >= 5, "only {tested} valid scenes");
+    assert!(events >= 30, "only {events} events");
+}

@@ -67,7 +67,7 @@ use super::mesh::{Mesh, splits};
 use super::radiosity::FormFactors;
 use super::scene::FlatScene;
 use super::views::{
-    Contributions, Topology, View, all_views, contributions, splice_event, view_of,
+    Contributions, Splice, Topology, View, all_views, contributions, splice_event, view_of,
 };
 
 /// What one update step did.
@@ -112,6 +112,12 @@ pub struct StepReport {
     pub pairs_vanished: usize,
     /// Wall time of the step, seconds.
     pub seconds: f64,
+    /// Of which: finding and queueing the events.
+    pub seconds_find: f64,
+    /// Of which: applying the events to the views.
+    pub seconds_apply: f64,
+    /// Of which: re-evaluating the measures at `t1`.
+    pub seconds_measure: f64,
     /// True if the step was a full recomputation (first time, discontinuity mesh,
     /// or a change of the point set).
     pub full: bool,
@@ -232,7 +238,10 @@ impl<'s> Dynamic<'s> {
             // Events of the motion from self.t to t1 (backwards: the same collinear
             // triples, popped latest first by negating time).
             let backwards = t1 < self.t;
+            let lap = Instant::now();
             let mut queue = find_events(self.scene, &traj, &moving, ta, tb);
+            rep.seconds_find = lap.elapsed().as_secs_f64();
+            let lap = Instant::now();
             let mut events: Vec<super::events::Event> = queue.drain_sorted();
             if backwards {
                 events.reverse();
@@ -251,6 +260,10 @@ impl<'s> Dynamic<'s> {
             rep.triples_tested = queue.triples;
             rep.event_candidates = events.len();
             let tol = 1e-12 * (tb - ta);
+            let moving_points: Vec<u32> = (0..self.views.len() as u32)
+                .filter(|&i| moving.contains(&traj.object[i as usize]))
+                .collect();
+            let mut gm = self.geom.clone();
             let mut changed = vec![false; self.views.len()];
             let mut k = 0;
             while k < events.len() {
@@ -261,9 +274,9 @@ impl<'s> Dynamic<'s> {
                 rep.event_groups += 1;
                 let next = events.get(j).map_or(t1, |e| e.time);
                 let tm = 0.5 * (events[j - 1].time + next);
-                let gm = FlatGeometry::new(self.scene.posed(tm), &self.splits);
-                if gm.point_segments != self.geom.point_segments {
-                    return full(self);
+                // The views read only the points' positions: move the moving ones.
+                for &i in &moving_points {
+                    gm.points[i as usize] = traj.point(self.scene, i, tm);
                 }
                 let mut ends: Vec<u32> = events[k..j].iter().flat_map(|e| e.ends).collect();
                 ends.sort_unstable();
@@ -288,7 +301,8 @@ impl<'s> Dynamic<'s> {
                         None
                     };
                     let view = match local {
-                        Some(view) => {
+                        Some(Splice::Unchanged) => continue,
+                        Some(Splice::New(view)) => {
                             rep.views_spliced += 1;
                             view
                         }
@@ -321,6 +335,8 @@ impl<'s> Dynamic<'s> {
                     changed[v as usize] = true;
                 }
             }
+            rep.seconds_apply = lap.elapsed().as_secs_f64();
+            let lap = Instant::now();
             // Points whose contribution may differ at t1 (§5.1 and §5.2).
             let is_moving: Vec<bool> = (0..self.views.len())
                 .map(|i| moving.contains(&traj.object[i]))
@@ -398,12 +414,18 @@ impl<'s> Dynamic<'s> {
                     _ => {}
                 }
             }
+            rep.seconds_measure = lap.elapsed().as_secs_f64();
             rep.faces_visited = visited.len();
             rep.ff_recomputed = touched.iter().map(|k| if k.0 == k.1 { 1 } else { 2 }).sum();
         }
         self.geom = geom1;
         self.t = t1;
-        rep.ff_total = self.form_factors().nonzeros();
+        rep.ff_total = self
+            .mu
+            .iter()
+            .filter(|(_, m)| **m > 0.0)
+            .map(|(k, _)| if k.0 == k.1 { 1 } else { 2 })
+            .sum();
         rep.seconds = start.elapsed().as_secs_f64();
         rep
     }

@@ -1,21 +1,23 @@
 //! Visibility events of moving objects (paper §5.2): the times at which three points
 //! become collinear while objects move rigidly, in a priority queue ordered by time.
 //!
-//! How it works: every change of the visibility complex's topology is the elementary
-//! change of §5.2 (Figure 15): a point `p` crosses the segment `l r` between two
-//! points, so `l` and `r` start or stop seeing each other, and the views of `l` and `r`
-//! ([`super::views`]) change — nothing else does (a view changes only when a point
-//! enters or leaves it, which needs three collinear points with the view's owner at an
-//! end). So the events are the roots in time of `orient(a(t), b(t), c(t))` for the
-//! triples of points not all fixed to one rigid body (one moving point and a static
-//! pair, two moving points and a static one, three moving points of different objects;
-//! `O(k P^2)` triples for `k` moving points). Motion is the scene's piecewise-linear
-//! interpolation of translation and rotation, so each triple's orientation is a smooth
-//! function of time; it is sampled at the keyframe times inside `[t0, t1]` and
-//! uniformly in between (4 samples per piece, plus 16 per half-turn of rotation of the
-//! fastest moving object in that piece), each sign change is refined by bisection to
-//! `1e-12 (t1 - t0)`, and the event is queued in a [`BinaryHeap`] keyed by time with
-//! the two outer points of the collinear triple as the ends whose views change.
+//! How it works: every change of the visibility complex's topology is the
+//! elementary change of §5.2 (Figure 15): a point `p` crosses the segment `l r`
+//! between two points, so `l` and `r` start or stop seeing each other, and the
+//! views of `l` and `r` ([`super::views`]) change — nothing else does (a view
+//! changes only when a point enters or leaves it, which needs three collinear
+//! points with the view's owner at an end). So the events are the roots in time of
+//! `orient(a(t), b(t), c(t))` for the triples of points not all fixed to one rigid
+//! body (one moving point and a static pair, two moving points and a static one,
+//! three moving points of different objects; `O(k P^2)` triples for `k` moving
+//! points). Motion is the scene's piecewise-linear interpolation of translation and
+//! rotation, so each triple's orientation is a smooth function of time; it is
+//! sampled at the keyframe times inside `[t0, t1]` and uniformly in between (4
+//! samples per piece, plus 16 per half-turn of rotation of the fastest moving
+//! object in that piece), each sign change is refined by regula falsi (Illinois,
+//! kept inside the bracket) to `1e-12 (t1 - t0)`, and the event is queued in a
+//! [`BinaryHeap`] keyed by time with the two outer points of the collinear triple
+//! as the ends whose views change.
 //!
 //! Tolerance, honestly: two roots of one triple between two consecutive samples (the
 //! triple becomes collinear and un-collinear again within `~(t1 - t0) / 4`) cancel and
@@ -172,7 +174,8 @@ impl Trajectories {
             .collect()
     }
 
-    fn point(&self, scene: &FlatScene, i: u32, t: f64) -> [f64; 2] {
+    /// Position of point `i` at time `t`.
+    pub fn point(&self, scene: &FlatScene, i: u32, t: f64) -> [f64; 2] {
         let o = &scene.objects[self.object[i as usize] as usize];
         place(o.pivot, &o.pose_at(t), self.local[i as usize])
     }
@@ -224,8 +227,10 @@ pub fn find_events(
     q.samples = times.len();
     let xs: Vec<Vec<[f64; 2]>> = times.iter().map(|&t| traj.positions(scene, t)).collect();
     let np = traj.local.len() as u32;
-    let is_moving = |i: u32| moving.contains(&traj.object[i as usize]);
-    let (mov, stat): (Vec<u32>, Vec<u32>) = (0..np).partition(|&i| is_moving(i));
+    let is_moving: Vec<bool> = (0..np)
+        .map(|i| moving.contains(&traj.object[i as usize]))
+        .collect();
+    let (mov, stat): (Vec<u32>, Vec<u32>) = (0..np).partition(|&i| is_moving[i as usize]);
     let tol = 1e-12 * (t1 - t0);
     let mut f = vec![0.0; times.len()];
     let mut test = |a: u32, b: u32, c: u32, q: &mut EventQueue| {
@@ -234,8 +239,9 @@ pub fn find_events(
             let (pa, pb, pc) = (x[a as usize], x[b as usize], x[c as usize]);
             let o = orient(pa, pb, pc);
             // Collinear to round-off: the sine of the angle at `a` below 1e-12.
-            let scale = (pb[0] - pa[0]).hypot(pb[1] - pa[1]) * (pc[0] - pa[0]).hypot(pc[1] - pa[1]);
-            f[k] = if o.abs() <= 1e-12 * scale { 0.0 } else { o };
+            let lb = (pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2);
+            let lc = (pc[0] - pa[0]).powi(2) + (pc[1] - pa[1]).powi(2);
+            f[k] = if o * o <= 1e-24 * lb * lc { 0.0 } else { o };
         }
         let mut last: Option<usize> = None;
         let mut persistent = false;
@@ -249,23 +255,44 @@ pub fn find_events(
                 Some(l) if f[l].signum() != f[k].signum() => Some(if k - l > 1 {
                     times[l + 1]
                 } else {
-                    // Bisection on [times[l], times[k]].
+                    // Regula falsi (Illinois) on [times[l], times[k]], kept inside
+                    // the bracket, down to `tol`.
+                    let fat = |m: f64| {
+                        let q = [a, b, c].map(|i| {
+                            if is_moving[i as usize] {
+                                traj.point(scene, i, m)
+                            } else {
+                                xs[0][i as usize]
+                            }
+                        });
+                        orient(q[0], q[1], q[2])
+                    };
                     let (mut lo, mut hi) = (times[l], times[k]);
-                    let sl = f[l].signum();
-                    while hi - lo > tol {
-                        let m = 0.5 * (lo + hi);
-                        let pm = [
-                            traj.point(scene, a, m),
-                            traj.point(scene, b, m),
-                            traj.point(scene, c, m),
-                        ];
-                        let fm = orient(pm[0], pm[1], pm[2]);
+                    let (mut flo, mut fhi) = (f[l], f[k]);
+                    let mut side = 0i8;
+                    for _ in 0..200 {
+                        if hi - lo <= tol {
+                            break;
+                        }
+                        let mut m = (lo * fhi - hi * flo) / (fhi - flo);
+                        if !(m > lo && m < hi) {
+                            m = 0.5 * (lo + hi);
+                        }
+                        let fm = fat(m);
                         if fm == 0.0 {
                             (lo, hi) = (m, m);
-                        } else if fm.signum() == sl {
-                            lo = m;
+                        } else if fm.signum() == flo.signum() {
+                            (lo, flo) = (m, fm);
+                            if side == -1 {
+                                fhi *= 0.5;
+                            }
+                            side = -1;
                         } else {
-                            hi = m;
+                            (hi, fhi) = (m, fm);
+                            if side == 1 {
+                                flo *= 0.5;
+                            }
+                            side = 1;
                         }
                     }
                     0.5 * (lo + hi)

@@ -12,16 +12,17 @@
 //! ```
 //!
 //! Moving objects: [`dynamic::Dynamic`] applies the visibility events of the motion
-//! ([`events`], §5.2) in time order from a priority queue, re-sweeping the two views
-//! each event changes, and re-evaluates only the terms of the points related to the
-//! moving object (§5.1); every other form factor is kept. ([`window`] measures the
-//! lines meeting a convex region, an earlier form of the update kept as a tool.) Pictures: [`svg`]. The crate's 3D solver does not depend on this
-//! module; it is our exact reference for the ideas it borrows (string rule, exact
-//! visibility events).
+//! ([`events`], §5.2) in time order from a priority queue, updating locally the two
+//! views each event changes, and re-evaluates only the terms of the points related to
+//! the moving object (§5.1); every other form factor is kept. ([`window`] measures the
+//! lines meeting a convex region, an earlier form of the update kept as a tool.)
+//! Pictures: [`svg`]. The crate's 3D solver does not depend on this module; it is our
+//! exact reference for the ideas it borrows (string rule, exact visibility events).
 //!
 //! Everything is `f64`. What this module does not do: curved objects, participating
 //! media, non-diffuse reflection, or the paper's optimal output-sensitive construction
-//! (see [`complex`] for the cost we pay instead).
+//! (the views cost `O(P^2 log P)`, see [`views`]; the faces with chains
+//! `O(P^2 (log P + n))`, see [`complex`]).
 
 pub mod complex;
 pub mod dynamic;

@@ -493,28 +493,56 @@ pub fn form_factors_mu(geom: &FlatGeometry) -> (PairMap, ViewStats) {
     (mu, stats)
 }
 
-/// The elements hit by `x`'s view around direction `phi` (the interval containing it
-/// and its two neighbours), at the positions of `geom`. `O(deg x)`.
-fn hits_near(geom: &FlatGeometry, view: &View, x: u32, phi: f64, out: &mut Vec<u32>) {
-    let c = geom.points[x as usize];
+/// The elements hit by `x`'s view around the direction `u` (a vector): the interval
+/// containing it and its two neighbours, at the positions of `geom`. The view's
+/// boundaries are in counter-clockwise order, so the interval is found by orientation
+/// tests along the view (`O(deg x)`, no angle).
+fn hits_near(geom: &FlatGeometry, view: &View, x: u32, u: [f64; 2], out: &mut Vec<u32>) {
     let n = view.boundaries.len();
     if n == 0 {
         out.push(view.hit_all);
         return;
     }
-    let mut bd: Vec<(f64, usize)> = view
-        .boundaries
-        .iter()
-        .enumerate()
-        .map(|(i, b)| (dir(c, geom.points[b.point as usize]), i))
-        .collect();
-    bd.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let k = bd.partition_point(|b| b.0 <= phi);
-    let at = |j: usize| view.boundaries[bd[j % n].1].hit_after;
-    // Interval containing phi starts at bd[k - 1] (cyclically).
-    for j in [k + 2 * n - 2, k + 2 * n - 1, k + 2 * n] {
-        out.push(at(j));
+    let c = geom.points[x as usize];
+    let vec = |k: usize| {
+        let q = geom.points[view.boundaries[k % n].point as usize];
+        [q[0] - c[0], q[1] - c[1]]
+    };
+    let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
+    let dot = |a: [f64; 2], b: [f64; 2]| a[0] * b[0] + a[1] * b[1];
+    // Is u in the counter-clockwise sweep [a, b)?
+    let between = |a: [f64; 2], b: [f64; 2]| {
+        let (ab, au, ub) = (cross(a, b), cross(a, u), cross(u, b));
+        if ab > 0.0 || (ab == 0.0 && dot(a, b) < 0.0) {
+            au >= 0.0 && ub > 0.0 && !(au == 0.0 && dot(a, u) < 0.0)
+        } else {
+            // Reflex (or full-turn) sweep: not in the complementary [b, a).
+            !(cross(b, u) >= 0.0 && cross(u, a) > 0.0 && !(cross(b, u) == 0.0 && dot(b, u) < 0.0))
+        }
+    };
+    let found = if n == 1 {
+        Some(0)
+    } else {
+        (0..n).find(|&k| between(vec(k), vec(k + 1)))
+    };
+    match found {
+        Some(k) => {
+            for j in [k + n - 1, k, k + 1] {
+                out.push(view.boundaries[j % n].hit_after);
+            }
+        }
+        // Not found (round-off): every hit of the view is a candidate.
+        None => out.extend(view.boundaries.iter().map(|b| b.hit_after)),
     }
+}
+
+/// The result of [`splice_event`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Splice {
+    /// The view is not changed by the event (`v` sees neither `p` nor `r`).
+    Unchanged,
+    /// The updated view.
+    New(View),
 }
 
 /// The local update of the view of `v` at the elementary event of §5.2 (Figure 15):
@@ -526,8 +554,7 @@ fn hits_near(geom: &FlatGeometry, view: &View, x: u32, phi: f64, out: &mut Vec<u
 /// `O(deg p + deg r)`, independent of the scene size. `views` hold the views before
 /// the event; `geom` is posed just after it. `None` when the local case does not
 /// apply (`p` not seen by `v`, `r` seen but not next to `p`, fewer than four
-/// boundaries): the caller re-sweeps the whole view. When `v` does not see `p`
-/// because an element crosses the segment `v p` properly, the view is unchanged.
+/// boundaries): the caller re-sweeps the whole view.
 pub fn splice_event(
     geom: &FlatGeometry,
     topo: &Topology,
@@ -535,7 +562,7 @@ pub fn splice_event(
     v: u32,
     p: u32,
     r: u32,
-) -> Option<View> {
+) -> Option<Splice> {
     let old = &views[v as usize];
     let n = old.boundaries.len();
     if n < 4 {
@@ -549,20 +576,15 @@ pub fn splice_event(
     let pts = &geom.points;
     let c = pts[v as usize];
     let Some(ip) = pos(p) else {
-        // `v` does not see `p`: if the element `v` sees in `p`'s direction crosses the
-        // segment `v p` properly, it hides `r` on both sides of the event and the view
-        // does not change.
-        let mut h = Vec::new();
-        hits_near(geom, old, v, dir(c, pts[p as usize]), &mut h);
-        let e = h[1];
-        if e != NO_ELEM && pos(r).is_none() {
-            let [a, b] = topo.ends[e as usize].map(|i| pts[i as usize]);
-            let q = pts[p as usize];
-            if orient(a, b, c) * orient(a, b, q) < 0.0 && orient(c, q, a) * orient(c, q, b) < 0.0 {
-                return Some(old.clone());
-            }
-        }
-        return None;
+        // `v` sees neither `p` nor `r`: the segment `v p` is blocked at the event, so
+        // `v r` is blocked on both sides of it and the view does not change (a point
+        // touching `v p` at the same time is a simultaneous event at `v`, handled by
+        // the caller's re-sweep).
+        return if pos(r).is_none() {
+            Some(Splice::Unchanged)
+        } else {
+            None
+        };
     };
     let (first, last) = match pos(r) {
         None => (ip, ip),
@@ -587,10 +609,21 @@ pub fn splice_event(
     }
     elems.extend(&topo.incident[p as usize]);
     elems.extend(&topo.incident[r as usize]);
-    let along_p = dir(c, pts[p as usize]);
-    let along_r = dir(c, pts[r as usize]);
-    hits_near(geom, &views[p as usize], p, along_p, &mut elems);
-    hits_near(geom, &views[r as usize], r, along_r, &mut elems);
+    let (qp, qr) = (pts[p as usize], pts[r as usize]);
+    hits_near(
+        geom,
+        &views[p as usize],
+        p,
+        [qp[0] - c[0], qp[1] - c[1]],
+        &mut elems,
+    );
+    hits_near(
+        geom,
+        &views[r as usize],
+        r,
+        [qr[0] - c[0], qr[1] - c[1]],
+        &mut elems,
+    );
     elems.retain(|&e| e != NO_ELEM);
     elems.sort_unstable();
     elems.dedup();
@@ -708,8 +741,8 @@ pub fn splice_event(
     if let Some(k) = (0..out.len()).min_by_key(|&k| out[k].point) {
         out.rotate_left(k);
     }
-    Some(View {
+    Some(Splice::New(View {
         boundaries: out,
         hit_all: NO_ELEM,
-    })
+    }))
 }
