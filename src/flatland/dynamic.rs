@@ -235,8 +235,8 @@ impl<'s> Dynamic<'s> {
         let moving = self.scene.moving_between(ta, tb);
         if !moving.is_empty() {
             let traj = Trajectories::new(self.scene, &self.geom, self.t);
-            // Events of the motion from self.t to t1 (backwards: the same collinear
-            // triples, popped latest first by negating time).
+            // Events of the motion from self.t to t1, popped from the queue earliest
+            // first (backwards in time: the same events, applied latest first).
             let backwards = t1 < self.t;
             let lap = Instant::now();
             let mut queue = find_events(self.scene, &traj, &moving, ta, tb);
