@@ -281,3 +281,54 @@ fn two_objects_moving_at_once_with_a_keyframe_inside_the_steps() {
     assert!(tested >= 5, "only {tested} valid scenes");
     assert!(events >= 30, "only {events} events");
 }
+
+#[test]
+fn every_local_splice_equals_a_full_resweep_of_the_view() {
+    use rhier::flatland::views::{Splice, splice_event, view_of};
+    let (mut spliced, mut unchanged) = (0, 0);
+    for seed in 300..330u64 {
+        let Some(scene) = random_moving_scene(seed, 6) else {
+            continue;
+        };
+        let g0 = geometry_at(&scene, 0.0, Mesh::None);
+        let topo = Topology::new(&g0);
+        let (mut views, _) = all_views(&g0, &topo);
+        let traj = Trajectories::new(&scene, &g0, 0.0);
+        let mut q = find_events(&scene, &traj, &[1], 0.0, 1.0);
+        let events = q.drain_sorted();
+        let mut gm = g0.clone();
+        for (k, e) in events.iter().enumerate() {
+            let next = events.get(k + 1).map_or(1.0, |n| n.time);
+            if next - e.time < 1e-9 {
+                continue; // simultaneous events: not the local case
+            }
+            let tm = 0.5 * (e.time + next);
+            for (i, p) in gm.points.iter_mut().enumerate() {
+                *p = traj.point(&scene, i as u32, tm);
+            }
+            let mut new = Vec::new();
+            for (v, other) in [(e.ends[0], e.ends[1]), (e.ends[1], e.ends[0])] {
+                let full = view_of(&gm, &topo, v).0;
+                match splice_event(&gm, &topo, &views, v, e.mid, other) {
+                    Some(Splice::New(view)) => {
+                        spliced += 1;
+                        assert_eq!(view, full, "seed {seed} event {e:?} at {v}");
+                    }
+                    Some(Splice::Unchanged) => {
+                        unchanged += 1;
+                        assert_eq!(views[v as usize], full, "seed {seed} event {e:?} at {v}");
+                    }
+                    None => {}
+                }
+                new.push((v, full));
+            }
+            for (v, view) in new {
+                views[v as usize] = view;
+            }
+        }
+    }
+    assert!(
+        spliced >= 50 && unchanged >= 50,
+        "{spliced} splices, {unchanged} unchanged"
+    );
+}
