@@ -13,6 +13,7 @@ use rhier::flatland::geometry_at;
 use rhier::flatland::mesh::Mesh;
 use rhier::flatland::radiosity::form_factors;
 use rhier::flatland::scene::{PosedSegment, first_crossing, parse};
+use rhier::flatland::views::{Topology, all_views, visibility_graph};
 
 struct Lcg(u64);
 impl Lcg {
@@ -47,24 +48,45 @@ fn random_scene(seed: u64, n: usize) -> FlatGeometry {
 fn complex_construction(c: &mut Criterion) {
     let mut g = c.benchmark_group("flatland_complex");
     g.sample_size(10).measurement_time(Duration::from_secs(3));
-    for n in [10usize, 20, 40, 80, 160] {
+    for n in [10usize, 20, 40, 80, 160, 320] {
         let geom = random_scene(7, n);
-        let out = sweep(&geom, None, true);
-        let cx = out.complex.as_ref().unwrap();
+        let topo = Topology::new(&geom);
+        let (views, vs) = all_views(&geom, &topo);
+        let m = visibility_graph(&topo, &views).len();
+        let (_, fs) = form_factors(&geom);
         eprintln!(
-            "n = {n}: points {}, complex vertices m = {}, faces {}, edges {}, cells {}",
+            "n = {n}: points {}, visibility-graph edges m = {m}, view boundaries {}, \
+             sweep events {}, intervals {}",
             geom.points.len(),
-            cx.vertices.len(),
-            cx.faces.len(),
-            cx.edges.len(),
-            cx.cells.len()
+            vs.boundaries,
+            vs.events,
+            fs.intervals
         );
-        g.bench_with_input(BenchmarkId::new("complex", n), &geom, |b, geom| {
-            b.iter(|| black_box(sweep(geom, None, true)))
+        g.bench_with_input(BenchmarkId::new("views", n), &geom, |b, geom| {
+            b.iter(|| black_box(all_views(geom, &Topology::new(geom))))
         });
         g.bench_with_input(BenchmarkId::new("form_factors", n), &geom, |b, geom| {
             b.iter(|| black_box(form_factors(geom)))
         });
+        if n <= 160 {
+            let out = sweep(&geom, None, true);
+            let cx = out.complex.as_ref().unwrap();
+            eprintln!(
+                "n = {n}: dual sweep: complex vertices {}, faces {}, edges {}, cells {}",
+                cx.vertices.len(),
+                cx.faces.len(),
+                cx.edges.len(),
+                cx.cells.len()
+            );
+            g.bench_with_input(
+                BenchmarkId::new("dual_sweep_complex", n),
+                &geom,
+                |b, geom| b.iter(|| black_box(sweep(geom, None, true))),
+            );
+            g.bench_with_input(BenchmarkId::new("dual_sweep_mu", n), &geom, |b, geom| {
+                b.iter(|| black_box(sweep(geom, None, false)))
+            });
+        }
     }
     g.finish();
 }
@@ -94,11 +116,14 @@ fn moving_scene(k: usize) -> String {
     };
     let mut rng = Lcg(3);
     for i in 0..k {
-        // Static boxes on a jittered grid in the lower part of the room.
-        let (col, row) = (i % 6, i / 6);
-        let x = 0.3 + col as f64 * 0.6 + 0.1 * rng.next();
+        // Static boxes on a jittered grid in the lower part of the room (6 or 12 per
+        // row).
+        let per_row = if k > 24 { 12 } else { 6 };
+        let (col, row) = (i % per_row, i / per_row);
+        let (dx, s) = if k > 24 { (0.3, 0.12) } else { (0.6, 0.2) };
+        let x = 0.3 + col as f64 * dx + 0.1 * rng.next();
         let y = 0.2 + row as f64 * 0.45 + 0.1 * rng.next();
-        objs.push(boxj(&format!("b{i}"), x, y, 0.2, ""));
+        objs.push(boxj(&format!("b{i}"), x, y, s, ""));
     }
     objs.push(boxj(
         "mover",
@@ -116,31 +141,46 @@ fn moving_scene(k: usize) -> String {
 fn moving_update(c: &mut Criterion) {
     let mut g = c.benchmark_group("flatland_update");
     g.sample_size(10).measurement_time(Duration::from_secs(3));
-    for k in [0usize, 6, 12, 24] {
+    for k in [0usize, 6, 12, 24, 48] {
         let text = moving_scene(k);
         let scene = parse(std::path::Path::new("bench"), &text).unwrap();
-        let (t0, t1) = (0.50, 0.52);
-        let (mut d, _) = Dynamic::new(&scene, Mesh::None, t0);
-        let rep = d.step(t1);
-        eprintln!(
-            "boxes {k}: segments {}, faces visited {}, update recomputes {} of {} form factors ({:.1} %), {} casts",
-            d.geometry().segments.len(),
-            rep.faces_visited,
-            rep.ff_recomputed,
-            rep.ff_total,
-            100.0 * rep.ff_recomputed as f64 / rep.ff_total as f64,
-            rep.casts
-        );
-        let (mut d, _) = Dynamic::new(&scene, Mesh::None, t0);
-        let mut at = t0;
-        g.bench_function(BenchmarkId::new("update_step", k), |b| {
-            b.iter(|| {
-                at = if at == t0 { t1 } else { t0 };
-                black_box(d.step(at))
-            })
-        });
+        for (t0, t1) in [(0.50, 0.52), (0.30, 0.70)] {
+            let (mut d, _) = Dynamic::new(&scene, Mesh::None, t0);
+            let rep = d.step(t1);
+            eprintln!(
+                "boxes {k}, step {t0} -> {t1}: segments {}, points {}, events {} of {} candidates \
+                 ({} triples), views re-swept {}, points evaluated {}, edges {}, faces {}, \
+                 update recomputes {} of {} form factors ({:.1} %); \
+                 find {:.2} ms, apply {:.2} ms, measure {:.2} ms, total {:.2} ms",
+                d.geometry().segments.len(),
+                d.geometry().points.len(),
+                rep.events,
+                rep.event_candidates,
+                rep.triples_tested,
+                rep.views_reswept,
+                rep.points_evaluated,
+                rep.edges_visited,
+                rep.faces_visited,
+                rep.ff_recomputed,
+                rep.ff_total,
+                100.0 * rep.ff_recomputed as f64 / rep.ff_total as f64,
+                1e3 * rep.seconds_find,
+                1e3 * rep.seconds_apply,
+                1e3 * rep.seconds_measure,
+                1e3 * rep.seconds,
+            );
+            let id = format!("{k}_{t0}_{t1}");
+            let (mut d, _) = Dynamic::new(&scene, Mesh::None, t0);
+            let mut at = t0;
+            g.bench_function(BenchmarkId::new("update_step", &id), |b| {
+                b.iter(|| {
+                    at = if at == t0 { t1 } else { t0 };
+                    black_box(d.step(at))
+                })
+            });
+        }
         g.bench_function(BenchmarkId::new("full_recompute", k), |b| {
-            b.iter(|| black_box(form_factors(&geometry_at(&scene, t1, Mesh::None))))
+            b.iter(|| black_box(form_factors(&geometry_at(&scene, 0.52, Mesh::None))))
         });
     }
     g.finish();

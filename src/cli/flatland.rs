@@ -93,14 +93,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let sol = solve_with(&scene, t, dynamic.geometry().clone(), &ff);
         let mut update = json!({
             "full": report.full,
+            "events": report.events,
+            "event_candidates": report.event_candidates,
+            "event_groups": report.event_groups,
+            "triples_tested": report.triples_tested,
+            "views_spliced": report.views_spliced,
+            "views_reswept": report.views_reswept,
+            "points_evaluated": report.points_evaluated,
+            "edges_visited": report.edges_visited,
             "faces_visited": report.faces_visited,
-            "cells_visited": report.cells_visited,
-            "labels_visited": report.labels_visited,
             "form_factors_recomputed": report.ff_recomputed,
             "form_factors_total": report.ff_total,
             "pairs_appeared": report.pairs_appeared,
             "pairs_vanished": report.pairs_vanished,
-            "lines_cast": report.casts,
             "seconds": report.seconds,
         });
         if args.verify {
@@ -116,11 +121,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             update["verify"] = json!({"max_abs_dF": df, "max_abs_dB": db});
         }
         let what = if report.full {
-            format!("full solve, {} cells", report.cells_visited)
+            format!("full solve, {} complex edges", report.edges_visited)
         } else {
             format!(
-                "update: {} recomputed, {} faces ({} cells) visited",
-                report.ff_recomputed, report.faces_visited, report.cells_visited
+                "update: {} events ({} candidates), {} recomputed, {} faces ({} edges) visited",
+                report.events,
+                report.event_candidates,
+                report.ff_recomputed,
+                report.faces_visited,
+                report.edges_visited
             )
         };
         let _ = writeln!(

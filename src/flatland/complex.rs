@@ -45,9 +45,15 @@
 //!
 //! `P` points, `n` segments: all `P (P - 1) / 2` point pairs are events (sorted:
 //! `O(P^2 log P)`), each event rebuilds `O(1)` gaps (generic position) with one cast
-//! of `O(n)`: `O(P^2 (log P + n))` in all, against the paper's `O(m + n log n)` output-
-//! sensitive sweep of Rivière [17] (`m` = size of the visibility graph). The complex
-//! (with `record`) also tests each event pair for visibility, `O(n)` each.
+//! of `O(n)`: `O(P^2 (log P + n))` in all for the cells, and the structure it stores
+//! (cells: one per free segment per gap) is that large too. The complex's vertices
+//! (with `record`) are the visibility graph taken from [`super::views`]
+//! (`O(P^2 log P)`, no per-pair `O(n)` test). The exact form factors do not use this
+//! sweep any more: [`super::views`] sums them from the views in `O(P^2 log P)`
+//! (`O(m log m)` once the views are known); this sweep remains the reference they are
+//! tested against, the builder of faces with chains, and the clipped measure of
+//! [`Clip`]. Neither reaches the paper's output-sensitive `O(m + n log n)` sweep of
+//! Rivière [17] (`m` = size of the visibility graph).
 //!
 //! # What it does not do
 //!
@@ -478,6 +484,13 @@ pub fn sweep(geom: &FlatGeometry, clip: Option<&Clip>, record: bool) -> SweepOut
     let rel_next = |gi: usize| -> f64 { groups.get(gi + 1).map_or(PI, |g| g.2) };
     let first_mid = theta0 + 0.5 * groups.first().map_or(PI, |g| g.2);
     let mut st = State::new(geom, clip, record, theta0, first_mid);
+    // Vertices of the complex: the visibility graph from the views (`O(P^2 log P)`).
+    let visible = if record {
+        let topo = super::views::Topology::new(geom);
+        super::views::visibility_graph(&topo, &super::views::all_views(geom, &topo).0)
+    } else {
+        Vec::new()
+    };
     // 4. Sweep the groups in order.
     let mut comp = vec![NONE; np];
     let mut involved: Vec<u32> = Vec::new();
@@ -536,7 +549,7 @@ pub fn sweep(geom: &FlatGeometry, clip: Option<&Clip>, record: bool) -> SweepOut
         if record {
             for &(_, a, b) in &pairs[g0..g1] {
                 let (pu, pw) = (pts[a as usize], pts[b as usize]);
-                if geom.sees(pu, pw) {
+                if visible.binary_search(&(a.min(b), a.max(b))).is_ok() {
                     st.rec.vertices.push(CVertex {
                         theta: theta_e,
                         length: (pw[0] - pu[0]).hypot(pw[1] - pu[1]),

@@ -6,26 +6,33 @@
 //!
 //! ```text
 //! scene::load ─▶ FlatScene::posed(t) ─▶ mesh::splits (none | uniform:N | discontinuity, §3.2)
-//!   ─▶ geometry::FlatGeometry (elements, points) ─▶ complex::sweep (dual plane, §2.3)
+//!   ─▶ geometry::FlatGeometry (elements, points) ─▶ views (rotational sweep per point)
 //!   ─▶ radiosity::form_factors (string rule, eq. 2–3) ─▶ radiosity::solve_radiosity
+//! (complex::sweep: the dual-plane sweep building faces with chains, §2.3)
 //! ```
 //!
-//! Moving objects: [`dynamic::Dynamic`] re-sweeps only the lines meeting the moving
-//! geometry ([`window`], §5) and keeps every other form factor. Pictures: [`svg`]. The crate's 3D solver does not depend on this
-//! module; it is our exact reference for the ideas it borrows (string rule, exact
-//! visibility events).
+//! Moving objects: [`dynamic::Dynamic`] applies the visibility events of the motion
+//! ([`events`], §5.2) in time order from a priority queue, updating locally the two
+//! views each event changes, and re-evaluates only the terms of the points related to
+//! the moving object (§5.1); every other form factor is kept. ([`window`] measures the
+//! lines meeting a convex region, an earlier form of the update kept as a tool.)
+//! Pictures: [`svg`]. The crate's 3D solver does not depend on this module; it is our
+//! exact reference for the ideas it borrows (string rule, exact visibility events).
 //!
 //! Everything is `f64`. What this module does not do: curved objects, participating
 //! media, non-diffuse reflection, or the paper's optimal output-sensitive construction
-//! (see [`complex`] for the cost we pay instead).
+//! (the views cost `O(P^2 log P)`, see [`views`]; the faces with chains
+//! `O(P^2 (log P + n))`, see [`complex`]).
 
 pub mod complex;
 pub mod dynamic;
+pub mod events;
 pub mod geometry;
 pub mod mesh;
 pub mod radiosity;
 pub mod scene;
 pub mod svg;
+pub mod views;
 pub mod window;
 
 use geometry::FlatGeometry;

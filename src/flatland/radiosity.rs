@@ -1,9 +1,10 @@
 //! Exact flatland form factors (string rule, eq. 2–3 of the paper, §3.1 and §4.2) and
 //! the dense radiosity solve `B = E + rho F B` (§3).
 //!
-//! How it works: one sweep of the dual plane ([`super::complex::sweep`]) gives, for
-//! every pair of elements `(i, j)`, the measure `mu_ij` of the lines whose free
-//! segment joins their lit sides; then `F_ij = mu_ij / (2 L_i)` (Hottel's crossed
+//! How it works: the views of all points ([`super::views`]: one rotational sweep
+//! around each point, `O(P^2 log P)`) give, for every pair of elements `(i, j)`, the
+//! measure `mu_ij` of the lines whose free segment joins their lit sides, as a sum of
+//! `+- v . dN` over the complex's edges (eq. 3); then `F_ij = mu_ij / (2 L_i)` (Hottel's crossed
 //! strings, strings stretched around obstacles). Pairs that see nothing of each other
 //! have no entry (zero). Reciprocity `L_i F_ij = L_j F_ji` holds by construction, and
 //! closure (`sum_j F_ij = 1` in a closed room) holds to round-off because the lines
@@ -15,8 +16,8 @@
 //! `O(N^2)` memory and `O(N^3)` time in the number of elements `N` (fine up to a few
 //! thousand elements).
 
-use super::complex::{SweepStats, sweep};
 use super::geometry::{FlatGeometry, PairMap};
+use super::views::{ViewStats, form_factors_mu};
 
 /// Sparse exact form factors between the elements of one geometry.
 #[derive(Clone, Debug, Default)]
@@ -68,10 +69,11 @@ impl FormFactors {
     }
 }
 
-/// Exact form factors of all element pairs with one sweep.
-pub fn form_factors(geom: &FlatGeometry) -> (FormFactors, SweepStats) {
-    let out = sweep(geom, None, false);
-    (FormFactors::from_mu(geom, out.mu), out.stats)
+/// Exact form factors of all element pairs, from the views of all points
+/// ([`super::views`], `O(P^2 log P)`).
+pub fn form_factors(geom: &FlatGeometry) -> (FormFactors, ViewStats) {
+    let (mu, stats) = form_factors_mu(geom);
+    (FormFactors::from_mu(geom, mu), stats)
 }
 
 /// Solves `(I - diag(rho) F) B = E` per channel; `rho` and `e` per element.
