@@ -15,21 +15,28 @@
 //! The solve runs in three stages:
 //! 1. *Shared part*: the usual rounds of refine + solve at the start time, links
 //!    classified against the boxes swept over the whole animation, and only constant
-//!    links refined. This hierarchy and its coefficients are computed once and kept
-//!    for every window ([`Solver::run_shared`]).
+//!    links refined; then the start time is solved once with its varying links
+//!    refined, and the constant links are refined again against that radiosity.
+//!    This hierarchy and its coefficients are computed once and kept for every
+//!    window ([`Solver::run_shared`]).
 //! 2. *Windows*, earliest first: the animation's frames (`fps`) are grouped into
 //!    windows of `window` seconds. A window re-classifies the links against the boxes
 //!    swept during the window only (a link far from where the objects are *now*
-//!    becomes constant), then for each frame places the moving objects, re-evaluates
-//!    and refines the varying links only, and solves the leaf system warm-started
-//!    from the previous frame. Constant links keep their coefficients, their leaf-row
-//!    coefficients and their final-gather terms for the whole window: a frame costs
-//!    what changes in it, plus a matrix-vector product per GMRES step.
+//!    becomes constant) and refines the links that became constant: the window's
+//!    base. Each frame then starts from that base, places the moving objects,
+//!    re-evaluates and refines the varying links only (so the hierarchy near a moving
+//!    object is as fine as this frame needs, not the union over the window), and
+//!    solves the leaf system warm-started from the previous frame. Constant links
+//!    keep their coefficients, leaf-row coefficients and final-gather terms for the
+//!    whole window. A static point gathering from a static source through a swept
+//!    box keeps the static half of every ray (a mask, [`crate::oracle::static_clear_mask`])
+//!    and re-casts it against the moving objects only, and only when one of them is
+//!    between the point and the source at that frame.
 //! 3. *Release*: the window's leaves go to the output (one `.rhier` chunk per
 //!    window), and everything the window added to the pools is dropped; the shared
 //!    part is restored exactly as it was, so windows are independent of each other
 //!    and memory does not grow with the animation's length. A resumed solve skips
-//!    the windows already written and produces the same bytes.
+//!    the windows already written and produces the same leaves.
 //!
 //! **Elements with time ranges.** Each frame's reconstruction cells hold for the
 //! frame's interval `[t_i − Δ/2, t_i + Δ/2)`; within a window, a cell whose corner
