@@ -21,9 +21,9 @@
 //! | [`geometry`] | patches in world space, form-factor kernels, ray visibility (the only obvhs user) |
 //! | [`pools`] | storage backends (RAM, mmap) and struct-of-arrays arenas with `u32` ids |
 //! | [`oracle`] | refinement decisions: keep a link, split receiver, split source |
-//! | [`solver`] | hierarchical radiosity: clusters, refinement, GMRES, reconstruction |
+//! | [`solver`] | hierarchical radiosity: clusters, refinement, GMRES, reconstruction; animations in time windows ([`solver::spacetime`]) or frame by frame ([`solver::per_frame`]) |
 //! | [`shafts`] | shafts between elements (Haines & Wallace) for visibility culling |
-//! | [`store`] | the `.rhier` file: writer, reader, validation |
+//! | [`store`] | the `.rhier` file: writer, reader, validation; the journal `solve --resume` continues from |
 //! | [`playback`] | evaluation of a stored solution: probes, frames, exports |
 //! | [`flatland`] | exact 2D radiosity with the visibility complex |
 //! | [`reference`] | an independent Monte Carlo path tracer used to validate the solver |
