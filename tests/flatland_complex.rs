@@ -10,16 +10,8 @@ use rhier::flatland::geometry::{FlatGeometry, Hit};
 use rhier::flatland::radiosity::form_factors;
 use rhier::flatland::scene::{PosedSegment, first_crossing, orient};
 
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+mod common;
+use common::Lcg;
 
 fn random_geometry(seed: u64, n: usize) -> FlatGeometry {
     let mut rng = Lcg(seed);

@@ -11,6 +11,9 @@ use rhier::flatland::radiosity::form_factors;
 use rhier::flatland::scene::load;
 use rhier::flatland::{geometry_at, solve, solve_with};
 
+mod common;
+use common::Lcg;
+
 fn scene_path() -> &'static Path {
     Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -123,17 +126,6 @@ fn window_sweep_over_the_whole_scene_equals_the_full_sweep() {
         for key in w.mu.keys() {
             assert!(c.mu.contains_key(key) || w.mu[key] < 1e-7);
         }
-    }
-}
-
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 

@@ -12,16 +12,8 @@ use rhier::flatland::radiosity::form_factors;
 use rhier::flatland::scene::{FlatScene, first_crossing, load, parse};
 use rhier::flatland::views::{Topology, all_views};
 
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+mod common;
+use common::Lcg;
 
 /// `k` random static segments and a moving triangle (translation and rotation); None
 /// if any two segments cross anywhere along the path.

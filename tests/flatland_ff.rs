@@ -5,6 +5,9 @@ use rhier::flatland::geometry::FlatGeometry;
 use rhier::flatland::radiosity::form_factors;
 use rhier::flatland::scene::PosedSegment;
 
+mod common;
+use common::Lcg;
+
 fn seg(a: [f64; 2], b: [f64; 2]) -> PosedSegment {
     PosedSegment::new(a, b, 0)
 }
@@ -94,18 +97,6 @@ fn closure_and_reciprocity_in_a_closed_room() {
         if splits > 1 {
             assert_eq!(ff.f(0, 1), 0.0);
         }
-    }
-}
-
-/// Deterministic pseudo-random numbers in [0, 1).
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 

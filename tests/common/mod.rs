@@ -73,3 +73,17 @@ pub fn uniform_enclosure(rho: f64, e: f64, scale: f64, n: usize) -> Scene {
     }
 }
 pub mod probe;
+
+/// Deterministic pseudo-random numbers in [0, 1) (a 64-bit LCG, the high 53 bits).
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    /// The next number.
+    pub fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
