@@ -477,12 +477,7 @@ impl<'a> Solver<'a> {
                 self.refine(vec![id], thr)?;
                 true
             } else {
-                let active: Vec<LinkId> = (0..self.links.len() as u32)
-                    .map(LinkId)
-                    .filter(|l| {
-                        self.links.transports.as_slice()[l.ix()].state() == LinkState::Active
-                    })
-                    .collect();
+                let active = self.active_links(false);
                 self.refine(active, thr)?
             };
             if round > 0 && !changed {
@@ -663,6 +658,18 @@ impl<'a> Solver<'a> {
         }
     }
 
+    /// The active links, or only the active varying ones.
+    fn active_links(&self, varying_only: bool) -> Vec<LinkId> {
+        let tr = self.links.transports.as_slice();
+        (0..tr.len() as u32)
+            .map(LinkId)
+            .filter(|l| {
+                let t = &tr[l.ix()];
+                t.state() == LinkState::Active && (!varying_only || t.varying())
+            })
+            .collect()
+    }
+
     /// True if element `e` holds a moving patch.
     fn elem_moving(&self, e: ElementId) -> bool {
         if let Some(&m) = self.tree_moving.get(e.ix()) {
@@ -785,10 +792,7 @@ impl<'a> Solver<'a> {
             base: Snapshot::of(&self.elems, &self.links),
             ..Window::default()
         });
-        let active: Vec<LinkId> = (0..self.links.len() as u32)
-            .map(LinkId)
-            .filter(|l| self.links.transports.as_slice()[l.ix()].state() == LinkState::Active)
-            .collect();
+        let active = self.active_links(false);
         let classes: Vec<bool> = active
             .par_iter()
             .map(|l| {
@@ -855,10 +859,7 @@ impl<'a> Solver<'a> {
                 ..Window::default()
             });
             self.shared_phase = true;
-            let active: Vec<LinkId> = (0..self.links.len() as u32)
-                .map(LinkId)
-                .filter(|l| self.links.transports.as_slice()[l.ix()].state() == LinkState::Active)
-                .collect();
+            let active = self.active_links(false);
             let changed = self.refine(active, self.opts.eps * b_ref);
             self.shared_phase = false;
             self.window = None;
@@ -952,13 +953,7 @@ impl<'a> Solver<'a> {
         let rays0 = self.rays;
         self.reset_frame();
         self.set_time(t);
-        let varying: Vec<LinkId> = (0..self.links.len() as u32)
-            .map(LinkId)
-            .filter(|l| {
-                let tr = &self.links.transports.as_slice()[l.ix()];
-                tr.state() == LinkState::Active && tr.varying()
-            })
-            .collect();
+        let varying = self.active_links(true);
         self.reevaluate(&varying);
         let n_varying = varying.len() as u64;
         let mut residual = 0.0;
@@ -974,13 +969,7 @@ impl<'a> Solver<'a> {
             self.index_links();
             self.compute_leaf_rows();
             residual = self.solve_leaves()?;
-            wave = (0..self.links.len() as u32)
-                .map(LinkId)
-                .filter(|l| {
-                    let tr = &self.links.transports.as_slice()[l.ix()];
-                    tr.state() == LinkState::Active && tr.varying()
-                })
-                .collect();
+            wave = self.active_links(true);
         }
         Ok(FrameCost {
             varying_links: n_varying,
