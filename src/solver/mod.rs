@@ -265,17 +265,23 @@ type TermSlices<'a> = (&'a [(u32, f32)], &'a [MaskedTerm]);
 
 /// A final-gather term from a static source to a static point whose rays a moving
 /// object may cross: the static part of each ray's visibility is kept as a mask (see
-/// [`oracle::static_clear_mask`]). 24 bytes.
+/// [`oracle::static_clear_mask`]), and the visibility that mask gives on its own
+/// (the value while no moving object is between the point and the source, used
+/// without casting or weighting anything). 24 bytes.
 #[derive(Clone, Copy, Debug)]
 struct MaskedTerm {
-    /// Jitter key of the rays.
-    key: u64,
     /// Rays the static part leaves clear.
     mask: u64,
-    /// Unoccluded point-to-element factor.
-    f: f32,
+    /// Jitter key of the rays (32 bits are plenty for jitter; see
+    /// [`Solver::point_terms`]).
+    key: u32,
     /// Source element.
     elem: u32,
+    /// Unoccluded point-to-element factor.
+    f: f32,
+    /// Kernel-weighted fraction of the rays `mask` leaves clear: the visibility while
+    /// no moving object is near.
+    vis_static: f32,
 }
 
 const _: () = assert!(std::mem::size_of::<MaskedTerm>() == 24);
@@ -1320,6 +1326,8 @@ impl<'a> Solver<'a> {
         let m = self.corner_rays_to(gs);
         let ns = DVec3::from_array(gs.normal);
         let skip = [receiver_patch, gs.patch];
+        // The rays' jitter key, as a masked term keeps it.
+        let key = key & u64::from(u32::MAX);
         match swept {
             Some(sw) if m <= 64 && !point_shaft_clear(x, n, gs, sw) => {
                 let mask = oracle::static_clear_mask(&self.bvh, x, gs, &ps, m, key, skip);
@@ -1327,24 +1335,22 @@ impl<'a> Solver<'a> {
                     // Hidden by static geometry whatever moves.
                     return;
                 }
+                let masked = |bvh| {
+                    oracle::visible_fraction_masked(bvh, x, n, gs, &ps, ns, m, key, skip, mask)
+                };
+                let vis_static = masked(None);
                 let near = !point_shaft_clear(x, n, gs, &self.moving_now);
-                let v = oracle::visible_fraction_masked(
-                    near.then_some(&self.bvh),
-                    x,
-                    n,
-                    gs,
-                    &ps,
-                    ns,
-                    m,
-                    key,
-                    skip,
-                    mask,
-                );
+                let v = if near {
+                    masked(Some(&self.bvh))
+                } else {
+                    vis_static
+                };
                 let t = MaskedTerm {
-                    f: f as f32,
-                    key,
                     mask,
+                    key: key as u32,
                     elem: s as u32,
+                    f: f as f32,
+                    vis_static: vis_static as f32,
                 };
                 out.masked.push((t, v));
             }
@@ -1422,18 +1428,22 @@ impl<'a> Solver<'a> {
                         let gs = &geoms[t.elem as usize];
                         // Rays are only cast where a moving object is now.
                         let near = !point_shaft_clear(x, n, gs, &self.moving_now);
-                        let v = oracle::visible_fraction_masked(
-                            near.then_some(&self.bvh),
-                            x,
-                            n,
-                            gs,
-                            &oracle::poly(gs),
-                            DVec3::from_array(gs.normal),
-                            self.corner_rays_to(gs),
-                            t.key,
-                            [p as u32, gs.patch],
-                            t.mask,
-                        );
+                        let v = if near {
+                            oracle::visible_fraction_masked(
+                                Some(&self.bvh),
+                                x,
+                                n,
+                                gs,
+                                &oracle::poly(gs),
+                                DVec3::from_array(gs.normal),
+                                self.corner_rays_to(gs),
+                                u64::from(t.key),
+                                [p as u32, gs.patch],
+                                t.mask,
+                            )
+                        } else {
+                            f64::from(t.vis_static)
+                        };
                         for c in 0..3 {
                             h[c] += t.f as f64 * v * b[t.elem as usize][c] as f64;
                         }

@@ -192,6 +192,23 @@ pub fn frame_range(i: usize, fps: f64, start: f64, end: f64) -> [f64; 2] {
     [lo.max(start), (start + (i as f64 + 0.5) / fps).min(end)]
 }
 
+/// Frame times grouped into windows of `per_window` frames, earliest first; a last
+/// window shorter than half the others joins the one before it (a window's first
+/// frame gathers every point afresh, so a one-frame tail would cost as much as a
+/// whole window).
+pub fn group_frames(times: &[f64], per_window: usize) -> Vec<Vec<f64>> {
+    let per_window = per_window.max(1);
+    let mut windows: Vec<Vec<f64>> = times.chunks(per_window).map(<[f64]>::to_vec).collect();
+    if windows.len() >= 2 && windows[windows.len() - 1].len() * 2 < per_window {
+        if let Some(tail) = windows.pop() {
+            if let Some(last) = windows.last_mut() {
+                last.extend(tail);
+            }
+        }
+    }
+    windows
+}
+
 /// Boxes swept over `[t0, t1]` by each moving object of `scene`: the union of its
 /// box at 17 evenly spaced times and at the track's keys inside the range, widened by
 /// the largest distance a vertex travels between two consecutive samples (so the
@@ -291,7 +308,7 @@ impl<'a> SpaceTime<'a> {
         let (t_start, t_end) = (scene.time.start, scene.time.end);
         let times = frame_times(t_start, t_end, st.fps);
         let per_window = ((st.window * st.fps).round() as usize).max(1);
-        let windows: Vec<Vec<f64>> = times.chunks(per_window).map(<[f64]>::to_vec).collect();
+        let windows = group_frames(&times, per_window);
         let mut solver = Solver::at_time(scene, opts, t_start, [t_start as f32, t_end as f32])?;
         let rounds = solver.run_shared(swept_boxes(scene, t_start, t_end), on_round)?;
         let b_ref = solver.radiosity_scale().max(f64::MIN_POSITIVE);
@@ -477,4 +494,24 @@ pub fn solve(
         on_window(out)?;
     }
     Ok(run.stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_short_tail_joins_the_last_window() {
+        let times = frame_times(0.0, 3.0, 25.0);
+        assert_eq!(times.len(), 76);
+        let w = group_frames(&times, 25);
+        assert_eq!(w.iter().map(Vec::len).collect::<Vec<_>>(), [25, 25, 26]);
+        assert_eq!(w.concat(), times);
+        // A tail of half a window or more stays a window of its own.
+        let w = group_frames(&times[..63], 25);
+        assert_eq!(w.iter().map(Vec::len).collect::<Vec<_>>(), [25, 25, 13]);
+        let w = group_frames(&times[..5], 2);
+        assert_eq!(w.iter().map(Vec::len).collect::<Vec<_>>(), [2, 2, 1]);
+        assert_eq!(group_frames(&times[..3], 25), vec![times[..3].to_vec()]);
+    }
 }
