@@ -367,6 +367,51 @@ fn a_window_does_not_depend_on_the_ones_before_it() {
 }
 
 #[test]
+fn a_budget_on_kept_terms_bounds_them_and_keeps_the_result() {
+    // Bounding what a window keeps (down to nothing) changes where the work goes,
+    // not what is computed: a kept term was gathered at an earlier frame of the
+    // window, a dropped one is gathered again, with the same rays. The only
+    // difference is a source the frame has opened into finer children than when
+    // the term was kept.
+    let scene = sliding_block(-60.0, 0.8);
+    let window = |budget: Option<u64>| {
+        let o = SpaceTimeOptions {
+            kept_budget: budget,
+            ..st(5.0, 0.4)
+        };
+        let mut run = SpaceTime::new(&scene, opts(), o, |_, _| {}).unwrap();
+        let mut frames = Vec::new();
+        let w = run.solve_window(1, |f| frames.push(*f)).unwrap();
+        let sol = Solution {
+            scene: scene.clone(),
+            patches: run.patches().to_vec(),
+            leaves: w.leaves,
+            stats: SolveStats::default(),
+        };
+        let most = frames.iter().map(|f| f.bytes_kept).max().unwrap();
+        (sol, most)
+    };
+    let (free, kept) = window(None);
+    assert!(kept > 10_000, "the window keeps terms: {kept} bytes");
+    let pts = cornell_points();
+    for budget in [0, kept / 3] {
+        let (bounded, most) = window(Some(budget));
+        // The collector holds the bound up to one frame's admissions.
+        assert!(most < kept, "budget {budget}: kept {most} of {kept}");
+        if budget == 0 {
+            assert_eq!(most, 0);
+        }
+        for t in [0.4, 0.6] {
+            let a = probe(&free, &pts, t).unwrap();
+            let b = probe(&bounded, &pts, t).unwrap();
+            let apart = relative_rms(&b, &a);
+            eprintln!("budget {budget}, t = {t}: {:.4}% apart", apart * 100.0);
+            assert!(apart < 0.002, "budget {budget}, t = {t}: {apart}");
+        }
+    }
+}
+
+#[test]
 fn swept_shafts_catch_every_transient_blocker_that_time_sampling_sees() {
     // Brute force: visibility between points of two static patches, sampled at 48
     // times with the moving block placed at each; whenever it changes, the shaft

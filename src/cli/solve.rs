@@ -143,8 +143,10 @@ pub struct Args {
     /// in OUT.rhier.partial/).
     #[arg(long)]
     pub resume: bool,
-    /// Memory budget of the pools in bytes: they live in memory-mapped files
-    /// (`--scratch`), and a window that exceeds it is reported.
+    /// Memory budget in bytes: the pools live in memory-mapped files (`--scratch`)
+    /// and a window that exceeds it is reported; a space-time solve also keeps at
+    /// most this many bytes of final-gather terms per window (over it, points are
+    /// gathered afresh each frame: slower, same result).
     #[arg(long)]
     pub budget: Option<u64>,
     /// Stop with an error after this many windows (to test --resume).

@@ -32,6 +32,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
         fps: args.fps,
         window: args.window,
         merge_tol: args.merge_tol,
+        kept_budget: args.budget,
     })
 }
 
@@ -167,7 +168,7 @@ pub fn run(
             && run.stats.peak_pool_bytes > budget
         {
             say(format!(
-                "rhier: warning: window {wi} held {} bytes of pools, over the budget of {budget}; use a shorter --window",
+                "rhier: warning: window {wi} held {} bytes of pools, over the budget of {budget} (paged from files); use a shorter --window",
                 run.stats.peak_pool_bytes
             ));
         }
@@ -190,11 +191,11 @@ pub fn run(
     journal.finish()?;
     if let Some(path) = &args.report {
         let mut csv = String::from(
-            "frame,window,t,seconds,cells,elements,links,varying_links,rays,bytes_pools,residual\n",
+            "frame,window,t,seconds,cells,elements,links,varying_links,rays,bytes_pools,bytes_kept,residual\n",
         );
         for f in &frames {
             csv.push_str(&format!(
-                "{},{},{},{:.6},{},{},{},{},{},{},{:e}\n",
+                "{},{},{},{:.6},{},{},{},{},{},{},{},{:e}\n",
                 f.frame,
                 f.window,
                 f.t,
@@ -205,6 +206,7 @@ pub fn run(
                 f.varying_links,
                 f.rays,
                 f.bytes_pools,
+                f.bytes_kept,
                 f.residual
             ));
         }

@@ -176,6 +176,8 @@ pub struct Solver<'a> {
     moving_now: Vec<(DVec3, DVec3)>,
     /// The time the moving objects are placed at.
     now: f64,
+    /// Most bytes a window keeps in final-gather terms (`None`: no bound).
+    kept_budget: Option<usize>,
 }
 
 /// Pool lengths at some moment, and what was done since to older records (links
@@ -213,7 +215,82 @@ struct Window {
     /// Leaf-row coefficients of constant links on static leaves: `(leaf, link) → F`.
     rows: HashMap<(u32, u32), f64>,
     /// Final-gather terms that hold over the window at static reconstruction points.
-    points: std::sync::Mutex<HashMap<PointKey, PointTerms>>,
+    points: std::sync::Mutex<PointCache>,
+}
+
+impl Window {
+    /// Bytes of the leaf-row cache: per entry the key, the value and the hash
+    /// table's control byte, over its capacity.
+    fn rows_bytes(&self) -> usize {
+        self.rows.capacity() * (std::mem::size_of::<((u32, u32), f64)>() + 1)
+    }
+}
+
+/// The kept final-gather terms of a window, with what they cost and a bound on it.
+///
+/// Under a budget the cache is a collector: after each frame's reconstruction, if
+/// it holds more than `budget` bytes, the points that frame did not gather are
+/// dropped first (the working set of a frame is what the next frame needs: cells
+/// change where something moves), and while it is over budget no new point is
+/// admitted (those are gathered afresh every frame, as frame by frame would).
+/// Either way the values do not change, only the work.
+#[derive(Default)]
+struct PointCache {
+    map: HashMap<PointKey, PointTerms>,
+    /// Heap bytes of `map` (entries and the vectors they own, by capacity).
+    bytes: usize,
+    /// Bytes of the window's other kept coefficients (leaf rows), counted against
+    /// the same budget.
+    others: usize,
+    /// Most bytes to keep (`None`: no bound).
+    budget: Option<usize>,
+}
+
+impl PointCache {
+    /// Bytes one entry costs besides its vectors' contents (key, value, the hash
+    /// table's control byte and slack).
+    const ENTRY: usize = std::mem::size_of::<PointKey>() + std::mem::size_of::<PointTerms>() + 8;
+
+    fn admits(&self) -> bool {
+        self.budget.is_none_or(|b| self.bytes + self.others < b)
+    }
+
+    /// Adds the terms gathered afresh at point `pk`.
+    fn add(&mut self, pk: PointKey, links: FreshTerms) {
+        let known = self.map.contains_key(&pk);
+        if !known && !self.admits() {
+            return;
+        }
+        let entry = self.map.entry(pk).or_default();
+        let before = entry.bytes();
+        for (l, terms) in links {
+            entry.add(l, &terms);
+        }
+        entry.shrink();
+        // Entries only grow (each add is shrunk to fit).
+        self.bytes += entry.bytes().saturating_sub(before) + if known { 0 } else { Self::ENTRY };
+    }
+
+    /// Drops points not in `used` while over budget.
+    fn collect(&mut self, used: &HashMap<PointKey, usize>) {
+        let Some(budget) = self.budget else {
+            return;
+        };
+        if self.bytes + self.others <= budget {
+            return;
+        }
+        let mut freed = 0;
+        self.map.retain(|pk, t| {
+            if used.contains_key(pk) {
+                true
+            } else {
+                freed += t.bytes() + Self::ENTRY;
+                false
+            }
+        });
+        self.bytes -= freed.min(self.bytes);
+        self.map.shrink_to_fit();
+    }
 }
 
 /// The final-gather terms of a point that hold over a window, per source: a point is
@@ -243,6 +320,19 @@ impl PointTerms {
             let (f1, m1) = (self.fixed.len() as u32, self.masked.len() as u32);
             self.index.insert(at, (key, f0, f1, m0, m1));
         }
+    }
+
+    /// Heap bytes of the vectors' contents.
+    fn bytes(&self) -> usize {
+        self.index.capacity() * std::mem::size_of::<(u32, u32, u32, u32, u32)>()
+            + self.fixed.capacity() * std::mem::size_of::<(u32, f32)>()
+            + self.masked.capacity() * std::mem::size_of::<MaskedTerm>()
+    }
+
+    fn shrink(&mut self) {
+        self.index.shrink_to_fit();
+        self.fixed.shrink_to_fit();
+        self.masked.shrink_to_fit();
     }
 
     /// The fixed and masked terms of source key `key`.
@@ -301,9 +391,12 @@ impl Terms {
         self.masked.clear();
     }
 
-    /// `Σ factor · visibility · B_element`.
+    /// `Σ factor · visibility · B_element`, with the factors rounded as
+    /// [`PointTerms`] keeps them, so that a point gathers the same value whether its
+    /// terms were kept or computed afresh.
     fn gather(&self, b: &[[f32; 3]], h: &mut [f64; 3]) {
         for &(e, f) in &self.fixed {
+            let f = f64::from(f as f32);
             for k in 0..3 {
                 h[k] += f * b[e as usize][k] as f64;
             }
@@ -411,6 +504,7 @@ impl<'a> Solver<'a> {
             shared_phase: false,
             moving_now: Vec::new(),
             now: t,
+            kept_budget: None,
         };
         s.moving_patch = (0..s.patches.len())
             .map(|i| {
@@ -796,6 +890,10 @@ impl<'a> Solver<'a> {
         self.window = Some(Window {
             swept,
             base: Snapshot::of(&self.elems, &self.links),
+            points: std::sync::Mutex::new(PointCache {
+                budget: self.kept_budget,
+                ..PointCache::default()
+            }),
             ..Window::default()
         });
         let active = self.active_links(false);
@@ -984,6 +1082,23 @@ impl<'a> Solver<'a> {
         })
     }
 
+    /// Bounds the final-gather terms a time window keeps to `bytes` (see
+    /// [`spacetime`]): over it, the points the last frame did not use are dropped
+    /// and new points are gathered afresh at every frame instead of kept. `None`
+    /// keeps everything that holds over the window. Applies from the next window.
+    pub fn set_kept_budget(&mut self, bytes: Option<u64>) {
+        self.kept_budget = bytes.map(|b| usize::try_from(b).unwrap_or(usize::MAX));
+    }
+
+    /// Bytes of what the current window keeps: final-gather terms and leaf-row
+    /// coefficients (0 outside a window).
+    pub fn kept_bytes(&self) -> u64 {
+        self.window.as_ref().map_or(0, |w| {
+            let points = w.points.lock().map_or(0, |p| p.bytes);
+            (points + w.rows_bytes()) as u64
+        })
+    }
+
     /// Area-weighted RMS of the leaves' reflected radiosity (the error scale).
     pub fn radiosity_scale(&self) -> f64 {
         self.rms_radiosity()
@@ -1126,8 +1241,15 @@ impl<'a> Solver<'a> {
         self.row_coefs.clear();
         self.row_start.push(0);
         for (row, fresh) in rows {
-            if let Some(w) = &mut self.window {
-                w.rows.extend(fresh);
+            if let Some(w) = &mut self.window
+                && !fresh.is_empty()
+            {
+                let rows_bytes = w.rows_bytes();
+                let points = w.points.get_mut().unwrap_or_else(|e| e.into_inner());
+                points.others = rows_bytes;
+                if points.admits() {
+                    w.rows.extend(fresh);
+                }
             }
             for (s, c) in row {
                 self.row_sources.push(s);
@@ -1338,19 +1460,19 @@ impl<'a> Solver<'a> {
                 let masked = |bvh| {
                     oracle::visible_fraction_masked(bvh, x, n, gs, &ps, ns, m, key, skip, mask)
                 };
-                let vis_static = masked(None);
+                let vis_static = masked(None) as f32;
                 let near = !point_shaft_clear(x, n, gs, &self.moving_now);
                 let v = if near {
                     masked(Some(&self.bvh))
                 } else {
-                    vis_static
+                    f64::from(vis_static)
                 };
                 let t = MaskedTerm {
                     mask,
                     key: key as u32,
                     elem: s as u32,
                     f: f as f32,
-                    vis_static: vis_static as f32,
+                    vis_static,
                 };
                 out.masked.push((t, v));
             }
@@ -1557,15 +1679,12 @@ impl<'a> Solver<'a> {
                 ids.push((corners, cache.register(c, centre, centre)));
             }
             let fresh = cache.evaluate(
-                |leaf, x, pk| self.gather_point(leaf, x, known.as_ref(), pk),
+                |leaf, x, pk| self.gather_point(leaf, x, known.as_ref().map(|c| &c.map), pk),
                 &self.patches,
             );
             if let Some(m) = known.as_mut() {
                 for (pk, links) in fresh {
-                    let entry = m.entry(pk).or_default();
-                    for (l, terms) in links {
-                        entry.add(l, &terms);
-                    }
+                    m.add(pk, links);
                 }
             }
             let mut next = Vec::new();
@@ -1619,7 +1738,8 @@ impl<'a> Solver<'a> {
                 .then(a.uv[0][0].total_cmp(&b.uv[0][0]))
                 .then(a.uv[0][1].total_cmp(&b.uv[0][1]))
         });
-        if let (Some(w), Some(m)) = (&self.window, known) {
+        if let (Some(w), Some(mut m)) = (&self.window, known) {
+            m.collect(&cache.index);
             *w.points.lock().unwrap_or_else(|e| e.into_inner()) = m;
         }
         leaves

@@ -31,7 +31,9 @@
 //!    whole window. A static point gathering from a static source through a swept
 //!    box keeps the static half of every ray (a mask, [`crate::oracle::static_clear_mask`])
 //!    and re-casts it against the moving objects only, and only when one of them is
-//!    between the point and the source at that frame.
+//!    between the point and the source at that frame. What a window keeps can be
+//!    bounded ([`SpaceTimeOptions::kept_budget`]): over the bound, the points the
+//!    last frame did not gather are dropped and new ones are gathered every frame.
 //! 3. *Release*: the window's leaves go to the output (one `.rhier` chunk per
 //!    window), and everything the window added to the pools is dropped; the shared
 //!    part is restored exactly as it was, so windows are independent of each other
@@ -76,6 +78,10 @@ pub struct SpaceTimeOptions {
     /// A cell keeps one value over consecutive frames while its corners stay within
     /// this fraction of the RMS reflected radiosity of their running mean.
     pub merge_tol: f64,
+    /// Most bytes a window keeps in final-gather terms and leaf rows
+    /// ([`Solver::set_kept_budget`]); `None`: everything that holds over the window.
+    /// Changes the work, not the result.
+    pub kept_budget: Option<u64>,
 }
 
 impl Default for SpaceTimeOptions {
@@ -84,6 +90,7 @@ impl Default for SpaceTimeOptions {
             fps: 25.0,
             window: 1.0,
             merge_tol: 0.01,
+            kept_budget: None,
         }
     }
 }
@@ -111,6 +118,8 @@ pub struct FrameRecord {
     pub rays: u64,
     /// Bytes of the element and link pools.
     pub bytes_pools: u64,
+    /// Bytes of the final-gather terms and leaf rows the window keeps.
+    pub bytes_kept: u64,
     /// GMRES relative residual.
     pub residual: f64,
 }
@@ -119,7 +128,7 @@ impl FrameRecord {
     /// One line for the terminal.
     pub fn summary(&self) -> String {
         format!(
-            "frame {:4} (window {}) t={:.3}  {:7.2}s  cells {}  elements {}  links {} ({} varying)  rays {}  pools {:.1} MB  residual {:.1e}",
+            "frame {:4} (window {}) t={:.3}  {:7.2}s  cells {}  elements {}  links {} ({} varying)  rays {}  pools {:.1} MB  kept {:.1} MB  residual {:.1e}",
             self.frame,
             self.window,
             self.t,
@@ -130,6 +139,7 @@ impl FrameRecord {
             self.varying_links,
             self.rays,
             self.bytes_pools as f64 / 1e6,
+            self.bytes_kept as f64 / 1e6,
             self.residual
         )
     }
@@ -168,6 +178,8 @@ pub struct SpaceTimeStats {
     pub shared_links: u64,
     /// Largest element and link pool bytes seen at a frame.
     pub peak_pool_bytes: u64,
+    /// Largest bytes of kept terms seen at a frame.
+    pub peak_kept_bytes: u64,
     /// Rounds of the shared part.
     pub rounds: Vec<RoundRecord>,
     /// RMS reflected radiosity of the shared solution (the error scale).
@@ -310,6 +322,7 @@ impl<'a> SpaceTime<'a> {
         let per_window = ((st.window * st.fps).round() as usize).max(1);
         let windows = group_frames(&times, per_window);
         let mut solver = Solver::at_time(scene, opts, t_start, [t_start as f32, t_end as f32])?;
+        solver.set_kept_budget(st.kept_budget);
         let rounds = solver.run_shared(swept_boxes(scene, t_start, t_end), on_round)?;
         let b_ref = solver.radiosity_scale().max(f64::MIN_POSITIVE);
         let stats = SpaceTimeStats {
@@ -430,6 +443,8 @@ impl<'a> SpaceTime<'a> {
             }
             let bytes = (solver.elems.bytes() + solver.links.bytes()) as u64;
             self.stats.peak_pool_bytes = self.stats.peak_pool_bytes.max(bytes);
+            let kept = solver.kept_bytes();
+            self.stats.peak_kept_bytes = self.stats.peak_kept_bytes.max(kept);
             self.stats.frames += 1;
             on_frame(&FrameRecord {
                 frame: first + k as u32,
@@ -442,6 +457,7 @@ impl<'a> SpaceTime<'a> {
                 varying_links: cost.varying_links,
                 rays: cost.rays,
                 bytes_pools: bytes,
+                bytes_kept: kept,
                 residual: cost.residual,
             });
         }
