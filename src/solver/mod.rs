@@ -428,6 +428,10 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
     swept.iter().all(|&(lo, hi)| shaft.misses_box(lo, hi))
 }
 
+/// Points gathered in parallel at a time by the reconstruction: enough to keep the
+/// threads busy, few enough that the terms they return to keep stay small.
+const GATHER_BATCH: usize = 2048;
+
 /// What one space-time frame cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameCost {
@@ -1498,6 +1502,7 @@ impl<'a> Solver<'a> {
         x: DVec3,
         known: Option<&HashMap<PointKey, PointTerms>>,
         pk: PointKey,
+        admit: bool,
     ) -> ([f64; 3], bool, FreshTerms) {
         // Ray jitter from the point's place, so that a point gathered again (another
         // frame, another cell) casts the same rays.
@@ -1588,7 +1593,7 @@ impl<'a> Solver<'a> {
                 terms.gather(b, &mut h);
                 // Terms on elements of this frame's refinement are not kept: the
                 // next frame drops those elements.
-                if let Some(w) = keep {
+                if let Some(w) = keep.filter(|_| admit || cached.is_some()) {
                     let shared = |e: u32| (e as usize) < w.frame.elems_len;
                     if terms.fixed.iter().all(|t| shared(t.0))
                         && terms.masked.iter().all(|t| shared(t.0.elem))
@@ -1678,13 +1683,21 @@ impl<'a> Solver<'a> {
                 }
                 ids.push((corners, cache.register(c, centre, centre)));
             }
-            let fresh = cache.evaluate(
-                |leaf, x, pk| self.gather_point(leaf, x, known.as_ref().map(|c| &c.map), pk),
-                &self.patches,
-            );
-            if let Some(m) = known.as_mut() {
-                for (pk, links) in fresh {
-                    m.add(pk, links);
+            // In batches, so that the terms to keep are merged as they come (and
+            // not computed at all for new points once the budget is spent).
+            while cache.values.len() < cache.points.len() {
+                let admit = known.as_ref().is_some_and(PointCache::admits);
+                let fresh = cache.evaluate(
+                    GATHER_BATCH,
+                    |leaf, x, pk| {
+                        self.gather_point(leaf, x, known.as_ref().map(|c| &c.map), pk, admit)
+                    },
+                    &self.patches,
+                );
+                if let Some(m) = known.as_mut() {
+                    for (pk, links) in fresh {
+                        m.add(pk, links);
+                    }
                 }
             }
             let mut next = Vec::new();
@@ -1853,16 +1866,18 @@ impl VertexCache {
         })
     }
 
-    /// Gathers the points registered since the last call; returns the terms to keep
-    /// (see [`Solver::gather_point`]).
+    /// Gathers up to `batch` of the points registered and not gathered yet; returns
+    /// the terms to keep (see [`Solver::gather_point`]).
     #[allow(clippy::type_complexity)]
     fn evaluate(
         &mut self,
+        batch: usize,
         gather: impl Fn(ElementId, DVec3, PointKey) -> ([f64; 3], bool, FreshTerms) + Sync,
         patches: &Patches,
     ) -> Vec<(PointKey, FreshTerms)> {
         let from = self.values.len();
-        let new: Vec<_> = self.points[from..]
+        let to = self.points.len().min(from + batch);
+        let new: Vec<_> = self.points[from..to]
             .par_iter()
             .map(|&(leaf, patch, uv, toward, pk)| {
                 let x = patches.point(patch as usize, uv[0] as f64, uv[1] as f64);
