@@ -155,15 +155,15 @@ pub fn run(
             frames.push(*f);
         })?;
         writer.write_chunk(w.t0, w.t1, &w.leaves)?;
+        stored += w.leaves.len() as u64;
+        frame_cells += w.frame_cells;
         journal.append(&JournalWindow {
             index: w.index,
             t0: w.t0,
             t1: w.t1,
-            leaves: w.leaves.clone(),
+            leaves: w.leaves,
             frame_cells: w.frame_cells,
         })?;
-        stored += w.leaves.len() as u64;
-        frame_cells += w.frame_cells;
         if let Some(budget) = args.budget
             && run.stats.peak_pool_bytes > budget
         {

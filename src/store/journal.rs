@@ -75,7 +75,7 @@ impl Journal {
         }
         fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         let j = Journal { dir };
-        j.write_atomic("solve.key", key.as_bytes())?;
+        j.write_atomic("solve.key", &[key.as_bytes()])?;
         Ok(j)
     }
 
@@ -109,7 +109,7 @@ impl Journal {
 
     /// Records a finished window.
     pub fn append(&self, w: &JournalWindow) -> Result<()> {
-        let mut bytes = Vec::with_capacity(HEADER + w.leaves.len() * LEAF);
+        let mut bytes = Vec::with_capacity(HEADER);
         let body: &[u8] = bytemuck::cast_slice(&w.leaves);
         bytes.extend_from_slice(MAGIC);
         bytes.extend_from_slice(&VERSION.to_le_bytes());
@@ -120,8 +120,7 @@ impl Journal {
         bytes.extend_from_slice(&w.frame_cells.to_le_bytes());
         bytes.extend_from_slice(&crc32(body).to_le_bytes());
         bytes.extend_from_slice(&0u32.to_le_bytes());
-        bytes.extend_from_slice(body);
-        self.write_atomic(&window_name(w.index), &bytes)
+        self.write_atomic(&window_name(w.index), &[&bytes, body])
     }
 
     /// Removes the journal (the output file is complete).
@@ -129,11 +128,15 @@ impl Journal {
         fs::remove_dir_all(&self.dir).map_err(|e| Error::io(&self.dir, e))
     }
 
-    fn write_atomic(&self, name: &str, bytes: &[u8]) -> Result<()> {
+    /// Writes the concatenation of `parts` to `name` through a temporary file and a
+    /// rename (a crash leaves the old file or the new one, never a torn one).
+    fn write_atomic(&self, name: &str, parts: &[&[u8]]) -> Result<()> {
         let path = self.dir.join(name);
         let tmp = self.dir.join(format!("{name}.tmp"));
         let mut f = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
-        f.write_all(bytes).map_err(|e| Error::io(&tmp, e))?;
+        for bytes in parts {
+            f.write_all(bytes).map_err(|e| Error::io(&tmp, e))?;
+        }
         f.sync_all().map_err(|e| Error::io(&tmp, e))?;
         fs::rename(&tmp, &path).map_err(|e| Error::io(&path, e))?;
         if let Ok(d) = File::open(&self.dir) {
