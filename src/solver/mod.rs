@@ -290,6 +290,19 @@ impl PointCache {
         });
         self.bytes -= freed.min(self.bytes);
         self.map.shrink_to_fit();
+        release_free_memory();
+    }
+}
+
+/// Hands the heap pages freed by a collection back to the system: glibc keeps
+/// them mapped otherwise (the points' small vectors leave them scattered), and the
+/// process's resident size would not show what the budget bounds.
+fn release_free_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: `malloc_trim` only returns the allocator's free pages to the system;
+    // no pointer of ours is involved.
+    unsafe {
+        libc::malloc_trim(0);
     }
 }
 
@@ -988,6 +1001,8 @@ impl<'a> Solver<'a> {
         self.reset_frame();
         if let Some(mut w) = self.window.take() {
             self.restore(&mut w.base);
+            drop(w);
+            release_free_memory();
         }
         self.pull_pool();
     }
