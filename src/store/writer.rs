@@ -274,8 +274,12 @@ impl Writer {
             }
             reach = reach.max(lt1 as f64);
         }
-        let records: Vec<LeafRecord> = leaves.iter().map(LeafRecord::from).collect();
-        let bytes = archive(&self.path, &records)?;
+        // The records go as soon as they are serialised (a window's chunk is the
+        // largest transient of a space-time solve).
+        let bytes = {
+            let records: Vec<LeafRecord> = leaves.iter().map(LeafRecord::from).collect();
+            archive(&self.path, &records)?
+        };
         let section = self.entries.len() as u32;
         self.section(
             SectionKind::Chunk,
@@ -461,7 +465,7 @@ impl Drop for Writer {
 }
 
 /// Serializes one rkyv root.
-pub(crate) fn archive<T>(path: &Path, value: &T) -> Result<Vec<u8>>
+pub(crate) fn archive<T>(path: &Path, value: &T) -> Result<rkyv::util::AlignedVec>
 where
     T: for<'a> rkyv::Serialize<
             rkyv::api::high::HighSerializer<
@@ -471,16 +475,14 @@ where
             >,
         >,
 {
-    rkyv::to_bytes::<rancor::Error>(value)
-        .map(|v| v.to_vec())
-        .map_err(|e| {
-            Error::invalid(
-                path,
-                "serialising a record",
-                "a serialisable record",
-                e.to_string(),
-            )
-        })
+    rkyv::to_bytes::<rancor::Error>(value).map_err(|e| {
+        Error::invalid(
+            path,
+            "serialising a record",
+            "a serialisable record",
+            e.to_string(),
+        )
+    })
 }
 
 /// Time chunks a static or space-time [`Solution`] is written in by
