@@ -437,6 +437,15 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
         .iter()
         .map(|&c| DVec3::from_array(c))
         .collect();
+    // The shaft lies in the box of the point and the element: boxes that miss it
+    // need no shaft (most of them, for the current boxes of the moving objects).
+    let (lo, hi) = corners
+        .iter()
+        .fold((x, x), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+    let overlaps = |&(a, b): &(DVec3, DVec3)| (0..3).all(|k| b[k] >= lo[k] && a[k] <= hi[k]);
+    if !swept.iter().any(overlaps) {
+        return true;
+    }
     let shaft = crate::shafts::Shaft::new(&[x], n, &corners, DVec3::from_array(g.normal));
     swept.iter().all(|&(lo, hi)| shaft.misses_box(lo, hi))
 }
