@@ -158,6 +158,22 @@ fn all_behind(g: &Geom, pts: &[DVec3], eps: f64) -> bool {
     pts.iter().all(|&p| n.dot(p - o) <= eps)
 }
 
+/// The cosine factor a cluster source radiates with towards the unit direction `v`:
+/// `max(0, N·v)/P + (1 − |N|/P)/4`, with `P = A·B̄` the cluster's power (largest
+/// channel) and `N = Σ A_i B̄_i n_i` its power-weighted normal (`dir`). A cluster whose
+/// power comes from surfaces facing one way (a lamp) radiates like that surface,
+/// `cos θ`; one whose surfaces face every way radiates isotropically, 1/4 (Sillion
+/// 1995); a dark cluster is taken as isotropic.
+pub fn cluster_emission(g: &Geom, dir: &[f32; 3], b: f64, v: DVec3) -> f64 {
+    let p = g.area * b;
+    let n = DVec3::new(dir[0] as f64, dir[1] as f64, dir[2] as f64);
+    if !(p > 0.0) {
+        return 0.25;
+    }
+    let len = n.length().min(p);
+    (n.dot(v).max(0.0) / p).min(1.0) + 0.25 * (1.0 - len / p)
+}
+
 /// Isotropic-cluster coefficient at a receiving point/element (see module docs).
 /// `cr`, `cs` are the cosine factors (1/4 for a cluster side).
 fn cluster_factor(area_s: f64, cr: f64, cs: f64, d2: f64) -> f64 {
@@ -219,7 +235,11 @@ pub fn evaluate(
         let cs = if s_surface {
             widen(DVec3::from_array(gs.normal), -u, rr)
         } else {
-            0.25
+            let b = elems.radiosities.as_slice()[s.ix()]
+                .iter()
+                .copied()
+                .fold(0.0f32, f32::max) as f64;
+            cluster_emission(gs, &elems.directions.as_slice()[s.ix()], b, -u)
         };
         f = cluster_factor(gs.area, cr, cs, d2);
         // The true factor lies between 0 and the value with every cosine at its

@@ -1148,6 +1148,26 @@ impl<'a> Solver<'a> {
         for (out, v) in self.elems.radiosities.as_mut_slice().iter_mut().zip(&b) {
             *out = [v[0] as f32, v[1] as f32, v[2] as f32];
         }
+        // Power-weighted normals, bottom-up: a surface's own, a cluster the sum of its
+        // children's (surface children below a patch root are not needed).
+        let nodes = self.elems.nodes.as_slice();
+        let geoms = self.elems.geoms.as_slice();
+        let mut dirs = vec![DVec3::ZERO; nodes.len()];
+        for i in (0..nodes.len()).rev() {
+            let g = &geoms[i];
+            dirs[i] = if g.patch != u32::MAX {
+                let bmax = b[i].iter().copied().fold(0.0, f64::max);
+                DVec3::from_array(g.normal) * (g.area * bmax)
+            } else {
+                let n = nodes[i];
+                (n.first_child..n.first_child + n.child_count)
+                    .map(|c| dirs[c as usize])
+                    .sum()
+            };
+        }
+        for (out, d) in self.elems.directions.as_mut_slice().iter_mut().zip(&dirs) {
+            *out = d.as_vec3().to_array();
+        }
     }
 
     /// Applies `A = I − ρ·(rows ∘ pull)` to leaf radiosities `x` (3 per leaf).
@@ -1302,7 +1322,8 @@ impl<'a> Solver<'a> {
         }
         if gs.patch == u32::MAX {
             let u = (c - x) / d;
-            let f = gs.area * n.dot(u).max(0.0) * 0.25 / (std::f64::consts::PI * d * d) * vis;
+            let cs = oracle::cluster_emission(gs, &self.elems.directions.as_slice()[s], b_of(&self.elems, s), -u);
+            let f = gs.area * n.dot(u).max(0.0) * cs / (std::f64::consts::PI * d * d) * vis;
             if f > 0.0 {
                 out.fixed.push((s as u32, f));
             }
@@ -1644,6 +1665,14 @@ pub fn solve(scene: &Scene, opts: SolveOptions) -> Result<(Solution, Vec<RoundRe
         sol.stats.residual = last.residual;
     }
     Ok((sol, records))
+}
+
+/// Largest channel of element `e`'s radiosity.
+fn b_of(elems: &ElementPool, e: usize) -> f64 {
+    elems.radiosities.as_slice()[e]
+        .iter()
+        .copied()
+        .fold(0.0f32, f32::max) as f64
 }
 
 /// Area-weighted pull: every element with children gets the area-weighted mean of its
