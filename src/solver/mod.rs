@@ -84,6 +84,9 @@ pub struct SolveOptions {
     pub min_size: f64,
     /// Rays per receiver quadrature point for partly hidden links.
     pub rays_per_point: u32,
+    /// Rays between the ends of a link with a cluster, for its visibility estimate
+    /// ([`oracle::cluster_visibility`]).
+    pub cluster_rays: u32,
     /// Rays from a reconstruction corner to a partly hidden source (emitters: 4×).
     pub corner_rays: u32,
     /// A source seen from a corner under a half-angle above this (radius/distance) is
@@ -118,6 +121,7 @@ impl Default for SolveOptions {
             eps: 0.5,
             min_size: 1.0 / 256.0,
             rays_per_point: 4,
+            cluster_rays: 8,
             corner_rays: 8,
             open_ratio: 0.5,
             max_rounds: 8,
@@ -445,6 +449,7 @@ impl<'a> Solver<'a> {
     fn settings(&self) -> EvalSettings {
         EvalSettings {
             rays_per_point: self.opts.rays_per_point,
+            cluster_rays: self.opts.cluster_rays,
             seed: self.opts.seed,
         }
     }
@@ -683,8 +688,9 @@ impl<'a> Solver<'a> {
     /// a box swept by a moving object meets the shaft between two surfaces (Damez &
     /// Sillion §5.2: "same motion → kernel constant; shaft never crossed by a moving
     /// object → visibility constant"; the swept boxes are the motion volumes of §7
-    /// item 1, so no time sampling decides it). A cluster link carries no visibility,
-    /// so between static ends it is constant. Always false in a static solve.
+    /// item 1, so no time sampling decides it). A link with a cluster end carries the
+    /// visibility of rays between the ends' surfaces, all inside the box of both ends:
+    /// it varies when a swept box meets that box. Always false in a static solve.
     fn varying(&self, r: ElementId, s: ElementId) -> bool {
         let Some(w) = &self.window else {
             return false;
@@ -695,7 +701,18 @@ impl<'a> Solver<'a> {
         let geoms = self.elems.geoms.as_slice();
         let (gr, gs) = (&geoms[r.ix()], &geoms[s.ix()]);
         if gr.patch == u32::MAX || gs.patch == u32::MAX {
-            return false;
+            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            for g in [gr, gs] {
+                let k = if g.patch == u32::MAX { 2 } else { g.n as usize };
+                for p in &g.corners[..k] {
+                    lo = lo.min(DVec3::from_array(*p));
+                    hi = hi.max(DVec3::from_array(*p));
+                }
+            }
+            return w
+                .swept
+                .iter()
+                .any(|&(a, b)| a.cmple(hi).all() && lo.cmple(b).all());
         }
         let (pr, ps) = (oracle::poly(gr), oracle::poly(gs));
         let shaft = crate::shafts::Shaft::new(
@@ -1322,7 +1339,12 @@ impl<'a> Solver<'a> {
         }
         if gs.patch == u32::MAX {
             let u = (c - x) / d;
-            let cs = oracle::cluster_emission(gs, &self.elems.directions.as_slice()[s], b_of(&self.elems, s), -u);
+            let cs = oracle::cluster_emission(
+                gs,
+                &self.elems.directions.as_slice()[s],
+                b_of(&self.elems, s),
+                -u,
+            );
             let f = gs.area * n.dot(u).max(0.0) * cs / (std::f64::consts::PI * d * d) * vis;
             if f > 0.0 {
                 out.fixed.push((s as u32, f));
