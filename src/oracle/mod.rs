@@ -330,6 +330,36 @@ pub fn surface_point(elems: &ElementPool, e: ElementId, h: u64) -> (DVec3, DVec3
     )
 }
 
+/// Visibility of cluster `s` from the point `x` (normal `n`, on patch `patch`): the
+/// estimate of [`cluster_visibility`] with the receiving end a point (the final
+/// gather's). Returns `(visibility, rays cast)`.
+#[allow(clippy::too_many_arguments)]
+pub fn point_cluster_visibility(
+    elems: &ElementPool,
+    bvh: &SceneBvh,
+    x: DVec3,
+    n: DVec3,
+    patch: u32,
+    s: ElementId,
+    m: u32,
+    key: u64,
+) -> (f64, u32) {
+    let (mut wsum, mut vsum, mut rays) = (0.0, 0.0, 0);
+    for j in 0..m.max(1) as u64 {
+        let (y, ny, py) = surface_point(elems, s, hash3(key, j, 2));
+        let k = point_to_point_kernel(x, n, y, ny);
+        if !(k > 0.0) {
+            continue;
+        }
+        rays += 1;
+        wsum += k;
+        if !bvh.occluded_except(x, y, [patch, py]) {
+            vsum += k;
+        }
+    }
+    (if wsum > 0.0 { vsum / wsum } else { 0.0 }, rays)
+}
+
 /// Visibility of a link with a cluster end: `m` rays between [`surface_point`]s of
 /// `r` and `s` (Sillion 1995 §4.3), the visible fraction weighted by the point
 /// kernel. Pairs facing away from each other cast nothing; if every pair does, the

@@ -1321,7 +1321,16 @@ impl<'a> Solver<'a> {
         let node = nodes[s];
         let (c, rad) = oracle::sphere(gs);
         let d = c.distance(x).max(f64::MIN_POSITIVE);
-        if node.child_count > 0 && rad / d > self.opts.open_ratio {
+        // A cluster whose rays from `x` a moving object may cross is opened (down to
+        // surfaces, whose terms keep their static rays as masks).
+        let swept_cluster = gs.patch == u32::MAX
+            && swept.is_some_and(|sw| {
+                let lo = DVec3::from_array(gs.corners[0]).min(x);
+                let hi = DVec3::from_array(gs.corners[1]).max(x);
+                sw.iter()
+                    .any(|&(a, b)| a.cmple(hi).all() && lo.cmple(b).all())
+            });
+        if node.child_count > 0 && (rad / d > self.opts.open_ratio || swept_cluster) {
             for ch in node.first_child..node.first_child + node.child_count {
                 self.point_terms(
                     x,
@@ -1338,6 +1347,19 @@ impl<'a> Solver<'a> {
             return;
         }
         if gs.patch == u32::MAX {
+            // Visibility from the point itself, as the link's from its receiver
+            // (oracle module docs); an opened cluster's children do not inherit it.
+            let _ = vis;
+            let (vis, _) = oracle::point_cluster_visibility(
+                &self.elems,
+                &self.bvh,
+                x,
+                n,
+                receiver_patch,
+                ElementId(s as u32),
+                self.opts.cluster_rays,
+                key,
+            );
             let u = (c - x) / d;
             let cs = oracle::cluster_emission(
                 gs,
