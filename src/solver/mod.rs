@@ -1297,11 +1297,15 @@ impl<'a> Solver<'a> {
     /// Transfer terms from source `s` to the point `x` (normal `n`): `Σ factor ·
     /// visibility · B_element` over `out` is the radiosity the point gathers from `s`;
     /// exact point-to-polygon factors, visibility by rays unless `clear`, sources
-    /// that look large from `x` opened into their children.
+    /// that look large from `x` opened into their children. A cluster source gets
+    /// the estimate of its links: [`oracle::cluster_emission`], visibility by
+    /// [`oracle::point_cluster_visibility`] from `x`.
     ///
     /// With `swept` (a static point and a static source in a time window), a term
     /// whose shaft from `x` meets a box swept by a moving object becomes a
-    /// [`MaskedTerm`] (its rays' static visibility kept); the others are fixed.
+    /// [`MaskedTerm`] (its rays' static visibility kept); the others are fixed. A
+    /// cluster whose box, with `x`, meets a swept box is opened (its rays could be
+    /// crossed), so a fixed cluster term holds over the window.
     #[allow(clippy::too_many_arguments)]
     fn point_terms(
         &self,
@@ -1310,7 +1314,6 @@ impl<'a> Solver<'a> {
         receiver_patch: u32,
         s: usize,
         clear: bool,
-        vis: f64,
         key: u64,
         swept: Option<&[(DVec3, DVec3)]>,
         out: &mut Terms,
@@ -1338,7 +1341,6 @@ impl<'a> Solver<'a> {
                     receiver_patch,
                     ch as usize,
                     clear,
-                    vis,
                     oracle::hash3(key, ch as u64, 1),
                     swept,
                     out,
@@ -1348,8 +1350,12 @@ impl<'a> Solver<'a> {
         }
         if gs.patch == u32::MAX {
             // Visibility from the point itself, as the link's from its receiver
-            // (oracle module docs); an opened cluster's children do not inherit it.
-            let _ = vis;
+            // (oracle module docs): an opened cluster's children do not inherit it.
+            // The rays' targets depend on the source and the receiving patch only, so
+            // neighbouring points aim at the same surface points and the estimate is
+            // smooth across the patch (independent jitter per point is noise the
+            // reconstruction would mesh).
+            let key = oracle::hash3(self.opts.seed ^ 0xc105, s as u64, receiver_patch as u64);
             let (vis, _) = oracle::point_cluster_visibility(
                 &self.elems,
                 &self.bvh,
@@ -1513,7 +1519,6 @@ impl<'a> Solver<'a> {
                     p as u32,
                     s,
                     clear || (keep.is_none() && t.shaft_clear()),
-                    t.visibility as f64,
                     key,
                     keep.map(|w| &w.swept[..]),
                     &mut terms,
