@@ -185,7 +185,7 @@ fn all_behind(g: &Geom, pts: &[DVec3], eps: f64) -> bool {
 pub fn cluster_emission(g: &Geom, dir: &[f32; 3], b: f64, v: DVec3) -> f64 {
     let p = g.area * b;
     let n = DVec3::new(dir[0] as f64, dir[1] as f64, dir[2] as f64);
-    if !(p > 0.0) {
+    if p.is_nan() || p <= 0.0 {
         return 0.25;
     }
     let len = n.length().min(p);
@@ -348,7 +348,7 @@ pub fn point_cluster_visibility(
     for j in 0..m.max(1) as u64 {
         let (y, ny, py) = surface_point(elems, s, hash3(key, j, 2));
         let k = point_to_point_kernel(x, n, y, ny);
-        if !(k > 0.0) {
+        if k.is_nan() || k <= 0.0 {
             continue;
         }
         rays += 1;
@@ -377,7 +377,7 @@ pub fn cluster_visibility(
         let (x, nx, px) = surface_point(elems, r, hash3(key, j, 1));
         let (y, ny, py) = surface_point(elems, s, hash3(key, j, 2));
         let k = point_to_point_kernel(x, nx, y, ny);
-        if !(k > 0.0) {
+        if k.is_nan() || k <= 0.0 {
             continue;
         }
         rays += 1;
