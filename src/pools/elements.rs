@@ -80,6 +80,10 @@ pub struct ElementPool {
     pub times: Column<[f32; 2]>,
     /// Radiosity `B` (RGB): at leaves the solution, above the area average (pull).
     pub radiosities: Column<[f32; 3]>,
+    /// Power-weighted normal `Σ A_i B̄_i n_i` over the element's surfaces (`B̄` the
+    /// largest channel): how directional a cluster's emission is (see
+    /// [`crate::oracle`], links with a cluster). Set by the solver's pull.
+    pub directions: Column<[f32; 3]>,
     /// Irradiance gathered through the element's own links in the last gather.
     pub irradiances: Column<[f32; 3]>,
 }
@@ -92,6 +96,7 @@ impl ElementPool {
             geoms: Column::new(storage, "elem-geoms")?,
             times: Column::new(storage, "elem-times")?,
             radiosities: Column::new(storage, "elem-b")?,
+            directions: Column::new(storage, "elem-dir")?,
             irradiances: Column::new(storage, "elem-h")?,
         })
     }
@@ -112,6 +117,7 @@ impl ElementPool {
         self.geoms.push(geom)?;
         self.times.push(time)?;
         self.radiosities.push([0.0; 3])?;
+        self.directions.push([0.0; 3])?;
         self.irradiances.push([0.0; 3])?;
         Ok(ElementId(id))
     }
@@ -122,6 +128,7 @@ impl ElementPool {
         self.geoms.truncate(len);
         self.times.truncate(len);
         self.radiosities.truncate(len);
+        self.directions.truncate(len);
         self.irradiances.truncate(len);
     }
 
@@ -148,6 +155,7 @@ impl ElementPool {
             + self.geoms.bytes()
             + self.times.bytes()
             + self.radiosities.bytes()
+            + self.directions.bytes()
             + self.irradiances.bytes()
     }
 
@@ -163,6 +171,7 @@ impl ElementPool {
             self.geoms.len(),
             self.times.len(),
             self.radiosities.len(),
+            self.directions.len(),
             self.irradiances.len(),
         ] {
             if len != n {

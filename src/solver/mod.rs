@@ -84,6 +84,9 @@ pub struct SolveOptions {
     pub min_size: f64,
     /// Rays per receiver quadrature point for partly hidden links.
     pub rays_per_point: u32,
+    /// Rays between the ends of a link with a cluster, for its visibility estimate
+    /// ([`oracle::cluster_visibility`]).
+    pub cluster_rays: u32,
     /// Rays from a reconstruction corner to a partly hidden source (emitters: 4×).
     pub corner_rays: u32,
     /// A source seen from a corner under a half-angle above this (radius/distance) is
@@ -118,6 +121,7 @@ impl Default for SolveOptions {
             eps: 0.5,
             min_size: 1.0 / 256.0,
             rays_per_point: 4,
+            cluster_rays: 8,
             corner_rays: 8,
             open_ratio: 0.5,
             max_rounds: 8,
@@ -571,6 +575,7 @@ impl<'a> Solver<'a> {
     fn settings(&self) -> EvalSettings {
         EvalSettings {
             rays_per_point: self.opts.rays_per_point,
+            cluster_rays: self.opts.cluster_rays,
             seed: self.opts.seed,
         }
     }
@@ -809,8 +814,9 @@ impl<'a> Solver<'a> {
     /// a box swept by a moving object meets the shaft between two surfaces (Damez &
     /// Sillion §5.2: "same motion → kernel constant; shaft never crossed by a moving
     /// object → visibility constant"; the swept boxes are the motion volumes of §7
-    /// item 1, so no time sampling decides it). A cluster link carries no visibility,
-    /// so between static ends it is constant. Always false in a static solve.
+    /// item 1, so no time sampling decides it). A link with a cluster end carries the
+    /// visibility of rays between the ends' surfaces, all inside the box of both ends:
+    /// it varies when a swept box meets that box. Always false in a static solve.
     fn varying(&self, r: ElementId, s: ElementId) -> bool {
         let Some(w) = &self.window else {
             return false;
@@ -821,7 +827,18 @@ impl<'a> Solver<'a> {
         let geoms = self.elems.geoms.as_slice();
         let (gr, gs) = (&geoms[r.ix()], &geoms[s.ix()]);
         if gr.patch == u32::MAX || gs.patch == u32::MAX {
-            return false;
+            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            for g in [gr, gs] {
+                let k = if g.patch == u32::MAX { 2 } else { g.n as usize };
+                for p in &g.corners[..k] {
+                    lo = lo.min(DVec3::from_array(*p));
+                    hi = hi.max(DVec3::from_array(*p));
+                }
+            }
+            return w
+                .swept
+                .iter()
+                .any(|&(a, b)| a.cmple(hi).all() && lo.cmple(b).all());
         }
         let (pr, ps) = (oracle::poly(gr), oracle::poly(gs));
         let shaft = crate::shafts::Shaft::new(
@@ -1304,6 +1321,26 @@ impl<'a> Solver<'a> {
         for (out, v) in self.elems.radiosities.as_mut_slice().iter_mut().zip(&b) {
             *out = [v[0] as f32, v[1] as f32, v[2] as f32];
         }
+        // Power-weighted normals, bottom-up: a surface's own, a cluster the sum of its
+        // children's (surface children below a patch root are not needed).
+        let nodes = self.elems.nodes.as_slice();
+        let geoms = self.elems.geoms.as_slice();
+        let mut dirs = vec![DVec3::ZERO; nodes.len()];
+        for i in (0..nodes.len()).rev() {
+            let g = &geoms[i];
+            dirs[i] = if g.patch != u32::MAX {
+                let bmax = b[i].iter().copied().fold(0.0, f64::max);
+                DVec3::from_array(g.normal) * (g.area * bmax)
+            } else {
+                let n = nodes[i];
+                (n.first_child..n.first_child + n.child_count)
+                    .map(|c| dirs[c as usize])
+                    .sum()
+            };
+        }
+        for (out, d) in self.elems.directions.as_mut_slice().iter_mut().zip(&dirs) {
+            *out = d.as_vec3().to_array();
+        }
     }
 
     /// Applies `A = I − ρ·(rows ∘ pull)` to leaf radiosities `x` (3 per leaf).
@@ -1416,11 +1453,15 @@ impl<'a> Solver<'a> {
     /// Transfer terms from source `s` to the point `x` (normal `n`): `Σ factor ·
     /// visibility · B_element` over `out` is the radiosity the point gathers from `s`;
     /// exact point-to-polygon factors, visibility by rays unless `clear`, sources
-    /// that look large from `x` opened into their children.
+    /// that look large from `x` opened into their children. A cluster source gets
+    /// the estimate of its links: [`oracle::cluster_emission`], visibility by
+    /// [`oracle::point_cluster_visibility`] from `x`.
     ///
     /// With `swept` (a static point and a static source in a time window), a term
     /// whose shaft from `x` meets a box swept by a moving object becomes a
-    /// [`MaskedTerm`] (its rays' static visibility kept); the others are fixed.
+    /// [`MaskedTerm`] (its rays' static visibility kept); the others are fixed. A
+    /// cluster whose box, with `x`, meets a swept box is opened (its rays could be
+    /// crossed), so a fixed cluster term holds over the window.
     #[allow(clippy::too_many_arguments)]
     fn point_terms(
         &self,
@@ -1429,7 +1470,6 @@ impl<'a> Solver<'a> {
         receiver_patch: u32,
         s: usize,
         clear: bool,
-        vis: f64,
         key: u64,
         swept: Option<&[(DVec3, DVec3)]>,
         out: &mut Terms,
@@ -1440,7 +1480,16 @@ impl<'a> Solver<'a> {
         let node = nodes[s];
         let (c, rad) = oracle::sphere(gs);
         let d = c.distance(x).max(f64::MIN_POSITIVE);
-        if node.child_count > 0 && rad / d > self.opts.open_ratio {
+        // A cluster whose rays from `x` a moving object may cross is opened (down to
+        // surfaces, whose terms keep their static rays as masks).
+        let swept_cluster = gs.patch == u32::MAX
+            && swept.is_some_and(|sw| {
+                let lo = DVec3::from_array(gs.corners[0]).min(x);
+                let hi = DVec3::from_array(gs.corners[1]).max(x);
+                sw.iter()
+                    .any(|&(a, b)| a.cmple(hi).all() && lo.cmple(b).all())
+            });
+        if node.child_count > 0 && (rad / d > self.opts.open_ratio || swept_cluster) {
             for ch in node.first_child..node.first_child + node.child_count {
                 self.point_terms(
                     x,
@@ -1448,7 +1497,6 @@ impl<'a> Solver<'a> {
                     receiver_patch,
                     ch as usize,
                     clear,
-                    vis,
                     oracle::hash3(key, ch as u64, 1),
                     swept,
                     out,
@@ -1457,8 +1505,31 @@ impl<'a> Solver<'a> {
             return;
         }
         if gs.patch == u32::MAX {
+            // Visibility from the point itself, as the link's from its receiver
+            // (oracle module docs): an opened cluster's children do not inherit it.
+            // The rays' targets depend on the source and the receiving patch only, so
+            // neighbouring points aim at the same surface points and the estimate is
+            // smooth across the patch (independent jitter per point is noise the
+            // reconstruction would mesh).
+            let key = oracle::hash3(self.opts.seed ^ 0xc105, s as u64, receiver_patch as u64);
+            let (vis, _) = oracle::point_cluster_visibility(
+                &self.elems,
+                &self.bvh,
+                x,
+                n,
+                receiver_patch,
+                ElementId(s as u32),
+                self.opts.cluster_rays,
+                key,
+            );
             let u = (c - x) / d;
-            let f = gs.area * n.dot(u).max(0.0) * 0.25 / (std::f64::consts::PI * d * d) * vis;
+            let cs = oracle::cluster_emission(
+                gs,
+                &self.elems.directions.as_slice()[s],
+                b_of(&self.elems, s),
+                -u,
+            );
+            let f = gs.area * n.dot(u).max(0.0) * cs / (std::f64::consts::PI * d * d) * vis;
             if f > 0.0 {
                 out.fixed.push((s as u32, f));
             }
@@ -1609,7 +1680,6 @@ impl<'a> Solver<'a> {
                     p as u32,
                     s,
                     clear || (keep.is_none() && t.shaft_clear()),
-                    t.visibility as f64,
                     key,
                     keep.map(|w| &w.swept[..]),
                     &mut terms,
@@ -1811,6 +1881,14 @@ pub fn solve(scene: &Scene, opts: SolveOptions) -> Result<(Solution, Vec<RoundRe
         sol.stats.residual = last.residual;
     }
     Ok((sol, records))
+}
+
+/// Largest channel of element `e`'s radiosity.
+fn b_of(elems: &ElementPool, e: usize) -> f64 {
+    elems.radiosities.as_slice()[e]
+        .iter()
+        .copied()
+        .fold(0.0f32, f32::max) as f64
 }
 
 /// Area-weighted pull: every element with children gets the area-weighted mean of its

@@ -9,8 +9,8 @@
 //! decided without time sampling, from the boxes the moving objects sweep (the
 //! motion volumes of §7 item 1): a surface link between static ends is **constant**
 //! over a time range if its shaft misses every swept box; a cluster link between
-//! static ends is constant (it carries no visibility); everything else is
-//! **varying**.
+//! static ends if the box of both ends (which holds its visibility rays) misses every
+//! swept box; everything else is **varying**.
 //!
 //! The solve runs in three stages:
 //! 1. *Shared part*: the usual rounds of refine + solve at the start time, links
@@ -303,6 +303,8 @@ pub struct SpaceTime<'a> {
     windows: Vec<Vec<f64>>,
     shared_tr: Vec<crate::pools::links::Transport>,
     shared_b: Vec<[f32; 3]>,
+    /// The shared part's power-weighted normals (cluster emission depends on `B`).
+    shared_dir: Vec<[f32; 3]>,
     start: Instant,
     /// Totals so far.
     pub stats: SpaceTimeStats,
@@ -337,12 +339,14 @@ impl<'a> SpaceTime<'a> {
         // The state every window starts from (windows are independent).
         let shared_tr = solver.links.transports.as_slice().to_vec();
         let shared_b = solver.elems.radiosities.as_slice().to_vec();
+        let shared_dir = solver.elems.directions.as_slice().to_vec();
         Ok(SpaceTime {
             solver,
             st,
             windows,
             shared_tr,
             shared_b,
+            shared_dir,
             start,
             stats,
         })
@@ -484,6 +488,11 @@ impl<'a> SpaceTime<'a> {
             .radiosities
             .as_mut_slice()
             .copy_from_slice(&self.shared_b);
+        solver
+            .elems
+            .directions
+            .as_mut_slice()
+            .copy_from_slice(&self.shared_dir);
         self.stats.seconds = self.start.elapsed().as_secs_f64();
         Ok(WindowOutput {
             index: wi as u32,
