@@ -127,6 +127,7 @@ fn links_per_patch(n: usize) -> f64 {
 fn links_per_patch_stay_bounded_as_clutter_grows() {
     let small = links_per_patch(3);
     let large = links_per_patch(8);
+    eprintln!("links per patch: {small:.1} (3×3 boxes), {large:.1} (8×8 boxes)");
     // 60 → 390 polygons: the links per patch may grow a little (more neighbours),
     // not with the number of patches (6.5×).
     assert!(small > 1.0 && large > 1.0, "{small} {large}");
@@ -136,7 +137,7 @@ fn links_per_patch_stay_bounded_as_clutter_grows() {
     );
 }
 
-/// Probe points: floor between boxes, box tops, box sides, walls, ceiling.
+/// Probe points (58 for 4 × 4 boxes): floor between boxes, box tops, box sides, walls, ceiling.
 fn probes(n: usize) -> Vec<ProbePoint> {
     let pitch = 9.0 / n as f64;
     let w = 0.6 * pitch;
@@ -186,14 +187,18 @@ fn power_criterion_and_cheap_gather_keep_point_radiosity() {
         let sol = solver.solution();
         (probe(&sol, &pts, 0.0).expect("probe"), links)
     };
-    let (fast, fast_links) = run(coarse());
+    // Box faces (0.07–0.5 m²) below the power area (0.84 m² here).
+    let (fast, fast_links) = run(SolveOptions {
+        power_size: 1.0 / 16.0,
+        ..coarse()
+    });
     let (full, full_links) = run(SolveOptions {
         power_size: 0.0,
         faint_source: 0.0,
         ..coarse()
     });
     assert!(
-        fast_links <= full_links,
+        fast_links < full_links,
         "power criterion made more links: {fast_links} > {full_links}"
     );
     let scale = (full.iter().map(|b| b[1] * b[1]).sum::<f64>() / full.len() as f64).sqrt();
@@ -205,8 +210,11 @@ fn power_criterion_and_cheap_gather_keep_point_radiosity() {
         .sum::<f64>()
         / full.len() as f64)
         .sqrt();
+    eprintln!(
+        "links {fast_links} (power) vs {full_links}; RMS difference {rms:.4}, scale {scale:.4}"
+    );
     assert!(
-        rms < 0.03 * scale,
+        rms < 0.05 * scale,
         "RMS difference {rms:.4} vs scale {scale:.4} ({} points)",
         pts.len()
     );

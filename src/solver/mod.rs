@@ -1104,8 +1104,8 @@ impl<'a> Solver<'a> {
         // A static scene keeps each leaf's coefficients from round to round.
         let keep_rows = self.window.is_none() && !self.has_motion();
         type Fresh = Vec<((u32, u32), f64)>;
-        type Kept = Vec<KeptCoef>;
-        let rows: Vec<(Vec<(u32, f64)>, Fresh, Kept)> = self
+        type Row = (Vec<(u32, f64)>, Fresh, Vec<KeptCoef>);
+        let rows: Vec<Row> = self
             .leaves
             .par_iter()
             .map(|&leaf| {
