@@ -36,6 +36,16 @@
 //! meets a back face, e.g. under a block resting on the floor) takes the mean of its
 //! leaf's valid corners instead. `probe` interpolates these corners.
 //!
+//! **Scale.** A receiver smaller than the power area `A_p` ([`SolveOptions::power_size`])
+//! is refined on the power its links may get wrong, not its radiosity; a static
+//! solve keeps each leaf's row coefficients (and the visible fraction of each source
+//! seen from the leaf) from round to round, and the final gather of a leaf smaller
+//! than `A_p` takes the visibility of non-emitting sources from that row instead of
+//! casting rays (emitters keep their rays); any point skips the rays of a source
+//! that can hand it less than [`SolveOptions::faint_source`] (link visibility
+//! instead). A cluster source's row coefficient is the isotropic estimate at the
+//! leaf's own points and orientation.
+//!
 //! Results are deterministic for a given seed and thread count (ray jitter is hashed
 //! from link ids; parallel loops write disjoint outputs).
 
@@ -112,6 +122,20 @@ pub struct SolveOptions {
     /// RMS error (eps 0.5); in cluttered scenes it multiplies patches (2407 → 3773 on
     /// a room of 400 boxes).
     pub contact_meshing: bool,
+    /// Edge, as a fraction of the scene's diameter, of the square area `A_p` below
+    /// which a receiver is refined on the *power* its links may get wrong instead of
+    /// the radiosity (0: radiosity everywhere). A receiver of area `A_r < A_p` splits
+    /// a link only while `ρ_r B_s min(A_r ΔK, A_s) > eps · B_ref · A_p`: its error
+    /// counts for what it hands on to the rest of the scene (Hanrahan, Salzman &
+    /// Aupperle 1991 §4, "BF refinement"; Lischinski et al. 1993 §3: the hierarchy
+    /// needs the sources right, the final gather gives the point values). `A_s`
+    /// bounds the power by reciprocity, so a cluster link too close for the isotropic
+    /// estimate is not forced open at a tiny receiver.
+    pub power_size: f64,
+    /// Final gather: a non-emitting source that can hand a point less than this
+    /// times the RMS radiosity takes its link's visibility instead of rays (0: rays
+    /// always).
+    pub faint_source: f64,
 }
 
 impl Default for SolveOptions {
@@ -132,6 +156,8 @@ impl Default for SolveOptions {
             recon_tol: 0.02,
             recon_min_size: 1.0 / 512.0,
             contact_meshing: true,
+            power_size: 1.0 / 64.0,
+            faint_source: 0.005,
         }
     }
 }
@@ -152,6 +178,8 @@ pub struct Solver<'a> {
     time: [f32; 2],
     eps_len: f64,
     min_area: f64,
+    /// `A_p` of [`SolveOptions::power_size`] (0: off).
+    power_area: f64,
     rho_max: f64,
     /// Leaves (surface elements without children), in id order.
     leaves: Vec<ElementId>,
@@ -165,6 +193,9 @@ pub struct Solver<'a> {
     row_start: Vec<u32>,
     row_sources: Vec<u32>,
     row_coefs: Vec<f64>,
+    /// Static solve: each leaf's row coefficients by chain link (`(link, coef)`,
+    /// sorted by link), reused by the next round for links that did not change.
+    row_cache: HashMap<u32, Vec<KeptCoef>>,
     rays: u64,
     shaft_clear: u64,
     /// Per patch: its object moves somewhere in the time domain.
@@ -367,6 +398,18 @@ impl PointTerms {
     }
 }
 
+/// A leaf's row entry kept from round to round in a static solve (12 bytes): the
+/// chain link, its coefficient re-integrated over the leaf, and the visible fraction
+/// of the source seen from the leaf (coefficient over unoccluded coefficient).
+#[derive(Clone, Copy, Debug)]
+struct KeptCoef {
+    link: u32,
+    coef: f32,
+    vis: f32,
+}
+
+const _: () = assert!(std::mem::size_of::<KeptCoef>() == 12);
+
 /// The kept fixed and masked terms of one source at one point.
 type TermSlices<'a> = (&'a [(u32, f32)], &'a [MaskedTerm]);
 
@@ -511,6 +554,7 @@ impl<'a> Solver<'a> {
             scene,
             eps_len: diam * 1e-9,
             min_area: (opts.min_size * diam).powi(2),
+            power_area: (opts.power_size.max(0.0) * diam).powi(2),
             opts,
             patches,
             bvh,
@@ -526,6 +570,7 @@ impl<'a> Solver<'a> {
             row_start: Vec::new(),
             row_sources: Vec::new(),
             row_coefs: Vec::new(),
+            row_cache: HashMap::new(),
             rays: 0,
             shaft_clear: 0,
             moving_patch: Vec::new(),
@@ -713,6 +758,32 @@ impl<'a> Solver<'a> {
         self.rho_of(ElementId(ends.receiver)) * bmax * t.spread as f64
     }
 
+    /// True if link `l` must be split at threshold `thr = eps · B_ref`: a cluster
+    /// self-link or a cluster link too close for its estimate (infinite spread)
+    /// always, otherwise while its radiosity error exceeds `thr`; a receiver smaller
+    /// than the power area `A_p` instead compares its power error with `thr · A_p`
+    /// (see [`SolveOptions::power_size`]).
+    fn needs_refining(&self, l: LinkId, thr: f64) -> bool {
+        let ends = self.links.ends.as_slice()[l.ix()];
+        let t = self.links.transports.as_slice()[l.ix()];
+        let geoms = self.elems.geoms.as_slice();
+        let ar = geoms[ends.receiver as usize].area;
+        if self.power_area > 0.0 && ar < self.power_area {
+            let a_s = geoms[ends.source as usize].area;
+            let b = self.elems.radiosities.as_slice()[ends.source as usize];
+            let bmax = b.iter().copied().fold(0.0f32, f32::max) as f64;
+            let spread = if t.spread >= f32::MAX {
+                f64::INFINITY
+            } else {
+                t.spread as f64
+            };
+            let power = self.rho_of(ElementId(ends.receiver)) * bmax * (ar * spread).min(a_s);
+            return power > thr * self.power_area;
+        }
+        let forced = ends.receiver == ends.source || t.spread.is_infinite() || t.spread >= f32::MAX;
+        forced || self.link_error(l) > thr
+    }
+
     /// Refines from the links `wave`; returns true if any link was split.
     fn refine(&mut self, mut wave: Vec<LinkId>, thr: f64) -> Result<bool> {
         let mut changed = false;
@@ -725,8 +796,7 @@ impl<'a> Solver<'a> {
                 }
                 let ends = self.links.ends.as_slice()[l.ix()];
                 let (r, s) = (ElementId(ends.receiver), ElementId(ends.source));
-                let forced = r == s || t.spread.is_infinite() || t.spread >= f32::MAX;
-                if !forced && (self.link_error(l) <= thr || (self.shared_phase && t.varying())) {
+                if !self.needs_refining(l, thr) || (self.shared_phase && t.varying()) {
                     continue;
                 }
                 let split = match oracle::choose_split(&self.elems, r, s, self.min_area) {
@@ -1197,8 +1267,11 @@ impl<'a> Solver<'a> {
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
         let cache = self.window.as_ref().map(|w| &w.rows);
+        // A static scene keeps each leaf's coefficients from round to round.
+        let keep_rows = self.window.is_none() && !self.has_motion();
         type Fresh = Vec<((u32, u32), f64)>;
-        let rows: Vec<(Vec<(u32, f64)>, Fresh)> = self
+        type Row = (Vec<(u32, f64)>, Fresh, Vec<KeptCoef>);
+        let rows: Vec<Row> = self
             .leaves
             .par_iter()
             .map(|&leaf| {
@@ -1208,12 +1281,24 @@ impl<'a> Solver<'a> {
                 let leaf_moving = self.elem_moving(leaf);
                 let mut row = Vec::new();
                 let mut fresh = Vec::new();
+                let mut kept = Vec::new();
+                let before = self.row_cache.get(&leaf.0).filter(|_| keep_rows);
                 let mut e = leaf.0;
                 while e != u32::MAX {
                     for &l in self.links_of(e as usize) {
                         let t = &tr[l as usize];
                         let s = ends[l as usize].source;
                         let gs = &geoms[s as usize];
+                        if let Some(k) = before
+                            .and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]))
+                        {
+                            kept.push(k);
+                            let c = k.coef;
+                            if c > 0.0 {
+                                row.push((s, c as f64));
+                            }
+                            continue;
+                        }
                         // Constant link, static leaf: the coefficient of an earlier
                         // frame of the window holds.
                         let cacheable = !leaf_moving
@@ -1230,25 +1315,54 @@ impl<'a> Solver<'a> {
                             }
                             continue;
                         }
-                        let coef = if gs.patch == u32::MAX {
-                            t.f as f64
+                        let (coef, vis) = if gs.patch == u32::MAX {
+                            let f = if t.f > 0.0 {
+                                // The cluster estimate (Sillion 1995, with the
+                                // cluster's directional emission, see
+                                // [`oracle::cluster_emission`]) at the leaf's own points
+                                // and orientation: a cluster link made at an ancestor
+                                // averages the cosine over the ancestor's surfaces (1/4
+                                // for a cluster), which lights leaves that face away,
+                                // e.g. the bottom of a box resting on the floor.
+                                let (c, _) = oracle::sphere(gs);
+                                let dir = &elems.directions.as_slice()[s as usize];
+                                let bs = b_of(elems, s as usize);
+                                (0..q.count)
+                                    .map(|i| {
+                                        let d = c - q.points[i];
+                                        let d2 = d.length_squared().max(f64::MIN_POSITIVE);
+                                        let u = d / d2.sqrt();
+                                        let cos = n.dot(u).max(0.0);
+                                        let cs = oracle::cluster_emission(gs, dir, bs, -u);
+                                        q.weights[i] * gs.area * cs * cos
+                                            / (std::f64::consts::PI * d2)
+                                    })
+                                    .sum::<f64>()
+                                    * t.visibility as f64
+                            } else {
+                                t.f as f64
+                            };
+                            (f, t.visibility as f64)
                         } else if t.shaft_clear() {
                             let ps = oracle::poly(gs);
-                            (0..q.count)
+                            let f = (0..q.count)
                                 .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
-                                .sum()
+                                .sum();
+                            (f, 1.0)
                         } else {
                             // Partly hidden: visibility from the leaf's own points, not
                             // the ancestor's average.
                             let ps = oracle::poly(gs);
                             let ns = DVec3::from_array(gs.normal);
                             let m = self.opts.rays_per_point;
-                            (0..q.count)
+                            let mut unoccluded = 0.0;
+                            let f: f64 = (0..q.count)
                                 .map(|i| {
                                     let f = point_to_polygon(q.points[i], n, &ps);
                                     if f <= 0.0 {
                                         return 0.0;
                                     }
+                                    unoccluded += q.weights[i] * f;
                                     let key = oracle::hash3(
                                         self.opts.seed ^ 0x1eaf,
                                         l as u64,
@@ -1267,25 +1381,44 @@ impl<'a> Solver<'a> {
                                     );
                                     q.weights[i] * f * v
                                 })
-                                .sum()
+                                .sum();
+                            let vis = if unoccluded > 0.0 {
+                                f / unoccluded
+                            } else {
+                                0.0
+                            };
+                            (f, vis)
                         };
                         if cache.is_some() && cacheable {
                             fresh.push(((leaf.0, l), coef));
                         }
+                        // Rounded once, so a reused coefficient equals the first.
+                        let coef = if keep_rows {
+                            kept.push(KeptCoef {
+                                link: l,
+                                coef: coef as f32,
+                                vis: vis as f32,
+                            });
+                            coef as f32 as f64
+                        } else {
+                            coef
+                        };
                         if coef > 0.0 {
                             row.push((s, coef));
                         }
                     }
                     e = nodes[e as usize].parent;
                 }
-                (row, fresh)
+                kept.sort_unstable_by_key(|x| x.link);
+                (row, fresh, kept)
             })
             .collect();
         self.row_start.clear();
         self.row_sources.clear();
         self.row_coefs.clear();
         self.row_start.push(0);
-        for (row, fresh) in rows {
+        self.row_cache.clear();
+        for (&leaf, (row, fresh, kept)) in self.leaves.iter().zip(rows) {
             if let Some(w) = &mut self.window
                 && !fresh.is_empty()
             {
@@ -1295,6 +1428,9 @@ impl<'a> Solver<'a> {
                 if points.admits() {
                     w.rows.extend(fresh);
                 }
+            }
+            if keep_rows {
+                self.row_cache.insert(leaf.0, kept);
             }
             for (s, c) in row {
                 self.row_sources.push(s);
@@ -1591,6 +1727,10 @@ impl<'a> Solver<'a> {
     /// covers): constant links, and varying links whose shaft from the point to the
     /// source misses every box the moving objects sweep. `fresh` returns the terms of
     /// such links computed now, to be merged into `known` by the caller.
+    ///
+    /// `faint`: a non-emitting surface source whose light at `x` is bounded below
+    /// this (`ρ B_s A_s / (π d²)`, `d` the distance to its bounding sphere) is
+    /// gathered with its link's visibility instead of rays (0: rays always).
     fn gather_point(
         &self,
         leaf: ElementId,
@@ -1598,6 +1738,7 @@ impl<'a> Solver<'a> {
         known: Option<&HashMap<PointKey, PointTerms>>,
         pk: PointKey,
         admit: bool,
+        faint: f64,
     ) -> ([f64; 3], bool, FreshTerms) {
         // Ray jitter from the point's place, so that a point gathered again (another
         // frame, another cell) casts the same rays.
@@ -1625,6 +1766,12 @@ impl<'a> Solver<'a> {
         let mut h = [0.0; 3];
         let mut fresh = Vec::new();
         let mut terms = Terms::default();
+        // A leaf smaller than the power area takes the visibility of non-emitting
+        // sources from its row (seen from its quadrature points), not from rays.
+        let small_leaf = self
+            .row_cache
+            .get(&leaf.0)
+            .filter(|_| self.window.is_none() && g.area < self.power_area);
         let mut e = leaf.0;
         while e != u32::MAX {
             for &l in self.links_of(e as usize) {
@@ -1674,16 +1821,32 @@ impl<'a> Solver<'a> {
                 }
                 terms.clear();
                 let key = oracle::hash3(self.opts.seed, s as u64, point_key);
+                // A static source that can hand this point little light takes the
+                // link's visibility instead of rays (see `faint`).
+                let cheap = if self.window.is_some() || clear || t.shaft_clear() {
+                    None
+                } else if let Some(v) = small_leaf.and_then(|row| self.leaf_visibility(row, l, s)) {
+                    Some(v)
+                } else if faint > 0.0 && self.faint_source(x, s, b, faint) {
+                    Some(t.visibility as f64)
+                } else {
+                    None
+                };
                 self.point_terms(
                     x,
                     n,
                     p as u32,
                     s,
-                    clear || (keep.is_none() && t.shaft_clear()),
+                    cheap.is_some() || clear || (keep.is_none() && t.shaft_clear()),
                     key,
                     keep.map(|w| &w.swept[..]),
                     &mut terms,
                 );
+                if let Some(v) = cheap {
+                    for term in &mut terms.fixed {
+                        term.1 *= v;
+                    }
+                }
                 terms.gather(b, &mut h);
                 // Terms on elements of this frame's refinement are not kept: the
                 // next frame drops those elements.
@@ -1709,6 +1872,42 @@ impl<'a> Solver<'a> {
             valid,
             fresh,
         )
+    }
+
+    /// The visible fraction of non-emitting surface source `s` (chain link `l`) seen
+    /// from the leaf whose kept row is `row`.
+    fn leaf_visibility(&self, row: &[KeptCoef], l: u32, s: usize) -> Option<f64> {
+        let gs = &self.elems.geoms.as_slice()[s];
+        if gs.patch == u32::MAX
+            || self.patches.emissions[gs.patch as usize]
+                .iter()
+                .any(|&e| e > 0.0)
+        {
+            return None;
+        }
+        let i = row.binary_search_by_key(&l, |k| k.link).ok()?;
+        Some(row[i].vis as f64)
+    }
+
+    /// True if surface source `s` is no emitter and can hand the point `x` less
+    /// than `faint` (bound `ρ_max B_s A_s / (π d²)`, `d` from `x` to the source's
+    /// bounding sphere): the final gather then skips its rays.
+    fn faint_source(&self, x: DVec3, s: usize, b: &[[f32; 3]], faint: f64) -> bool {
+        let gs = &self.elems.geoms.as_slice()[s];
+        if gs.patch == u32::MAX
+            || self.patches.emissions[gs.patch as usize]
+                .iter()
+                .any(|&e| e > 0.0)
+        {
+            return false;
+        }
+        let (c, rad) = oracle::sphere(gs);
+        let d = c.distance(x) - rad;
+        if d <= 0.0 {
+            return false;
+        }
+        let bs = b[s].iter().copied().fold(0.0f32, f32::max) as f64;
+        self.rho_max * bs * gs.area / (std::f64::consts::PI * d * d) < faint
     }
 
     /// The solution: reconstruction cells with corner radiosity from the final gather.
@@ -1749,6 +1948,7 @@ impl<'a> Solver<'a> {
             .map(|w| std::mem::take(&mut *w.points.lock().unwrap_or_else(|e| e.into_inner())));
         let b_ref = self.rms_radiosity();
         let tol = self.opts.recon_tol * b_ref;
+        let faint = self.opts.faint_source * b_ref;
         let min_area = (self.opts.recon_min_size * self.patches.diameter).powi(2);
         let mut cache = VertexCache::default();
         let mut cells: Vec<Cell> = self
@@ -1784,7 +1984,7 @@ impl<'a> Solver<'a> {
                 let fresh = cache.evaluate(
                     GATHER_BATCH,
                     |leaf, x, pk| {
-                        self.gather_point(leaf, x, known.as_ref().map(|c| &c.map), pk, admit)
+                        self.gather_point(leaf, x, known.as_ref().map(|c| &c.map), pk, admit, faint)
                     },
                     &self.patches,
                 );

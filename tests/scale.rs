@@ -1,0 +1,221 @@
+//! Scale: a room cluttered with small boxes (the scene of `tools/gen_cubes.py`, built
+//! here at small sizes). The number of active links per patch must stay bounded as
+//! the clutter grows, and the power criterion for small receivers
+//! (`SolveOptions::power_size`) with the cheap final gather of small leaves must give
+//! the same point radiosity as the radiosity criterion with rays everywhere.
+
+use std::path::Path;
+
+use rhier::playback::probe::{ProbePoint, probe};
+use rhier::scene::{Scene, load_json_str};
+use rhier::solver::{SolveOptions, Solver};
+
+/// A 10 × 4 × 10 room with a ceiling lamp and an `n × n` grid of boxes on the floor
+/// (as `tools/gen_cubes.py n`).
+fn clutter(n: usize) -> Scene {
+    let (size, h) = (10.0f64, 4.0f64);
+    let quad = |v: [[f64; 3]; 4], m: &str| {
+        format!(
+            r#"{{"vertices": [[{},{},{}],[{},{},{}],[{},{},{}],[{},{},{}]], "material": "{m}"}}"#,
+            v[0][0],
+            v[0][1],
+            v[0][2],
+            v[1][0],
+            v[1][1],
+            v[1][2],
+            v[2][0],
+            v[2][1],
+            v[2][2],
+            v[3][0],
+            v[3][1],
+            v[3][2]
+        )
+    };
+    let s = size;
+    let room = [
+        quad(
+            [[0., 0., 0.], [0., 0., s], [s, 0., s], [s, 0., 0.]],
+            "white",
+        ),
+        quad([[0., h, 0.], [s, h, 0.], [s, h, s], [0., h, s]], "white"),
+        quad([[0., 0., s], [0., h, s], [s, h, s], [s, 0., s]], "white"),
+        quad(
+            [[0., 0., 0.], [s, 0., 0.], [s, h, 0.], [0., h, 0.]],
+            "white",
+        ),
+        quad([[0., 0., 0.], [0., h, 0.], [0., h, s], [0., 0., s]], "red"),
+        quad([[s, 0., 0.], [s, 0., s], [s, h, s], [s, h, 0.]], "green"),
+    ];
+    let (l0, l1, y) = (4.0, 6.0, h - 0.01);
+    let lamp = quad([[l0, y, l0], [l1, y, l0], [l1, y, l1], [l0, y, l1]], "lamp");
+    let mut cubes = Vec::new();
+    let pitch = (size - 1.0) / n as f64;
+    for i in 0..n {
+        for j in 0..n {
+            let hgt = 0.05 + 0.3 * (((i * 7 + j * 13) % 11) as f64 / 10.0);
+            let (x0, z0) = (0.5 + i as f64 * pitch, 0.5 + j as f64 * pitch);
+            let (x1, z1, y1) = (x0 + 0.6 * pitch, z0 + 0.6 * pitch, hgt);
+            cubes.extend([
+                quad(
+                    [[x0, y1, z0], [x0, y1, z1], [x1, y1, z1], [x1, y1, z0]],
+                    "white",
+                ),
+                quad(
+                    [[x0, 0., z0], [x1, 0., z0], [x1, y1, z0], [x0, y1, z0]],
+                    "white",
+                ),
+                quad(
+                    [[x1, 0., z1], [x0, 0., z1], [x0, y1, z1], [x1, y1, z1]],
+                    "white",
+                ),
+                quad(
+                    [[x0, 0., z1], [x0, 0., z0], [x0, y1, z0], [x0, y1, z1]],
+                    "white",
+                ),
+                quad(
+                    [[x1, 0., z0], [x1, 0., z1], [x1, y1, z1], [x1, y1, z0]],
+                    "white",
+                ),
+                quad(
+                    [[x0, 0., z0], [x0, 0., z1], [x1, 0., z1], [x1, 0., z0]],
+                    "white",
+                ),
+            ]);
+        }
+    }
+    let text = format!(
+        r#"{{"rhier_scene": 1,
+  "materials": {{
+    "white": {{"reflectance": [0.7, 0.7, 0.7]}},
+    "red": {{"reflectance": [0.6, 0.1, 0.1]}},
+    "green": {{"reflectance": [0.1, 0.6, 0.1]}},
+    "lamp": {{"reflectance": [0.5, 0.5, 0.5], "emission": [20.0, 20.0, 20.0]}}}},
+  "objects": [
+    {{"name": "room", "polygons": [{}]}},
+    {{"name": "lamp", "polygons": [{lamp}]}},
+    {{"name": "cubes", "polygons": [{}]}}]}}"#,
+        room.join(","),
+        cubes.join(",")
+    );
+    match load_json_str(&text, Path::new("clutter.json")) {
+        Ok(s) => s,
+        Err(e) => panic!("generated scene does not load: {e}"),
+    }
+}
+
+/// Options light enough for a test: coarse elements, no contact meshing.
+fn coarse() -> SolveOptions {
+    SolveOptions {
+        min_size: 1.0 / 64.0,
+        recon_min_size: 1.0 / 64.0,
+        max_rounds: 3,
+        contact_meshing: false,
+        ..SolveOptions::default()
+    }
+}
+
+/// Active links per patch after the rounds.
+fn links_per_patch(n: usize) -> f64 {
+    let scene = clutter(n);
+    let mut solver = Solver::new(&scene, coarse()).expect("solver");
+    let records = solver.run(|_, _| {}).expect("rounds");
+    let last = records.last().expect("at least one round");
+    last.links_active as f64 / solver.patches.len() as f64
+}
+
+#[test]
+fn links_per_patch_stay_bounded_as_clutter_grows() {
+    let small = links_per_patch(3);
+    let large = links_per_patch(8);
+    eprintln!("links per patch: {small:.1} (3×3 boxes), {large:.1} (8×8 boxes)");
+    // 60 → 390 polygons: the links per patch may grow a little (more neighbours),
+    // not with the number of patches (6.5×).
+    assert!(small > 1.0 && large > 1.0, "{small} {large}");
+    assert!(
+        large < 2.0 * small,
+        "links per patch grew from {small:.1} (3×3 boxes) to {large:.1} (8×8 boxes)"
+    );
+}
+
+/// Probe points (58 for 4 × 4 boxes): floor between boxes, box tops, box sides, walls, ceiling.
+fn probes(n: usize) -> Vec<ProbePoint> {
+    let pitch = 9.0 / n as f64;
+    let w = 0.6 * pitch;
+    let mut pts = Vec::new();
+    let p = |x: f64, y: f64, z: f64| glam::DVec3::new(x, y, z);
+    for i in 0..n {
+        for j in 0..n {
+            let hgt = 0.05 + 0.3 * (((i * 7 + j * 13) % 11) as f64 / 10.0);
+            let (x0, z0) = (0.5 + i as f64 * pitch, 0.5 + j as f64 * pitch);
+            pts.push(ProbePoint {
+                p: p(x0 + w + 0.5 * (pitch - w), 1e-4, z0 + 0.5 * w),
+                n: glam::DVec3::Y,
+            });
+            pts.push(ProbePoint {
+                p: p(x0 + 0.5 * w, hgt + 1e-4, z0 + 0.5 * w),
+                n: glam::DVec3::Y,
+            });
+            pts.push(ProbePoint {
+                p: p(x0 + 0.5 * w, 0.5 * hgt, z0 - 1e-4),
+                n: -glam::DVec3::Z,
+            });
+        }
+    }
+    for k in 0..5 {
+        let t = 1.0 + 2.0 * k as f64;
+        pts.push(ProbePoint {
+            p: p(1e-4, 2.0, t),
+            n: glam::DVec3::X,
+        });
+        pts.push(ProbePoint {
+            p: p(t, 4.0 - 1e-4, 1.0),
+            n: -glam::DVec3::Y,
+        });
+    }
+    pts
+}
+
+#[test]
+fn power_criterion_and_cheap_gather_keep_point_radiosity() {
+    let n = 4;
+    let scene = clutter(n);
+    let pts = probes(n);
+    let run = |opts: SolveOptions| {
+        let mut solver = Solver::new(&scene, opts).expect("solver");
+        let records = solver.run(|_, _| {}).expect("rounds");
+        let links = records.last().expect("a round").links_active;
+        let sol = solver.solution();
+        (probe(&sol, &pts, 0.0).expect("probe"), links)
+    };
+    // Box faces (0.07–0.5 m²) below the power area (0.84 m² here).
+    let (fast, fast_links) = run(SolveOptions {
+        power_size: 1.0 / 16.0,
+        ..coarse()
+    });
+    let (full, full_links) = run(SolveOptions {
+        power_size: 0.0,
+        faint_source: 0.0,
+        ..coarse()
+    });
+    assert!(
+        fast_links < full_links,
+        "power criterion made more links: {fast_links} > {full_links}"
+    );
+    let scale = (full.iter().map(|b| b[1] * b[1]).sum::<f64>() / full.len() as f64).sqrt();
+    assert!(scale > 0.01, "scene is dark: {scale}");
+    let rms = (fast
+        .iter()
+        .zip(&full)
+        .map(|(a, b)| (a[1] - b[1]).powi(2))
+        .sum::<f64>()
+        / full.len() as f64)
+        .sqrt();
+    eprintln!(
+        "links {fast_links} (power) vs {full_links}; RMS difference {rms:.4}, scale {scale:.4}"
+    );
+    assert!(
+        rms < 0.05 * scale,
+        "RMS difference {rms:.4} vs scale {scale:.4} ({} points)",
+        pts.len()
+    );
+}
