@@ -39,7 +39,8 @@
 //! **Scale.** A receiver smaller than the power area `A_p` ([`SolveOptions::power_size`])
 //! is refined on the power its links may get wrong, not its radiosity; a static
 //! solve keeps each leaf's row coefficients (and the visible fraction of each source
-//! seen from the leaf) from round to round, and the final gather of a leaf smaller
+//! seen from the leaf) from round to round (a static scene only; cleared when a
+//! time window restores the pools), and the final gather of a leaf smaller
 //! than `A_p` takes the visibility of non-emitting sources from that row instead of
 //! casting rays (emitters keep their rays); any point skips the rays of a source
 //! that can hand it less than [`SolveOptions::faint_source`] (link visibility
@@ -1105,6 +1106,8 @@ impl<'a> Solver<'a> {
 
     /// Restores the pools to `snap` (see [`Snapshot`]).
     fn restore(&mut self, snap: &mut Snapshot) {
+        // Element and link ids past the snapshot will be reused.
+        self.row_cache.clear();
         self.elems.truncate(snap.elems_len);
         self.links.truncate(snap.links_len);
         for l in snap.passivated.drain(..) {
@@ -1268,7 +1271,7 @@ impl<'a> Solver<'a> {
         let tr = self.links.transports.as_slice();
         let cache = self.window.as_ref().map(|w| &w.rows);
         // A static scene keeps each leaf's coefficients from round to round.
-        let keep_rows = self.window.is_none() && !self.has_motion();
+        let keep_rows = !self.has_motion();
         type Fresh = Vec<((u32, u32), f64)>;
         type Row = (Vec<(u32, f64)>, Fresh, Vec<KeptCoef>);
         let rows: Vec<Row> = self
@@ -1771,7 +1774,7 @@ impl<'a> Solver<'a> {
         let small_leaf = self
             .row_cache
             .get(&leaf.0)
-            .filter(|_| self.window.is_none() && g.area < self.power_area);
+            .filter(|_| !self.has_motion() && g.area < self.power_area);
         let mut e = leaf.0;
         while e != u32::MAX {
             for &l in self.links_of(e as usize) {
@@ -1823,7 +1826,7 @@ impl<'a> Solver<'a> {
                 let key = oracle::hash3(self.opts.seed, s as u64, point_key);
                 // A static source that can hand this point little light takes the
                 // link's visibility instead of rays (see `faint`).
-                let cheap = if self.window.is_some() || clear || t.shaft_clear() {
+                let cheap = if self.has_motion() || clear || t.shaft_clear() {
                     None
                 } else if let Some(v) = small_leaf.and_then(|row| self.leaf_visibility(row, l, s)) {
                     Some(v)
