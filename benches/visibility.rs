@@ -5,8 +5,18 @@
 //! Scene: a 10 m room with an n × n grid of boxes on the floor (6 quads each, n = 129
 //! gives ~200k triangles), segments between random points of random patches (the
 //! shape of the solver's link rays: surface to surface, incoherent).
+//!
+//! `RHIER_EXPORT_RAYS=DIR cargo bench --bench visibility` also writes the exact triangles
+//! and rays of the bare loop to DIR (for `tools/embree_rays.py`, the Embree side of the
+//! comparison), times both loops once more with a plain `Instant` (median and best of 9
+//! runs, single thread) and prints the numbers; then criterion runs as usual. Files, all
+//! little-endian: `tris.bin` (f32 × 9 per triangle: v0, v1, v2), `rays.bin` (f32 × 8 per
+//! ray: origin, direction = end − origin, tmin, tmax, the bare loop's trims),
+//! `occluded.bin` (u8 per ray: the bare loop's answer, 1 = occluded) and `meta.json` (counts of occluded rays and the measured rays/s). Without the variable
+//! the bench does exactly what it did before.
 
-use std::time::Duration;
+use std::path::Path;
+use std::time::{Duration, Instant};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::{DVec3, Vec3A};
@@ -127,22 +137,112 @@ fn bench(c: &mut Criterion) {
         .map(|&i| tris[i as usize])
         .collect();
     let trim = rhier::geometry::SEGMENT_TRIM as f32;
+    let rhier_count = || segs.iter().filter(|(a, e)| bvh.occluded(*a, *e)).count();
+    let bare_count = || {
+        segs.iter()
+            .filter(|(a, e)| {
+                let ray = Ray::new(f(*a), f(*e - *a), trim, 1.0 - trim);
+                !bare.ray_traverse_miss(ray, |r, id| tris[id].intersect(r))
+            })
+            .count()
+    };
+    if let Some(dir) = std::env::var_os("RHIER_EXPORT_RAYS") {
+        let rays: Vec<[f32; 8]> = segs
+            .iter()
+            .map(|(a, e)| {
+                let (o, d) = (f(*a), f(*e - *a));
+                [o.x, o.y, o.z, d.x, d.y, d.z, trim, 1.0 - trim]
+            })
+            .collect();
+        let (rhier_occluded, rhier_rate, rhier_best) = timed(&rhier_count, segs.len());
+        let (bare_occluded, bare_rate, bare_best) = timed(&bare_count, segs.len());
+        println!(
+            "export: {} triangles, {} rays; occluded: rhier {rhier_occluded}, bare obvhs \
+             {bare_occluded}; single thread rays/s: rhier {:.3} M, bare obvhs {:.3} M \
+             (rhier/bare {:.2}); best of 9: rhier {:.3} M, bare obvhs {:.3} M",
+            tris.len(),
+            rays.len(),
+            rhier_rate / 1e6,
+            bare_rate / 1e6,
+            rhier_rate / bare_rate,
+            rhier_best / 1e6,
+            bare_best / 1e6
+        );
+        let meta = serde_json::json!({
+            "grid": n,
+            "triangles": tris.len(),
+            "rays": rays.len(),
+            "occluded_bare_obvhs": bare_occluded,
+            "occluded_rhier": rhier_occluded,
+            "rays_per_s_bare_obvhs": bare_rate,
+            "rays_per_s_rhier": rhier_rate,
+            "rays_per_s_bare_obvhs_best": bare_best,
+            "rays_per_s_rhier_best": rhier_best,
+        });
+        let tri_floats = tris
+            .iter()
+            .flat_map(|t| [t.v0, t.v1, t.v2].into_iter().flat_map(|v| [v.x, v.y, v.z]));
+        let answers: Vec<u8> = segs
+            .iter()
+            .map(|(a, e)| {
+                let ray = Ray::new(f(*a), f(*e - *a), trim, 1.0 - trim);
+                u8::from(!bare.ray_traverse_miss(ray, |r, id| tris[id].intersect(r)))
+            })
+            .collect();
+        if let Err(e) = export(
+            Path::new(&dir),
+            tri_floats,
+            rays.iter().flatten().copied(),
+            &answers,
+            &meta,
+        ) {
+            eprintln!("RHIER_EXPORT_RAYS={}: {e}", Path::new(&dir).display());
+            std::process::exit(1);
+        }
+        println!(
+            "export: wrote tris.bin, rays.bin, meta.json to {}",
+            Path::new(&dir).display()
+        );
+    }
     let mut g = c.benchmark_group(format!("occlusion_{}k_triangles", tris.len() / 1000));
     g.throughput(Throughput::Elements(segs.len() as u64));
-    g.bench_function("rhier_scene_bvh", |b| {
-        b.iter(|| segs.iter().filter(|(a, e)| bvh.occluded(*a, *e)).count())
-    });
-    g.bench_function("bare_obvhs_loop", |b| {
-        b.iter(|| {
-            segs.iter()
-                .filter(|(a, e)| {
-                    let ray = Ray::new(f(*a), f(*e - *a), trim, 1.0 - trim);
-                    !bare.ray_traverse_miss(ray, |r, id| tris[id].intersect(r))
-                })
-                .count()
-        })
-    });
+    g.bench_function("rhier_scene_bvh", |b| b.iter(rhier_count));
+    g.bench_function("bare_obvhs_loop", |b| b.iter(bare_count));
     g.finish();
+}
+
+/// Runs `count` 9 times (after one warm-up) and returns its answer and the rates in rays
+/// per second for `rays` rays per run: (answer, median rate, best rate). The best run is
+/// the one least disturbed by other work on a shared machine.
+fn timed(count: &dyn Fn() -> usize, rays: usize) -> (usize, f64, f64) {
+    let answer = count();
+    let mut secs: Vec<f64> = (0..9)
+        .map(|_| {
+            let t = Instant::now();
+            std::hint::black_box(count());
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    secs.sort_by(f64::total_cmp);
+    let rate = |s: f64| rays as f64 / s;
+    (answer, rate(secs[secs.len() / 2]), rate(secs[0]))
+}
+
+/// Writes `tris.bin`, `rays.bin` (little-endian f32), `occluded.bin` (u8 per ray) and
+/// `meta.json` into `dir`.
+fn export(
+    dir: &Path,
+    mut tris: impl Iterator<Item = f32>,
+    mut rays: impl Iterator<Item = f32>,
+    answers: &[u8],
+    meta: &serde_json::Value,
+) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let le = |it: &mut dyn Iterator<Item = f32>| it.flat_map(f32::to_le_bytes).collect::<Vec<u8>>();
+    std::fs::write(dir.join("tris.bin"), le(&mut tris))?;
+    std::fs::write(dir.join("rays.bin"), le(&mut rays))?;
+    std::fs::write(dir.join("occluded.bin"), answers)?;
+    std::fs::write(dir.join("meta.json"), format!("{meta:#}\n"))
 }
 
 criterion_group! {
