@@ -399,9 +399,10 @@ impl PointTerms {
     }
 }
 
-/// A leaf's row entry kept from round to round in a static solve (12 bytes): the
-/// chain link, its coefficient re-integrated over the leaf, and the visible fraction
-/// of the source seen from the leaf (coefficient over unoccluded coefficient).
+/// A leaf's row entry for a surface source, kept from round to round in a static
+/// solve (12 bytes): the chain link, its coefficient re-integrated over the leaf,
+/// and the visible fraction of the source seen from the leaf (coefficient over
+/// unoccluded coefficient).
 #[derive(Clone, Copy, Debug)]
 struct KeptCoef {
     link: u32,
@@ -663,7 +664,7 @@ impl<'a> Solver<'a> {
             self.index_links();
             self.compute_leaf_rows();
             let residual = self.solve_leaves()?;
-            b_ref = self.rms_radiosity().max(f64::MIN_POSITIVE);
+            b_ref = self.b_ref();
             #[cfg(debug_assertions)]
             {
                 self.elems.validate()?;
@@ -719,6 +720,19 @@ impl<'a> Solver<'a> {
         }
         let rho = (ar / a).min(0.999);
         (ae / a) * rho / (1.0 - rho)
+    }
+
+    /// The radiosity scale `B_ref` thresholds are set against: [`Self::rms_radiosity`],
+    /// or the enclosure estimate while no reflected light has been gathered (a first
+    /// round whose links all wait for a window would otherwise give `B_ref = 0` and a
+    /// threshold that splits every link down to the minimum area).
+    fn b_ref(&self) -> f64 {
+        let r = self.rms_radiosity();
+        if r > 0.0 {
+            r
+        } else {
+            self.enclosure_estimate().max(f64::MIN_POSITIVE)
+        }
     }
 
     /// Area-weighted RMS of the leaves' reflected radiosity `B − E` (max channel):
@@ -797,7 +811,12 @@ impl<'a> Solver<'a> {
                 }
                 let ends = self.links.ends.as_slice()[l.ix()];
                 let (r, s) = (ElementId(ends.receiver), ElementId(ends.source));
-                if !self.needs_refining(l, thr) || (self.shared_phase && t.varying()) {
+                // The shared phase leaves varying links to the windows, except those
+                // that have no estimate at all (a cluster's self-link, a too-close
+                // cluster link): left whole they would carry no light, and the
+                // rounds' B_ref would be zero.
+                let forced = r == s || t.spread >= f32::MAX;
+                if !self.needs_refining(l, thr) || (self.shared_phase && t.varying() && !forced) {
                     continue;
                 }
                 let split = match oracle::choose_split(&self.elems, r, s, self.min_area) {
@@ -1063,7 +1082,7 @@ impl<'a> Solver<'a> {
         // radiosity, and refine the constant links against it.
         let t = self.now;
         for _ in 0..SHARED_PASSES {
-            let b_ref = self.rms_radiosity().max(f64::MIN_POSITIVE);
+            let b_ref = self.b_ref();
             self.begin_window(swept.clone(), b_ref)?;
             self.frame(t, b_ref)?;
             let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
@@ -1071,7 +1090,7 @@ impl<'a> Solver<'a> {
             self.release_window();
             self.elems.radiosities.as_mut_slice().copy_from_slice(&b);
             self.index_links();
-            let b_ref = self.rms_radiosity().max(f64::MIN_POSITIVE);
+            let b_ref = self.b_ref();
             self.window = Some(Window {
                 swept: swept.clone(),
                 ..Window::default()
@@ -1217,9 +1236,9 @@ impl<'a> Solver<'a> {
         })
     }
 
-    /// Area-weighted RMS of the leaves' reflected radiosity (the error scale).
+    /// The radiosity scale `B_ref` errors are measured against (see `b_ref`).
     pub fn radiosity_scale(&self) -> f64 {
-        self.rms_radiosity()
+        self.b_ref()
     }
 
     /// Rebuilds the leaf list and the by-receiver index of active links.
@@ -1303,8 +1322,13 @@ impl<'a> Solver<'a> {
                             continue;
                         }
                         // Constant link, static leaf: the coefficient of an earlier
-                        // frame of the window holds.
+                        // frame of the window holds. Not for a cluster source: its
+                        // estimate follows the cluster's radiosity (directional
+                        // emission), which changes from round to round and frame to
+                        // frame; it costs no rays to recompute.
+                        let cluster_source = gs.patch == u32::MAX;
                         let cacheable = !leaf_moving
+                            && !cluster_source
                             && !t.varying()
                             && self.window.as_ref().is_some_and(|w| {
                                 leaf.ix() < w.frame.elems_len && (l as usize) < w.frame.links_len
@@ -1396,7 +1420,7 @@ impl<'a> Solver<'a> {
                             fresh.push(((leaf.0, l), coef));
                         }
                         // Rounded once, so a reused coefficient equals the first.
-                        let coef = if keep_rows {
+                        let coef = if keep_rows && !cluster_source {
                             kept.push(KeptCoef {
                                 link: l,
                                 coef: coef as f32,
