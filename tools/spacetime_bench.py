@@ -28,7 +28,12 @@ Usage:
 
 --scene takes a builtin name with a JSON example (actor, actor150, actor750, light,
 light150, light750: formats/examples/NAME.json) or any native JSON scene path.
-Standard library only (no matplotlib: the plot is written as SVG by hand).
+    python3 tools/spacetime_bench.py --plot-only [--csv tools/spacetime_bench.csv]
+
+The measurement needs only the standard library. The plots are redrawn from the whole
+CSV after every run: an SVG written by hand, and a PNG (one panel per scene, error
+against run time and peak RSS against run time) with matplotlib when it is installed
+(`pip install matplotlib`; without it only the SVG is written, with a note).
 """
 
 import argparse
@@ -232,10 +237,78 @@ def write_svg(rows, path):
         f.write("\n".join(out) + "\n")
 
 
+def write_png(rows, path):
+    """One column per scene: error against run time (top), peak RSS against run time
+    (bottom), log-log, one curve per method, each point labelled with its eps."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.ticker import FuncFormatter
+    except ImportError:
+        print(f"spacetime_bench: matplotlib not installed, {path} not written "
+              "(pip install matplotlib)", file=sys.stderr)
+        return
+    data = {}
+    for r in rows:
+        try:
+            s, e, m = float(r["seconds"]), float(r["error"]), float(r["peak_rss_mb"])
+        except (ValueError, KeyError):
+            continue
+        if s > 0 and e > 0 and m > 0:
+            data.setdefault(r["scene"], {}).setdefault(r["method"], []).append((s, e, m, r["eps"]))
+    if not data:
+        return
+    scenes = sorted(data)
+    fig, axes = plt.subplots(2, len(scenes), figsize=(5.2 * len(scenes), 7.5), squeeze=False)
+    styles = {"per-frame": ("#1f77b4", "o"), "space-time": ("#d62728", "s")}
+    extra = ["#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"]
+    for j, scene in enumerate(scenes):
+        top, bottom = axes[0][j], axes[1][j]
+        for k, (method, pts) in enumerate(sorted(data[scene].items())):
+            colour, marker = styles.get(method, (extra[k % len(extra)], "^"))
+            pts.sort()
+            xs = [p[0] for p in pts]
+            top.plot(xs, [100 * p[1] for p in pts], marker=marker, color=colour, label=method)
+            bottom.plot(xs, [p[2] for p in pts], marker=marker, color=colour, label=method)
+            for s, e, m, eps in pts:
+                top.annotate(f"eps {eps}", (s, 100 * e), textcoords="offset points",
+                             xytext=(5, 4), fontsize=8, color=colour)
+        top.set_title(scene)
+        top.set_ylabel("relative RMS error vs reference (%)")
+        bottom.set_ylabel("peak RSS (MB)")
+        bottom.set_xlabel("run time (s, whole process)")
+        for ax in (top, bottom):
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.grid(True, which="both", color="#ddd", linewidth=0.6)
+            plain = FuncFormatter(lambda v, _: f"{v:g}")
+            for axis in (ax.xaxis, ax.yaxis):
+                axis.set_major_formatter(plain)
+                axis.set_minor_formatter(plain)
+            ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def read_rows(path):
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def plot(rows, csv_path):
+    stem = os.path.splitext(csv_path)[0]
+    write_svg(rows, stem + ".svg")
+    write_png(rows, stem + ".png")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rhier", default=os.path.join(ROOT, "target", "release", "rhier"))
-    ap.add_argument("--scene", required=True)
+    ap.add_argument("--scene", help="scene to measure (required unless --plot-only)")
     ap.add_argument("--eps", default="1.0,0.5", help="comma-separated eps values")
     ap.add_argument("--fps", type=float, default=25.0, help="frames per second of the method")
     ap.add_argument("--name", default="per-frame", help="method label in the CSV")
@@ -246,7 +319,13 @@ def main():
     ap.add_argument("--threads", type=int, default=2, help="appended as --threads N (0: not)")
     ap.add_argument("--out-dir", default="spacetime_bench_out")
     ap.add_argument("--csv", default=os.path.join(ROOT, "tools", "spacetime_bench.csv"))
+    ap.add_argument("--plot-only", action="store_true", help="only redraw the plots from --csv")
     args = ap.parse_args()
+    if args.plot_only:
+        plot(read_rows(args.csv), args.csv)
+        return
+    if not args.scene:
+        ap.error("--scene is required unless --plot-only")
 
     os.makedirs(args.out_dir, exist_ok=True)
     scene_file = scene_path(args.scene)
@@ -283,17 +362,13 @@ def main():
         print(",".join(str(row[k]) for k in CSV_FIELDS[:7]), flush=True)
         new_rows.append(row)
 
-    rows = []
-    if os.path.exists(args.csv):
-        with open(args.csv) as f:
-            rows = list(csv.DictReader(f))
-    rows += new_rows
+    rows = read_rows(args.csv) + new_rows
     with open(args.csv, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=CSV_FIELDS)
         w.writeheader()
         for r in rows:
             w.writerow({k: r.get(k, "") for k in CSV_FIELDS})
-    write_svg(rows, os.path.splitext(args.csv)[0] + ".svg")
+    plot(rows, args.csv)
 
 
 if __name__ == "__main__":
