@@ -344,20 +344,9 @@ pub fn point_cluster_visibility(
     m: u32,
     key: u64,
 ) -> (f64, u32) {
-    let (mut wsum, mut vsum, mut rays) = (0.0, 0.0, 0);
-    for j in 0..m.max(1) as u64 {
-        let (y, ny, py) = surface_point(elems, s, hash3(key, j, 2));
-        let k = point_to_point_kernel(x, n, y, ny);
-        if k.is_nan() || k <= 0.0 {
-            continue;
-        }
-        rays += 1;
-        wsum += k;
-        if !bvh.occluded_except(x, y, [patch, py]) {
-            vsum += k;
-        }
-    }
-    (if wsum > 0.0 { vsum / wsum } else { 0.0 }, rays)
+    kernel_weighted_visibility(bvh, m, |j| {
+        ((x, n, patch), surface_point(elems, s, hash3(key, j, 2)))
+    })
 }
 
 /// Visibility of a link with a cluster end: `m` rays between [`surface_point`]s of
@@ -372,10 +361,26 @@ pub fn cluster_visibility(
     m: u32,
     key: u64,
 ) -> (f64, u32) {
+    kernel_weighted_visibility(bvh, m, |j| {
+        (
+            surface_point(elems, r, hash3(key, j, 1)),
+            surface_point(elems, s, hash3(key, j, 2)),
+        )
+    })
+}
+
+/// The visible fraction of `m` segments between point pairs `ends(j)` (point,
+/// normal, patch skipped by the ray), weighted by the point-to-point kernel; pairs
+/// facing away cast nothing, and if every pair does the visibility is 0. Returns
+/// `(visibility, rays cast)`.
+fn kernel_weighted_visibility(
+    bvh: &SceneBvh,
+    m: u32,
+    mut ends: impl FnMut(u64) -> ((DVec3, DVec3, u32), (DVec3, DVec3, u32)),
+) -> (f64, u32) {
     let (mut wsum, mut vsum, mut rays) = (0.0, 0.0, 0);
     for j in 0..m.max(1) as u64 {
-        let (x, nx, px) = surface_point(elems, r, hash3(key, j, 1));
-        let (y, ny, py) = surface_point(elems, s, hash3(key, j, 2));
+        let ((x, nx, px), (y, ny, py)) = ends(j);
         let k = point_to_point_kernel(x, nx, y, ny);
         if k.is_nan() || k <= 0.0 {
             continue;
