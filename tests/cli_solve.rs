@@ -116,3 +116,47 @@ fn bad_input_exits_1_and_bad_usage_exits_2() {
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
 }
+
+#[test]
+fn mmap_storage_creates_its_scratch_directory_and_gives_the_ram_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let scratch = dir.path().join("not").join("yet");
+    let pts = dir.path().join("p.json");
+    std::fs::write(
+        &pts,
+        r#"[{"p":[278,0,278],"n":[0,1,0]},{"p":[0,274,278],"n":[1,0,0]}]"#,
+    )
+    .unwrap();
+    let run = |extra: &[&str], name: &str| {
+        let vals = dir.path().join(name);
+        let out = rhier()
+            .current_dir(dir.path())
+            .args([
+                "solve",
+                "--builtin",
+                "cornell",
+                "-q",
+                "--threads",
+                "1",
+                "--probe",
+            ])
+            .arg(&pts)
+            .arg("--probe-out")
+            .arg(&vals)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        std::fs::read_to_string(vals).unwrap()
+    };
+    let mapped = run(
+        &["--storage", "mmap", "--scratch", scratch.to_str().unwrap()],
+        "m.json",
+    );
+    assert!(scratch.is_dir());
+    assert_eq!(mapped, run(&[], "r.json"));
+}

@@ -74,7 +74,8 @@ pub struct Args {
     /// Where the element and link pools live.
     #[arg(long, value_enum, default_value = "ram")]
     pub storage: StorageKind,
-    /// Directory for `--storage mmap` files (default: the system temp directory).
+    /// Directory for `--storage mmap` files, created if missing (default: the system
+    /// temp directory).
     #[arg(long)]
     pub scratch: Option<PathBuf>,
     /// Refinement threshold, relative to the RMS reflected radiosity.
@@ -253,6 +254,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let _ = rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
             .build_global();
+    }
+    if let Some(dir) = &args.scratch {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("--scratch {}: cannot create the directory", dir.display()))?;
     }
     if args.per_frame {
         return super::per_frame::run(&args);
