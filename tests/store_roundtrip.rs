@@ -331,3 +331,40 @@ fn writer_report_in_progress_matches_the_finished_file() {
     let text = after.to_string();
     assert!(text.contains("play one frame") && text.contains("chunk_index"));
 }
+
+/// `-o /dev/null` once replaced the device with a regular file (the writer renamed its
+/// temporary file over it), and every later reader of `/dev/null` read a `.rhier`
+/// file. A FIFO stands in for the device here: it must still be a FIFO afterwards and
+/// have received exactly the bytes of an in-memory write.
+#[cfg(unix)]
+#[test]
+fn a_device_or_fifo_is_written_in_place_not_replaced() {
+    use std::io::Read;
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let sol = box_solution(2);
+    let want = encode_solution(&fifo, &sol, WriteOptions::default()).unwrap();
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut got = Vec::new();
+            std::fs::File::open(&fifo)
+                .unwrap()
+                .read_to_end(&mut got)
+                .unwrap();
+            got
+        })
+    };
+    write_solution(&fifo, &sol, WriteOptions::default()).unwrap();
+    // Checked before joining: a replaced FIFO would leave the reader blocked forever.
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+    let got = reader.join().unwrap();
+    assert!(!rhier::store::writer::temp_path(&fifo).exists());
+    assert_eq!(got, want);
+}

@@ -8,7 +8,9 @@
 //! chunk index and stats sections and the section table, writes the header at offset
 //! 0, fsyncs, renames `<path>.tmp` to `<path>` and fsyncs the directory. Dropping an
 //! unfinished writer removes the temporary file. Nothing is ever rewritten except the
-//! header, so memory stays at one chunk whatever the animation's length.
+//! header, so memory stays at one chunk whatever the animation's length. A path that
+//! exists and is not a regular file (`/dev/null`, a FIFO) is written in place at the
+//! end, never renamed over: the file is then built in memory.
 //!
 //! What it stores: only what playback needs. Motion tracks only for objects that move;
 //! each leaf once, in the chunk where its time range starts (a leaf that holds over
@@ -75,7 +77,8 @@ impl<'a> SolutionHeader<'a> {
     }
 }
 
-/// Where the bytes go: a temporary file renamed at the end, or memory.
+/// Where the bytes go: a temporary file renamed at the end, memory, or memory written
+/// at the end to an existing device or FIFO (renaming over it would replace it).
 enum Sink {
     File {
         out: BufWriter<File>,
@@ -83,6 +86,7 @@ enum Sink {
         done: bool,
     },
     Memory(Vec<u8>),
+    Device(Vec<u8>),
 }
 
 /// Streams a `.rhier` file; see the module header.
@@ -118,12 +122,22 @@ pub fn temp_path(path: &Path) -> PathBuf {
 
 impl Writer {
     /// Starts writing `path` (through `<path>.tmp`): writes the placeholder header, the
-    /// scene section and the patch section.
+    /// scene section and the patch section. An existing `path` that is neither a
+    /// regular file nor a directory (a device, a FIFO) gets the whole file at
+    /// [`Writer::finish`], built in memory until then.
     pub fn create(
         path: &Path,
         header: &SolutionHeader<'_>,
         options: WriteOptions,
     ) -> Result<Writer> {
+        if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+            return Writer::start(
+                path.to_path_buf(),
+                Sink::Device(Vec::new()),
+                header,
+                options,
+            );
+        }
         let tmp = temp_path(path);
         let file = OpenOptions::new()
             .write(true)
@@ -345,6 +359,15 @@ impl Writer {
                 }
                 Ok(())
             }
+            Sink::Device(bytes) => {
+                let mut out = OpenOptions::new()
+                    .write(true)
+                    .open(&path)
+                    .map_err(|e| Error::io(&path, e))?;
+                out.write_all(bytes)
+                    .and_then(|_| out.flush())
+                    .map_err(|e| Error::io(&path, e))
+            }
             Sink::Memory(_) => Err(Error::Usage(
                 "an in-memory writer ends with finish_to_bytes".into(),
             )),
@@ -356,7 +379,9 @@ impl Writer {
         self.write_tail(stats)?;
         match &mut self.sink {
             Sink::Memory(v) => Ok(std::mem::take(v)),
-            Sink::File { .. } => Err(Error::Usage("a file writer ends with finish".into())),
+            Sink::File { .. } | Sink::Device(_) => {
+                Err(Error::Usage("a file writer ends with finish".into()))
+            }
         }
     }
 
@@ -405,7 +430,7 @@ impl Writer {
                     .and_then(|_| out.seek(SeekFrom::End(0)).map(|_| ()));
                 r.map_err(|e| Error::io(&*tmp, e))
             }
-            Sink::Memory(v) => {
+            Sink::Memory(v) | Sink::Device(v) => {
                 v[..HEADER_LEN].copy_from_slice(&bytes);
                 Ok(())
             }
@@ -444,7 +469,7 @@ impl Writer {
     fn emit(&mut self, bytes: &[u8]) -> Result<()> {
         match &mut self.sink {
             Sink::File { out, tmp, .. } => out.write_all(bytes).map_err(|e| Error::io(&*tmp, e))?,
-            Sink::Memory(v) => v.extend_from_slice(bytes),
+            Sink::Memory(v) | Sink::Device(v) => v.extend_from_slice(bytes),
         }
         self.pos += bytes.len() as u64;
         Ok(())
