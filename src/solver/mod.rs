@@ -67,6 +67,7 @@ use crate::Result;
 use crate::geometry::{Patches, SceneBvh, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
 use crate::pools::elements::{Geom, Node};
+use crate::pools::links::{Ends, Transport};
 use crate::pools::{ElementId, ElementKind, ElementPool, LinkId, LinkPool, LinkState, Storage};
 use crate::scene::Scene;
 
@@ -397,6 +398,12 @@ impl PointTerms {
                 )
             })
     }
+}
+
+/// True if link `ends`/`t` has no error estimate and must be split: a cluster's
+/// self-link, or a cluster link too close for its estimate (infinite spread).
+fn no_estimate(ends: Ends, t: &Transport) -> bool {
+    ends.receiver == ends.source || t.spread >= f32::MAX
 }
 
 /// A leaf's row entry for a surface source, kept from round to round in a static
@@ -795,8 +802,7 @@ impl<'a> Solver<'a> {
             let power = self.rho_of(ElementId(ends.receiver)) * bmax * (ar * spread).min(a_s);
             return power > thr * self.power_area;
         }
-        let forced = ends.receiver == ends.source || t.spread.is_infinite() || t.spread >= f32::MAX;
-        forced || self.link_error(l) > thr
+        no_estimate(ends, &t) || self.link_error(l) > thr
     }
 
     /// Refines from the links `wave`; returns true if any link was split.
@@ -815,7 +821,7 @@ impl<'a> Solver<'a> {
                 // that have no estimate at all (a cluster's self-link, a too-close
                 // cluster link): left whole they would carry no light, and the
                 // rounds' B_ref would be zero.
-                let forced = r == s || t.spread >= f32::MAX;
+                let forced = no_estimate(ends, &t);
                 if !self.needs_refining(l, thr) || (self.shared_phase && t.varying() && !forced) {
                     continue;
                 }
