@@ -15,7 +15,10 @@
 //! The solve runs in three stages:
 //! 1. *Shared part*: the usual rounds of refine + solve at the start time, links
 //!    classified against the boxes swept over the whole animation, and only constant
-//!    links refined; then the start time is solved once with its varying links
+//!    links refined (and the varying links that have no estimate at all, a cluster's
+//!    self-link or a too-close cluster link, which would otherwise carry no light
+//!    and leave the rounds without a radiosity scale); then the start time is
+//!    solved once with its varying links
 //!    refined, and the constant links are refined again against that radiosity.
 //!    This hierarchy and its coefficients are computed once and kept for every
 //!    window ([`Solver::run_shared`]).
