@@ -772,12 +772,19 @@ impl<'a> Solver<'a> {
         }
     }
 
+    /// The refinement oracle's error of link `l` on the receiver's radiosity,
+    /// `ρ_r B_s ΔK` (`ΔK` the link's spread; infinite for a link with no estimate).
     fn link_error(&self, l: LinkId) -> f64 {
+        self.link_error_with(l, f64::INFINITY)
+    }
+
+    /// [`Self::link_error`] with the spread capped at `max_spread`.
+    fn link_error_with(&self, l: LinkId, max_spread: f64) -> f64 {
         let ends = self.links.ends.as_slice()[l.ix()];
         let t = self.links.transports.as_slice()[l.ix()];
         let b = self.elems.radiosities.as_slice()[ends.source as usize];
         let bmax = b.iter().copied().fold(0.0f32, f32::max) as f64;
-        self.rho_of(ElementId(ends.receiver)) * bmax * t.spread as f64
+        self.rho_of(ElementId(ends.receiver)) * bmax * (t.spread as f64).min(max_spread)
     }
 
     /// True if link `l` must be split at threshold `thr = eps · B_ref`: a cluster
@@ -1577,7 +1584,8 @@ impl<'a> Solver<'a> {
     }
 
     /// Relative RMS error estimate from the active links' bounds: per leaf, the
-    /// bounds of the links it gathers through add up; RMS over area, relative to `b_ref`.
+    /// bounds of the links it gathers through (spread capped at 1) add up; RMS over
+    /// area, relative to `b_ref`.
     fn estimated_error(&self, b_ref: f64) -> f64 {
         let nodes = self.elems.nodes.as_slice();
         let mut per_elem = vec![0.0f64; self.elems.len()];
@@ -1585,7 +1593,11 @@ impl<'a> Solver<'a> {
             *v = self
                 .links_of(e)
                 .iter()
-                .map(|&l| self.link_error(LinkId(l)))
+                // A point's form factor to any source is at most 1, so no link can
+                // be off by more than `ρ B_s`: the cap keeps the links the power
+                // criterion leaves whole without an estimate (infinite spread) from
+                // making the sum meaningless.
+                .map(|&l| self.link_error_with(LinkId(l), 1.0))
                 .sum();
         }
         let (mut s, mut a) = (0.0, 0.0);
