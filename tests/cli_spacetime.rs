@@ -103,3 +103,49 @@ fn bad_time_settings_are_refused() {
         assert!(!out.exists());
     }
 }
+
+/// A space-time solve into a FIFO (as into `/dev/null`): the file arrives whole
+/// through the FIFO, no journal is created beside it, and `--resume` is refused.
+#[cfg(unix)]
+#[test]
+fn a_fifo_output_gets_the_file_and_no_journal() {
+    use std::io::Read;
+    let dir = tempfile::tempdir().unwrap();
+    let (fifo, file) = (dir.path().join("pipe"), dir.path().join("file.rhier"));
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut got = Vec::new();
+            std::fs::File::open(&fifo)
+                .unwrap()
+                .read_to_end(&mut got)
+                .unwrap();
+            got
+        })
+    };
+    let out = solve(&fifo, &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!rhier::store::journal::journal_dir(&fifo).exists());
+    let got = reader.join().unwrap();
+    // The same solve into a file: the same leaves (the stats differ in seconds).
+    assert!(solve(&file, &[]).status.success());
+    let piped = dir.path().join("piped.rhier");
+    std::fs::write(&piped, got).unwrap();
+    let leaves = |p: &Path| {
+        rhier::store::Reader::open(p)
+            .unwrap()
+            .to_solution()
+            .unwrap()
+            .leaves
+    };
+    assert_eq!(leaves(&piped), leaves(&file));
+    let resumed = solve(&fifo, &["--resume"]);
+    assert_eq!(resumed.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&resumed.stderr).contains("not a regular file"));
+}

@@ -90,10 +90,23 @@ pub fn run(
         .unwrap_or_else(|| PathBuf::from(format!("{stem}.rhier")));
     let probes = args.probe.as_deref().map(read_probe_points).transpose()?;
     let key = fingerprint(scene, &opts, &st);
-    let (journal, done) = if args.resume {
-        Journal::resume(&out, &key)?
+    // A device or FIFO (`-o /dev/null`) is written in place at the end (see the
+    // store's writer): nothing could be resumed into it, so it gets no journal beside
+    // it (which, next to /dev/null, a user could not even create).
+    let device = std::fs::metadata(&out).is_ok_and(|m| !m.is_file() && !m.is_dir());
+    let (journal, done) = if device {
+        if args.resume {
+            anyhow::bail!(
+                "--resume: {} is not a regular file, so no journal was kept for it",
+                out.display()
+            );
+        }
+        (None, Vec::new())
+    } else if args.resume {
+        let (j, done) = Journal::resume(&out, &key)?;
+        (Some(j), done)
     } else {
-        (Journal::create(&out, &key)?, Vec::new())
+        (Some(Journal::create(&out, &key)?), Vec::new())
     };
     let quiet = args.quiet;
     let show_progress =
@@ -157,13 +170,15 @@ pub fn run(
         writer.write_chunk(w.t0, w.t1, &w.leaves)?;
         stored += w.leaves.len() as u64;
         frame_cells += w.frame_cells;
-        journal.append(&JournalWindow {
-            index: w.index,
-            t0: w.t0,
-            t1: w.t1,
-            leaves: w.leaves,
-            frame_cells: w.frame_cells,
-        })?;
+        if let Some(journal) = &journal {
+            journal.append(&JournalWindow {
+                index: w.index,
+                t0: w.t0,
+                t1: w.t1,
+                leaves: w.leaves,
+                frame_cells: w.frame_cells,
+            })?;
+        }
         if let Some(budget) = args.budget
             && run.stats.peak_pool_bytes > budget
         {
@@ -188,7 +203,9 @@ pub fn run(
     writer
         .finish(&stats)
         .with_context(|| format!("writing {}", out.display()))?;
-    journal.finish()?;
+    if let Some(journal) = journal {
+        journal.finish()?;
+    }
     if let Some(path) = &args.report {
         let mut csv = String::from(
             "frame,window,t,seconds,cells,elements,links,varying_links,rays,bytes_pools,bytes_kept,residual\n",
