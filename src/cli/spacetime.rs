@@ -93,7 +93,7 @@ pub fn run(
     // A device or FIFO (`-o /dev/null`) is written in place at the end (see the
     // store's writer): nothing could be resumed into it, so it gets no journal beside
     // it (which, next to /dev/null, a user could not even create).
-    let device = std::fs::metadata(&out).is_ok_and(|m| !m.is_file() && !m.is_dir());
+    let device = rhier::store::writer::writes_in_place(&out);
     let (journal, done) = if device {
         if args.resume {
             anyhow::bail!(

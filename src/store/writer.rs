@@ -120,6 +120,13 @@ pub fn temp_path(path: &Path) -> PathBuf {
     PathBuf::from(s)
 }
 
+/// True if `path` exists and is neither a regular file nor a directory (a device such
+/// as `/dev/null`, a FIFO): [`Writer::create`] writes such a path in place at the end
+/// instead of renaming a temporary file over it.
+pub fn writes_in_place(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
 impl Writer {
     /// Starts writing `path` (through `<path>.tmp`): writes the placeholder header, the
     /// scene section and the patch section. An existing `path` that is neither a
@@ -130,7 +137,7 @@ impl Writer {
         header: &SolutionHeader<'_>,
         options: WriteOptions,
     ) -> Result<Writer> {
-        if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+        if writes_in_place(path) {
             return Writer::start(
                 path.to_path_buf(),
                 Sink::Device(Vec::new()),
