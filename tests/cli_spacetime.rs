@@ -2,6 +2,8 @@
 //! window, an interrupted solve leaves no `.rhier` file and `--resume` finishes it with
 //! the same leaves, and bad settings are refused with exit code 1 or 2.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -109,22 +111,10 @@ fn bad_time_settings_are_refused() {
 #[cfg(unix)]
 #[test]
 fn a_fifo_output_gets_the_file_and_no_journal() {
-    use std::io::Read;
+    use std::os::unix::fs::FileTypeExt;
     let dir = tempfile::tempdir().unwrap();
     let (fifo, file) = (dir.path().join("pipe"), dir.path().join("file.rhier"));
-    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
-    assert!(made.success());
-    let reader = {
-        let fifo = fifo.clone();
-        std::thread::spawn(move || {
-            let mut got = Vec::new();
-            std::fs::File::open(&fifo)
-                .unwrap()
-                .read_to_end(&mut got)
-                .unwrap();
-            got
-        })
-    };
+    let reader = common::fifo::fifo_with_reader(&fifo);
     let out = solve(&fifo, &[]);
     assert!(
         out.status.success(),
@@ -132,6 +122,8 @@ fn a_fifo_output_gets_the_file_and_no_journal() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(!rhier::store::journal::journal_dir(&fifo).exists());
+    // Checked before joining: a replaced FIFO would leave the reader blocked forever.
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
     let got = reader.join().unwrap();
     // The same solve into a file: the same leaves (the stats differ in seconds).
     assert!(solve(&file, &[]).status.success());

@@ -2,6 +2,8 @@
 //! back; probing the file equals probing the solution in memory; RAM-built and
 //! file-built bytes are identical; chunked space-time files are read chunk by chunk.
 
+mod common;
+
 use glam::DVec3;
 use rhier::playback::{ProbePoint, SolutionView, probe};
 use rhier::solver::{Leaf, Solution};
@@ -339,28 +341,12 @@ fn writer_report_in_progress_matches_the_finished_file() {
 #[cfg(unix)]
 #[test]
 fn a_device_or_fifo_is_written_in_place_not_replaced() {
-    use std::io::Read;
     use std::os::unix::fs::FileTypeExt;
     let dir = tempfile::tempdir().unwrap();
     let fifo = dir.path().join("pipe");
-    let made = std::process::Command::new("mkfifo")
-        .arg(&fifo)
-        .status()
-        .unwrap();
-    assert!(made.success());
+    let reader = common::fifo::fifo_with_reader(&fifo);
     let sol = box_solution(2);
     let want = encode_solution(&fifo, &sol, WriteOptions::default()).unwrap();
-    let reader = {
-        let fifo = fifo.clone();
-        std::thread::spawn(move || {
-            let mut got = Vec::new();
-            std::fs::File::open(&fifo)
-                .unwrap()
-                .read_to_end(&mut got)
-                .unwrap();
-            got
-        })
-    };
     write_solution(&fifo, &sol, WriteOptions::default()).unwrap();
     // Checked before joining: a replaced FIFO would leave the reader blocked forever.
     assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());

@@ -72,6 +72,8 @@ pub fn uniform_enclosure(rho: f64, e: f64, scale: f64, n: usize) -> Scene {
         ..Default::default()
     }
 }
+#[cfg(unix)]
+pub mod fifo;
 pub mod probe;
 
 /// Deterministic pseudo-random numbers in [0, 1) (a 64-bit LCG, the high 53 bits).
