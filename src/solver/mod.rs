@@ -1919,15 +1919,17 @@ impl<'a> Solver<'a> {
         )
     }
 
+    /// True if element `s` is a surface (not a cluster) of a patch that emits nothing:
+    /// the sources whose rays the final gather may take from elsewhere.
+    fn non_emitting_surface(&self, s: usize) -> bool {
+        let p = self.elems.geoms.as_slice()[s].patch;
+        p != u32::MAX && !self.patches.emissions[p as usize].iter().any(|&e| e > 0.0)
+    }
+
     /// The visible fraction of non-emitting surface source `s` (chain link `l`) seen
     /// from the leaf whose kept row is `row`.
     fn leaf_visibility(&self, row: &[KeptCoef], l: u32, s: usize) -> Option<f64> {
-        let gs = &self.elems.geoms.as_slice()[s];
-        if gs.patch == u32::MAX
-            || self.patches.emissions[gs.patch as usize]
-                .iter()
-                .any(|&e| e > 0.0)
-        {
+        if !self.non_emitting_surface(s) {
             return None;
         }
         let i = row.binary_search_by_key(&l, |k| k.link).ok()?;
@@ -1938,14 +1940,10 @@ impl<'a> Solver<'a> {
     /// than `faint` (bound `ρ_max B_s A_s / (π d²)`, `d` from `x` to the source's
     /// bounding sphere): the final gather then skips its rays.
     fn faint_source(&self, x: DVec3, s: usize, b: &[[f32; 3]], faint: f64) -> bool {
-        let gs = &self.elems.geoms.as_slice()[s];
-        if gs.patch == u32::MAX
-            || self.patches.emissions[gs.patch as usize]
-                .iter()
-                .any(|&e| e > 0.0)
-        {
+        if !self.non_emitting_surface(s) {
             return false;
         }
+        let gs = &self.elems.geoms.as_slice()[s];
         let (c, rad) = oracle::sphere(gs);
         let d = c.distance(x) - rad;
         if d <= 0.0 {
