@@ -25,15 +25,29 @@ def room(size, h):
 
 
 def cube(x0, z0, w, hgt):
+    """The six faces of a box, each counter-clockwise seen from outside."""
     x1, z1, y1 = x0 + w, z0 + w, hgt
     return [
         quad([x0, y1, z0], [x0, y1, z1], [x1, y1, z1], [x1, y1, z0], "white"),  # top +y
-        quad([x0, 0, z0], [x1, 0, z0], [x1, y1, z0], [x0, y1, z0], "white"),    # -z
-        quad([x1, 0, z1], [x0, 0, z1], [x0, y1, z1], [x1, y1, z1], "white"),    # +z
-        quad([x0, 0, z1], [x0, 0, z0], [x0, y1, z0], [x0, y1, z1], "white"),    # -x
-        quad([x1, 0, z0], [x1, 0, z1], [x1, y1, z1], [x1, y1, z0], "white"),    # +x
-        quad([x0, 0, z0], [x0, 0, z1], [x1, 0, z1], [x1, 0, z0], "white"),      # bottom -y
+        quad([x0, y1, z0], [x1, y1, z0], [x1, 0, z0], [x0, 0, z0], "white"),    # -z
+        quad([x1, y1, z1], [x0, y1, z1], [x0, 0, z1], [x1, 0, z1], "white"),    # +z
+        quad([x0, y1, z1], [x0, y1, z0], [x0, 0, z0], [x0, 0, z1], "white"),    # -x
+        quad([x1, y1, z0], [x1, y1, z1], [x1, 0, z1], [x1, 0, z0], "white"),    # +x
+        quad([x1, 0, z0], [x1, 0, z1], [x0, 0, z1], [x0, 0, z0], "white"),      # bottom -y
     ]
+
+
+def outward(faces, centre):
+    """True if every face's normal (counter-clockwise rule) points away from `centre`."""
+    for f in faces:
+        a, b, c = f["vertices"][0], f["vertices"][1], f["vertices"][2]
+        e1 = [b[i] - a[i] for i in range(3)]
+        e2 = [c[i] - b[i] for i in range(3)]
+        n = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]]
+        mid = [sum(v[i] for v in f["vertices"]) / 4 for i in range(3)]
+        if sum(n[i] * (mid[i] - centre[i]) for i in range(3)) <= 0:
+            return False
+    return True
 
 
 def main():
@@ -47,7 +61,10 @@ def main():
     for i in range(n):
         for j in range(n):
             hgt = 0.05 + 0.3 * (((i * 7 + j * 13) % 11) / 10.0)
-            cubes += cube(0.5 + i * pitch, 0.5 + j * pitch, pitch * 0.6, hgt)
+            x0, z0, w = 0.5 + i * pitch, 0.5 + j * pitch, pitch * 0.6
+            faces = cube(x0, z0, w, hgt)
+            assert outward(faces, [x0 + w / 2, hgt / 2, z0 + w / 2])
+            cubes += faces
     scene = {
         "rhier_scene": 1,
         "materials": {
