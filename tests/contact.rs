@@ -2,7 +2,11 @@
 //! bases, the pieces under the blocks are dropped, and what remains of the floor has
 //! exactly the floor's area minus the two footprints.
 
+mod common;
+
+use glam::DVec3;
 use rhier::geometry::{Patches, split_at_contacts};
+use rhier::scene::{Material, Object, Scene};
 
 fn footprint_area(patches: &Patches, floor_y: f64) -> f64 {
     // Block tops are horizontal quads above the floor facing up; their footprint is
@@ -48,4 +52,82 @@ fn floor_is_cut_at_the_block_bases_and_hidden_pieces_dropped() {
             .count()
     };
     assert_eq!(walls(&before), walls(&after));
+}
+
+/// A 10 × 4 × 10 room with a 3 × 3 grid of boxes on its floor (as
+/// `tools/gen_cubes.py 3`), and a thin two-sided panel (two coincident quads facing
+/// opposite ways) floating at y = 2.
+fn boxes_and_panel() -> Scene {
+    let mut polys = common::closed_box(DVec3::ZERO, DVec3::new(10.0, 4.0, 10.0), 1, |_| 0);
+    let pitch = 3.0;
+    for i in 0..3 {
+        for j in 0..3 {
+            let lo = DVec3::new(0.5 + i as f64 * pitch, 0.0, 0.5 + j as f64 * pitch);
+            let h = 0.05 + 0.3 * (((i * 7 + j * 13) % 11) as f64 / 10.0);
+            let mut faces = common::closed_box(lo, lo + DVec3::new(1.8, h, 1.8), 1, |_| 0);
+            // closed_box faces inwards; a solid's faces look out.
+            for f in &mut faces {
+                f.vertices.reverse();
+            }
+            polys.extend(faces);
+        }
+    }
+    let panel = |flip: bool| {
+        let mut v = vec![
+            DVec3::new(4.0, 2.0, 4.0),
+            DVec3::new(6.0, 2.0, 4.0),
+            DVec3::new(6.0, 2.0, 6.0),
+            DVec3::new(4.0, 2.0, 6.0),
+        ];
+        if flip {
+            v.reverse();
+        }
+        rhier::scene::Polygon {
+            vertices: v,
+            material: rhier::scene::MaterialId(0),
+        }
+    };
+    polys.push(panel(false));
+    polys.push(panel(true));
+    Scene {
+        materials: vec![Material {
+            name: "white".into(),
+            rho: [0.7; 3],
+            emission: [0.0; 3],
+        }],
+        objects: vec![Object {
+            name: "room".into(),
+            polygons: polys,
+            motion: None,
+        }],
+        ..Default::default()
+    }
+}
+
+/// Every box's footprint and its bottom are dropped, whatever the triangulation of
+/// the box top above the footprint's centre (the test ray once ran along the top's
+/// diagonal and missed it for some boxes); the floating two-sided panel is kept.
+#[test]
+fn every_box_on_a_floor_loses_its_footprint_and_its_bottom() {
+    let scene = boxes_and_panel();
+    let before = Patches::at_time(&scene, 0.0);
+    let (after, stats) = split_at_contacts(&scene, &before, 0.0);
+    assert_eq!(stats.pieces_hidden, 18, "{stats:?}");
+    let floor_area: f64 = (0..after.len())
+        .filter(|&i| after.normals[i].y > 0.99 && after.polys[i].v[0].y.abs() < 1e-9)
+        .map(|i| after.areas[i])
+        .sum();
+    let expected = 100.0 - 9.0 * 1.8 * 1.8;
+    assert!(
+        (floor_area - expected).abs() < 1e-9,
+        "floor area {floor_area} vs {expected}"
+    );
+    let bottoms = (0..after.len())
+        .filter(|&i| after.normals[i].y < -0.99 && after.polys[i].v[0].y.abs() < 1e-9)
+        .count();
+    assert_eq!(bottoms, 0, "box bottoms left on the floor");
+    let panel_faces = (0..after.len())
+        .filter(|&i| (after.polys[i].v[0].y - 2.0).abs() < 1e-9 && after.normals[i].y.abs() > 0.99)
+        .count();
+    assert_eq!(panel_faces, 2, "the two-sided panel lost a face");
 }
