@@ -36,7 +36,7 @@ fn closed_enclosure_reaches_e_over_one_minus_rho() {
 /// the power the surfaces absorb, `Σ A (1 − ρ) (B − E) / ρ` over the leaves, equals
 /// the power emitted. Gathering each big source's *average* radiosity
 /// (`SolveOptions::row_open_ratio` 0) absorbs 2.8% too little here at eps 0.1
-/// (measured); opening sources in the leaf rows brings eps 0.1 and 0.05 to 0.7–0.8%.
+/// (measured); opening sources in the leaf rows brings eps 0.1 and 0.05 to 1.2–1.3%.
 #[test]
 fn the_leaf_system_conserves_energy() {
     use glam::DVec3;

@@ -83,7 +83,10 @@ const SHARED_PASSES: usize = 2;
 
 /// A leaf-row entry with a coefficient at most this is not opened into children
 /// ([`Solver::push_opened`]): its share of the leaf's light is too small to matter.
-const ROW_OPEN_MIN_COEF: f64 = 1e-3;
+/// Measured on the Cornell blocks at eps 0.02: 1e-3 doubles the solve's time (2.1 →
+/// 4.0 s), 1e-2 costs 30% (2.8 s) for the same contact-point error (1.5%); the
+/// energy test keeps 0.7% (1e-3) or 1.2% (1e-2) of its 2.8% deficit.
+const ROW_OPEN_MIN_COEF: f64 = 1e-2;
 
 /// Fraction of the way from a corner to its leaf's centroid where the corner's
 /// final gather is evaluated.
@@ -1334,10 +1337,10 @@ impl<'a> Solver<'a> {
     /// its points hands on a share of its light that is not its own (the averaged
     /// form factors of its links do not sum to 1 point by point), and where the
     /// bright part hands on too little the solution loses energy: in a closed room lit
-    /// by a lamp flush in its ceiling, 2.8% of the power at eps 0.1, 0.7% with the
+    /// by a lamp flush in its ceiling, 2.8% of the power at eps 0.1, 1.2% with the
     /// opening (test `the_leaf_system_conserves_energy`); the loss grew as refinement
-    /// mixed the levels more. Cost: more row entries (Cornell box at eps 0.05, 0.4 →
-    /// 0.8 s; nothing at the default eps).
+    /// mixed the levels more. Cost: more row entries (see [`ROW_OPEN_MIN_COEF`];
+    /// nothing measurable at the default eps).
     /// The children's exact polygon factors, with the link's visible fraction, sum
     /// to the parent's; each child brings its own radiosity. No ray is cast and no
     /// link is made. Cluster sources are not opened: their children would take the
@@ -1615,17 +1618,70 @@ impl<'a> Solver<'a> {
     /// solve carry the radiosity of the hierarchy before this round's refinement:
     /// on the Cornell blocks that left some cluster coefficients 2% off and the
     /// leaves up to 1.5e-3 from the fixed point. With cluster sources in the rows,
-    /// they are rebuilt once from the new radiosity and solved again (no ray is
-    /// cast: every other coefficient is kept); one step reaches the fixed point to
-    /// f32 on that scene (measured: the next step changes nothing).
+    /// their entries are recomputed once from the new radiosity and the system solved
+    /// again (no ray is cast, every other entry is kept); one step reaches the fixed
+    /// point to f32 on that scene (measured: the next step changes nothing).
     fn solve_rows(&mut self) -> Result<f64> {
         self.compute_leaf_rows();
         let residual = self.solve_leaves()?;
         if !self.rows_have_clusters() {
             return Ok(residual);
         }
-        self.compute_leaf_rows();
+        self.refresh_cluster_rows();
         self.solve_leaves()
+    }
+
+    /// Recomputes the cluster-source entries of the leaf rows from the current
+    /// radiosity, as [`Solver::compute_leaf_rows`] makes them, keeping every other
+    /// entry.
+    fn refresh_cluster_rows(&mut self) {
+        let geoms = self.elems.geoms.as_slice();
+        let nodes = self.elems.nodes.as_slice();
+        let ends = self.links.ends.as_slice();
+        let tr = self.links.transports.as_slice();
+        let rows: Vec<Vec<(u32, f64)>> = self
+            .leaves
+            .par_iter()
+            .enumerate()
+            .map(|(li, &leaf)| {
+                let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
+                let mut row: Vec<(u32, f64)> = self.row_sources[r0..r1]
+                    .iter()
+                    .zip(&self.row_coefs[r0..r1])
+                    .filter(|(s, _)| geoms[**s as usize].patch != u32::MAX)
+                    .map(|(&s, &c)| (s, c))
+                    .collect();
+                let g = &geoms[leaf.ix()];
+                let q = oracle::samples(g);
+                let n = DVec3::from_array(g.normal);
+                let mut e = leaf.0;
+                while e != u32::MAX {
+                    for &l in self.links_of(e as usize) {
+                        let t = &tr[l as usize];
+                        let s = ends[l as usize].source;
+                        if geoms[s as usize].patch == u32::MAX && t.f > 0.0 {
+                            let f = self.cluster_coef(&q, n, s) * t.visibility as f64;
+                            if f > 0.0 {
+                                row.push((s, f));
+                            }
+                        }
+                    }
+                    e = nodes[e as usize].parent;
+                }
+                row
+            })
+            .collect();
+        self.row_start.clear();
+        self.row_sources.clear();
+        self.row_coefs.clear();
+        self.row_start.push(0);
+        for row in rows {
+            for (s, c) in row {
+                self.row_sources.push(s);
+                self.row_coefs.push(c);
+            }
+            self.row_start.push(self.row_sources.len() as u32);
+        }
     }
 
     /// True if some leaf row gathers from a cluster.
