@@ -240,3 +240,47 @@ fn power_criterion_and_cheap_gather_keep_point_radiosity() {
         pts.len()
     );
 }
+
+/// Power absorbed by the surfaces over power emitted, `Σ A (1 − ρ)(B − E) / ρ` over
+/// the leaves over `Σ A E` (channel 0).
+fn absorbed_over_emitted(solver: &Solver) -> f64 {
+    let geoms = solver.elems.geoms.as_slice();
+    let nodes = solver.elems.nodes.as_slice();
+    let b = solver.elems.radiosities.as_slice();
+    let (mut absorbed, mut emitted) = (0.0, 0.0);
+    for e in 0..solver.elems.len() {
+        let g = &geoms[e];
+        if g.patch == u32::MAX || nodes[e].child_count > 0 {
+            continue;
+        }
+        let p = g.patch as usize;
+        let (rho, em) = (solver.patches.rhos[p][0], solver.patches.emissions[p][0]);
+        absorbed += g.area * (1.0 - rho) * (b[e][0] as f64 - em) / rho;
+        emitted += g.area * em;
+    }
+    absorbed / emitted
+}
+
+/// The room of boxes is closed and its boxes rest on the floor with their hidden
+/// faces dropped (contact meshing), so the light the lamp emits is all absorbed by
+/// the surfaces. Cluster links too close for the cluster estimate, left whole at
+/// small receivers by the power criterion, once carried nothing: 0.913 at 32 × 32
+/// boxes (measured), 0.964 since they carry their Monte Carlo factor. The 3.6% still
+/// missing is the cluster estimates' own error (not yet understood); the bound is 5%.
+#[test]
+fn the_clutter_keeps_its_light() {
+    let n = 32;
+    let scene = clutter(n);
+    let mut solver = Solver::new(
+        &scene,
+        SolveOptions {
+            contact_meshing: true,
+            ..coarse()
+        },
+    )
+    .expect("solver");
+    solver.run(|_, _| {}).expect("rounds");
+    let ratio = absorbed_over_emitted(&solver);
+    eprintln!("{n} x {n} boxes: absorbed / emitted = {ratio:.4}");
+    assert!((ratio - 1.0).abs() < 0.05, "{n} x {n} boxes: {ratio}");
+}

@@ -1327,6 +1327,20 @@ impl<'a> Solver<'a> {
             .sum()
     }
 
+    /// A leaf's row coefficient for the chain link `t` to cluster `s`: the cluster
+    /// estimate at the leaf's points ([`Solver::cluster_coef`]) with the link's
+    /// visibility, or, for a link too close for that estimate, its own Monte Carlo
+    /// factor ([`oracle::close_cluster_factor`], the receiver's average).
+    fn cluster_entry(&self, q: &oracle::Samples, n: DVec3, s: u32, t: &Transport) -> f64 {
+        if t.spread >= f32::MAX {
+            t.f as f64
+        } else if t.f > 0.0 {
+            self.cluster_coef(q, n, s) * t.visibility as f64
+        } else {
+            0.0
+        }
+    }
+
     /// Pushes a leaf's row entry for source `s` (coefficient `coef`, visible
     /// fraction `vis`), opening a surface source into its children while it looks
     /// large from the leaf ([`SolveOptions::row_open_ratio`]).
@@ -1439,15 +1453,7 @@ impl<'a> Solver<'a> {
                             continue;
                         }
                         let (coef, vis) = if gs.patch == u32::MAX {
-                            // The cluster estimate at the leaf's own points and
-                            // orientation ([`Solver::cluster_coef`]); a link with no
-                            // estimate (too close) carries nothing.
-                            let f = if t.f > 0.0 {
-                                self.cluster_coef(&q, n, s) * t.visibility as f64
-                            } else {
-                                0.0
-                            };
-                            (f, t.visibility as f64)
+                            (self.cluster_entry(&q, n, s, t), t.visibility as f64)
                         } else if t.shaft_clear() {
                             let ps = oracle::poly(gs);
                             let f = (0..q.count)
@@ -1659,8 +1665,8 @@ impl<'a> Solver<'a> {
                     for &l in self.links_of(e as usize) {
                         let t = &tr[l as usize];
                         let s = ends[l as usize].source;
-                        if geoms[s as usize].patch == u32::MAX && t.f > 0.0 {
-                            let f = self.cluster_coef(&q, n, s) * t.visibility as f64;
+                        if geoms[s as usize].patch == u32::MAX {
+                            let f = self.cluster_entry(&q, n, s, t);
                             if f > 0.0 {
                                 row.push((s, f));
                             }
