@@ -195,6 +195,9 @@ pub struct Solver<'a> {
     /// `A_p` of [`SolveOptions::power_size`] (0: off).
     power_area: f64,
     rho_max: f64,
+    /// Per cluster built at the start (and patch root): true if an emitting patch
+    /// lies under it.
+    emits_under: Vec<bool>,
     /// Leaves (surface elements without children), in id order.
     leaves: Vec<ElementId>,
     /// Leaf index of each element (`u32::MAX` for inner elements).
@@ -585,6 +588,7 @@ impl<'a> Solver<'a> {
             root,
             time,
             rho_max,
+            emits_under: Vec::new(),
             leaves: Vec::new(),
             leaf_of: Vec::new(),
             csr_start: Vec::new(),
@@ -626,6 +630,23 @@ impl<'a> Solver<'a> {
                 };
             }
             s.tree_moving = tm;
+        }
+        {
+            let nodes = s.elems.nodes.as_slice();
+            let geoms = s.elems.geoms.as_slice();
+            let mut em = vec![false; nodes.len()];
+            for i in (0..nodes.len()).rev() {
+                let g = &geoms[i];
+                em[i] = if g.patch != u32::MAX {
+                    s.patches.emissions[g.patch as usize]
+                        .iter()
+                        .any(|&e| e > 0.0)
+                } else {
+                    let n = nodes[i];
+                    (n.first_child..n.first_child + n.child_count).any(|c| em[c as usize])
+                };
+            }
+            s.emits_under = em;
         }
         // Initial guess B = E at the patch roots, pulled up.
         for i in 0..s.elems.len() {
@@ -1843,16 +1864,21 @@ impl<'a> Solver<'a> {
             // smooth across the patch (independent jitter per point is noise the
             // reconstruction would mesh).
             let key = oracle::hash3(self.opts.seed ^ 0xc105, s as u64, receiver_patch as u64);
-            let (vis, _) = oracle::point_cluster_visibility(
-                &self.elems,
-                &self.bvh,
-                x,
-                n,
-                receiver_patch,
-                ElementId(s as u32),
-                self.opts.cluster_rays,
-                key,
-            );
+            // `clear`: the caller supplies the visibility.
+            let (vis, _) = if clear {
+                (1.0, 0)
+            } else {
+                oracle::point_cluster_visibility(
+                    &self.elems,
+                    &self.bvh,
+                    x,
+                    n,
+                    receiver_patch,
+                    ElementId(s as u32),
+                    self.opts.cluster_rays,
+                    key,
+                )
+            };
             let u = (c - x) / d;
             let cs = oracle::cluster_emission(
                 gs,
@@ -2022,6 +2048,13 @@ impl<'a> Solver<'a> {
                     None
                 } else if let Some(v) = small_leaf.and_then(|row| self.leaf_visibility(row, l, s)) {
                     Some(v)
+                } else if small_leaf.is_some()
+                    && geoms[s].patch == u32::MAX
+                    && !self.emits_under.get(s).copied().unwrap_or(true)
+                {
+                    // A cluster with no emitter under it, seen from a small leaf: the
+                    // link's visibility, as the leaf row takes it.
+                    Some(t.visibility as f64)
                 } else if faint > 0.0 && self.faint_source(x, s, b, faint) {
                     Some(t.visibility as f64)
                 } else {
