@@ -1374,8 +1374,8 @@ impl<'a> Solver<'a> {
     /// bright part hands on too little the solution loses energy: in a closed room lit
     /// by a lamp flush in its ceiling, 2.8% of the power at eps 0.1, 1.2% with the
     /// opening (test `the_leaf_system_conserves_energy`); the loss grew as refinement
-    /// mixed the levels more. Cost: more row entries (see [`ROW_OPEN_MIN_COEF`];
-    /// nothing measurable at the default eps).
+    /// mixed the levels more. Cost: more row entries (see [`ROW_OPEN_MIN_COEF`]).
+    ///
     /// The children's exact polygon factors, with the link's visible fraction, sum
     /// to the parent's; each child brings its own radiosity. No ray is cast and no
     /// link is made. Cluster sources are not opened: their children would take the
@@ -1543,12 +1543,10 @@ impl<'a> Solver<'a> {
                 (row, fresh, kept)
             })
             .collect();
-        self.row_start.clear();
-        self.row_sources.clear();
-        self.row_coefs.clear();
-        self.row_start.push(0);
+        self.clear_rows();
         self.row_cache.clear();
-        for (&leaf, (row, fresh, kept)) in self.leaves.iter().zip(rows) {
+        let leaves = std::mem::take(&mut self.leaves);
+        for (&leaf, (row, fresh, kept)) in leaves.iter().zip(rows) {
             if let Some(w) = &mut self.window
                 && !fresh.is_empty()
             {
@@ -1562,12 +1560,26 @@ impl<'a> Solver<'a> {
             if keep_rows {
                 self.row_cache.insert(leaf.0, kept);
             }
-            for (s, c) in row {
-                self.row_sources.push(s);
-                self.row_coefs.push(c);
-            }
-            self.row_start.push(self.row_sources.len() as u32);
+            self.push_row(row);
         }
+        self.leaves = leaves;
+    }
+
+    /// Empties the leaf rows (CSR) before they are pushed again, leaf by leaf.
+    fn clear_rows(&mut self) {
+        self.row_start.clear();
+        self.row_sources.clear();
+        self.row_coefs.clear();
+        self.row_start.push(0);
+    }
+
+    /// Appends the next leaf's row.
+    fn push_row(&mut self, row: Vec<(u32, f64)>) {
+        for (s, c) in row {
+            self.row_sources.push(s);
+            self.row_coefs.push(c);
+        }
+        self.row_start.push(self.row_sources.len() as u32);
     }
 
     /// Area-weighted pull of the pool's radiosities (leaves → root).
@@ -1698,16 +1710,9 @@ impl<'a> Solver<'a> {
                 row
             })
             .collect();
-        self.row_start.clear();
-        self.row_sources.clear();
-        self.row_coefs.clear();
-        self.row_start.push(0);
+        self.clear_rows();
         for row in rows {
-            for (s, c) in row {
-                self.row_sources.push(s);
-                self.row_coefs.push(c);
-            }
-            self.row_start.push(self.row_sources.len() as u32);
+            self.push_row(row);
         }
     }
 
