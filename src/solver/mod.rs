@@ -617,37 +617,11 @@ impl<'a> Solver<'a> {
             .collect();
         s.moving_now = s.bvh.moving_boxes();
         if s.moving_patch.iter().any(|&m| m) {
-            let nodes = s.elems.nodes.as_slice();
-            let geoms = s.elems.geoms.as_slice();
-            let mut tm = vec![false; nodes.len()];
-            for i in (0..nodes.len()).rev() {
-                let g = &geoms[i];
-                tm[i] = if g.patch != u32::MAX {
-                    s.moving_patch[g.patch as usize]
-                } else {
-                    let n = nodes[i];
-                    (n.first_child..n.first_child + n.child_count).any(|c| tm[c as usize])
-                };
-            }
-            s.tree_moving = tm;
+            s.tree_moving = any_patch_under(&s.elems, |p| s.moving_patch[p]);
         }
-        {
-            let nodes = s.elems.nodes.as_slice();
-            let geoms = s.elems.geoms.as_slice();
-            let mut em = vec![false; nodes.len()];
-            for i in (0..nodes.len()).rev() {
-                let g = &geoms[i];
-                em[i] = if g.patch != u32::MAX {
-                    s.patches.emissions[g.patch as usize]
-                        .iter()
-                        .any(|&e| e > 0.0)
-                } else {
-                    let n = nodes[i];
-                    (n.first_child..n.first_child + n.child_count).any(|c| em[c as usize])
-                };
-            }
-            s.emits_under = em;
-        }
+        s.emits_under = any_patch_under(&s.elems, |p| {
+            s.patches.emissions[p].iter().any(|&e| e > 0.0)
+        });
         // Initial guess B = E at the patch roots, pulled up.
         for i in 0..s.elems.len() {
             let g = s.elems.geoms.as_slice()[i];
@@ -2315,6 +2289,24 @@ pub fn solve(scene: &Scene, opts: SolveOptions) -> Result<(Solution, Vec<RoundRe
 }
 
 /// Largest channel of element `e`'s radiosity.
+/// Per element of the pool: true if `patch_holds` is true of some patch under it
+/// (its own for a surface). Children come after their parent in the pool, so one
+/// backward pass suffices.
+fn any_patch_under(elems: &ElementPool, patch_holds: impl Fn(usize) -> bool) -> Vec<bool> {
+    let nodes = elems.nodes.as_slice();
+    let geoms = elems.geoms.as_slice();
+    let mut out = vec![false; nodes.len()];
+    for i in (0..nodes.len()).rev() {
+        out[i] = if geoms[i].patch != u32::MAX {
+            patch_holds(geoms[i].patch as usize)
+        } else {
+            let n = nodes[i];
+            (n.first_child..n.first_child + n.child_count).any(|c| out[c as usize])
+        };
+    }
+    out
+}
+
 fn b_of(elems: &ElementPool, e: usize) -> f64 {
     elems.radiosities.as_slice()[e]
         .iter()
