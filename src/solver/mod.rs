@@ -41,11 +41,18 @@
 //! solve keeps each leaf's row coefficients (and the visible fraction of each source
 //! seen from the leaf) from round to round (a static scene only; cleared when a
 //! time window restores the pools), and the final gather of a leaf smaller
-//! than `A_p` takes the visibility of non-emitting sources from that row instead of
-//! casting rays (emitters keep their rays); any point skips the rays of a source
-//! that can hand it less than [`SolveOptions::faint_source`] (link visibility
-//! instead). A cluster source's row coefficient is the isotropic estimate at the
-//! leaf's own points and orientation.
+//! than `A_p` takes the visibility of non-emitting surface sources from that row, and
+//! of clusters with no emitter under them from their link, instead of casting rays
+//! (emitters keep their rays); any point skips the rays of a source that can hand it
+//! less than [`SolveOptions::faint_source`] (link visibility instead). A cluster
+//! source's row coefficient is the directional cluster estimate at the leaf's own
+//! points and orientation (a Monte Carlo factor for links too close for it), rebuilt
+//! once after each solve so that it matches the radiosity it depends on.
+//!
+//! **Sources larger than they look.** A leaf row gathers each source's average
+//! radiosity; a surface source that looks large from the leaf is opened into its
+//! children in that row ([`SolveOptions::row_open_ratio`]), which keeps the leaf
+//! system from losing the light of bright parts of big sources.
 //!
 //! Results are deterministic for a given seed and thread count (ray jitter is hashed
 //! from link ids; parallel loops write disjoint outputs).
@@ -1967,7 +1974,8 @@ impl<'a> Solver<'a> {
         let mut fresh = Vec::new();
         let mut terms = Terms::default();
         // A leaf smaller than the power area takes the visibility of non-emitting
-        // sources from its row (seen from its quadrature points), not from rays.
+        // surface sources from its row (seen from its quadrature points), and of
+        // clusters with no emitter from their link, not from rays.
         let small_leaf = self
             .row_cache
             .get(&leaf.0)
