@@ -148,9 +148,11 @@ pub struct SolveOptions {
     /// bounds the power by reciprocity, so a cluster link too close for the isotropic
     /// estimate is not forced open at a tiny receiver.
     pub power_size: f64,
-    /// Leaf rows: a source whose bounding sphere's radius exceeds this times its
-    /// distance from a leaf's quadrature point is opened into its children in that
-    /// leaf's row (see [`Solver::push_opened`]; 0: never).
+    /// Leaf rows: a surface source whose bounding sphere's radius exceeds this times
+    /// its distance from a leaf's quadrature point is opened into its children in
+    /// that leaf's row, each with its own radiosity and exact polygon factor (0:
+    /// never). Gathering big sources' average radiosity lost 2.8% of the light of a
+    /// closed room lit by a small lamp (module docs, "Sources larger than they look").
     pub row_open_ratio: f64,
     /// Final gather: a non-emitting source that can hand a point less than this
     /// times the RMS radiosity takes its link's visibility instead of rays (0: rays
