@@ -9,6 +9,7 @@ use rhier::playback::{ProbePoint, probe, read_probe_points, write_probe_results}
 use rhier::pools::Storage;
 use rhier::scene::Scene;
 use rhier::solver::report::{self, relative_rms};
+use rhier::solver::spacetime::SpaceTimeOptions;
 use rhier::solver::{RoundRecord, SolveOptions, Solver};
 use rhier::store::{
     LinkRecord, MemoryReport, SolutionHeader, WriteOptions, Writer, write_solution,
@@ -140,6 +141,16 @@ pub struct Args {
     /// within this fraction of the RMS reflected radiosity of their mean.
     #[arg(long, default_value_t = 0.01)]
     pub merge_tol: f64,
+    /// Space-time: every N-th frame of a window (and its first and last) is a
+    /// keyframe gathered at every reconstruction point; the frames between take
+    /// the points on which their two keyframes agree by interpolation (1: gather
+    /// every frame).
+    #[arg(long, default_value_t = SpaceTimeOptions::default().key_stride)]
+    pub key_stride: u32,
+    /// Space-time: two keyframes agree on a point when their values differ by at
+    /// most this fraction of the RMS reflected radiosity.
+    #[arg(long, default_value_t = SpaceTimeOptions::default().interp_tol)]
+    pub interp_tol: f64,
     /// Continue an interrupted space-time solve from its last finished window (kept
     /// in OUT.rhier.partial/).
     #[arg(long)]

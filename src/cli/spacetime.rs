@@ -23,16 +23,22 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
         ("--fps", args.fps),
         ("--window", args.window),
         ("--merge-tol", args.merge_tol),
+        ("--interp-tol", args.interp_tol),
     ] {
         if !(v.is_finite() && v > 0.0) {
             anyhow::bail!("{name}: expected a finite number > 0, found {v}");
         }
+    }
+    if args.key_stride == 0 {
+        anyhow::bail!("--key-stride: expected a whole number >= 1, found 0");
     }
     Ok(SpaceTimeOptions {
         fps: args.fps,
         window: args.window,
         merge_tol: args.merge_tol,
         kept_budget: args.budget,
+        key_stride: args.key_stride,
+        interp_tol: args.interp_tol,
     })
 }
 
@@ -40,7 +46,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
 /// changes a result (not the storage, thread count being part of determinism).
 fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> String {
     let settings = format!(
-        "eps {} min_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {} contact {} fps {} window {} merge {} threads {}",
+        "eps {} min_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {} contact {} fps {} window {} merge {} keys {} interp {} threads {}",
         opts.eps,
         opts.min_size,
         opts.rays_per_point,
@@ -55,6 +61,8 @@ fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> Str
         st.fps,
         st.window,
         st.merge_tol,
+        st.key_stride,
+        st.interp_tol,
         rayon::current_num_threads(),
     );
     let scene_text = rhier::scene::to_json_string(scene);
@@ -208,16 +216,20 @@ pub fn run(
     }
     if let Some(path) = &args.report {
         let mut csv = String::from(
-            "frame,window,t,seconds,cells,elements,links,varying_links,rays,bytes_pools,bytes_kept,residual\n",
+            "frame,window,t,seconds,cells,gathered,interpolated,elements,links,varying_links,rays,bytes_pools,bytes_kept,residual\n",
         );
+        // Frames are solved keyframes first; the report lists them in time order.
+        frames.sort_by_key(|f| f.frame);
         for f in &frames {
             csv.push_str(&format!(
-                "{},{},{},{:.6},{},{},{},{},{},{},{},{:e}\n",
+                "{},{},{},{:.6},{},{},{},{},{},{},{},{},{},{:e}\n",
                 f.frame,
                 f.window,
                 f.t,
                 f.seconds,
                 f.cells,
+                f.gathered,
+                f.interpolated,
                 f.elements,
                 f.links,
                 f.varying_links,

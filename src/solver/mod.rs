@@ -549,6 +549,159 @@ pub struct FrameCost {
 /// A reconstruction point: patch and quantised parameters.
 type PointKey = (u32, u32, u32);
 
+/// The values a keyframe's reconstruction gathered at its points (radiosity, and
+/// whether the point lies outside every solid), by point key: what the frames
+/// between two keyframes interpolate ([`Between`]).
+///
+/// With [`KeyValues::with_cells`], a point the keyframe did not gather takes the
+/// value of the keyframe's cell that holds it (the stored interpolant), so a frame
+/// that meshes a cell differently can still interpolate its new points.
+#[derive(Clone, Debug, Default)]
+pub struct KeyValues {
+    points: HashMap<PointKey, ([f64; 3], bool)>,
+    /// The keyframe's cells, sorted by patch (as [`Solver::reconstruct`] returns
+    /// them).
+    cells: Vec<Leaf>,
+}
+
+impl KeyValues {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True if no point was gathered.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Adds the keyframe's cells (sorted by patch) for the points it did not gather.
+    pub fn with_cells(mut self, cells: &[Leaf]) -> Self {
+        self.cells = cells.to_vec();
+        self
+    }
+
+    /// The value at point `pk` outside every solid: the one gathered there if it
+    /// was (and lay outside the solids then), else the keyframe's cell holding it.
+    fn at(&self, pk: &PointKey) -> Option<[f64; 3]> {
+        if let Some(&(v, true)) = self.points.get(pk) {
+            return Some(v);
+        }
+        let lo = self.cells.partition_point(|l| l.patch < pk.0);
+        let hi = self.cells.partition_point(|l| l.patch <= pk.0);
+        let (u, v) = (point_param(pk.1), point_param(pk.2));
+        crate::playback::probe::leaf_at(&self.cells[lo..hi], u, v).map(|l| l.eval(u, v))
+    }
+}
+
+/// The parameter a point key's coordinate stands for ([`VertexCache::register`]).
+fn point_param(q: u32) -> f64 {
+    q as f64 / (1u64 << 24) as f64
+}
+
+/// A keyframe of a space-time window: its position (frame index, or any time unit
+/// shared by the keyframes of a [`Between`]) and the values it gathered.
+pub type Keyframe<'k> = (f64, &'k KeyValues);
+
+/// A frame at `t` between two keyframes `a` and `b` of a space-time window, with the
+/// keyframes around them when there are any. A reconstruction point gathered at
+/// both keyframes with the same validity takes the linear interpolation of their
+/// values instead of a final gather when
+/// - their values differ by at most `tol` in every channel, or
+/// - the point's values are linear in time over the keyframes around the interval:
+///   `b` lies within `tol` of the line through `a` and `after`, and `a` within `tol`
+///   of the line through `before` and `b` (each test where that keyframe exists; at
+///   least one must).
+///
+/// Every other point is gathered at the frame.
+///
+/// Why this holds: a point's value changes between keyframes through the
+/// radiosity of its sources, which varies smoothly, and through moving objects
+/// crossing its view of them. A moving blocker larger than the distance it travels
+/// between two keyframes cannot cover and uncover a point's view within that time,
+/// so a point whose values agree at both ends, or follow one line over three
+/// keyframes, saw no shadow edge pass in between; a shadow edge that passes within
+/// the interval puts the value at one end off the line through its neighbours by
+/// about half the edge's contrast, and the point is gathered.
+#[derive(Clone, Copy, Debug)]
+pub struct Between<'k> {
+    /// The keyframe before `a`, if any.
+    pub before: Option<Keyframe<'k>>,
+    /// The keyframe that starts the interval.
+    pub a: Keyframe<'k>,
+    /// The keyframe that ends the interval.
+    pub b: Keyframe<'k>,
+    /// The keyframe after `b`, if any.
+    pub after: Option<Keyframe<'k>>,
+    /// Position of the frame, strictly between `a` and `b`.
+    pub t: f64,
+    /// Largest deviation (radiosity units) of a point's keyframe values from
+    /// agreement or from a line for the point to be interpolated.
+    pub tol: f64,
+}
+
+impl Between<'_> {
+    /// The interpolated value of point `pk` and whether it lies outside every
+    /// solid, if the keyframes allow it. A point both keyframes gathered keeps their
+    /// validity (they must agree on it); any other point asks `outside_now` (one
+    /// ray, no gather) and, if outside the solids, interpolates the keyframes'
+    /// cells ([`KeyValues::with_cells`]).
+    fn value(&self, pk: &PointKey, outside_now: impl FnOnce() -> bool) -> Option<([f64; 3], bool)> {
+        let gathered = |k: &KeyValues| k.points.get(pk).copied();
+        let (va, vb, valid) = match (gathered(self.a.1), gathered(self.b.1)) {
+            (Some((va, oka)), Some((vb, okb))) if oka == okb => (va, vb, oka),
+            (Some(_), Some(_)) => return None,
+            _ => {
+                if !outside_now() {
+                    // Inside a solid: the cell takes its other corners' values.
+                    return Some(([0.0; 3], false));
+                }
+                (self.a.1.at(pk)?, self.b.1.at(pk)?, true)
+            }
+        };
+        let (ta, tb) = (self.a.0, self.b.0);
+        let close = |x: &[f64; 3], y: &[f64; 3]| (0..3).all(|k| (x[k] - y[k]).abs() <= self.tol);
+        // Value at `t` of the line through `(t0, v0)` and `(t1, v1)`; `v0 + α (v1 − v0)`,
+        // so equal values give back exactly the same value.
+        let line = |t0: f64, v0: &[f64; 3], t1: f64, v1: &[f64; 3], t: f64| -> [f64; 3] {
+            let alpha = (t - t0) / (t1 - t0);
+            std::array::from_fn(|k| v0[k] + alpha * (v1[k] - v0[k]))
+        };
+        let linear = || {
+            if self.before.is_none() && self.after.is_none() {
+                return false;
+            }
+            let after_ok = self.after.is_none_or(|(tc, c)| {
+                c.at(pk)
+                    .is_some_and(|vc| close(&vb, &line(ta, &va, tc, &vc, tb)))
+            });
+            let before_ok = self.before.is_none_or(|(tp, p)| {
+                p.at(pk)
+                    .is_some_and(|vp| close(&va, &line(tp, &vp, tb, &vb, ta)))
+            });
+            after_ok && before_ok
+        };
+        if !(close(&va, &vb) || linear()) {
+            return None;
+        }
+        Some((line(ta, &va, tb, &vb, self.t), valid))
+    }
+}
+
+/// What [`Solver::reconstruct_between`] did.
+#[derive(Clone, Debug, Default)]
+pub struct Reconstruction {
+    /// The cells, as [`Solver::reconstruct`] returns them.
+    pub leaves: Vec<Leaf>,
+    /// The values gathered at every point (a keyframe's, for later interpolation;
+    /// empty when interpolating).
+    pub values: KeyValues,
+    /// Points gathered by a final gather.
+    pub gathered: u64,
+    /// Points interpolated between keyframes.
+    pub interpolated: u64,
+}
+
 /// Terms a point gathers that hold over the window, computed now: `(source << 1 |
 /// clear, terms)`.
 type FreshTerms = Vec<(u32, Terms)>;
@@ -1963,12 +2116,7 @@ impl<'a> Solver<'a> {
         let g = &geoms[leaf.ix()];
         let n = DVec3::from_array(g.normal);
         let p = g.patch as usize;
-        // Inside a solid? The first thing straight above is a back face.
-        let diam = self.patches.diameter;
-        let valid = match self.bvh.intersect(x, n * diam, 1e-7, 1.0) {
-            Some(h) => self.patches.normals[h.patch as usize].dot(n) <= 0.0,
-            None => true,
-        };
+        let valid = self.outside_solids(x, n);
         let b = self.elems.radiosities.as_slice();
         let window = self.window.as_ref().filter(|_| !self.elem_moving(leaf));
         let cached = known.and_then(|m| m.get(&pk));
@@ -2091,6 +2239,17 @@ impl<'a> Solver<'a> {
         )
     }
 
+    /// False if the point `x` of a surface facing `n` lies inside a solid: the first
+    /// thing straight above it is a back face (a floor point under a block resting
+    /// on it).
+    fn outside_solids(&self, x: DVec3, n: DVec3) -> bool {
+        let diam = self.patches.diameter;
+        match self.bvh.intersect(x, n * diam, 1e-7, 1.0) {
+            Some(h) => self.patches.normals[h.patch as usize].dot(n) <= 0.0,
+            None => true,
+        }
+    }
+
     /// True if element `s` is a surface (not a cluster) of a patch that emits nothing:
     /// the sources whose rays the final gather may take from elsewhere.
     fn non_emitting_surface(&self, s: usize) -> bool {
@@ -2155,7 +2314,15 @@ impl<'a> Solver<'a> {
     /// The reconstruction cells of [`Solver::solution`] as stored leaves (time range
     /// the solver's), sorted by patch and parameters.
     pub fn reconstruct(&self) -> Vec<Leaf> {
+        self.reconstruct_between(None).leaves
+    }
+
+    /// [`Solver::reconstruct`], with the points of a frame between two keyframes
+    /// interpolated where the keyframes agree (see [`Between`]); `None` gathers
+    /// every point and returns their values (a keyframe).
+    pub fn reconstruct_between(&self, between: Option<&Between>) -> Reconstruction {
         let geoms = self.elems.geoms.as_slice();
+        let interpolated = std::sync::atomic::AtomicU64::new(0);
         // The window's kept terms, taken out of their lock for the parallel gathers.
         let mut known = self
             .window
@@ -2199,6 +2366,14 @@ impl<'a> Solver<'a> {
                 let fresh = cache.evaluate(
                     GATHER_BATCH,
                     |leaf, x, pk| {
+                        let outside = || {
+                            let n = DVec3::from_array(geoms[leaf.ix()].normal);
+                            self.outside_solids(x, n)
+                        };
+                        if let Some((b, valid)) = between.and_then(|bw| bw.value(&pk, outside)) {
+                            interpolated.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                            return (b, valid, Vec::new());
+                        }
                         self.gather_point(leaf, x, known.as_ref().map(|c| &c.map), pk, admit, faint)
                     },
                     &self.patches,
@@ -2264,7 +2439,25 @@ impl<'a> Solver<'a> {
             m.collect(&cache.index);
             *w.points.lock().unwrap_or_else(|e| e.into_inner()) = m;
         }
-        leaves
+        let interpolated = interpolated.into_inner();
+        let values = if between.is_some() {
+            KeyValues::default()
+        } else {
+            KeyValues {
+                points: cache
+                    .index
+                    .iter()
+                    .map(|(&pk, &i)| (pk, cache.values[i]))
+                    .collect(),
+                cells: Vec::new(),
+            }
+        };
+        Reconstruction {
+            leaves,
+            values,
+            gathered: cache.values.len() as u64 - interpolated,
+            interpolated,
+        }
     }
 
     /// Piecewise-constant radiosity of every leaf (element averages), for tests.
@@ -2473,4 +2666,88 @@ fn corner_values(
         out[i] = if ok { v } else { fallback };
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn values(points: &[(u32, [f64; 3], bool)]) -> KeyValues {
+        KeyValues {
+            points: points
+                .iter()
+                .map(|&(i, v, ok)| ((0, i, 0), (v, ok)))
+                .collect(),
+            cells: Vec::new(),
+        }
+    }
+
+    fn grey(v: f64) -> [f64; 3] {
+        [v, v, v]
+    }
+
+    #[test]
+    fn frames_between_keyframes_interpolate_only_what_the_keyframes_allow() {
+        // Point 0 holds its value, point 1 drifts along a line, point 2 sees a shadow
+        // edge pass between a and b, point 3 is missing at b, point 4 is inside a
+        // solid at a only, point 5 drifts too fast but only `a` and `b` exist.
+        let p = values(&[(1, grey(0.8), true), (2, grey(1.0), true)]);
+        let a = values(&[
+            (0, grey(0.5), true),
+            (1, grey(1.0), true),
+            (2, grey(1.0), true),
+            (3, grey(0.5), true),
+            (4, grey(0.5), false),
+            (5, grey(0.5), true),
+        ]);
+        let b = values(&[
+            (0, grey(0.505), true),
+            (1, grey(1.2), true),
+            (2, grey(0.4), true),
+            (4, grey(0.5), true),
+            (5, grey(0.9), true),
+        ]);
+        let c = values(&[(1, grey(1.4), true), (2, grey(0.4), true)]);
+        let between = Between {
+            before: Some((0.0, &p)),
+            a: (4.0, &a),
+            b: (8.0, &b),
+            after: Some((12.0, &c)),
+            t: 5.0,
+            tol: 0.01,
+        };
+        let at = |i: u32| between.value(&(0, i, 0), || true);
+        let (v0, ok0) = at(0).expect("agreeing keyframes interpolate");
+        assert!(ok0);
+        assert!((v0[0] - 0.50125).abs() < 1e-12, "{v0:?}");
+        let (v1, _) = at(1).expect("a value on one line over four keyframes");
+        assert!((v1[1] - 1.05).abs() < 1e-12, "{v1:?}");
+        assert_eq!(at(2), None, "a shadow edge passed between a and b");
+        assert_eq!(at(3), None, "not gathered at b");
+        assert_eq!(at(4), None, "inside a solid at a only");
+        assert_eq!(at(5), None, "no keyframe around the interval holds point 5");
+        // Without keyframes around the interval only agreement counts.
+        let bare = Between {
+            before: None,
+            after: None,
+            ..between
+        };
+        assert!(bare.value(&(0, 0, 0), || true).is_some());
+        assert_eq!(bare.value(&(0, 1, 0), || true), None);
+        // Equal values come back bit for bit (where nothing changes, consecutive
+        // frames are equal and the store merges them).
+        let same = values(&[(0, [0.1, 0.2, 0.3], true)]);
+        let flat = Between {
+            before: None,
+            a: (0.0, &same),
+            b: (3.0, &same),
+            after: None,
+            t: 1.0,
+            tol: 0.0,
+        };
+        assert_eq!(
+            flat.value(&(0, 0, 0), || true),
+            Some(([0.1, 0.2, 0.3], true))
+        );
+    }
 }

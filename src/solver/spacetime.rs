@@ -37,6 +37,16 @@
 //!    between the point and the source at that frame. What a window keeps can be
 //!    bounded ([`SpaceTimeOptions::kept_budget`]): over the bound, the points the
 //!    last frame did not gather are dropped and new ones are gathered every frame.
+//!
+//!    *Keyframes.* Every [`SpaceTimeOptions::key_stride`]-th frame of a window (and
+//!    its first and last) is reconstructed by a final gather at every point; the
+//!    frames between are solved after the keyframes around them, and a point whose
+//!    keyframe values agree, or lie on one line over the keyframes around the
+//!    interval, takes the linear interpolation in time instead of a gather
+//!    ([`Between`]; the paper's elements are constant over a time range, eq. 8, these
+//!    are linear over one). Only points a moving object's shadow or reflection
+//!    changes in a way a line cannot follow, and cells the frame meshes anew, are
+//!    gathered. The frame's leaf system is still solved (those gathers need it).
 //! 3. *Release*: the window's leaves go to the output (one `.rhier` chunk per
 //!    window), and everything the window added to the pools is dropped; the shared
 //!    part is restored exactly as it was, so windows are independent of each other
@@ -58,16 +68,18 @@
 //! *coefficients* of varying links are evaluated per frame and those of constant
 //! links once, and the stored *leaves* are merged in time where their values hold.
 //! Light does not flow between different times (no inter-temporal exchange, which
-//! §4.3 notes is an artefact of the discretisation). What is missing: time-split
-//! links whose coefficient is evaluated once for several frames (eq. 9 over a range)
-//! when a varying link changes slowly; every varying link is evaluated every frame.
+//! §4.3 notes is an artefact of the discretisation); the reconstruction, the
+//! costliest part, is interpolated in time between keyframes where that holds. What
+//! is missing: time-split links whose coefficient is evaluated once for several
+//! frames (eq. 9 over a range) when a varying link changes slowly; every varying link
+//! is evaluated, and the leaf system solved, at every frame.
 
 use std::collections::HashMap;
 use std::time::Instant;
 
 use glam::DVec3;
 
-use super::{Leaf, RoundRecord, SolveOptions, Solver};
+use super::{Between, KeyValues, Leaf, RoundRecord, SolveOptions, Solver};
 use crate::Result;
 use crate::scene::Scene;
 
@@ -85,6 +97,14 @@ pub struct SpaceTimeOptions {
     /// ([`Solver::set_kept_budget`]); `None`: everything that holds over the window.
     /// Changes the work, not the result.
     pub kept_budget: Option<u64>,
+    /// Every `key_stride`-th frame of a window (and its first and last) is a
+    /// keyframe, reconstructed by final gathers at every point; the frames between
+    /// two keyframes interpolate the points where the keyframes allow it ([`Between`]). 1:
+    /// every frame is a keyframe.
+    pub key_stride: u32,
+    /// Two keyframes agree on a point when their values differ by at most this
+    /// fraction of the RMS reflected radiosity in every channel.
+    pub interp_tol: f64,
 }
 
 impl Default for SpaceTimeOptions {
@@ -94,8 +114,32 @@ impl Default for SpaceTimeOptions {
             window: 1.0,
             merge_tol: 0.01,
             kept_budget: None,
+            key_stride: 4,
+            interp_tol: 0.01,
         }
     }
+}
+
+/// Keyframes of a window of `n` frames: every `stride`-th and the last.
+pub fn key_frames(n: usize, stride: u32) -> Vec<usize> {
+    let stride = stride.max(1) as usize;
+    let mut keys: Vec<usize> = (0..n).step_by(stride).collect();
+    if n > 0 && keys.last() != Some(&(n - 1)) {
+        keys.push(n - 1);
+    }
+    keys
+}
+
+/// The order a window's frames are solved in: the frames between two keyframes
+/// come after both keyframes and the one after them (the interpolation looks at the
+/// keyframes around the interval, see [`Between`]).
+pub fn solve_order(keys: &[usize]) -> Vec<usize> {
+    let mut order: Vec<usize> = keys.iter().take(2).copied().collect();
+    for (i, pair) in keys.windows(2).enumerate() {
+        order.extend(keys.get(i + 2));
+        order.extend(pair[0] + 1..pair[1]);
+    }
+    order
 }
 
 /// What one frame cost.
@@ -125,18 +169,24 @@ pub struct FrameRecord {
     pub bytes_kept: u64,
     /// GMRES relative residual.
     pub residual: f64,
+    /// Reconstruction points gathered at this frame.
+    pub gathered: u64,
+    /// Reconstruction points interpolated between keyframes.
+    pub interpolated: u64,
 }
 
 impl FrameRecord {
     /// One line for the terminal.
     pub fn summary(&self) -> String {
         format!(
-            "frame {:4} (window {}) t={:.3}  {:7.2}s  cells {}  elements {}  links {} ({} varying)  rays {}  pools {:.1} MB  kept {:.1} MB  residual {:.1e}",
+            "frame {:4} (window {}) t={:.3}  {:7.2}s  cells {} (points: {} gathered, {} interpolated)  elements {}  links {} ({} varying)  rays {}  pools {:.1} MB  kept {:.1} MB  residual {:.1e}",
             self.frame,
             self.window,
             self.t,
             self.seconds,
             self.cells,
+            self.gathered,
+            self.interpolated,
             self.elements,
             self.links,
             self.varying_links,
@@ -291,6 +341,69 @@ impl Run {
 
 type CellKey = (u32, [[u32; 2]; 4]);
 
+/// Consecutive frames' cells merged into leaves with longer time ranges while their
+/// corners hold within `tol` of the running mean (module docs).
+struct TimeMerge {
+    runs: HashMap<CellKey, Run>,
+    done: Vec<Leaf>,
+    tol: f64,
+}
+
+impl TimeMerge {
+    /// Adds the cells of frame `k` of the window (frames in time order), whose time
+    /// range starts at `f0`.
+    fn push_frame(&mut self, cells: &[Leaf], k: u32, f0: f64) {
+        let tol = self.tol;
+        for cell in cells {
+            let key = cell_key(cell);
+            let vals = cell.b.map(|c| c.map(f64::from));
+            let extend = self.runs.get(&key).is_some_and(|r| {
+                let m = r.mean();
+                (0..cell.corners as usize)
+                    .all(|i| (0..3).all(|c| (vals[i][c] - m[i][c]).abs() <= tol))
+            });
+            if extend {
+                if let Some(r) = self.runs.get_mut(&key) {
+                    for (s, v) in r.sum.iter_mut().zip(vals) {
+                        for c in 0..3 {
+                            s[c] += v[c];
+                        }
+                    }
+                    r.frames += 1;
+                    r.last = k;
+                }
+            } else {
+                if let Some(r) = self.runs.remove(&key) {
+                    self.done.push(r.close(f0));
+                }
+                let mut leaf = *cell;
+                leaf.time = [f0 as f32, f0 as f32];
+                self.runs.insert(
+                    key,
+                    Run {
+                        leaf,
+                        sum: vals,
+                        frames: 1,
+                        last: k,
+                    },
+                );
+            }
+        }
+        // Cells absent from this frame end where it begins.
+        let gone: Vec<CellKey> = self
+            .runs
+            .iter()
+            .filter(|(_, r)| r.last != k)
+            .map(|(key, _)| *key)
+            .collect();
+        for key in gone {
+            if let Some(r) = self.runs.remove(&key) {
+                self.done.push(r.close(f0));
+            }
+        }
+    }
+}
+
 fn cell_key(l: &Leaf) -> CellKey {
     (l.patch, l.uv.map(|c| c.map(f32::to_bits)))
 }
@@ -394,59 +507,53 @@ impl<'a> SpaceTime<'a> {
         let solver = &mut self.solver;
         solver.set_time(frames[0]);
         solver.begin_window(swept_boxes(scene, w0, w1), b_ref)?;
-        let mut runs: HashMap<CellKey, Run> = HashMap::new();
-        let mut done: Vec<Leaf> = Vec::new();
+        let mut merge = TimeMerge {
+            runs: HashMap::new(),
+            done: Vec::new(),
+            tol,
+        };
         let mut frame_cells = 0u64;
-        for (k, &t) in frames.iter().enumerate() {
+        let keys = key_frames(frames.len(), self.st.key_stride);
+        let interp_tol = self.st.interp_tol * b_ref;
+        // The keyframes' values (a few MB for a window), and finished frames waiting
+        // for the ones before them to be merged in time order.
+        let mut key_values: HashMap<usize, KeyValues> = HashMap::new();
+        let mut pending: std::collections::BTreeMap<usize, Vec<Leaf>> = Default::default();
+        let mut next_merge = 0;
+        for k in solve_order(&keys) {
+            let t = frames[k];
             let cost = solver.frame(t, b_ref)?;
-            let [f0, _] = frame_range(first as usize + k, fps, t_start, t_end);
-            let cells = solver.reconstruct();
+            let rec = match keys.binary_search(&k) {
+                Ok(_) => {
+                    let mut r = solver.reconstruct_between(None);
+                    key_values.insert(k, std::mem::take(&mut r.values).with_cells(&r.leaves));
+                    r
+                }
+                Err(i) => {
+                    // `solve_order` solves the keyframes around `k` first.
+                    let key = |j: Option<usize>| {
+                        let f = keys.get(j?)?;
+                        Some((*f as f64, key_values.get(f)?))
+                    };
+                    let between = key(Some(i - 1)).zip(key(Some(i))).map(|(a, b)| Between {
+                        before: key(i.checked_sub(2)),
+                        a,
+                        b,
+                        after: key(Some(i + 1)),
+                        t: k as f64,
+                        tol: interp_tol,
+                    });
+                    solver.reconstruct_between(between.as_ref())
+                }
+            };
+            let cells = rec.leaves;
             frame_cells += cells.len() as u64;
-            for cell in &cells {
-                let key = cell_key(cell);
-                let vals = cell.b.map(|c| c.map(f64::from));
-                let extend = runs.get(&key).is_some_and(|r| {
-                    let m = r.mean();
-                    (0..cell.corners as usize)
-                        .all(|i| (0..3).all(|c| (vals[i][c] - m[i][c]).abs() <= tol))
-                });
-                if extend {
-                    if let Some(r) = runs.get_mut(&key) {
-                        for (s, v) in r.sum.iter_mut().zip(vals) {
-                            for c in 0..3 {
-                                s[c] += v[c];
-                            }
-                        }
-                        r.frames += 1;
-                        r.last = k as u32;
-                    }
-                } else {
-                    if let Some(r) = runs.remove(&key) {
-                        done.push(r.close(f0));
-                    }
-                    let mut leaf = *cell;
-                    leaf.time = [f0 as f32, f0 as f32];
-                    runs.insert(
-                        key,
-                        Run {
-                            leaf,
-                            sum: vals,
-                            frames: 1,
-                            last: k as u32,
-                        },
-                    );
-                }
-            }
-            // Cells absent from this frame end where it begins.
-            let gone: Vec<CellKey> = runs
-                .iter()
-                .filter(|(_, r)| r.last != k as u32)
-                .map(|(key, _)| *key)
-                .collect();
-            for key in gone {
-                if let Some(r) = runs.remove(&key) {
-                    done.push(r.close(f0));
-                }
+            let n_cells = cells.len() as u64;
+            pending.insert(k, cells);
+            while let Some(cells) = pending.remove(&next_merge) {
+                let [f0, _] = frame_range(first as usize + next_merge, fps, t_start, t_end);
+                merge.push_frame(&cells, next_merge as u32, f0);
+                next_merge += 1;
             }
             let bytes = (solver.elems.bytes() + solver.links.bytes()) as u64;
             self.stats.peak_pool_bytes = self.stats.peak_pool_bytes.max(bytes);
@@ -458,7 +565,7 @@ impl<'a> SpaceTime<'a> {
                 window: wi as u32,
                 t,
                 seconds: self.start.elapsed().as_secs_f64(),
-                cells: cells.len() as u64,
+                cells: n_cells,
                 elements: solver.elems.len() as u64,
                 links: solver.links.len() as u64,
                 varying_links: cost.varying_links,
@@ -466,8 +573,11 @@ impl<'a> SpaceTime<'a> {
                 bytes_pools: bytes,
                 bytes_kept: kept,
                 residual: cost.residual,
+                gathered: rec.gathered,
+                interpolated: rec.interpolated,
             });
         }
+        let TimeMerge { runs, mut done, .. } = merge;
         done.extend(runs.into_values().map(|r| r.close(w1)));
         // A total order (cells of one patch and start time differ in some corner), so
         // the hash map's order never reaches the file.
@@ -541,5 +651,33 @@ mod tests {
         let w = group_frames(&times[..5], 2);
         assert_eq!(w.iter().map(Vec::len).collect::<Vec<_>>(), [2, 2, 1]);
         assert_eq!(group_frames(&times[..3], 25), vec![times[..3].to_vec()]);
+    }
+
+    #[test]
+    fn keyframes_come_before_the_frames_between_them() {
+        assert_eq!(key_frames(26, 4), [0, 4, 8, 12, 16, 20, 24, 25]);
+        assert_eq!(key_frames(25, 4), [0, 4, 8, 12, 16, 20, 24]);
+        assert_eq!(key_frames(3, 1), [0, 1, 2]);
+        assert_eq!(key_frames(1, 4), [0]);
+        assert_eq!(key_frames(0, 4), Vec::<usize>::new());
+        for (n, stride) in [(26, 4), (25, 8), (5, 2), (1, 3), (7, 1)] {
+            let keys = key_frames(n, stride);
+            let order = solve_order(&keys);
+            // Every frame once.
+            let mut sorted = order.clone();
+            sorted.sort_unstable();
+            assert_eq!(sorted, (0..n).collect::<Vec<_>>(), "n {n}, stride {stride}");
+            // A frame between keyframes comes after the keyframes around it.
+            let at = |f: usize| order.iter().position(|&x| x == f).unwrap_or(usize::MAX);
+            for f in 0..n {
+                if let Err(i) = keys.binary_search(&f) {
+                    for j in [i.checked_sub(2), Some(i - 1), Some(i), Some(i + 1)] {
+                        if let Some(&key) = j.and_then(|j| keys.get(j)) {
+                            assert!(at(key) < at(f), "n {n}, stride {stride}: {key} before {f}");
+                        }
+                    }
+                }
+            }
+        }
     }
 }
