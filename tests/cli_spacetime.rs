@@ -92,6 +92,10 @@ fn bad_time_settings_are_refused() {
         (vec!["--window=-1"], 1, "--window"),
         (vec!["--keep-links"], 1, "--keep-links"),
         (vec!["--fps", "many"], 2, "--fps"),
+        (vec!["--key-stride", "0"], 1, "--key-stride"),
+        (vec!["--key-stride=-1"], 2, "--key-stride"),
+        (vec!["--interp-tol", "0"], 1, "--interp-tol"),
+        (vec!["--interp-tol", "NaN"], 1, "--interp-tol"),
     ] {
         let o = rhier()
             .args(["solve", SCENE, "-q", "-o"])

@@ -2750,4 +2750,36 @@ mod tests {
             Some(([0.1, 0.2, 0.3], true))
         );
     }
+
+    #[test]
+    fn a_point_no_keyframe_gathered_interpolates_their_cells() {
+        // Patch 7 is one quad cell at each keyframe, corners 1, 2, 2, 1 at `a` (a
+        // ramp in u) and 0.005 brighter at `b`; the frame asks for (0.25, 0.5).
+        let cell = |lift: f32| Leaf {
+            patch: 7,
+            corners: 4,
+            time: [0.0, 0.0],
+            uv: [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            b: [1.0, 2.0, 2.0, 1.0].map(|v| [v + lift; 3]),
+        };
+        let a = KeyValues::default().with_cells(&[cell(0.0)]);
+        let b = KeyValues::default().with_cells(&[cell(0.005)]);
+        let between = Between {
+            before: None,
+            a: (0.0, &a),
+            b: (2.0, &b),
+            after: None,
+            t: 1.0,
+            tol: 0.01,
+        };
+        let q = |x: f64| (x * (1u64 << 24) as f64) as u32;
+        let pk = (7, q(0.25), q(0.5));
+        let (v, valid) = between.value(&pk, || true).expect("the cells agree");
+        assert!(valid);
+        assert!((v[0] - 1.2525).abs() < 1e-6, "{v:?}");
+        // Inside a solid now: no value is needed, no gather is made.
+        assert_eq!(between.value(&pk, || false), Some(([0.0; 3], false)));
+        // A patch neither keyframe has cells on is gathered.
+        assert_eq!(between.value(&(8, q(0.25), q(0.5)), || true), None);
+    }
 }
