@@ -142,13 +142,14 @@ pub struct Args {
     #[arg(long, default_value_t = 0.01)]
     pub merge_tol: f64,
     /// Space-time: every N-th frame of a window (and its first and last) is a
-    /// keyframe gathered at every reconstruction point; the frames between take
-    /// the points on which their two keyframes agree by interpolation (1: gather
-    /// every frame).
+    /// keyframe gathered at every reconstruction point; the frames between
+    /// interpolate the points where the keyframes around them agree or follow a
+    /// line, and gather the rest (1: gather every frame).
     #[arg(long, default_value_t = SpaceTimeOptions::default().key_stride)]
     pub key_stride: u32,
-    /// Space-time: two keyframes agree on a point when their values differ by at
-    /// most this fraction of the RMS reflected radiosity.
+    /// Space-time: how far (a fraction of the RMS reflected radiosity) a point's
+    /// keyframe values may stray from agreeing, or from a line, for the frames
+    /// between to interpolate it.
     #[arg(long, default_value_t = SpaceTimeOptions::default().interp_tol)]
     pub interp_tol: f64,
     /// Continue an interrupted space-time solve from its last finished window (kept

@@ -102,8 +102,9 @@ pub struct SpaceTimeOptions {
     /// two keyframes interpolate the points where the keyframes allow it ([`Between`]). 1:
     /// every frame is a keyframe.
     pub key_stride: u32,
-    /// Two keyframes agree on a point when their values differ by at most this
-    /// fraction of the RMS reflected radiosity in every channel.
+    /// A point is interpolated between two keyframes when their values differ by at
+    /// most this fraction of the RMS reflected radiosity in every channel, or lie
+    /// within it of a line through the keyframes around them ([`Between`]).
     pub interp_tol: f64,
 }
 
