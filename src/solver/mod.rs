@@ -546,6 +546,29 @@ pub struct FrameCost {
     pub residual: f64,
 }
 
+/// Radiosity of the elements a window's frames share, at one frame
+/// ([`Solver::shared_radiosity`]).
+#[derive(Clone, Debug, Default)]
+pub struct SharedRadiosity {
+    b: Vec<[f32; 3]>,
+    dir: Vec<[f32; 3]>,
+    /// Power (area × max channel) of each moving surface element, in id order.
+    moving_power: Vec<f64>,
+}
+
+impl SharedRadiosity {
+    /// True if the moving surfaces hand on the same light at `a` and `b`: the power
+    /// each emits changes by at most `tol` times their total power.
+    pub fn moving_power_holds(a: &SharedRadiosity, b: &SharedRadiosity, tol: f64) -> bool {
+        let total: f64 = b.moving_power.iter().sum();
+        a.moving_power.len() == b.moving_power.len()
+            && a.moving_power
+                .iter()
+                .zip(&b.moving_power)
+                .all(|(x, y)| (x - y).abs() <= tol * total)
+    }
+}
+
 /// A reconstruction point: patch and quantised parameters.
 type PointKey = (u32, u32, u32);
 
@@ -1405,6 +1428,53 @@ impl<'a> Solver<'a> {
     /// keeps everything that holds over the window. Applies from the next window.
     pub fn set_kept_budget(&mut self, bytes: Option<u64>) {
         self.kept_budget = bytes.map(|b| usize::try_from(b).unwrap_or(usize::MAX));
+    }
+
+    /// Places the moving objects at `t` (inside the current window) without solving:
+    /// the hierarchy of the last frame solved stays, and the radiosity of the
+    /// window's own elements (those every frame of the window shares) is set to
+    /// `B_a + alpha · (B_b − B_a)` between two earlier frames' values `a` and `b`
+    /// ([`Solver::shared_radiosity`]; `b` is the last frame solved). The elements
+    /// that frame refined keep its values. For the gathers of a frame between two
+    /// keyframes ([`spacetime`]).
+    pub fn place_between(&mut self, t: f64, a: &SharedRadiosity, b: &SharedRadiosity, alpha: f64) {
+        let n = a.b.len().min(b.b.len()).min(self.elems.len());
+        let lerp =
+            |x: [f32; 3], y: [f32; 3]| std::array::from_fn(|k| x[k] + alpha as f32 * (y[k] - x[k]));
+        for (i, out) in self.elems.radiosities.as_mut_slice()[..n]
+            .iter_mut()
+            .enumerate()
+        {
+            *out = lerp(a.b[i], b.b[i]);
+        }
+        for (i, out) in self.elems.directions.as_mut_slice()[..n]
+            .iter_mut()
+            .enumerate()
+        {
+            *out = lerp(a.dir[i], b.dir[i]);
+        }
+        self.set_time(t);
+    }
+
+    /// The radiosity (and power-weighted directions) of the elements every frame of
+    /// the current window shares, as solved now.
+    pub fn shared_radiosity(&self) -> SharedRadiosity {
+        let n = self
+            .window
+            .as_ref()
+            .map_or(self.elems.len(), |w| w.frame.elems_len);
+        let b = self.elems.radiosities.as_slice()[..n].to_vec();
+        // Power of the moving surfaces (what they hand the rest of the scene).
+        let geoms = self.elems.geoms.as_slice();
+        let moving_power = (0..n)
+            .filter(|&e| geoms[e].patch != u32::MAX && self.elem_moving(ElementId(e as u32)))
+            .map(|e| geoms[e].area * b[e].iter().copied().fold(0.0f32, f32::max) as f64)
+            .collect();
+        SharedRadiosity {
+            b,
+            dir: self.elems.directions.as_slice()[..n].to_vec(),
+            moving_power,
+        }
     }
 
     /// Bytes of what the current window keeps: final-gather terms and leaf-row
@@ -2749,6 +2819,34 @@ mod tests {
             flat.value(&(0, 0, 0), || true),
             Some(([0.1, 0.2, 0.3], true))
         );
+    }
+
+    #[test]
+    fn moving_power_holds_within_a_share_of_the_moving_total() {
+        let at = |p: &[f64]| SharedRadiosity {
+            moving_power: p.to_vec(),
+            ..SharedRadiosity::default()
+        };
+        let a = at(&[10.0, 90.0]);
+        // 1 of a total of 100 moves: within 1%, not within 0.5%.
+        assert!(SharedRadiosity::moving_power_holds(
+            &a,
+            &at(&[11.0, 89.0]),
+            0.01
+        ));
+        assert!(!SharedRadiosity::moving_power_holds(
+            &a,
+            &at(&[11.0, 89.0]),
+            0.005
+        ));
+        // A panel sliding over a lamp: one surface's light doubles.
+        assert!(!SharedRadiosity::moving_power_holds(
+            &a,
+            &at(&[20.0, 90.0]),
+            0.01
+        ));
+        // Different surfaces (never within one window): not comparable.
+        assert!(!SharedRadiosity::moving_power_holds(&a, &at(&[10.0]), 0.5));
     }
 
     #[test]
