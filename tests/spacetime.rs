@@ -565,6 +565,36 @@ fn static_masks_plus_moving_rays_equal_full_visibility() {
     );
 }
 
+/// One window of 9 frames (fps 10 over 0.8 s) solved with keyframes every `stride`
+/// frames: its leaves and every frame's record.
+fn keyed_run(scene: &Scene, stride: u32) -> (Vec<WindowOutput>, Vec<spacetime::FrameRecord>) {
+    let o = SpaceTimeOptions {
+        key_stride: stride,
+        ..st(10.0, 0.8)
+    };
+    let mut frames = Vec::new();
+    let mut windows = Vec::new();
+    spacetime::solve(
+        scene,
+        opts(),
+        &o,
+        |f| frames.push(*f),
+        |w| {
+            windows.push(w);
+            Ok(())
+        },
+    )
+    .unwrap();
+    (windows, frames)
+}
+
+/// A static solve of a sliding-block scene at its start (for its patches).
+fn sliding_base(scene: &Scene) -> Solution {
+    let mut s = Solver::at_time(scene, opts(), 0.0, [0.0, 0.8]).unwrap();
+    s.run(|_, _| {}).unwrap();
+    s.solution()
+}
+
 #[test]
 fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
     // One window of 9 frames (fps 10 over 0.8 s), keyframes 0, 4 and 8: the frames
@@ -572,28 +602,8 @@ fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
     // rest (the floor the block's shadow crosses). Against a fine static solve of
     // each frame, they must be as close as the same frames gathered everywhere.
     let scene = sliding_block(-60.0, 0.8);
-    let run = |stride: u32| {
-        let o = SpaceTimeOptions {
-            key_stride: stride,
-            ..st(10.0, 0.8)
-        };
-        let mut frames = Vec::new();
-        let mut windows = Vec::new();
-        spacetime::solve(
-            &scene,
-            opts(),
-            &o,
-            |f| frames.push(*f),
-            |w| {
-                windows.push(w);
-                Ok(())
-            },
-        )
-        .unwrap();
-        (windows, frames)
-    };
-    let (every, every_frames) = run(1);
-    let (keyed, keyed_frames) = run(4);
+    let (every, every_frames) = keyed_run(&scene, 1);
+    let (keyed, keyed_frames) = keyed_run(&scene, 4);
     assert_eq!((every.len(), keyed.len()), (1, 1));
     assert!(every_frames.iter().all(|f| f.interpolated == 0));
     let between = |f: &&spacetime::FrameRecord| f.frame % 4 != 0;
@@ -625,11 +635,7 @@ fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
         gathered * 20 > interpolated,
         "the moving shadow is gathered"
     );
-    let base = {
-        let mut s = Solver::at_time(&scene, opts(), 0.0, [0.0, 0.8]).unwrap();
-        s.run(|_, _| {}).unwrap();
-        s.solution()
-    };
+    let base = sliding_base(&scene);
     let (every, keyed) = (
         as_solution(&scene, &base, &every),
         as_solution(&scene, &base, &keyed),
@@ -691,28 +697,8 @@ fn frames_between_keyframes_skip_the_solve_where_moving_light_holds() {
     // from the keyframe's hierarchy with interpolated radiosity. They must match
     // the same frames solved and gathered everywhere.
     let scene = sliding_block(-6.0, 0.8);
-    let run = |stride: u32| {
-        let o = SpaceTimeOptions {
-            key_stride: stride,
-            ..st(10.0, 0.8)
-        };
-        let mut frames = Vec::new();
-        let mut windows = Vec::new();
-        spacetime::solve(
-            &scene,
-            opts(),
-            &o,
-            |f| frames.push(*f),
-            |w| {
-                windows.push(w);
-                Ok(())
-            },
-        )
-        .unwrap();
-        (windows, frames)
-    };
-    let (every, _) = run(1);
-    let (keyed, keyed_frames) = run(4);
+    let (every, _) = keyed_run(&scene, 1);
+    let (keyed, keyed_frames) = keyed_run(&scene, 4);
     let skipped: Vec<u32> = keyed_frames
         .iter()
         .filter(|f| f.varying_links == 0)
@@ -726,11 +712,7 @@ fn frames_between_keyframes_skip_the_solve_where_moving_light_holds() {
         .map(|f| f.gathered)
         .sum();
     assert!(gathered > 0, "some points are gathered without a solve");
-    let base = {
-        let mut s = Solver::at_time(&scene, opts(), 0.0, [0.0, 0.8]).unwrap();
-        s.run(|_, _| {}).unwrap();
-        s.solution()
-    };
+    let base = sliding_base(&scene);
     let (every, keyed) = (
         as_solution(&scene, &base, &every),
         as_solution(&scene, &base, &keyed),
