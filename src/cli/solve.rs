@@ -143,8 +143,8 @@ pub struct Args {
     pub merge_tol: f64,
     /// Space-time: every N-th frame of a window (and its first and last) is a
     /// keyframe gathered at every reconstruction point; the frames between
-    /// interpolate the points where the keyframes around them agree or follow a
-    /// line, and gather the rest (1: gather every frame).
+    /// interpolate the points where their two keyframes agree, or follow a line
+    /// with the keyframe before, and gather the rest (1: gather every frame).
     #[arg(long, default_value_t = SpaceTimeOptions::default().key_stride)]
     pub key_stride: u32,
     /// Space-time: how far (a fraction of the RMS reflected radiosity) a point's

@@ -588,16 +588,6 @@ pub struct KeyValues {
 }
 
 impl KeyValues {
-    /// Number of points.
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    /// True if no point was gathered.
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
-    }
-
     /// Adds the keyframe's cells (sorted by patch) for the points it did not gather.
     pub fn with_cells(mut self, cells: &[Leaf]) -> Self {
         self.cells = cells.to_vec();
@@ -627,14 +617,12 @@ fn point_param(q: u32) -> f64 {
 pub type Keyframe<'k> = (f64, &'k KeyValues);
 
 /// A frame at `t` between two keyframes `a` and `b` of a space-time window, with the
-/// keyframes around them when there are any. A reconstruction point gathered at
+/// keyframe before them when there is one. A reconstruction point gathered at
 /// both keyframes with the same validity takes the linear interpolation of their
 /// values instead of a final gather when
 /// - their values differ by at most `tol` in every channel, or
-/// - the point's values are linear in time over the keyframes around the interval:
-///   `b` lies within `tol` of the line through `a` and `after`, and `a` within `tol`
-///   of the line through `before` and `b` (each test where that keyframe exists; at
-///   least one must).
+/// - the point's values are linear in time over the three keyframes: `a` lies
+///   within `tol` of the line through `before` and `b`.
 ///
 /// Every other point is gathered at the frame.
 ///
@@ -644,8 +632,8 @@ pub type Keyframe<'k> = (f64, &'k KeyValues);
 /// between two keyframes cannot cover and uncover a point's view within that time,
 /// so a point whose values agree at both ends, or follow one line over three
 /// keyframes, saw no shadow edge pass in between; a shadow edge that passes within
-/// the interval puts the value at one end off the line through its neighbours by
-/// about half the edge's contrast, and the point is gathered.
+/// the interval puts `a` off the line through `before` and `b` by about half the
+/// edge's contrast, and the point is gathered.
 #[derive(Clone, Copy, Debug)]
 pub struct Between<'k> {
     /// The keyframe before `a`, if any.
@@ -654,8 +642,6 @@ pub struct Between<'k> {
     pub a: Keyframe<'k>,
     /// The keyframe that ends the interval.
     pub b: Keyframe<'k>,
-    /// The keyframe after `b`, if any.
-    pub after: Option<Keyframe<'k>>,
     /// Position of the frame, strictly between `a` and `b`.
     pub t: f64,
     /// Largest deviation (radiosity units) of a point's keyframe values from
@@ -691,18 +677,10 @@ impl Between<'_> {
             std::array::from_fn(|k| v0[k] + alpha * (v1[k] - v0[k]))
         };
         let linear = || {
-            if self.before.is_none() && self.after.is_none() {
-                return false;
-            }
-            let after_ok = self.after.is_none_or(|(tc, c)| {
-                c.at(pk)
-                    .is_some_and(|vc| close(&vb, &line(ta, &va, tc, &vc, tb)))
-            });
-            let before_ok = self.before.is_none_or(|(tp, p)| {
+            self.before.is_some_and(|(tp, p)| {
                 p.at(pk)
                     .is_some_and(|vp| close(&va, &line(tp, &vp, tb, &vb, ta)))
-            });
-            after_ok && before_ok
+            })
         };
         if !(close(&va, &vb) || linear()) {
             return None;
@@ -2760,7 +2738,7 @@ mod tests {
     fn frames_between_keyframes_interpolate_only_what_the_keyframes_allow() {
         // Point 0 holds its value, point 1 drifts along a line, point 2 sees a shadow
         // edge pass between a and b, point 3 is missing at b, point 4 is inside a
-        // solid at a only, point 5 drifts too fast but only `a` and `b` exist.
+        // solid at a only, point 5 drifts too fast and the keyframe before lacks it.
         let p = values(&[(1, grey(0.8), true), (2, grey(1.0), true)]);
         let a = values(&[
             (0, grey(0.5), true),
@@ -2777,12 +2755,10 @@ mod tests {
             (4, grey(0.5), true),
             (5, grey(0.9), true),
         ]);
-        let c = values(&[(1, grey(1.4), true), (2, grey(0.4), true)]);
         let between = Between {
             before: Some((0.0, &p)),
             a: (4.0, &a),
             b: (8.0, &b),
-            after: Some((12.0, &c)),
             t: 5.0,
             tol: 0.01,
         };
@@ -2790,16 +2766,15 @@ mod tests {
         let (v0, ok0) = at(0).expect("agreeing keyframes interpolate");
         assert!(ok0);
         assert!((v0[0] - 0.50125).abs() < 1e-12, "{v0:?}");
-        let (v1, _) = at(1).expect("a value on one line over four keyframes");
+        let (v1, _) = at(1).expect("a value on one line over three keyframes");
         assert!((v1[1] - 1.05).abs() < 1e-12, "{v1:?}");
         assert_eq!(at(2), None, "a shadow edge passed between a and b");
         assert_eq!(at(3), None, "not gathered at b");
         assert_eq!(at(4), None, "inside a solid at a only");
-        assert_eq!(at(5), None, "no keyframe around the interval holds point 5");
-        // Without keyframes around the interval only agreement counts.
+        assert_eq!(at(5), None, "the keyframe before does not hold point 5");
+        // Without a keyframe before the interval only agreement counts.
         let bare = Between {
             before: None,
-            after: None,
             ..between
         };
         assert!(bare.value(&(0, 0, 0), || true).is_some());
@@ -2811,7 +2786,6 @@ mod tests {
             before: None,
             a: (0.0, &same),
             b: (3.0, &same),
-            after: None,
             t: 1.0,
             tol: 0.0,
         };
@@ -2866,7 +2840,6 @@ mod tests {
             before: None,
             a: (0.0, &a),
             b: (2.0, &b),
-            after: None,
             t: 1.0,
             tol: 0.01,
         };

@@ -112,8 +112,9 @@ pub struct SpaceTimeOptions {
     /// every frame is a keyframe.
     pub key_stride: u32,
     /// A point is interpolated between two keyframes when their values differ by at
-    /// most this fraction of the RMS reflected radiosity in every channel, or lie
-    /// within it of a line through the keyframes around them ([`Between`]).
+    /// most this fraction of the RMS reflected radiosity in every channel, or the
+    /// earlier lies within it of the line through the keyframe before and the later
+    /// ([`Between`]).
     pub interp_tol: f64,
 }
 
@@ -576,7 +577,6 @@ impl<'a> SpaceTime<'a> {
                         before: key(i.checked_sub(2)),
                         a,
                         b,
-                        after: None,
                         t: k as f64,
                         tol: interp_tol,
                     });
