@@ -11,8 +11,10 @@ pub fn grid_points(patches: &Patches, k: usize) -> Vec<(DVec3, DVec3)> {
         for a in 0..k {
             for b in 0..k {
                 let (u, v) = ((a as f64 + 0.5) / k as f64, (b as f64 + 0.5) / k as f64);
-                let (u, v) = if patches.polys[i].n == 3 && u + v > 1.0 {
-                    (1.0 - u, 1.0 - v)
+                // Square to triangle strictly inside (folding at `u + v = 1` would put
+                // points on the long edge, in the corner of two walls).
+                let (u, v) = if patches.polys[i].n == 3 {
+                    (1.0 - u.sqrt(), u.sqrt() * v)
                 } else {
                     (u, v)
                 };
