@@ -54,6 +54,17 @@
 //! children in that row ([`SolveOptions::row_open_ratio`]), which keeps the leaf
 //! system from losing the light of bright parts of big sources.
 //!
+//! **Sources whose radiosity varies.** The final gather multiplies a source's
+//! *average* radiosity by the exact factor of the whole source, which is off by the
+//! covariance of `F(x, y)` and `B(y)` over the source: about `(r/d) ΔB_s` of the
+//! factor, `r/d` the source's radius over its distance and `ΔB_s` the spread of the
+//! leaf radiosities under it. A surface source is opened into its children while
+//! `(r/d) ΔB_s > open_spread · B_ref` ([`SolveOptions::open_spread`]); the children
+//! share the visible fraction the rays to the whole source measured, so the opening
+//! costs point-to-polygon factors, not rays. The errors have one sign where the
+//! brightest parts of a source are the nearest (the Cornell ceiling sees the floor's
+//! bright middle nearest): that ceiling was 3.8% too dark, 1.9% with the opening.
+//!
 //! Results are deterministic for a given seed and thread count (ray jitter is hashed
 //! from link ids; parallel loops write disjoint outputs).
 
@@ -95,6 +106,24 @@ const SHARED_PASSES: usize = 2;
 /// energy test keeps 0.7% (1e-3) or 1.2% (1e-2) of its 2.8% deficit.
 const ROW_OPEN_MIN_COEF: f64 = 1e-2;
 
+/// Default of [`SolveOptions::open_spread`] (tuned in BENCHMARKS.md, "Sources whose
+/// radiosity varies").
+pub const OPEN_SPREAD: f64 = 0.05;
+
+/// What one reconstruction's final gathers measure their sources against
+/// ([`Solver::gather_point`], [`Solver::point_terms`]).
+struct GatherLimits {
+    /// A non-emitting surface source bounded below this (absolute radiosity) takes
+    /// its link's visibility instead of rays ([`SolveOptions::faint_source`]).
+    faint: f64,
+    /// A surface source with `r/d · ΔB_s` above this (absolute) is opened
+    /// ([`SolveOptions::open_spread`]); infinite: never.
+    open_spread: f64,
+    /// Per element: `ΔB_s`, the largest channel's spread (max − min) of the leaf
+    /// radiosities under it (0 for a leaf). 4 bytes per element.
+    spread: Vec<f32>,
+}
+
 /// Fraction of the way from a corner to its leaf's centroid where the corner's
 /// final gather is evaluated.
 pub const CORNER_INSET: f64 = 1e-3;
@@ -118,6 +147,11 @@ pub struct SolveOptions {
     /// A source seen from a corner under a half-angle above this (radius/distance) is
     /// opened into its children during reconstruction.
     pub open_ratio: f64,
+    /// Final gather: a surface source is also opened into its children while
+    /// `r/d · ΔB_s` exceeds this times the RMS radiosity (`r/d` as for
+    /// [`Self::open_ratio`], `ΔB_s` the spread of the leaf radiosities under it; 0:
+    /// never). See the module docs, "Sources whose radiosity varies".
+    pub open_spread: f64,
     /// Most refine-and-solve rounds.
     pub max_rounds: u32,
     /// Stop when the estimated error is below this.
@@ -170,6 +204,7 @@ impl Default for SolveOptions {
             cluster_rays: 8,
             corner_rays: 8,
             open_ratio: 0.5,
+            open_spread: OPEN_SPREAD,
             max_rounds: 8,
             target_error: None,
             time_budget: None,
@@ -2013,6 +2048,7 @@ impl<'a> Solver<'a> {
         clear: bool,
         key: u64,
         swept: Option<&[(DVec3, DVec3)]>,
+        limits: &GatherLimits,
         out: &mut Terms,
     ) {
         let geoms = self.elems.geoms.as_slice();
@@ -2030,7 +2066,45 @@ impl<'a> Solver<'a> {
                 sw.iter()
                     .any(|&(a, b)| a.cmple(hi).all() && lo.cmple(b).all())
             });
-        if node.child_count > 0 && (rad / d > self.opts.open_ratio || swept_cluster) {
+        // A surface whose radiosity varies is opened too: its average would be off by
+        // about `(r/d) ΔB_s` of its factor (module docs, "Sources whose radiosity
+        // varies").
+        let varies = gs.patch != u32::MAX && rad / d * limits.spread[s] as f64 > limits.open_spread;
+        let large = rad / d > self.opts.open_ratio || swept_cluster;
+        // (Where a moving object may cross the rays, the children get rays of their
+        // own, kept as masked terms.)
+        let still = swept.is_none_or(|sw| point_shaft_clear(x, n, gs, sw));
+        if node.child_count > 0 && !large && varies && !clear && still {
+            // Opened for its radiosity only: the children share the source's visible
+            // fraction, from the rays the source would have had unopened.
+            let ps = oracle::poly(gs);
+            let ns = DVec3::from_array(gs.normal);
+            let skip = [receiver_patch, gs.patch];
+            let m = self.corner_rays_to(gs);
+            let v = oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key, skip);
+            if v <= 0.0 {
+                return;
+            }
+            let first = out.fixed.len();
+            for ch in node.first_child..node.first_child + node.child_count {
+                self.point_terms(
+                    x,
+                    n,
+                    receiver_patch,
+                    ch as usize,
+                    true,
+                    key,
+                    None,
+                    limits,
+                    out,
+                );
+            }
+            for t in &mut out.fixed[first..] {
+                t.1 *= v;
+            }
+            return;
+        }
+        if node.child_count > 0 && (large || varies) {
             for ch in node.first_child..node.first_child + node.child_count {
                 self.point_terms(
                     x,
@@ -2040,6 +2114,7 @@ impl<'a> Solver<'a> {
                     clear,
                     oracle::hash3(key, ch as u64, 1),
                     swept,
+                    limits,
                     out,
                 );
             }
@@ -2138,8 +2213,8 @@ impl<'a> Solver<'a> {
     /// source misses every box the moving objects sweep. `fresh` returns the terms of
     /// such links computed now, to be merged into `known` by the caller.
     ///
-    /// `faint`: a non-emitting surface source whose light at `x` is bounded below
-    /// this (`ρ B_s A_s / (π d²)`, `d` the distance to its bounding sphere) is
+    /// `limits.faint`: a non-emitting surface source whose light at `x` is bounded
+    /// below this (`ρ B_s A_s / (π d²)`, `d` the distance to its bounding sphere) is
     /// gathered with its link's visibility instead of rays (0: rays always).
     fn gather_point(
         &self,
@@ -2148,8 +2223,9 @@ impl<'a> Solver<'a> {
         known: Option<&HashMap<PointKey, PointTerms>>,
         pk: PointKey,
         admit: bool,
-        faint: f64,
+        limits: &GatherLimits,
     ) -> ([f64; 3], bool, FreshTerms) {
+        let faint = limits.faint;
         // Ray jitter from the point's place, so that a point gathered again (another
         // frame, another cell) casts the same rays.
         let point_key = oracle::hash3(
@@ -2253,6 +2329,7 @@ impl<'a> Solver<'a> {
                     cheap.is_some() || clear || (keep.is_none() && t.shaft_clear()),
                     key,
                     keep.map(|w| &w.swept[..]),
+                    limits,
                     &mut terms,
                 );
                 if let Some(v) = cheap {
@@ -2313,6 +2390,39 @@ impl<'a> Solver<'a> {
         }
         let i = row.binary_search_by_key(&l, |k| k.link).ok()?;
         Some(row[i].vis as f64)
+    }
+
+    /// The limits of a reconstruction at radiosity scale `b_ref`: the options
+    /// scaled, and each element's radiosity spread from the pool's radiosities as
+    /// they are now (leaves up, children after their parent in the pool).
+    fn gather_limits(&self, b_ref: f64) -> GatherLimits {
+        let nodes = self.elems.nodes.as_slice();
+        let b = self.elems.radiosities.as_slice();
+        let mut lo = b.to_vec();
+        let mut hi = b.to_vec();
+        for i in (0..nodes.len()).rev() {
+            let nd = nodes[i];
+            for c in nd.first_child..nd.first_child + nd.child_count {
+                for k in 0..3 {
+                    lo[i][k] = lo[i][k].min(lo[c as usize][k]);
+                    hi[i][k] = hi[i][k].max(hi[c as usize][k]);
+                }
+            }
+        }
+        let spread = lo
+            .iter()
+            .zip(&hi)
+            .map(|(l, h)| (0..3).map(|k| h[k] - l[k]).fold(0.0f32, f32::max))
+            .collect();
+        GatherLimits {
+            faint: self.opts.faint_source * b_ref,
+            open_spread: if self.opts.open_spread > 0.0 {
+                self.opts.open_spread * b_ref
+            } else {
+                f64::INFINITY
+            },
+            spread,
+        }
     }
 
     /// True if surface source `s` is no emitter and can hand the point `x` less
@@ -2378,7 +2488,7 @@ impl<'a> Solver<'a> {
             .map(|w| std::mem::take(&mut *w.points.lock().unwrap_or_else(|e| e.into_inner())));
         let b_ref = self.rms_radiosity();
         let tol = self.opts.recon_tol * b_ref;
-        let faint = self.opts.faint_source * b_ref;
+        let limits = self.gather_limits(b_ref);
         let min_area = (self.opts.recon_min_size * self.patches.diameter).powi(2);
         let mut cache = VertexCache::default();
         let mut cells: Vec<Cell> = self
@@ -2422,7 +2532,14 @@ impl<'a> Solver<'a> {
                             interpolated.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                             return (b, valid, Vec::new());
                         }
-                        self.gather_point(leaf, x, known.as_ref().map(|c| &c.map), pk, admit, faint)
+                        self.gather_point(
+                            leaf,
+                            x,
+                            known.as_ref().map(|c| &c.map),
+                            pk,
+                            admit,
+                            &limits,
+                        )
                     },
                     &self.patches,
                 );
