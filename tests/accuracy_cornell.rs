@@ -96,3 +96,81 @@ fn the_ceiling_lit_only_by_the_walls_is_not_darkened() {
         walls * 100.0
     );
 }
+
+/// The solve's estimated error and its true error, relative RMS of the reflected
+/// radiosity over a 4 × 4 grid on every non-emitting patch weighted by area (what
+/// the estimate samples), against the path tracer.
+fn estimated_and_true(blocks: bool, opts: SolveOptions) -> (f64, f64, u32) {
+    let scene = rhier::scene::cornell_box(blocks);
+    let patches = Patches::at_time(&scene, 0.0);
+    let (pts, weights): (Vec<(DVec3, DVec3)>, Vec<f64>) = common::probe::grid_points(&patches, 4)
+        .into_iter()
+        .zip((0..patches.len()).flat_map(|i| std::iter::repeat_n(i, 16)))
+        .filter(|&(_, i)| patches.emissions[i].iter().all(|&e| e == 0.0))
+        .map(|(pn, i)| (pn, patches.areas[i]))
+        .unzip();
+    let reference = rhier::reference::radiosity_at(&scene, &pts, 20_000, 3);
+    let (sol, records) = solve(&scene, opts).unwrap();
+    let points: Vec<ProbePoint> = pts.iter().map(|&(p, n)| ProbePoint { p, n }).collect();
+    let b = probe(&sol, &points, 0.0).unwrap();
+    let (mut num, mut den) = (0.0, 0.0);
+    for ((v, r), w) in b.iter().zip(&reference).zip(&weights) {
+        // Points inside the blocks (the path tracer finds no light there) left out.
+        if r.b.iter().all(|&x| x == 0.0) {
+            continue;
+        }
+        for (x, y) in v.iter().zip(&r.b) {
+            num += w * (x - y).powi(2);
+            den += w * y * y;
+        }
+    }
+    (
+        sol.stats.estimated_error,
+        (num / den).sqrt(),
+        records.len() as u32,
+    )
+}
+
+#[test]
+fn the_estimated_error_is_within_three_times_the_true_error() {
+    // The estimate is the final gather's change since the level at twice the eps,
+    // plus the reconstruction's interpolation error: it overestimates at coarse eps
+    // (the change is mostly the coarser level's error) and underestimates at fine
+    // eps (a bias of about 1% no refinement changes). Measured here (estimate /
+    // true): empty eps 0.25 1.11% / 1.03%, eps 0.1 0.55% / 0.80%; blocks eps 0.25
+    // 1.11% / 1.73%. At the default eps 0.5 it reads 6.7% for a true 1.4%.
+    for (blocks, eps) in [(false, 0.25), (true, 0.25), (false, 0.1)] {
+        let opts = SolveOptions {
+            eps,
+            ..SolveOptions::default()
+        };
+        let (est, truth, _) = estimated_and_true(blocks, opts);
+        eprintln!("blocks {blocks}, eps {eps}: estimated {est:.4}, true {truth:.4}");
+        assert!(
+            est > truth / 3.0 && est < truth * 3.0,
+            "blocks {blocks}, eps {eps}: estimated {est}, true {truth}"
+        );
+    }
+}
+
+#[test]
+fn a_target_error_refines_until_the_estimate_reaches_it() {
+    // From the default eps 0.5 (estimate 6.7%, true 1.4%), a 1% target halves eps
+    // until the change between levels is under 1%, and the true error falls with it
+    // (measured: estimate 0.68%, true 0.91%, 5 rounds instead of 3).
+    let (est0, true0, rounds0) = estimated_and_true(false, SolveOptions::default());
+    let opts = SolveOptions {
+        target_error: Some(0.01),
+        ..SolveOptions::default()
+    };
+    let (est, truth, rounds) = estimated_and_true(false, opts);
+    eprintln!(
+        "default: {est0:.4} / {true0:.4} in {rounds0} rounds; target 0.01: {est:.4} / {truth:.4} in {rounds} rounds"
+    );
+    assert!(est0 > 0.01);
+    assert!(rounds > rounds0);
+    assert!(
+        truth < true0,
+        "true error {truth} against {true0} without the target"
+    );
+}

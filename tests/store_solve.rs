@@ -26,7 +26,8 @@ fn solve_file_probe_equals_the_solves_probe() {
     let back = r.to_solution().unwrap();
     assert_eq!(back.leaves, sol.leaves);
     assert_eq!(back.patches, sol.patches);
-    assert_eq!(back.stats, sol.stats);
+    // Bit for bit, NaN included (an estimated error the solve did not estimate).
+    assert_eq!(format!("{:?}", back.stats), format!("{:?}", sol.stats));
     assert_eq!(r.camera(), scene.camera);
 
     // Random points in the box, normals along the six axes: each finds the nearest

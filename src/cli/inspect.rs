@@ -141,13 +141,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let st = &report.stats;
     writeln!(
         text,
-        "solve: {:.3} s, {} iterations, {} elements, {} active + {} passive links, estimated error {:.3e}, residual {:.3e}",
+        "solve: {:.3} s, {} iterations, {} elements, {} active + {} passive links, estimated error {}, residual {:.3e}",
         st.seconds,
         st.iterations,
         st.elements,
         st.links_active,
         st.links_passive,
-        st.estimated_error,
+        rhier::solver::report::estimate_text(st.estimated_error),
         st.residual
     )?;
     match report.verified_leaves {

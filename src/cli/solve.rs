@@ -91,7 +91,8 @@ pub struct Args {
     /// Most refine-and-solve rounds.
     #[arg(long, default_value_t = SolveOptions::default().max_rounds)]
     pub max_rounds: u32,
-    /// Stop when the estimated relative error is below this.
+    /// Refine (halving `--eps` as needed) until the estimated relative error, the
+    /// final gather's change between levels, is below this (static scenes)
     #[arg(long)]
     pub target_error: Option<f64>,
     /// Start no new round after this many seconds.
@@ -323,7 +324,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     solution.stats.seconds = start.elapsed().as_secs_f64();
     solution.stats.iterations = records.len() as u32;
     if let Some(last) = records.last() {
-        solution.stats.estimated_error = last.estimated_error;
         solution.stats.residual = last.residual;
     }
     if let Some(b) = bar {
@@ -360,13 +360,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if !args.quiet {
         eprintln!(
-            "solved {} patches in {:.3} s: {} stored cells, {} elements, {} active / {} passive links; wrote {}",
+            "solved {} patches in {:.3} s: {} stored cells, {} elements, {} active / {} passive links, estimated error {}; wrote {}",
             solution.patches.len(),
             solution.stats.seconds,
             solution.leaves.len(),
             solution.stats.elements,
             solution.stats.links_active,
             solution.stats.links_passive,
+            report::estimate_text(solution.stats.estimated_error),
             out.display()
         );
     }

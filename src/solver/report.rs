@@ -68,7 +68,7 @@ impl RoundRecord {
     /// A one-line human summary.
     pub fn summary(&self) -> String {
         let mut s = format!(
-            "round {:>2}  {:>8.3} s  {:>8} elements  {:>8} leaves  {:>9} links ({} passive)  {:>7.1} MiB  est. error {:.3e}  residual {:.1e}",
+            "round {:>2}  {:>8.3} s  {:>8} elements  {:>8} leaves  {:>9} links ({} passive)  {:>7.1} MiB  est. error {}  residual {:.1e}",
             self.round,
             self.seconds,
             self.elements,
@@ -76,13 +76,23 @@ impl RoundRecord {
             self.links_active,
             self.links_passive,
             (self.bytes_elements + self.bytes_links + self.bytes_bvh) as f64 / (1024.0 * 1024.0),
-            self.estimated_error,
+            estimate_text(self.estimated_error),
             self.residual
         );
         if let Some(e) = self.true_error {
             s.push_str(&format!("  true error {e:.3e}"));
         }
         s
+    }
+}
+
+/// An estimated error for people: `n/a` where there is none (NaN: a first round,
+/// or a solve that estimates nothing).
+pub fn estimate_text(e: f64) -> String {
+    if e.is_nan() {
+        "n/a".to_string()
+    } else {
+        format!("{e:.3e}")
     }
 }
 
