@@ -68,16 +68,17 @@
 //! **Estimated error.** The stored answer is the final gather, so its error is
 //! estimated from it, not from the links' bounds (those bound the piecewise-constant
 //! hierarchy, which the gather replaces: their sum read 1.1 on a Cornell box whose
-//! answer is within 1.3% off the lamp). A static solve refines in levels, at most two rounds at
-//! `2 eps` and then rounds at `eps`, and gathers at 128 fixed points spread over the
-//! surfaces by area after every round; a round's estimate is the relative RMS change
-//! of those values (reflected radiosity) since the last round of the level before.
-//! The change is mostly the coarser level's error, so it overestimates at coarse eps;
-//! it does not see what no refinement changes (a bias of the cluster estimates, the
-//! reconstruction's one-signed interpolation error where `B` is concave), so it
-//! underestimates at fine eps. [`Solver::solution`] adds the reconstruction's measured
-//! interpolation error ([`Reconstruction::interpolation_error`]). With a target, eps
-//! keeps halving until the estimate reaches it.
+//! answer is within 1.3% off the lamp). A static solve refines in levels, at most two
+//! rounds at `2 eps` and then rounds at `eps`, and gathers at 128 fixed points spread
+//! over the surfaces by area after every round; a round's estimate is the relative RMS
+//! change of those values (reflected radiosity) since the last round of the level
+//! before. The change is mostly the coarser level's error, so it overestimates at
+//! coarse eps; it does not see what no refinement changes (a bias of the cluster
+//! estimates, the reconstruction's one-signed interpolation error where `B` is
+//! concave), so it underestimates at fine eps. [`Solver::solution`] adds the
+//! reconstruction's measured interpolation error
+//! ([`Reconstruction::interpolation_error`]). With a target, eps keeps halving until
+//! the estimate reaches it.
 //!
 //! Results are deterministic for a given seed and thread count (ray jitter is hashed
 //! from link ids; parallel loops write disjoint outputs).
@@ -2222,17 +2223,21 @@ impl<'a> Solver<'a> {
         // varies").
         let varies = gs.patch != u32::MAX && rad / d * limits.spread[s] as f64 > limits.open_spread;
         let large = rad / d > self.opts.open_ratio || swept_cluster;
-        // (Where a moving object may cross the rays, the children get rays of their
-        // own, kept as masked terms.)
-        let still = swept.is_none_or(|sw| point_shaft_clear(x, n, gs, sw));
-        if node.child_count > 0 && !large && varies && !clear && still {
+        // Not where a moving object may cross the rays: the children would need rays
+        // of their own every frame.
+        let still = || swept.is_none_or(|sw| point_shaft_clear(x, n, gs, sw));
+        if node.child_count > 0 && !large && varies && still() {
             // Opened for its radiosity only: the children share the source's visible
             // fraction, from the rays the source would have had unopened.
-            let ps = oracle::poly(gs);
-            let ns = DVec3::from_array(gs.normal);
-            let skip = [receiver_patch, gs.patch];
-            let m = self.corner_rays_to(gs);
-            let v = oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key, skip);
+            let v = if clear {
+                1.0
+            } else {
+                let ps = oracle::poly(gs);
+                let ns = DVec3::from_array(gs.normal);
+                let skip = [receiver_patch, gs.patch];
+                let m = self.corner_rays_to(gs);
+                oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key, skip)
+            };
             if v <= 0.0 {
                 return;
             }
@@ -2255,7 +2260,7 @@ impl<'a> Solver<'a> {
             }
             return;
         }
-        if node.child_count > 0 && (large || varies) {
+        if node.child_count > 0 && large {
             for ch in node.first_child..node.first_child + node.child_count {
                 self.point_terms(
                     x,
