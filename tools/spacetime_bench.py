@@ -262,7 +262,7 @@ def write_png(rows, path):
     scenes = sorted(data)
     fig, axes = plt.subplots(2, len(scenes), figsize=(5.2 * len(scenes), 7.5), squeeze=False)
     styles = {"per-frame": ("#1f77b4", "o"), "space-time": ("#d62728", "s")}
-    extra = ["#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"]
+    extra = ["#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"]
     for j, scene in enumerate(scenes):
         top, bottom = axes[0][j], axes[1][j]
         for k, (method, pts) in enumerate(sorted(data[scene].items())):
