@@ -983,7 +983,12 @@ impl<'a> Solver<'a> {
                 }
             } else if round > 0 && !changed {
                 // Nothing refines at `eps`: done, unless a target is still above the
-                // estimate and a finer eps may refine.
+                // estimate and a finer eps may refine. A level that refined nothing
+                // at all has the answer of the level before: it changed by 0.
+                if current.is_none() && coarser.is_some() {
+                    estimate = 0.0;
+                    self.estimate = 0.0;
+                }
                 let more = self
                     .opts
                     .target_error
