@@ -151,22 +151,19 @@ fn uv_inside(uv: &[[f32; 2]; 4], n: u32, p: [f64; 2]) -> bool {
     !(pos && neg)
 }
 
-/// Relative RMS change between two sets of sample values,
-/// `sqrt(Σ (a − b)² / Σ a²)` over the samples both have and their channels.
+/// Relative RMS change between two sets of sample values, `a` the newer:
+/// [`report::relative_rms`] of `b` against `a` over the samples both have (`NaN` if
+/// none).
 fn relative_change(a: &[Option<[f64; 3]>], b: &[Option<[f64; 3]>]) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (x, y) in a.iter().zip(b) {
-        if let (Some(x), Some(y)) = (x, y) {
-            for k in 0..3 {
-                num += (x[k] - y[k]).powi(2);
-                den += x[k] * x[k];
-            }
-        }
-    }
-    if den > 0.0 {
-        (num / den).sqrt()
-    } else {
+    let (new, old): (Vec<[f64; 3]>, Vec<[f64; 3]>) = a
+        .iter()
+        .zip(b)
+        .filter_map(|(x, y)| Some(((*x)?, (*y)?)))
+        .unzip();
+    if new.is_empty() {
         f64::NAN
+    } else {
+        report::relative_rms(&old, &new)
     }
 }
 
