@@ -42,18 +42,28 @@ fn cornell_box_with_blocks_within_point_eight_percent() {
     assert!(e < 0.008, "relative RMS error {e}");
 }
 
+/// A `k × k` grid on every non-emitting patch whose normal `select` takes, each point
+/// with its patch's area as weight.
+fn lit_grid(
+    patches: &Patches,
+    k: usize,
+    select: impl Fn(DVec3) -> bool,
+) -> (Vec<(DVec3, DVec3)>, Vec<f64>) {
+    common::probe::grid_points(patches, k)
+        .into_iter()
+        .zip((0..patches.len()).flat_map(|i| std::iter::repeat_n(i, k * k)))
+        .filter(|&((_, n), i)| select(n) && patches.emissions[i].iter().all(|&e| e == 0.0))
+        .map(|(pn, i)| (pn, patches.areas[i]))
+        .unzip()
+}
+
 /// Area-weighted mean radiosity bias of a solve against the path tracer over the
 /// non-emitting patches `select` picks (by normal): an 8 × 8 grid on each patch, each
 /// point weighted by its patch's area; `(mean B − mean B_ref) / mean B_ref`.
 fn mean_bias(opts: SolveOptions, select: impl Fn(DVec3) -> bool) -> f64 {
     let scene = rhier::scene::cornell_box(false);
     let patches = Patches::at_time(&scene, 0.0);
-    let (pts, weights): (Vec<(DVec3, DVec3)>, Vec<f64>) = common::probe::grid_points(&patches, 8)
-        .into_iter()
-        .zip((0..patches.len()).flat_map(|i| std::iter::repeat_n(i, 64)))
-        .filter(|&((_, n), i)| select(n) && patches.emissions[i].iter().all(|&e| e == 0.0))
-        .map(|(pn, i)| (pn, patches.areas[i]))
-        .unzip();
+    let (pts, weights) = lit_grid(&patches, 8, select);
     assert!(pts.len() >= 32, "{} points", pts.len());
     let reference = rhier::reference::radiosity_at(&scene, &pts, 20_000, 5);
     let (sol, _) = solve(&scene, opts).unwrap();
@@ -103,12 +113,7 @@ fn the_ceiling_lit_only_by_the_walls_is_not_darkened() {
 fn estimated_and_true(blocks: bool, opts: SolveOptions) -> (f64, f64, u32) {
     let scene = rhier::scene::cornell_box(blocks);
     let patches = Patches::at_time(&scene, 0.0);
-    let (pts, weights): (Vec<(DVec3, DVec3)>, Vec<f64>) = common::probe::grid_points(&patches, 4)
-        .into_iter()
-        .zip((0..patches.len()).flat_map(|i| std::iter::repeat_n(i, 16)))
-        .filter(|&(_, i)| patches.emissions[i].iter().all(|&e| e == 0.0))
-        .map(|(pn, i)| (pn, patches.areas[i]))
-        .unzip();
+    let (pts, weights) = lit_grid(&patches, 4, |_| true);
     let reference = rhier::reference::radiosity_at(&scene, &pts, 20_000, 3);
     let (sol, records) = solve(&scene, opts).unwrap();
     let points: Vec<ProbePoint> = pts.iter().map(|&(p, n)| ProbePoint { p, n }).collect();
