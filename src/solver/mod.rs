@@ -948,6 +948,12 @@ impl<'a> Solver<'a> {
         let mut idle = 0;
         let mut round = 0;
         while round < self.opts.max_rounds && idle <= self.opts.max_rounds {
+            // The first level (`2 eps`) ends after two solved rounds.
+            if at_level >= 2 && eps > self.opts.eps {
+                eps = (eps / 2.0).max(self.opts.eps);
+                coarser = current.take();
+                at_level = 0;
+            }
             let (rays0, clear0) = (self.rays, self.shaft_clear);
             let thr = eps * b_ref;
             let changed = if round == 0 {
@@ -966,18 +972,13 @@ impl<'a> Solver<'a> {
                 let active = self.active_links(false);
                 self.refine(active, thr)?
             };
-            // The first level (`2 eps`) ends after two solved rounds, or earlier if
-            // nothing refines.
-            let level_done = at_level >= 2;
-            if round > 0 && (!changed || level_done) && eps > self.opts.eps {
-                // Next level (refining at the new eps happens next pass).
+            if round > 0 && !changed && eps > self.opts.eps {
+                // The first level ends early: refine at `eps` next pass.
                 eps = (eps / 2.0).max(self.opts.eps);
                 coarser = current.take();
                 at_level = 0;
-                if !changed {
-                    idle += 1;
-                    continue;
-                }
+                idle += 1;
+                continue;
             } else if round > 0 && !changed {
                 // Nothing refines at `eps`: done, unless a target is still above the
                 // estimate and a finer eps may refine. A level that refined nothing
