@@ -144,28 +144,34 @@ fn each_frame_is_as_accurate_as_the_static_solve_of_that_frame() {
     }
 }
 
-#[test]
-fn the_moving_shadow_moves() {
-    // Where the per-frame solves change most between the first and the last frame
-    // (the floor the block's shadow leaves or reaches), the stored leaves follow.
-    let scene = sliding_block(-60.0, 0.8);
-    let windows = solve_all(&scene, &st(5.0, 0.4));
-    let mut floor = Vec::new();
-    for i in 0..24 {
-        for j in 0..24 {
+/// A `k × k` grid of upward points on the Cornell floor, leaving out the strip the
+/// sliding block itself passes over (its shadow moves around it).
+fn floor_around_block(k: usize) -> Vec<ProbePoint> {
+    let mut out = Vec::new();
+    for i in 0..k {
+        for j in 0..k {
             let (x, z) = (
-                10.0 + 530.0 * i as f64 / 23.0,
-                10.0 + 540.0 * j as f64 / 23.0,
+                10.0 + 530.0 * i as f64 / (k - 1) as f64,
+                10.0 + 540.0 * j as f64 / (k - 1) as f64,
             );
-            // Not where the block itself passes.
             if !((10.0..300.0).contains(&x) && (55.0..285.0).contains(&z)) {
-                floor.push(ProbePoint {
+                out.push(ProbePoint {
                     p: DVec3::new(x, 0.0, z),
                     n: DVec3::Y,
                 });
             }
         }
     }
+    out
+}
+
+#[test]
+fn the_moving_shadow_moves() {
+    // Where the per-frame solves change most between the first and the last frame
+    // (the floor the block's shadow leaves or reaches), the stored leaves follow.
+    let scene = sliding_block(-60.0, 0.8);
+    let windows = solve_all(&scene, &st(5.0, 0.4));
+    let floor = floor_around_block(24);
     let fixed = |t: f64| {
         let mut s = Solver::at_time(&scene, opts(), t, [0.0, 0.8]).unwrap();
         s.run(|_, _| {}).unwrap();
@@ -642,20 +648,7 @@ fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
     );
     let mut pts = cornell_points();
     // The floor around the block, where its shadow moves.
-    for i in 0..16 {
-        for j in 0..16 {
-            let (x, z) = (
-                10.0 + 530.0 * i as f64 / 15.0,
-                10.0 + 540.0 * j as f64 / 15.0,
-            );
-            if !((10.0..300.0).contains(&x) && (55.0..285.0).contains(&z)) {
-                pts.push(ProbePoint {
-                    p: DVec3::new(x, 0.0, z),
-                    n: DVec3::Y,
-                });
-            }
-        }
-    }
+    pts.extend(floor_around_block(16));
     for t in [0.1, 0.3, 0.5, 0.6] {
         let fine = {
             let o = SolveOptions { eps: 0.1, ..opts() };
