@@ -122,6 +122,57 @@ pub fn samples(g: &Geom) -> Samples {
     }
 }
 
+/// A finer rule on a surface element: the element cut into four (a quad at its
+/// parametric midpoints, a triangle at its edge midpoints), each piece's
+/// [`samples`] weighted by its share of the area. 16 points on a quad, 12 on a
+/// triangle; weights sum to 1.
+pub fn fine_samples(g: &Geom) -> Vec<(DVec3, f64)> {
+    let c = |i: usize| DVec3::from_array(g.corners[i]);
+    let pieces: Vec<Vec<DVec3>> = if g.n == 3 {
+        let (a, b, d) = (c(0), c(1), c(2));
+        let (ab, bd, da) = ((a + b) / 2.0, (b + d) / 2.0, (d + a) / 2.0);
+        vec![
+            vec![a, ab, da],
+            vec![ab, b, bd],
+            vec![da, bd, d],
+            vec![bd, da, ab],
+        ]
+    } else {
+        let (p0, p1, p2, p3) = (c(0), c(1), c(2), c(3));
+        let m01 = (p0 + p1) / 2.0;
+        let m12 = (p1 + p2) / 2.0;
+        let m23 = (p2 + p3) / 2.0;
+        let m30 = (p3 + p0) / 2.0;
+        let mid = (p0 + p1 + p2 + p3) / 4.0;
+        vec![
+            vec![p0, m01, mid, m30],
+            vec![m01, p1, m12, mid],
+            vec![mid, m12, p2, m23],
+            vec![m30, mid, m23, p3],
+        ]
+    };
+    let mut out = Vec::with_capacity(16);
+    let mut total = 0.0;
+    for piece in &pieces {
+        let mut sub = *g;
+        for (k, v) in piece.iter().enumerate() {
+            sub.corners[k] = v.to_array();
+        }
+        let area = Poly::new(piece).area_vector().length() / 2.0;
+        total += area;
+        let q = samples(&sub);
+        for i in 0..q.count {
+            out.push((q.points[i], q.weights[i] * area));
+        }
+    }
+    if total > 0.0 {
+        for o in &mut out {
+            o.1 /= total;
+        }
+    }
+    out
+}
+
 /// The world polygon of a surface element.
 pub fn poly(g: &Geom) -> Poly {
     let n = g.n as usize;
