@@ -131,3 +131,50 @@ fn every_box_on_a_floor_loses_its_footprint_and_its_bottom() {
         .count();
     assert_eq!(panel_faces, 2, "the two-sided panel lost a face");
 }
+
+/// The room of `tests/data/hung_lamp_room.json` with its lamp hung `gap` under the
+/// ceiling (y = 4).
+fn hung_lamp_room(gap: f64) -> Scene {
+    let path = std::path::Path::new("tests/data/hung_lamp_room.json");
+    let mut scene = rhier::scene::load(path).unwrap();
+    for v in &mut scene.objects[1].polygons[0].vertices {
+        v.y = 4.0 - gap;
+    }
+    scene
+}
+
+/// A lamp hung 1 cm under a ceiling, its back to it: the ceiling is cut along the
+/// lamp's outline (a covered region, almost unlit, apart from the rest of the
+/// ceiling) and the covered piece is kept, not dropped as the footprint of a solid
+/// would be (a probe there must find the ceiling, not the lamp). Hung lower, where
+/// light reaches under it, the ceiling is left whole.
+#[test]
+fn a_lamp_hung_just_under_the_ceiling_cuts_it_along_its_outline() {
+    let ceiling = |p: &Patches| -> Vec<usize> {
+        (0..p.len())
+            .filter(|&i| p.normals[i].y < -0.99 && (p.polys[i].v[0].y - 4.0).abs() < 1e-9)
+            .collect()
+    };
+    let scene = hung_lamp_room(0.01);
+    let before = Patches::at_time(&scene, 0.0);
+    let (after, stats) = split_at_contacts(&scene, &before, 0.0);
+    assert_eq!(stats.pieces_hidden, 0, "{stats:?}");
+    let pieces = ceiling(&after);
+    assert_eq!(
+        pieces.len(),
+        9,
+        "the lamp's four edges cut the ceiling in a 3 × 3 grid"
+    );
+    let area: f64 = pieces.iter().map(|&i| after.areas[i]).sum();
+    assert!((area - 100.0).abs() < 1e-9, "ceiling area {area}");
+    let covered = pieces.iter().filter(|&&i| {
+        let c = after.polys[i].centroid();
+        (after.areas[i] - 4.0).abs() < 1e-9 && (c.x - 5.0).abs() < 1e-9 && (c.z - 5.0).abs() < 1e-9
+    });
+    assert_eq!(covered.count(), 1, "no piece is exactly the lamp's outline");
+
+    let scene = hung_lamp_room(0.5);
+    let before = Patches::at_time(&scene, 0.0);
+    let (after, _) = split_at_contacts(&scene, &before, 0.0);
+    assert_eq!(ceiling(&after).len(), 1);
+}

@@ -45,7 +45,6 @@ fn closed_enclosure_reaches_e_over_one_minus_rho() {
 fn the_leaf_system_conserves_energy() {
     use glam::DVec3;
     use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
-    use rhier::solver::Solver;
     let mut polys = common::closed_box(DVec3::ZERO, DVec3::new(10.0, 4.0, 10.0), 1, |f| {
         // Two coloured walls, as in a Cornell-like room.
         match f {
@@ -92,36 +91,69 @@ fn the_leaf_system_conserves_energy() {
         ..Default::default()
     };
     for eps in [0.1, 0.05] {
-        let opts = SolveOptions {
-            eps,
-            ..SolveOptions::default()
-        };
-        let mut s = Solver::new(&scene, opts).unwrap();
-        s.run(|_, _| {}).unwrap();
-        let geoms = s.elems.geoms.as_slice();
-        let nodes = s.elems.nodes.as_slice();
-        let b = s.elems.radiosities.as_slice();
-        let (mut absorbed, mut emitted) = ([0.0f64; 3], [0.0f64; 3]);
-        let mut leaves = 0;
-        for e in 0..s.elems.len() {
-            let g = &geoms[e];
-            if g.patch == u32::MAX || nodes[e].child_count > 0 {
-                continue;
-            }
-            leaves += 1;
-            let p = g.patch as usize;
-            let (rho, em) = (s.patches.rhos[p], s.patches.emissions[p]);
-            for c in 0..3 {
-                absorbed[c] += g.area * (1.0 - rho[c]) * (b[e][c] as f64 - em[c]) / rho[c];
-                emitted[c] += g.area * em[c];
-            }
-        }
-        for c in 0..3 {
-            let ratio = absorbed[c] / emitted[c];
-            eprintln!("eps {eps}: {leaves} leaves, channel {c}: absorbed / emitted = {ratio:.4}");
+        let ratio = absorbed_over_emitted(&scene, eps);
+        for (c, r) in ratio.iter().enumerate() {
             assert!(
-                (ratio - 1.0).abs() < 0.015,
-                "eps {eps}, channel {c}: absorbed / emitted = {ratio}"
+                (r - 1.0).abs() < 0.015,
+                "eps {eps}, channel {c}: absorbed / emitted = {r}"
+            );
+        }
+    }
+}
+
+/// Per channel, the power the leaves of a solve at `eps` absorb,
+/// `Σ A (1 − ρ) (B − E) / ρ`, over the power emitted.
+fn absorbed_over_emitted(scene: &rhier::scene::Scene, eps: f64) -> [f64; 3] {
+    use rhier::solver::Solver;
+    let opts = SolveOptions {
+        eps,
+        ..SolveOptions::default()
+    };
+    let mut s = Solver::new(scene, opts).unwrap();
+    s.run(|_, _| {}).unwrap();
+    let geoms = s.elems.geoms.as_slice();
+    let nodes = s.elems.nodes.as_slice();
+    let b = s.elems.radiosities.as_slice();
+    let (mut absorbed, mut emitted) = ([0.0f64; 3], [0.0f64; 3]);
+    let mut leaves = 0;
+    for e in 0..s.elems.len() {
+        let g = &geoms[e];
+        if g.patch == u32::MAX || nodes[e].child_count > 0 {
+            continue;
+        }
+        leaves += 1;
+        let p = g.patch as usize;
+        let (rho, em) = (s.patches.rhos[p], s.patches.emissions[p]);
+        for c in 0..3 {
+            absorbed[c] += g.area * (1.0 - rho[c]) * (b[e][c] as f64 - em[c]) / rho[c];
+            emitted[c] += g.area * em[c];
+        }
+    }
+    let ratio = [0, 1, 2].map(|c| absorbed[c] / emitted[c]);
+    eprintln!("eps {eps}: {leaves} leaves, absorbed / emitted = {ratio:.4?}");
+    ratio
+}
+
+/// The same balance with the lamp hung 1 cm under the ceiling, its back to it
+/// (`tests/data/hung_lamp_room.json`; what `tools/gen_cubes.py` builds): the ceiling
+/// over the lamp sees almost nothing. Two faults broke the balance here (measured):
+/// the ceiling leaves straddling the lamp's edge gathered nothing from the floor
+/// (every quadrature point over the lamp; 3.8% of the emitted power lost at eps 0.1,
+/// and 1.2% *gained* at eps 0.5 where coarser straddling leaves saw only the lit
+/// side), and rows gathered the ceiling's average radiosity, dark covered region
+/// included, where only the lit part is seen (2.3–2.5% lost once the first was
+/// mended). The first is mended by a finer rule where a leaf's points and corners
+/// disagree, the second by contact meshing cutting the covered region out.
+#[test]
+fn a_lamp_hung_just_under_the_ceiling_loses_no_light() {
+    let path = std::path::Path::new("tests/data/hung_lamp_room.json");
+    let scene = rhier::scene::load(path).unwrap();
+    for eps in [0.5, 0.1] {
+        let ratio = absorbed_over_emitted(&scene, eps);
+        for (c, r) in ratio.iter().enumerate() {
+            assert!(
+                (r - 1.0).abs() < 0.015,
+                "eps {eps}, channel {c}: absorbed / emitted = {r}"
             );
         }
     }
