@@ -343,11 +343,14 @@ fn where_nothing_changes_consecutive_frames_are_one_leaf() {
     let windows = solve_all(&scene, &st(10.0, 0.5));
     // 11 frames, windows of 5: the one-frame tail joins the second window.
     assert_eq!(windows.len(), 2);
-    // Patches 7..14 are room B (room A's 7 polygons come first).
+    // The solver's patches by object: room A is object 0, room B object 1 (each
+    // ceiling cut around its lamp by contact meshing).
+    let objects = Solver::new(&scene, opts()).unwrap().patches.objects.clone();
+    let room = |l: &Leaf| objects[l.patch as usize];
     let mut in_b = 0;
     for w in &windows {
         for l in &w.leaves {
-            if (7..14).contains(&l.patch) {
+            if room(l) == 1 {
                 in_b += 1;
                 assert_eq!(
                     (l.time[0] as f64, l.time[1] as f64),
@@ -362,7 +365,7 @@ fn where_nothing_changes_consecutive_frames_are_one_leaf() {
     let short = windows
         .iter()
         .flat_map(|w| w.leaves.iter().map(move |l| (w, l)))
-        .filter(|(w, l)| l.patch < 7 && (l.time[1] - l.time[0]) < (w.t1 - w.t0) as f32 - 1e-6)
+        .filter(|(w, l)| room(l) == 0 && (l.time[1] - l.time[0]) < (w.t1 - w.t0) as f32 - 1e-6)
         .count();
     assert!(short > 0);
 }

@@ -379,6 +379,10 @@ struct Window {
     rows: HashMap<(u32, u32), (f32, f32)>,
     /// Final-gather terms that hold over the window at static reconstruction points.
     points: std::sync::Mutex<PointCache>,
+    /// The radiosity scale every frame of the window reconstructs against (cell
+    /// tolerance, gather limits): the frame's own would move with the moving
+    /// objects and change the decisions, hence the values, at static points.
+    b_ref: f64,
 }
 
 impl Window {
@@ -1437,6 +1441,7 @@ impl<'a> Solver<'a> {
                 budget: self.kept_budget,
                 ..PointCache::default()
             }),
+            b_ref,
             ..Window::default()
         });
         let active = self.active_links(false);
@@ -1790,24 +1795,29 @@ impl<'a> Solver<'a> {
         &self,
         leaf: ElementId,
         l: u32,
+        s: u32,
         q: &oracle::Samples,
         n: DVec3,
-        gs: &Geom,
     ) -> (f64, f64) {
+        let gs = &self.elems.geoms.as_slice()[s as usize];
         let g = &self.elems.geoms.as_slice()[leaf.ix()];
         let ps = oracle::poly(gs);
         let ns = DVec3::from_array(gs.normal);
         let m = self.opts.rays_per_point;
         let skip = [g.patch, gs.patch];
         // Quadrature points keep the keys rows always had; corners and the finer
-        // rule (i >= 4) take their own.
+        // rule (i >= 4) take their own, from the source element rather than the link
+        // (so they do not depend on the order the links were made in).
         let vis_at = |x: DVec3, i: u64| {
-            let (salt, j) = if i < 4 { (0x1eaf, i) } else { (0x1eb0, i - 4) };
-            let key = oracle::hash3(
-                self.opts.seed ^ salt,
-                l as u64,
-                (leaf.0 as u64) << if i < 4 { 3 } else { 5 } | j,
-            );
+            let key = if i < 4 {
+                oracle::hash3(self.opts.seed ^ 0x1eaf, l as u64, (leaf.0 as u64) << 3 | i)
+            } else {
+                oracle::hash3(
+                    self.opts.seed ^ 0x1eb0,
+                    s as u64,
+                    (leaf.0 as u64) << 5 | (i - 4),
+                )
+            };
             oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key, skip)
         };
         let integrate = |pts: &mut dyn Iterator<Item = (DVec3, f64, u64)>| {
@@ -1976,7 +1986,7 @@ impl<'a> Solver<'a> {
                         } else {
                             // Partly hidden: visibility from the leaf's own points, not
                             // the ancestor's average.
-                            self.hidden_row_coef(leaf, l, &q, n, gs)
+                            self.hidden_row_coef(leaf, l, s, &q, n)
                         };
                         if cache.is_some() && cacheable {
                             fresh.push(((leaf.0, l), (coef as f32, vis as f32)));
@@ -2697,7 +2707,11 @@ impl<'a> Solver<'a> {
             .window
             .as_ref()
             .map(|w| std::mem::take(&mut *w.points.lock().unwrap_or_else(|e| e.into_inner())));
-        let b_ref = self.rms_radiosity();
+        // A window's frames share one scale (see `Window::b_ref`).
+        let b_ref = match &self.window {
+            Some(w) => w.b_ref,
+            None => self.rms_radiosity(),
+        };
         let tol = self.opts.recon_tol * b_ref;
         let limits = self.gather_limits(b_ref);
         let min_area = (self.opts.recon_min_size * self.patches.diameter).powi(2);
