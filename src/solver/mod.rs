@@ -1794,13 +1794,14 @@ impl<'a> Solver<'a> {
     }
 
     /// A leaf's row coefficient for the partly hidden chain link `l` to surface
-    /// source `gs`, with visibility from the leaf's own points: `(F, visible
+    /// source `s`, with visibility from the leaf's own points: `(F, visible
     /// fraction)`, `F = Σ_q w_q F(x_q → A_s) V(x_q)`.
     ///
     /// Where every quadrature point is hidden (or every one sees the whole source), a
-    /// shadow edge may still cross the leaf between them and its corners; the corners
-    /// are checked (inset by [`CORNER_INSET`]) and, if one disagrees, the leaf is
-    /// integrated on the finer rule of [`oracle::fine_samples`]. Why: in a closed room
+    /// shadow edge may still cross the leaf between them and its corners; for an
+    /// entry above [`ROW_CORNER_MIN_COEF`] the corners are checked (inset by
+    /// [`CORNER_INSET`]) and, if one disagrees, the leaf is integrated on the finer
+    /// rule of [`oracle::fine_samples`]. Why: in a closed room
     /// lit by a lamp hung 1 cm under its ceiling, the four ceiling leaves that straddle
     /// the lamp's edge had all their points over the lamp and gathered nothing from
     /// the floor, though a third of each sees it; the floor's light sent there was
