@@ -183,7 +183,11 @@ pub struct SolveStats {
     pub links_active: u64,
     /// Passive (refined) links.
     pub links_passive: u64,
-    /// Estimated relative error from link error bounds.
+    /// Estimated relative error of the stored answer: the change of the final gather
+    /// between refinement levels combined with the reconstruction's interpolation
+    /// error ([`crate::solver`] module docs, "Estimated error"); `NaN` when no two
+    /// levels were compared (no error samples, a scene with motion, a solve that
+    /// stopped in its first level).
     pub estimated_error: f64,
     /// Last iteration's relative residual.
     pub residual: f64,
