@@ -459,6 +459,31 @@ fn a_budget_on_kept_terms_bounds_them_and_keeps_the_result() {
 }
 
 #[test]
+fn a_window_on_mapped_storage_is_the_one_in_ram() {
+    // The pools and the kept final-gather terms live in scratch files and their
+    // pages are handed back after every batch of gathers (out of core): the leaves
+    // are bit for bit those of the RAM run, and no scratch file is left behind.
+    let scene = sliding_block(-60.0, 0.8);
+    let dir = tempfile::tempdir().unwrap();
+    let mapped = SolveOptions {
+        storage: rhier::pools::Storage::Mmap(dir.path().to_path_buf()),
+        ..opts()
+    };
+    let window = |o: SolveOptions| {
+        let mut run = SpaceTime::new(&scene, o, st(5.0, 0.4), |_, _| {}).unwrap();
+        let mut kept = 0;
+        let w = run.solve_window(1, |f| kept = kept.max(f.bytes_kept)).unwrap();
+        (w, kept)
+    };
+    let (ram, kept) = window(opts());
+    assert!(kept > 10_000, "the window keeps terms: {kept} bytes");
+    let (on_disk, kept_mapped) = window(mapped);
+    assert_eq!(on_disk, ram);
+    assert!(kept_mapped >= kept, "{kept_mapped} < {kept}");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+#[test]
 fn swept_shafts_catch_every_transient_blocker_that_time_sampling_sees() {
     // Brute force: visibility between points of two static patches, sampled at 48
     // times with the moving block placed at each; whenever it changes, the shaft

@@ -72,7 +72,8 @@ pub struct Args {
     /// streaming one chunk per frame into the output file.
     #[arg(long)]
     pub per_frame: bool,
-    /// Where the element and link pools live.
+    /// Where the element and link pools (and a space-time window's kept final-gather
+    /// terms) live.
     #[arg(long, value_enum, default_value = "ram")]
     pub storage: StorageKind,
     /// Directory for `--storage mmap` files, created if missing (default: the system

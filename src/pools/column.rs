@@ -119,6 +119,75 @@ impl<T: Pod> Column<T> {
         Ok(index as u32)
     }
 
+    /// Appends `values`, growing the backing store if needed (RAM by a quarter, a
+    /// mapped file by doubling: its size costs no memory).
+    pub fn extend_from_slice(&mut self, values: &[T]) -> Result<()> {
+        let len = self.len + values.len();
+        if len > u32::MAX as usize {
+            return Err(Error::Usage(
+                "pool is full: more than 2^32 - 1 records".into(),
+            ));
+        }
+        match &mut self.backing {
+            Backing::Ram(v) => {
+                // A quarter more, not double: an arena appended to for a long time
+                // (kept final-gather terms) holds at most 25% slack.
+                if len > v.capacity() {
+                    v.reserve_exact((len - v.len()).max(len / 4));
+                }
+                v.extend_from_slice(values);
+            }
+            Backing::Mmap {
+                file,
+                path,
+                map,
+                cap,
+            } => {
+                if len > *cap {
+                    let new_cap = (*cap * 2).max(len);
+                    map.flush_async().map_err(|e| Error::io(&*path, e))?;
+                    *map = map_file(file, path, new_cap * std::mem::size_of::<T>())?;
+                    *cap = new_cap;
+                }
+                let size = std::mem::size_of::<T>();
+                map[self.len * size..len * size].copy_from_slice(bytemuck::cast_slice(values));
+            }
+        }
+        self.len = len;
+        Ok(())
+    }
+
+    /// Bytes reserved: the heap capacity, or the mapped file's size.
+    pub fn reserved_bytes(&self) -> usize {
+        let cap = match &self.backing {
+            Backing::Ram(v) => v.capacity(),
+            Backing::Mmap { cap, .. } => *cap,
+        };
+        cap * std::mem::size_of::<T>()
+    }
+
+    /// Gives back heap capacity beyond the length (RAM; a mapped file keeps its
+    /// size, see [`Column::release_resident`]).
+    pub fn shrink(&mut self) {
+        if let Backing::Ram(v) = &mut self.backing {
+            v.shrink_to_fit();
+        }
+    }
+
+    /// Hands a mapped column's resident pages back to the system: the records stay
+    /// in the file (the mapping is shared) and are paged in again when next read.
+    /// Nothing for RAM.
+    pub fn release_resident(&self) {
+        if let Backing::Mmap { map, .. } = &self.backing {
+            // SAFETY: the mapping is a shared file mapping (`MmapMut::map_mut`), so
+            // MADV_DONTNEED drops the pages from this process only; their contents
+            // stay in the page cache and the file. No reference into the mapping
+            // outlives this call's caller's borrow of `self`, and reads after it
+            // fault the same bytes back in. A failure only leaves the pages resident.
+            let _ = unsafe { map.unchecked_advise(memmap2::UncheckedAdvice::DontNeed) };
+        }
+    }
+
     /// The records.
     #[inline]
     pub fn as_slice(&self) -> &[T] {
@@ -213,6 +282,17 @@ mod tests {
         assert_eq!(s[9999][0], 9999.0);
         assert_eq!(s[1234], [1234.0, 7.0, 2.0]);
         assert_eq!(c.bytes(), 10_000 * 12);
+        // Appending a slice across a growth, then dropping resident pages, keeps
+        // every record.
+        let more: Vec<[f32; 3]> = (0..5000u32).map(|i| [i as f32, 3.0, 4.0]).collect();
+        c.extend_from_slice(&more).unwrap();
+        c.release_resident();
+        assert_eq!(c.len(), 15_000);
+        assert!(c.reserved_bytes() >= c.bytes());
+        let s = c.as_slice();
+        assert_eq!(s[1234], [1234.0, 7.0, 2.0]);
+        assert_eq!(s[10_000 + 4321], [4321.0, 3.0, 4.0]);
+        assert_eq!(s[9999][0], 9999.0);
     }
 
     #[test]

@@ -86,6 +86,7 @@
 
 pub mod gmres;
 pub mod hierarchy;
+mod kept;
 pub mod per_frame;
 pub mod report;
 pub mod solution;
@@ -104,6 +105,7 @@ use crate::pools::elements::{Geom, Node};
 use crate::pools::links::{Ends, Transport};
 use crate::pools::{ElementId, ElementKind, ElementPool, LinkId, LinkPool, LinkState, Storage};
 use crate::scene::Scene;
+use kept::{MaskedTerm, PointCache};
 
 pub use report::RoundRecord;
 pub use solution::{Leaf, PatchGeometry, Shape, Solution, SolveStats};
@@ -385,7 +387,8 @@ struct Window {
     /// (F, visible fraction)`.
     rows: HashMap<(u32, u32), (f32, f32)>,
     /// Final-gather terms that hold over the window at static reconstruction points.
-    points: std::sync::Mutex<PointCache>,
+    /// `None` in the shared part's rounds (nothing is reconstructed there).
+    points: std::sync::Mutex<Option<PointCache>>,
     /// The radiosity scale every frame of the window reconstructs against (cell
     /// tolerance, gather limits): the RMS reflected radiosity of the window's first
     /// solved frame. Each frame's own would move with the moving objects and change
@@ -402,74 +405,6 @@ impl Window {
     }
 }
 
-/// The kept final-gather terms of a window, with what they cost and a bound on it.
-///
-/// Under a budget the cache is a collector: after each frame's reconstruction, if
-/// it holds more than `budget` bytes, the points that frame did not gather are
-/// dropped first (the working set of a frame is what the next frame needs: cells
-/// change where something moves), and while it is over budget no new point is
-/// admitted (those are gathered afresh every frame, as frame by frame would).
-/// Either way the values do not change, only the work.
-#[derive(Default)]
-struct PointCache {
-    map: HashMap<PointKey, PointTerms>,
-    /// Heap bytes of `map` (entries and the vectors they own, by capacity).
-    bytes: usize,
-    /// Bytes of the window's other kept coefficients (leaf rows), counted against
-    /// the same budget.
-    others: usize,
-    /// Most bytes to keep (`None`: no bound).
-    budget: Option<usize>,
-}
-
-impl PointCache {
-    /// Bytes one entry costs besides its vectors' contents (key, value, the hash
-    /// table's control byte and slack).
-    const ENTRY: usize = std::mem::size_of::<PointKey>() + std::mem::size_of::<PointTerms>() + 8;
-
-    fn admits(&self) -> bool {
-        self.budget.is_none_or(|b| self.bytes + self.others < b)
-    }
-
-    /// Adds the terms gathered afresh at point `pk`.
-    fn add(&mut self, pk: PointKey, links: FreshTerms) {
-        let known = self.map.contains_key(&pk);
-        if !known && !self.admits() {
-            return;
-        }
-        let entry = self.map.entry(pk).or_default();
-        let before = entry.bytes();
-        for (l, terms) in links {
-            entry.add(l, &terms);
-        }
-        entry.shrink();
-        // Entries only grow (each add is shrunk to fit).
-        self.bytes += entry.bytes().saturating_sub(before) + if known { 0 } else { Self::ENTRY };
-    }
-
-    /// Drops points not in `used` while over budget.
-    fn collect(&mut self, used: &HashMap<PointKey, usize>) {
-        let Some(budget) = self.budget else {
-            return;
-        };
-        if self.bytes + self.others <= budget {
-            return;
-        }
-        let mut freed = 0;
-        self.map.retain(|pk, t| {
-            if used.contains_key(pk) {
-                true
-            } else {
-                freed += t.bytes() + Self::ENTRY;
-                false
-            }
-        });
-        self.bytes -= freed.min(self.bytes);
-        self.map.shrink_to_fit();
-        release_free_memory();
-    }
-}
-
 /// Hands the heap pages freed by a collection back to the system: glibc keeps
 /// them mapped otherwise (the points' small vectors leave them scattered), and the
 /// process's resident size would not show what the budget bounds.
@@ -479,63 +414,6 @@ fn release_free_memory() {
     // no pointer of ours is involved.
     unsafe {
         libc::malloc_trim(0);
-    }
-}
-
-/// The final-gather terms of a point that hold over a window, per source: a point is
-/// gathered through the chain of whichever leaf registers it first, which may change
-/// from frame to frame, so only the sources of the current chain are summed. Flat
-/// arrays (a few allocations per point, not per source).
-#[derive(Default)]
-struct PointTerms {
-    /// Sources covered (`source << 1 | clear`, clear: the link's shaft proved the
-    /// source visible), sorted, with the ranges of their terms in `fixed` and
-    /// `masked`: `(key, fixed start, fixed end, masked start, masked end)`.
-    index: Vec<(u32, u32, u32, u32, u32)>,
-    /// `(element, factor)`, visibility included, constant over the window.
-    fixed: Vec<(u32, f32)>,
-    /// Terms whose rays a moving object may cross: re-cast each frame against the
-    /// moving objects only.
-    masked: Vec<MaskedTerm>,
-}
-
-impl PointTerms {
-    fn add(&mut self, key: u32, terms: &Terms) {
-        if let Err(at) = self.index.binary_search_by_key(&key, |e| e.0) {
-            let (f0, m0) = (self.fixed.len() as u32, self.masked.len() as u32);
-            self.fixed
-                .extend(terms.fixed.iter().map(|&(e, f)| (e, f as f32)));
-            self.masked.extend(terms.masked.iter().map(|(m, _)| *m));
-            let (f1, m1) = (self.fixed.len() as u32, self.masked.len() as u32);
-            self.index.insert(at, (key, f0, f1, m0, m1));
-        }
-    }
-
-    /// Heap bytes of the vectors' contents.
-    fn bytes(&self) -> usize {
-        self.index.capacity() * std::mem::size_of::<(u32, u32, u32, u32, u32)>()
-            + self.fixed.capacity() * std::mem::size_of::<(u32, f32)>()
-            + self.masked.capacity() * std::mem::size_of::<MaskedTerm>()
-    }
-
-    fn shrink(&mut self) {
-        self.index.shrink_to_fit();
-        self.fixed.shrink_to_fit();
-        self.masked.shrink_to_fit();
-    }
-
-    /// The fixed and masked terms of source key `key`.
-    fn get(&self, key: u32) -> Option<TermSlices<'_>> {
-        self.index
-            .binary_search_by_key(&key, |e| e.0)
-            .ok()
-            .map(|i| {
-                let (_, f0, f1, m0, m1) = self.index[i];
-                (
-                    &self.fixed[f0 as usize..f1 as usize],
-                    &self.masked[m0 as usize..m1 as usize],
-                )
-            })
     }
 }
 
@@ -558,32 +436,6 @@ struct KeptCoef {
 
 const _: () = assert!(std::mem::size_of::<KeptCoef>() == 12);
 
-/// The kept fixed and masked terms of one source at one point.
-type TermSlices<'a> = (&'a [(u32, f32)], &'a [MaskedTerm]);
-
-/// A final-gather term from a static source to a static point whose rays a moving
-/// object may cross: the static part of each ray's visibility is kept as a mask (see
-/// [`oracle::static_clear_mask`]), and the visibility that mask gives on its own
-/// (the value while no moving object is between the point and the source, used
-/// without casting or weighting anything). 24 bytes.
-#[derive(Clone, Copy, Debug)]
-struct MaskedTerm {
-    /// Rays the static part leaves clear.
-    mask: u64,
-    /// Jitter key of the rays (32 bits are plenty for jitter; see
-    /// [`Solver::point_terms`]).
-    key: u32,
-    /// Source element.
-    elem: u32,
-    /// Unoccluded point-to-element factor.
-    f: f32,
-    /// Kernel-weighted fraction of the rays `mask` leaves clear: the visibility while
-    /// no moving object is near.
-    vis_static: f32,
-}
-
-const _: () = assert!(std::mem::size_of::<MaskedTerm>() == 24);
-
 /// The transfer terms of one link at one point.
 #[derive(Clone, Debug, Default)]
 struct Terms {
@@ -600,7 +452,7 @@ impl Terms {
     }
 
     /// `Σ factor · visibility · B_element`, with the factors rounded as
-    /// [`PointTerms`] keeps them, so that a point gathers the same value whether its
+    /// [`PointCache`] keeps them, so that a point gathers the same value whether its
     /// terms were kept or computed afresh.
     fn gather(&self, b: &[[f32; 3]], h: &mut [f64; 3]) {
         for &(e, f) in &self.fixed {
@@ -647,7 +499,7 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
 
 /// Points gathered in parallel at a time by the reconstruction: enough to keep the
 /// threads busy, few enough that the terms they return to keep stay small.
-const GATHER_BATCH: usize = 2048;
+const GATHER_BATCH: usize = 512;
 
 /// What one space-time frame cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -1446,10 +1298,10 @@ impl<'a> Solver<'a> {
         self.window = Some(Window {
             swept,
             base: Snapshot::of(&self.elems, &self.links),
-            points: std::sync::Mutex::new(PointCache {
-                budget: self.kept_budget,
-                ..PointCache::default()
-            }),
+            points: std::sync::Mutex::new(Some(PointCache::new(
+                &self.opts.storage,
+                self.kept_budget,
+            )?)),
             ..Window::default()
         });
         let active = self.active_links(false);
@@ -1706,7 +1558,10 @@ impl<'a> Solver<'a> {
     /// coefficients (0 outside a window).
     pub fn kept_bytes(&self) -> u64 {
         self.window.as_ref().map_or(0, |w| {
-            let points = w.points.lock().map_or(0, |p| p.bytes);
+            let points = w
+                .points
+                .lock()
+                .map_or(0, |p| p.as_ref().map_or(0, PointCache::bytes));
             (points + w.rows_bytes()) as u64
         })
     }
@@ -2035,8 +1890,10 @@ impl<'a> Solver<'a> {
             {
                 let rows_bytes = w.rows_bytes();
                 let points = w.points.get_mut().unwrap_or_else(|e| e.into_inner());
-                points.others = rows_bytes;
-                if points.admits() {
+                if let Some(p) = points.as_mut() {
+                    p.others = rows_bytes;
+                }
+                if points.as_ref().is_none_or(PointCache::admits) {
                     w.rows.extend(fresh);
                 }
             }
@@ -2452,7 +2309,7 @@ impl<'a> Solver<'a> {
         &self,
         leaf: ElementId,
         x: DVec3,
-        known: Option<&HashMap<PointKey, PointTerms>>,
+        known: Option<&PointCache>,
         pk: PointKey,
         admit: bool,
         limits: &GatherLimits,
@@ -2502,9 +2359,9 @@ impl<'a> Solver<'a> {
                 let clear = t.shaft_clear() && !t.varying();
                 let ck = (s as u32) << 1 | clear as u32;
                 if let Some((fixed, masked)) = keep.and(cached).and_then(|c| c.get(ck)) {
-                    for &(src, f) in fixed {
+                    for t in fixed {
                         for c in 0..3 {
-                            h[c] += f as f64 * b[src as usize][c] as f64;
+                            h[c] += t.f as f64 * b[t.elem as usize][c] as f64;
                         }
                     }
                     for t in masked {
@@ -2719,10 +2576,11 @@ impl<'a> Solver<'a> {
         let geoms = self.elems.geoms.as_slice();
         let interpolated = std::sync::atomic::AtomicU64::new(0);
         // The window's kept terms, taken out of their lock for the parallel gathers.
-        let mut known = self
+        let mut guard = self
             .window
             .as_ref()
-            .map(|w| std::mem::take(&mut *w.points.lock().unwrap_or_else(|e| e.into_inner())));
+            .map(|w| w.points.lock().unwrap_or_else(|e| e.into_inner()));
+        let mut known = guard.as_mut().and_then(|g| g.as_mut());
         // A window's frames share one scale (see `Window::b_ref`).
         let b_ref = match self.window.as_ref().and_then(|w| w.b_ref) {
             Some(b) => b,
@@ -2762,7 +2620,8 @@ impl<'a> Solver<'a> {
             // In batches, so that the terms to keep are merged as they come (and
             // not computed at all for new points once the budget is spent).
             while cache.values.len() < cache.points.len() {
-                let admit = known.as_ref().is_some_and(PointCache::admits);
+                let admit = known.as_ref().is_some_and(|c| c.admits());
+                let view = known.as_deref();
                 let fresh = cache.evaluate(
                     GATHER_BATCH,
                     |leaf, x, pk| {
@@ -2774,14 +2633,7 @@ impl<'a> Solver<'a> {
                             interpolated.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                             return (b, valid, Vec::new());
                         }
-                        self.gather_point(
-                            leaf,
-                            x,
-                            known.as_ref().map(|c| &c.map),
-                            pk,
-                            admit,
-                            &limits,
-                        )
+                        self.gather_point(leaf, x, view, pk, admit, &limits)
                     },
                     &self.patches,
                 );
@@ -2789,6 +2641,8 @@ impl<'a> Solver<'a> {
                     for (pk, links) in fresh {
                         m.add(pk, links);
                     }
+                    // Out of core: the batch's pages go back to the scratch file.
+                    m.release_resident();
                 }
             }
             let mut next = Vec::new();
@@ -2849,10 +2703,10 @@ impl<'a> Solver<'a> {
                 .then(a.uv[0][0].total_cmp(&b.uv[0][0]))
                 .then(a.uv[0][1].total_cmp(&b.uv[0][1]))
         });
-        if let (Some(w), Some(mut m)) = (&self.window, known) {
+        if let Some(m) = known {
             m.collect(&cache.index);
-            *w.points.lock().unwrap_or_else(|e| e.into_inner()) = m;
         }
+        drop(guard);
         let interpolated = interpolated.into_inner();
         let values = if between.is_some() {
             KeyValues::default()

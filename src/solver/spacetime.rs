@@ -34,7 +34,9 @@
 //!    whole window. A static point gathering from a static source through a swept
 //!    box keeps the static half of every ray (a mask, [`crate::oracle::static_clear_mask`])
 //!    and re-casts it against the moving objects only, and only when one of them is
-//!    between the point and the source at that frame. What a window keeps can be
+//!    between the point and the source at that frame. The kept terms are flat
+//!    arenas on the pools' storage (`kept`: out of core on `--storage mmap`); points
+//!    no frame has registered for a while are dropped. What a window keeps can be
 //!    bounded ([`SpaceTimeOptions::kept_budget`]): over the bound, the points the
 //!    last frame did not gather are dropped and new ones are gathered every frame.
 //!
