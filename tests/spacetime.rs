@@ -472,7 +472,9 @@ fn a_window_on_mapped_storage_is_the_one_in_ram() {
     let window = |o: SolveOptions| {
         let mut run = SpaceTime::new(&scene, o, st(5.0, 0.4), |_, _| {}).unwrap();
         let mut kept = 0;
-        let w = run.solve_window(1, |f| kept = kept.max(f.bytes_kept)).unwrap();
+        let w = run
+            .solve_window(1, |f| kept = kept.max(f.bytes_kept))
+            .unwrap();
         (w, kept)
     };
     let (ram, kept) = window(opts());

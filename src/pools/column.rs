@@ -157,11 +157,12 @@ impl<T: Pod> Column<T> {
         Ok(())
     }
 
-    /// Bytes reserved: the heap capacity, or the mapped file's size.
+    /// Bytes the column can occupy in memory: its heap capacity, or for a mapped
+    /// file its length (the file's slack beyond it is never touched).
     pub fn reserved_bytes(&self) -> usize {
         let cap = match &self.backing {
             Backing::Ram(v) => v.capacity(),
-            Backing::Mmap { cap, .. } => *cap,
+            Backing::Mmap { .. } => self.len,
         };
         cap * std::mem::size_of::<T>()
     }

@@ -405,10 +405,11 @@ impl Window {
     }
 }
 
-/// Hands the heap pages freed by a collection back to the system: glibc keeps
-/// them mapped otherwise (the points' small vectors leave them scattered), and the
-/// process's resident size would not show what the budget bounds.
-fn release_free_memory() {
+/// Hands the heap pages freed by a collection, a released window or a frame's
+/// gathers back to the system: glibc keeps them mapped otherwise (the gathers' many
+/// small vectors leave them scattered over the threads' heaps), and the process's
+/// resident size would grow over a window by more than it holds.
+pub(crate) fn release_free_memory() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: `malloc_trim` only returns the allocator's free pages to the system;
     // no pointer of ours is involved.
