@@ -481,7 +481,11 @@ fn a_window_on_mapped_storage_is_the_one_in_ram() {
     assert!(kept > 10_000, "the window keeps terms: {kept} bytes");
     let (on_disk, kept_mapped) = window(mapped);
     assert_eq!(on_disk, ram);
-    assert!(kept_mapped >= kept, "{kept_mapped} < {kept}");
+    // The same terms: RAM counts its arenas' capacity, a mapped file their length.
+    assert!(
+        kept_mapped <= kept && 5 * kept_mapped >= 4 * kept,
+        "mapped {kept_mapped}, RAM {kept}"
+    );
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
 
