@@ -309,7 +309,8 @@ impl PointCache {
     /// Ends a reconstruction that registered the points `used`: stamps them, drops
     /// the points unregistered for [`STALE_AFTER`] reconstructions (and, over the
     /// budget, every point not in `used`), and compacts the arenas when dead records
-    /// (of rewritten or dropped points) make up a quarter of one, or over the budget.
+    /// (of rewritten or dropped points) make up a quarter of one, or, over the
+    /// budget, when there are any.
     pub fn collect(&mut self, used: &HashMap<PointKey, usize>) {
         self.seq += 1;
         let seq = self.seq;
@@ -337,8 +338,7 @@ impl PointCache {
             .dead
             .iter()
             .zip(live)
-            .any(|(&d, l)| d > 0 && 4 * d >= l)
-            || over
+            .any(|(&d, l)| d > 0 && (over || 4 * d >= l))
         {
             self.compact();
         }

@@ -2576,7 +2576,8 @@ impl<'a> Solver<'a> {
     pub fn reconstruct_between(&self, between: Option<&Between>) -> Reconstruction {
         let geoms = self.elems.geoms.as_slice();
         let interpolated = std::sync::atomic::AtomicU64::new(0);
-        // The window's kept terms, taken out of their lock for the parallel gathers.
+        // The window's kept terms, locked for the whole reconstruction: the
+        // parallel gathers read them, the batches' fresh terms are added between.
         let mut guard = self
             .window
             .as_ref()
