@@ -104,12 +104,7 @@ impl<T: Pod> Column<T> {
                 map,
                 cap,
             } => {
-                if index == *cap {
-                    let new_cap = (*cap * 2).max(1);
-                    map.flush_async().map_err(|e| Error::io(&*path, e))?;
-                    *map = map_file(file, path, new_cap * std::mem::size_of::<T>())?;
-                    *cap = new_cap;
-                }
+                grow_mapped::<T>(file, path, map, cap, index + 1)?;
                 let bytes: &mut [T] =
                     bytemuck::cast_slice_mut(&mut map[..*cap * std::mem::size_of::<T>()]);
                 bytes[index] = value;
@@ -143,12 +138,7 @@ impl<T: Pod> Column<T> {
                 map,
                 cap,
             } => {
-                if len > *cap {
-                    let new_cap = (*cap * 2).max(len);
-                    map.flush_async().map_err(|e| Error::io(&*path, e))?;
-                    *map = map_file(file, path, new_cap * std::mem::size_of::<T>())?;
-                    *cap = new_cap;
-                }
+                grow_mapped::<T>(file, path, map, cap, len)?;
                 let size = std::mem::size_of::<T>();
                 map[self.len * size..len * size].copy_from_slice(bytemuck::cast_slice(values));
             }
@@ -257,6 +247,24 @@ impl<T: Pod + std::fmt::Debug> std::fmt::Debug for Column<T> {
             .field("mapped", &self.is_mapped())
             .finish()
     }
+}
+
+/// Makes a mapped column's file hold at least `len` records of `T`, doubling its
+/// capacity `cap` (or more, to `len`) and remapping it when it does not.
+fn grow_mapped<T>(
+    file: &File,
+    path: &Path,
+    map: &mut MmapMut,
+    cap: &mut usize,
+    len: usize,
+) -> Result<()> {
+    if len > *cap {
+        let new_cap = (*cap * 2).max(len);
+        map.flush_async().map_err(|e| Error::io(path, e))?;
+        *map = map_file(file, path, new_cap * std::mem::size_of::<T>())?;
+        *cap = new_cap;
+    }
+    Ok(())
 }
 
 fn map_file(file: &File, path: &Path, bytes: usize) -> Result<MmapMut> {
