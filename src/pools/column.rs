@@ -91,11 +91,7 @@ impl<T: Pod> Column<T> {
     /// Appends a record, growing the backing store if needed; returns its index.
     pub fn push(&mut self, value: T) -> Result<u32> {
         let index = self.len;
-        if index >= u32::MAX as usize {
-            return Err(Error::Usage(
-                "pool is full: more than 2^32 - 1 records".into(),
-            ));
-        }
+        room_for(index + 1)?;
         match &mut self.backing {
             Backing::Ram(v) => v.push(value),
             Backing::Mmap {
@@ -118,11 +114,7 @@ impl<T: Pod> Column<T> {
     /// mapped file by doubling: its size costs no memory).
     pub fn extend_from_slice(&mut self, values: &[T]) -> Result<()> {
         let len = self.len + values.len();
-        if len > u32::MAX as usize {
-            return Err(Error::Usage(
-                "pool is full: more than 2^32 - 1 records".into(),
-            ));
-        }
+        room_for(len)?;
         match &mut self.backing {
             Backing::Ram(v) => {
                 // A quarter more, not double: an arena appended to for a long time
@@ -247,6 +239,16 @@ impl<T: Pod + std::fmt::Debug> std::fmt::Debug for Column<T> {
             .field("mapped", &self.is_mapped())
             .finish()
     }
+}
+
+/// Refuses a column of `len` records when `u32` ids could not index them all.
+fn room_for(len: usize) -> Result<()> {
+    if len > u32::MAX as usize {
+        return Err(Error::Usage(
+            "pool is full: more than 2^32 - 1 records".into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Makes a mapped column's file hold at least `len` records of `T`, doubling its
