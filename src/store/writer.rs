@@ -29,8 +29,8 @@ use super::format::{
     SectionEntry, SectionKind, VERSION, crc32,
 };
 use super::records::{
-    CameraRecord, ChunkIndexRecord, ChunkRecord, LeafRecord, LinkRecord, MaterialRecord,
-    ObjectRecord, PatchRecord, SceneRecord, StatsRecord, track_record,
+    CameraRecord, ChunkIndexRecord, ChunkRecord, LinkRecord, MaterialRecord, ObjectRecord,
+    PatchRecord, SceneRecord, StatsRecord, track_record,
 };
 use crate::error::{Error, Result};
 use crate::scene::Scene;
@@ -38,6 +38,29 @@ use crate::solver::{Leaf, PatchGeometry, Solution, SolveStats};
 
 /// zstd level used for compressed sections.
 pub const ZSTD_LEVEL: i32 = 3;
+
+/// Leaves a chunk is checked, compressed and handed back in at a time
+/// ([`Writer::write_chunk_paged`]): 768 KiB.
+pub const LEAF_BLOCK: usize = 8192;
+
+// A chunk's leaves are written as their bytes in memory, which are the archived
+// records' (little-endian fields, the same order and size).
+const _: () = assert!(
+    cfg!(target_endian = "little")
+        && std::mem::size_of::<Leaf>() == std::mem::size_of::<super::records::ArchivedLeafRecord>()
+);
+
+/// The 16-byte root rkyv writes after the `n` records of an archived `Vec` of
+/// 96-byte records that start at byte 0: the offset from the root back to the
+/// first record (`-96 n`, i64 LE) and the length (u64 LE). Checked against rkyv
+/// by the test `streamed_chunks_are_the_archive`.
+fn vec_root(n: usize) -> [u8; 16] {
+    let mut root = [0u8; 16];
+    let back = -((n * std::mem::size_of::<Leaf>()) as i64);
+    root[..8].copy_from_slice(&back.to_le_bytes());
+    root[8..].copy_from_slice(&(n as u64).to_le_bytes());
+    root
+}
 
 /// Choices of the writer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -152,8 +175,10 @@ impl Writer {
             .truncate(true)
             .open(&tmp)
             .map_err(|e| Error::io(&tmp, e))?;
+        // Sections arrive whole (a chunk in one write, which bypasses the buffer):
+        // the buffer only gathers the small ones, and a solve keeps it resident.
         let sink = Sink::File {
-            out: BufWriter::with_capacity(1 << 20, file),
+            out: BufWriter::with_capacity(64 << 10, file),
             tmp,
             done: false,
         };
@@ -260,6 +285,25 @@ impl Writer {
     /// Appends the chunk `[t0, t1]` holding `leaves`, each of which starts in it.
     /// Chunks come in time order (`t0` >= the previous chunk's `t1`).
     pub fn write_chunk(&mut self, t0: f64, t1: f64, leaves: &[Leaf]) -> Result<()> {
+        self.write_chunk_paged(t0, t1, leaves, || {})
+    }
+
+    /// [`Writer::write_chunk`], calling `after_block` each time a block of
+    /// [`LEAF_BLOCK`] leaves has been read, so that a caller whose leaves are
+    /// memory-mapped can hand their pages back as the chunk is written.
+    ///
+    /// The leaves are never copied: the archive of a `Vec<LeafRecord>` is the
+    /// records' bytes (a `Leaf` is a `LeafRecord` in memory, little-endian) followed
+    /// by the 16-byte root ([`vec_root`]), and zstd takes them as a stream, with the
+    /// size pledged so that the frame is the one a single call would make. The leaves
+    /// are checked in the same pass; nothing reaches the file before all are.
+    pub fn write_chunk_paged(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        leaves: &[Leaf],
+        mut after_block: impl FnMut(),
+    ) -> Result<()> {
         let index = self.chunks.len();
         let prev_t1 = self.chunks.last().map_or(self.time[0], |c| c.t1);
         let in_domain = t0 >= self.time[0] && t1 <= self.time[1];
@@ -274,40 +318,59 @@ impl Writer {
                 format!("[{t0}, {t1}]"),
             ));
         }
+        let root = vec_root(leaves.len());
+        let raw_len = std::mem::size_of_val(leaves) + root.len();
         let mut reach = t0;
-        for (k, l) in leaves.iter().enumerate() {
-            let patch_corners = self.patch_corners.get(l.patch as usize).copied();
-            let (lt0, lt1) = (l.time[0], l.time[1]);
-            let starts_here = lt0 >= t0 as f32 && lt0 <= t1 as f32 && lt1 >= lt0;
-            if patch_corners != Some(l.corners) || !starts_here {
-                return Err(Error::invalid(
-                    &self.path,
-                    format!("chunk {index}, leaf {k}"),
-                    format!(
-                        "a leaf of one of {} patches, with its corner count, starting in [{t0}, {t1}]",
-                        self.patch_corners.len()
-                    ),
-                    format!(
-                        "patch {}, {} corners, time [{lt0}, {lt1}]",
-                        l.patch, l.corners
-                    ),
-                ));
+        let mut packed = None;
+        if self.options.compress {
+            let io = |e| Error::io(&self.path, e);
+            let mut z = zstd::stream::Encoder::new(Vec::new(), ZSTD_LEVEL).map_err(io)?;
+            z.set_pledged_src_size(Some(raw_len as u64)).map_err(io)?;
+            for (k, block) in leaves.chunks(LEAF_BLOCK).enumerate() {
+                reach = self.check_leaves(index, t0, t1, k * LEAF_BLOCK, block, reach)?;
+                z.write_all(bytemuck::cast_slice(block)).map_err(io)?;
+                after_block();
             }
-            reach = reach.max(lt1 as f64);
+            z.write_all(&root).map_err(io)?;
+            let z = z.finish().map_err(io)?;
+            packed = (z.len() < raw_len).then_some(z);
+        } else {
+            for (k, block) in leaves.chunks(LEAF_BLOCK).enumerate() {
+                reach = self.check_leaves(index, t0, t1, k * LEAF_BLOCK, block, reach)?;
+                after_block();
+            }
         }
-        // The records go as soon as they are serialised (a window's chunk is the
-        // largest transient of a space-time solve).
-        let bytes = {
-            let records: Vec<LeafRecord> = leaves.iter().map(LeafRecord::from).collect();
-            archive(&self.path, &records)?
-        };
         let section = self.entries.len() as u32;
-        self.section(
-            SectionKind::Chunk,
-            &bytes,
-            leaves.len() as u64,
-            self.options.compress,
-        )?;
+        match packed {
+            Some(z) => {
+                self.flags |= FLAG_COMPRESSED;
+                let entry = self.entry(SectionKind::Chunk, Codec::Zstd, &z, raw_len, leaves.len());
+                self.emit(&z)?;
+                self.entries.push(entry);
+            }
+            None => {
+                // Stored raw: the records again, a block at a time.
+                let offset = self.pos;
+                let mut crc = crc32fast::Hasher::new();
+                for block in leaves.chunks(LEAF_BLOCK) {
+                    let bytes: &[u8] = bytemuck::cast_slice(block);
+                    crc.update(bytes);
+                    self.emit(bytes)?;
+                    after_block();
+                }
+                crc.update(&root);
+                self.emit(&root)?;
+                self.entries.push(SectionEntry {
+                    kind: SectionKind::Chunk,
+                    codec: Codec::Raw,
+                    offset,
+                    stored_len: raw_len as u64,
+                    raw_len: raw_len as u64,
+                    items: leaves.len() as u64,
+                    crc: crc.finalize(),
+                });
+            }
+        }
         // First chunk whose leaves may still be live at t0 (reach only matters for
         // chunks after the previous carry_from, whose reach was below an earlier t0).
         let mut carry_from = self.chunks.last().map_or(0, |c| c.carry_from);
@@ -459,18 +522,65 @@ impl Writer {
         if codec == Codec::Zstd {
             self.flags |= FLAG_COMPRESSED;
         }
-        let entry = SectionEntry {
+        let entry = self.entry(kind, codec, stored, raw.len(), items as usize);
+        self.emit(stored)?;
+        self.entries.push(entry);
+        Ok(())
+    }
+
+    /// The table entry of a section about to be emitted at the current position.
+    fn entry(
+        &self,
+        kind: SectionKind,
+        codec: Codec,
+        stored: &[u8],
+        raw_len: usize,
+        items: usize,
+    ) -> SectionEntry {
+        SectionEntry {
             kind,
             codec,
             offset: self.pos,
             stored_len: stored.len() as u64,
-            raw_len: raw.len() as u64,
-            items,
+            raw_len: raw_len as u64,
+            items: items as u64,
             crc: crc32(stored),
-        };
-        self.emit(stored)?;
-        self.entries.push(entry);
-        Ok(())
+        }
+    }
+
+    /// Checks that `leaves` (the leaves `first..` of chunk `index`, `[t0, t1]`) name
+    /// a patch with their corner count and start in the chunk; returns `reach`
+    /// extended by their end times.
+    fn check_leaves(
+        &self,
+        index: usize,
+        t0: f64,
+        t1: f64,
+        first: usize,
+        leaves: &[Leaf],
+        mut reach: f64,
+    ) -> Result<f64> {
+        for (k, l) in leaves.iter().enumerate() {
+            let patch_corners = self.patch_corners.get(l.patch as usize).copied();
+            let (lt0, lt1) = (l.time[0], l.time[1]);
+            let starts_here = lt0 >= t0 as f32 && lt0 <= t1 as f32 && lt1 >= lt0;
+            if patch_corners != Some(l.corners) || !starts_here {
+                return Err(Error::invalid(
+                    &self.path,
+                    format!("chunk {index}, leaf {}", first + k),
+                    format!(
+                        "a leaf of one of {} patches, with its corner count, starting in [{t0}, {t1}]",
+                        self.patch_corners.len()
+                    ),
+                    format!(
+                        "patch {}, {} corners, time [{lt0}, {lt1}]",
+                        l.patch, l.corners
+                    ),
+                ));
+            }
+            reach = reach.max(lt1 as f64);
+        }
+        Ok(reach)
     }
 
     fn emit(&mut self, bytes: &[u8]) -> Result<()> {
@@ -538,4 +648,71 @@ pub fn encode_solution(name: &Path, solution: &Solution, options: WriteOptions) 
     let (t0, t1) = whole_domain(solution);
     w.write_chunk(t0, t1, &solution.leaves)?;
     w.finish_to_bytes(&solution.stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::store::records::LeafRecord;
+    use crate::store::samples::box_solution;
+
+    /// The section a chunk of `leaves` becomes: `(codec, stored bytes, raw_len)`.
+    fn chunk_section(sol: &Solution, leaves: &[Leaf], compress: bool) -> (Codec, Vec<u8>, u64) {
+        let options = WriteOptions {
+            compress,
+            keep_links: false,
+        };
+        let mut w = Writer::in_memory(Path::new("t.rhier"), &SolutionHeader::of(sol), options)
+            .expect("writer");
+        let mut blocks = 0;
+        w.write_chunk_paged(0.0, 0.0, leaves, || blocks += 1)
+            .expect("chunk");
+        let e = *w.entries.last().expect("entry");
+        // Each block is read once to check (and compress) it, and once more to
+        // store it raw.
+        let passes = if e.codec == Codec::Raw { 2 } else { 1 };
+        assert_eq!(blocks, passes * leaves.len().div_ceil(LEAF_BLOCK));
+        let Sink::Memory(bytes) = &w.sink else {
+            unreachable!("in-memory writer")
+        };
+        let stored = bytes[e.offset as usize..(e.offset + e.stored_len) as usize].to_vec();
+        assert_eq!(e.crc, crc32(&stored));
+        assert_eq!(e.items, leaves.len() as u64);
+        (e.codec, stored, e.raw_len)
+    }
+
+    #[test]
+    fn streamed_chunks_are_the_archive() {
+        let sol = box_solution(6);
+        assert!(sol.leaves.len() > 100);
+        // Three blocks' worth, the last one partial.
+        let many: Vec<Leaf> = sol
+            .leaves
+            .iter()
+            .cycle()
+            .take(2 * LEAF_BLOCK + 7)
+            .copied()
+            .collect();
+        for leaves in [&[][..], &sol.leaves[..1], &sol.leaves[..], &many[..]] {
+            let records: Vec<LeafRecord> = leaves.iter().map(LeafRecord::from).collect();
+            let archived = archive(Path::new("t"), &records).expect("archive");
+            // Raw: the very bytes rkyv makes.
+            let (codec, raw, raw_len) = chunk_section(&sol, leaves, false);
+            assert_eq!(codec, Codec::Raw);
+            assert_eq!(raw, archived.as_slice(), "{} leaves", leaves.len());
+            assert_eq!(raw_len, archived.len() as u64);
+            // Compressed: the frame one call to zstd makes of those bytes, or raw
+            // when that is not smaller (no leaves).
+            let (codec, packed, raw_len) = chunk_section(&sol, leaves, true);
+            assert_eq!(raw_len, archived.len() as u64);
+            let bulk = zstd::bulk::compress(&archived, ZSTD_LEVEL).expect("zstd");
+            if bulk.len() < archived.len() {
+                assert_eq!(codec, Codec::Zstd, "{} leaves", leaves.len());
+                assert_eq!(packed, bulk, "{} leaves", leaves.len());
+            } else {
+                assert_eq!(codec, Codec::Raw);
+                assert_eq!(packed, archived.as_slice());
+            }
+        }
+    }
 }
