@@ -109,12 +109,12 @@ pub fn run(
                 out.display()
             );
         }
-        (None, Vec::new())
+        (None, 0)
     } else if args.resume {
         let (j, done) = Journal::resume(&out, &key)?;
-        (Some(j), done)
+        (Some(j), done as usize)
     } else {
-        (Some(Journal::create(&out, &key)?), Vec::new())
+        (Some(Journal::create(&out, &key)?), 0)
     };
     let quiet = args.quiet;
     let show_progress =
@@ -134,17 +134,15 @@ pub fn run(
         say(format!("shared {}", rec.summary()))
     })?;
     let n_windows = run.window_count();
-    if done.len() > n_windows {
+    if done > n_windows {
         anyhow::bail!(
-            "{}: {} windows journaled, but this solve has {n_windows}",
+            "{}: {done} windows journaled, but this solve has {n_windows}",
             rhier::store::journal::journal_dir(&out).display(),
-            done.len()
         );
     }
-    if !done.is_empty() {
+    if done > 0 {
         say(format!(
-            "resuming: {} of {n_windows} windows already solved",
-            done.len()
+            "resuming: {done} of {n_windows} windows already solved"
         ));
     }
     let header = SolutionHeader {
@@ -155,13 +153,18 @@ pub fn run(
         .with_context(|| format!("creating {}", out.display()))?;
     let mut frames: Vec<FrameRecord> = Vec::new();
     let (mut stored, mut frame_cells) = (0u64, 0u64);
-    for w in &done {
-        writer.write_chunk(w.t0, w.t1, &w.leaves)?;
-        stored += w.leaves.len() as u64;
-        frame_cells += w.frame_cells;
+    // Read back one window at a time: a resumed long solve holds one window's
+    // leaves, not every finished window's.
+    if let Some(journal) = &journal {
+        for wi in 0..done {
+            let w = journal.read(wi as u32)?;
+            writer.write_chunk(w.t0, w.t1, &w.leaves)?;
+            stored += w.leaves.len() as u64;
+            frame_cells += w.frame_cells;
+        }
     }
     let mut last_residual = 0.0;
-    for wi in done.len()..n_windows {
+    for wi in done..n_windows {
         if args.stop_after_windows.is_some_and(|k| wi as u32 >= k) {
             anyhow::bail!(
                 "stopped after {wi} windows as asked (--stop-after-windows); resume with --resume"
@@ -250,7 +253,7 @@ pub fn run(
         eprintln!(
             "solved {} frames ({} windows from the journal) of {} windows in {:.3} s ({:.3} s shared part): {} stored cells for {} frame cells ({:.1}x fewer); wrote {}",
             run.stats.frames,
-            done.len(),
+            done,
             n_windows,
             stats.seconds,
             run.stats.shared_seconds,

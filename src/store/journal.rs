@@ -19,19 +19,23 @@
 //!
 //! Each is written to a temporary name, fsynced and renamed, so a window file is
 //! either whole or absent. The file `solve.key` holds a fingerprint of the scene and
-//! the settings; `--resume` refuses a journal made by a different solve, and reads
-//! the windows `0, 1, …` up to the first missing one, checking every field and the
-//! CRC (a damaged window is an error that names the file, not a silent re-solve).
+//! the settings; `--resume` refuses a journal made by a different solve, counts
+//! the windows `0, 1, …` up to the first missing one and reads them back one at a
+//! time (memory stays at one window's leaves), checking every field and the CRC (a
+//! damaged window is an error that names the file, not a silent re-solve). A
+//! window is written a block of leaves at a time, the header last, so leaves on
+//! memory-mapped storage are never copied.
 //! The directory is removed when the `.rhier` file is complete. Nothing in it looks
 //! like a `.rhier` file.
 
 use std::fs::{self, File};
-use std::io::Write;
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use super::format::crc32;
 use crate::error::{Error, Result};
 use crate::solver::Leaf;
+use bytemuck::Zeroable;
 
 const MAGIC: &[u8; 8] = b"RHIERWIN";
 const VERSION: u32 = 1;
@@ -75,16 +79,18 @@ impl Journal {
         }
         fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         let j = Journal { dir };
-        j.write_atomic("solve.key", &[key.as_bytes()])?;
+        j.write_atomic("solve.key", key.as_bytes())?;
         Ok(j)
     }
 
     /// Opens the journal of `out` to resume: checks the fingerprint and returns the
-    /// finished windows `0, 1, …` (none if there is no journal: a fresh start).
-    pub fn resume(out: &Path, key: &str) -> Result<(Journal, Vec<JournalWindow>)> {
+    /// number of finished windows `0, 1, …` it holds (none if there is no journal: a
+    /// fresh start). [`Journal::read`] reads them one at a time, so resuming a long
+    /// solve holds one window's leaves, not all of them.
+    pub fn resume(out: &Path, key: &str) -> Result<(Journal, u32)> {
         let dir = journal_dir(out);
         if !dir.exists() {
-            return Ok((Journal::create(out, key)?, Vec::new()));
+            return Ok((Journal::create(out, key)?, 0));
         }
         let key_path = dir.join("solve.key");
         let found = fs::read_to_string(&key_path).map_err(|e| Error::io(&key_path, e))?;
@@ -96,31 +102,62 @@ impl Journal {
                 "a journal of a different solve",
             ));
         }
-        let mut windows = Vec::new();
-        loop {
-            let path = dir.join(window_name(windows.len() as u32));
-            if !path.exists() {
-                break;
-            }
-            windows.push(read_window(&path, windows.len() as u32)?);
+        let mut count = 0;
+        while dir.join(window_name(count)).exists() {
+            count += 1;
         }
-        Ok((Journal { dir }, windows))
+        Ok((Journal { dir }, count))
     }
 
-    /// Records a finished window.
+    /// Reads finished window `index`, checking every field and the CRC.
+    pub fn read(&self, index: u32) -> Result<JournalWindow> {
+        read_window(&self.dir.join(window_name(index)), index)
+    }
+
+    /// Records a finished window (a [`JournalWindow`] whose leaves are borrowed).
     pub fn append(&self, w: &JournalWindow) -> Result<()> {
-        let mut bytes = Vec::with_capacity(HEADER);
-        let body: &[u8] = bytemuck::cast_slice(&w.leaves);
-        bytes.extend_from_slice(MAGIC);
-        bytes.extend_from_slice(&VERSION.to_le_bytes());
-        bytes.extend_from_slice(&w.index.to_le_bytes());
-        bytes.extend_from_slice(&w.t0.to_le_bytes());
-        bytes.extend_from_slice(&w.t1.to_le_bytes());
-        bytes.extend_from_slice(&(w.leaves.len() as u64).to_le_bytes());
-        bytes.extend_from_slice(&w.frame_cells.to_le_bytes());
-        bytes.extend_from_slice(&crc32(body).to_le_bytes());
-        bytes.extend_from_slice(&0u32.to_le_bytes());
-        self.write_atomic(&window_name(w.index), &[&bytes, body])
+        self.append_leaves(w.index, [w.t0, w.t1], w.frame_cells, &w.leaves, || {})
+    }
+
+    /// Records finished window `index` over `time` with its `leaves`, calling
+    /// `after_block` after each block of them is written (so that memory-mapped
+    /// leaves can hand their pages back, as [`super::Writer::write_chunk_paged`]).
+    pub fn append_leaves(
+        &self,
+        index: u32,
+        time: [f64; 2],
+        frame_cells: u64,
+        leaves: &[Leaf],
+        mut after_block: impl FnMut(),
+    ) -> Result<()> {
+        let name = window_name(index);
+        let path = self.dir.join(&name);
+        let tmp = self.dir.join(format!("{name}.tmp"));
+        let io = |e| Error::io(&tmp, e);
+        let mut f = std::io::BufWriter::new(File::create(&tmp).map_err(io)?);
+        // The header goes last, when the CRC is known.
+        f.write_all(&[0u8; HEADER]).map_err(io)?;
+        let mut crc = crc32fast::Hasher::new();
+        for block in leaves.chunks(super::writer::LEAF_BLOCK) {
+            let bytes: &[u8] = bytemuck::cast_slice(block);
+            crc.update(bytes);
+            f.write_all(bytes).map_err(io)?;
+            after_block();
+        }
+        let mut head = Vec::with_capacity(HEADER);
+        head.extend_from_slice(MAGIC);
+        head.extend_from_slice(&VERSION.to_le_bytes());
+        head.extend_from_slice(&index.to_le_bytes());
+        head.extend_from_slice(&time[0].to_le_bytes());
+        head.extend_from_slice(&time[1].to_le_bytes());
+        head.extend_from_slice(&(leaves.len() as u64).to_le_bytes());
+        head.extend_from_slice(&frame_cells.to_le_bytes());
+        head.extend_from_slice(&crc.finalize().to_le_bytes());
+        head.extend_from_slice(&0u32.to_le_bytes());
+        let mut f = f.into_inner().map_err(|e| io(e.into_error()))?;
+        f.seek(SeekFrom::Start(0)).map_err(io)?;
+        f.write_all(&head).map_err(io)?;
+        self.commit(f, &tmp, &path)
     }
 
     /// Removes the journal (the output file is complete).
@@ -128,17 +165,21 @@ impl Journal {
         fs::remove_dir_all(&self.dir).map_err(|e| Error::io(&self.dir, e))
     }
 
-    /// Writes the concatenation of `parts` to `name` through a temporary file and a
-    /// rename (a crash leaves the old file or the new one, never a torn one).
-    fn write_atomic(&self, name: &str, parts: &[&[u8]]) -> Result<()> {
+    /// Writes `bytes` to `name` through a temporary file and a rename (a crash
+    /// leaves the old file or the new one, never a torn one).
+    fn write_atomic(&self, name: &str, bytes: &[u8]) -> Result<()> {
         let path = self.dir.join(name);
         let tmp = self.dir.join(format!("{name}.tmp"));
         let mut f = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
-        for bytes in parts {
-            f.write_all(bytes).map_err(|e| Error::io(&tmp, e))?;
-        }
-        f.sync_all().map_err(|e| Error::io(&tmp, e))?;
-        fs::rename(&tmp, &path).map_err(|e| Error::io(&path, e))?;
+        f.write_all(bytes).map_err(|e| Error::io(&tmp, e))?;
+        self.commit(f, &tmp, &path)
+    }
+
+    /// Fsyncs the finished temporary file `f` (`tmp`), renames it to `path` and
+    /// fsyncs the directory.
+    fn commit(&self, f: File, tmp: &Path, path: &Path) -> Result<()> {
+        f.sync_all().map_err(|e| Error::io(tmp, e))?;
+        fs::rename(tmp, path).map_err(|e| Error::io(path, e))?;
         if let Ok(d) = File::open(&self.dir) {
             let _ = d.sync_all();
         }
@@ -151,17 +192,20 @@ fn window_name(i: u32) -> String {
 }
 
 fn read_window(path: &Path, index: u32) -> Result<JournalWindow> {
-    let bytes = fs::read(path).map_err(|e| Error::io(path, e))?;
     let bad = |place: &str, expected: String, found: String| {
         Err(Error::invalid(path, place.to_string(), expected, found))
     };
-    if bytes.len() < HEADER {
+    let mut f = File::open(path).map_err(|e| Error::io(path, e))?;
+    let file_len = f.metadata().map_err(|e| Error::io(path, e))?.len();
+    let mut bytes = [0u8; HEADER];
+    if file_len < HEADER as u64 {
         return bad(
             "header",
             format!("at least {HEADER} bytes"),
-            bytes.len().to_string(),
+            file_len.to_string(),
         );
     }
+    f.read_exact(&mut bytes).map_err(|e| Error::io(path, e))?;
     let u32_at =
         |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
     let u64_at = |o: usize| {
@@ -193,25 +237,25 @@ fn read_window(path: &Path, index: u32) -> Result<JournalWindow> {
     }
     let n = u64_at(32);
     let expected_len = (n as u128) * LEAF as u128 + HEADER as u128;
-    if expected_len != bytes.len() as u128 {
+    if expected_len != file_len as u128 {
         return bad(
             "length",
             format!("{expected_len} bytes for {n} leaves"),
-            bytes.len().to_string(),
+            file_len.to_string(),
         );
     }
-    let body = &bytes[HEADER..];
-    if crc32(body) != u32_at(48) {
+    // The length matched the file's, so `n` leaves are there to read.
+    let mut leaves = vec![Leaf::zeroed(); n as usize];
+    f.read_exact(bytemuck::cast_slice_mut(&mut leaves))
+        .map_err(|e| Error::io(path, e))?;
+    let crc = crc32(bytemuck::cast_slice(&leaves));
+    if crc != u32_at(48) {
         return bad(
             "leaves",
             format!("CRC-32 {:#010x}", u32_at(48)),
-            format!("{:#010x}", crc32(body)),
+            format!("{crc:#010x}"),
         );
     }
-    let leaves: Vec<Leaf> = body
-        .chunks_exact(LEAF)
-        .map(bytemuck::pod_read_unaligned)
-        .collect();
     Ok(JournalWindow {
         index,
         t0,
@@ -256,8 +300,10 @@ mod tests {
         };
         j.append(&w0).unwrap();
         j.append(&w1).unwrap();
-        let (_, got) = Journal::resume(&out, "key-1").unwrap();
-        assert_eq!(got, vec![w0.clone(), w1]);
+        let (j, count) = Journal::resume(&out, "key-1").unwrap();
+        assert_eq!(count, 2);
+        assert_eq!(j.read(0).unwrap(), w0);
+        assert_eq!(j.read(1).unwrap(), w1);
         // Another solve's journal is refused.
         let e = Journal::resume(&out, "key-2").unwrap_err().to_string();
         assert!(
@@ -270,12 +316,16 @@ mod tests {
         let last = bytes.len() - 1;
         bytes[last] ^= 1;
         fs::write(&p, &bytes).unwrap();
-        let e = Journal::resume(&out, "key-1").unwrap_err().to_string();
+        let read1 = || Journal::resume(&out, "key-1").and_then(|(j, _)| j.read(1));
+        let e = read1().unwrap_err().to_string();
         assert!(e.contains("window-00001.bin") && e.contains("CRC"), "{e}");
-        // A truncated file too.
+        // A truncated file too, and one cut inside its leaves.
         fs::write(&p, &bytes[..40]).unwrap();
-        let e = Journal::resume(&out, "key-1").unwrap_err().to_string();
+        let e = read1().unwrap_err().to_string();
         assert!(e.contains("header"), "{e}");
+        fs::write(&p, &bytes[..bytes.len() - 8]).unwrap();
+        let e = read1().unwrap_err().to_string();
+        assert!(e.contains("length") && e.contains("for 1 leaves"), "{e}");
         // Finishing removes the directory.
         Journal::create(&out, "key-1").unwrap().finish().unwrap();
         assert!(!journal_dir(&out).exists());
