@@ -69,7 +69,10 @@ fn as_solution(scene: &Scene, patches: &Solution, windows: &[WindowOutput]) -> S
     Solution {
         scene: scene.clone(),
         patches: patches.patches.clone(),
-        leaves: windows.iter().flat_map(|w| w.leaves.clone()).collect(),
+        leaves: windows
+            .iter()
+            .flat_map(|w| w.leaves.iter().copied())
+            .collect(),
         stats: SolveStats::default(),
     }
 }
@@ -349,7 +352,7 @@ fn where_nothing_changes_consecutive_frames_are_one_leaf() {
     let room = |l: &Leaf| objects[l.patch as usize];
     let mut in_b = 0;
     for w in &windows {
-        for l in &w.leaves {
+        for l in w.leaves.iter() {
             if room(l) == 1 {
                 in_b += 1;
                 assert_eq!(
@@ -432,7 +435,7 @@ fn a_budget_on_kept_terms_bounds_them_and_keeps_the_result() {
         let sol = Solution {
             scene: scene.clone(),
             patches: run.patches().to_vec(),
-            leaves: w.leaves,
+            leaves: w.leaves.to_vec(),
             stats: SolveStats::default(),
         };
         let most = frames.iter().map(|f| f.bytes_kept).max().unwrap();
@@ -460,9 +463,10 @@ fn a_budget_on_kept_terms_bounds_them_and_keeps_the_result() {
 
 #[test]
 fn a_window_on_mapped_storage_is_the_one_in_ram() {
-    // The pools and the kept final-gather terms live in scratch files and their
-    // pages are handed back after every batch of gathers (out of core): the leaves
-    // are bit for bit those of the RAM run, and no scratch file is left behind.
+    // The pools, the kept final-gather terms and the window's leaves live in
+    // scratch files and their pages are handed back after every batch of gathers
+    // (out of core): the leaves are bit for bit those of the RAM run, and no
+    // scratch file outlives what it holds.
     let scene = sliding_block(-60.0, 0.8);
     let dir = tempfile::tempdir().unwrap();
     let mapped = SolveOptions {
@@ -480,12 +484,16 @@ fn a_window_on_mapped_storage_is_the_one_in_ram() {
     let (ram, kept) = window(opts());
     assert!(kept > 10_000, "the window keeps terms: {kept} bytes");
     let (on_disk, kept_mapped) = window(mapped);
+    assert!(on_disk.leaves.is_mapped() && !ram.leaves.is_mapped());
     assert_eq!(on_disk, ram);
     // The same terms: RAM counts its arenas' capacity, a mapped file their length.
     assert!(
         kept_mapped <= kept && 5 * kept_mapped >= 4 * kept,
         "mapped {kept_mapped}, RAM {kept}"
     );
+    // The leaves' file goes with them; nothing else is left.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    drop(on_disk);
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
 

@@ -12,7 +12,7 @@ use rhier::playback::{probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
 use rhier::solver::spacetime::{FrameRecord, SpaceTime, SpaceTimeOptions};
 use rhier::solver::{SolveOptions, SolveStats};
-use rhier::store::journal::{Journal, JournalWindow};
+use rhier::store::journal::Journal;
 use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
 
 use super::solve::Args;
@@ -153,8 +153,6 @@ pub fn run(
         .with_context(|| format!("creating {}", out.display()))?;
     let mut frames: Vec<FrameRecord> = Vec::new();
     let (mut stored, mut frame_cells) = (0u64, 0u64);
-    // Read back one window at a time: a resumed long solve holds one window's
-    // leaves, not every finished window's.
     if let Some(journal) = &journal {
         for wi in 0..done {
             let w = journal.read(wi as u32)?;
@@ -178,16 +176,14 @@ pub fn run(
             say(f.summary());
             frames.push(*f);
         })?;
-        writer.write_chunk(w.t0, w.t1, &w.leaves)?;
-        stored += w.leaves.len() as u64;
+        // Out of core, the leaves are paged in a block at a time and handed back.
+        let leaves = &w.leaves;
+        writer.write_chunk_paged(w.t0, w.t1, leaves, || leaves.release_resident())?;
+        stored += leaves.len() as u64;
         frame_cells += w.frame_cells;
         if let Some(journal) = &journal {
-            journal.append(&JournalWindow {
-                index: w.index,
-                t0: w.t0,
-                t1: w.t1,
-                leaves: w.leaves,
-                frame_cells: w.frame_cells,
+            journal.append_leaves(w.index, [w.t0, w.t1], w.frame_cells, leaves, || {
+                leaves.release_resident()
             })?;
         }
         if let Some(budget) = args.budget
