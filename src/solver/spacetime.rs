@@ -86,6 +86,7 @@
 //! at every keyframe and every frame that is solved.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::DVec3;
@@ -600,21 +601,27 @@ impl<'a> SpaceTime<'a> {
         let keys = key_frames(frames.len(), self.st.key_stride);
         let interp_tol = self.st.interp_tol * b_ref;
         // The values of the keyframes around the frames being solved (at most three,
-        // about 1.3 MB each on ACTOR), and finished frames waiting for the ones
+        // about 0.9 MB each on ACTOR), and finished frames waiting for the ones
         // before them to be merged in time order.
         let mut key_values: HashMap<usize, KeyValues> = HashMap::new();
         let mut key_rad: HashMap<usize, SharedRadiosity> = HashMap::new();
-        let mut pending: std::collections::BTreeMap<usize, Vec<Leaf>> = Default::default();
+        let mut pending: std::collections::BTreeMap<usize, Arc<[Leaf]>> = Default::default();
         let mut next_merge = 0;
         for k in solve_order(&keys) {
             let t = frames[k];
-            let (cost, rec) = match keys.binary_search(&k) {
+            // The frame's cells are shared by the time merge and, for a keyframe,
+            // its values (which interpolate the points it did not gather).
+            let (cost, cells, gathered, interpolated): (_, Arc<[Leaf]>, _, _) = match keys
+                .binary_search(&k)
+            {
                 Ok(_) => {
                     let cost = solver.frame(t, b_ref)?;
                     key_rad.insert(k, solver.shared_radiosity());
                     let mut r = solver.reconstruct_between(None);
-                    key_values.insert(k, std::mem::take(&mut r.values).with_cells(&r.leaves));
-                    (cost, r)
+                    let cells: Arc<[Leaf]> = std::mem::take(&mut r.leaves).into();
+                    let values = std::mem::take(&mut r.values).with_cells(cells.clone());
+                    key_values.insert(k, values);
+                    (cost, cells, r.gathered, r.interpolated)
                 }
                 Err(i) => {
                     // `solve_order` solves the keyframe ending `k`'s interval just
@@ -645,13 +652,13 @@ impl<'a> SpaceTime<'a> {
                         t: k as f64,
                         tol: interp_tol,
                     });
-                    (cost, solver.reconstruct_between(between.as_ref()))
+                    let r = solver.reconstruct_between(between.as_ref());
+                    (cost, r.leaves.into(), r.gathered, r.interpolated)
                 }
             };
             // The frame's gathers leave the heaps fragmented (ACTOR, out of core:
             // 6 MB less resident at the end of a window).
             super::release_free_memory();
-            let cells = rec.leaves;
             frame_cells += cells.len() as u64;
             let n_cells = cells.len() as u64;
             pending.insert(k, cells);
@@ -680,8 +687,8 @@ impl<'a> SpaceTime<'a> {
                 bytes_pools: bytes,
                 bytes_kept: kept,
                 residual: cost.residual,
-                gathered: rec.gathered,
-                interpolated: rec.interpolated,
+                gathered,
+                interpolated,
             });
         }
         let closed = merge.finish(w1)?;
