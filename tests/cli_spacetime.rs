@@ -84,6 +84,52 @@ fn interrupted_solve_leaves_no_file_and_resume_gives_the_same_leaves() {
 }
 
 #[test]
+fn out_of_core_by_default_with_the_leaves_of_ram_and_no_scratch_left() {
+    // A space-time solve pages its pools, kept terms and leaves through files in
+    // the journal directory unless asked for RAM; the file is the same either way
+    // (but for the timing in its stats), and no scratch file outlives the solve,
+    // interrupted or not.
+    let dir = tempfile::tempdir().unwrap();
+    let (paged, ram) = (dir.path().join("paged.rhier"), dir.path().join("ram.rhier"));
+    for (out, extra) in [
+        (&paged, &["--stats"][..]),
+        (&ram, &["--storage", "ram"][..]),
+    ] {
+        let o = solve(out, extra);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let (a, b) = (
+        rhier::store::Reader::open(&paged).unwrap(),
+        rhier::store::Reader::open(&ram).unwrap(),
+    );
+    assert_eq!(a.chunks().len(), b.chunks().len());
+    for k in 0..a.chunks().len() {
+        assert_eq!(
+            a.chunk_leaves(k).unwrap(),
+            b.chunk_leaves(k).unwrap(),
+            "chunk {k}"
+        );
+    }
+    let names = |d: &Path| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(names(dir.path()), ["paged.rhier", "ram.rhier"]);
+    // Interrupted after two windows: the journal holds its windows and key only.
+    let cut = dir.path().join("cut.rhier");
+    let o = solve(&cut, &["--stop-after-windows", "2"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        names(&rhier::store::journal::journal_dir(&cut)),
+        ["solve.key", "window-00000.bin", "window-00001.bin"]
+    );
+}
+
+#[test]
 fn bad_time_settings_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.rhier");

@@ -73,11 +73,12 @@ pub struct Args {
     #[arg(long)]
     pub per_frame: bool,
     /// Where the element and link pools (and a space-time window's kept final-gather
-    /// terms) live.
-    #[arg(long, value_enum, default_value = "ram")]
-    pub storage: StorageKind,
-    /// Directory for `--storage mmap` files, created if missing (default: the system
-    /// temp directory).
+    /// terms and leaves) live [default: mmap for a space-time solve, out of core in
+    /// the journal directory `OUT.rhier.partial/` beside the output; ram otherwise]
+    #[arg(long, value_enum)]
+    pub storage: Option<StorageKind>,
+    /// Directory for memory-mapped pool files, created if missing (default: a
+    /// space-time solve's journal directory, else the system temp directory).
     #[arg(long)]
     pub scratch: Option<PathBuf>,
     /// Refinement threshold, relative to the RMS reflected radiosity.
@@ -244,7 +245,7 @@ pub(super) fn load(args: &Args) -> anyhow::Result<(Scene, String)> {
 /// The solver settings the arguments ask for (shared by every mode of `solve`).
 pub(super) fn solve_options(args: &Args) -> SolveOptions {
     let storage = match (args.storage, args.budget) {
-        (StorageKind::Ram, None) => Storage::Ram,
+        (None | Some(StorageKind::Ram), None) => Storage::Ram,
         _ => Storage::Mmap(args.scratch.clone().unwrap_or_else(std::env::temp_dir)),
     };
     SolveOptions {

@@ -9,13 +9,14 @@ use std::time::Instant;
 
 use anyhow::Context;
 use rhier::playback::{probe, read_probe_points, write_probe_results};
+use rhier::pools::Storage;
 use rhier::scene::Scene;
 use rhier::solver::spacetime::{FrameRecord, SpaceTime, SpaceTimeOptions};
 use rhier::solver::{SolveOptions, SolveStats};
 use rhier::store::journal::Journal;
 use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
 
-use super::solve::Args;
+use super::solve::{Args, StorageKind};
 
 /// Checks the time settings: finite and positive.
 fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
@@ -116,6 +117,17 @@ pub fn run(
     } else {
         (Some(Journal::create(&out, &key)?), 0)
     };
+    // Out of core unless asked for RAM: the pools, kept terms and leaves page through
+    // files in the journal directory, beside the output on its file system (a
+    // system temp directory may be a RAM-backed tmpfs) and removed with it.
+    let mut opts = opts;
+    if args.storage != Some(StorageKind::Ram) || args.budget.is_some() {
+        let dir = args
+            .scratch
+            .clone()
+            .or_else(|| journal.as_ref().map(|j| j.dir().to_path_buf()));
+        opts.storage = Storage::Mmap(dir.unwrap_or_else(std::env::temp_dir));
+    }
     let quiet = args.quiet;
     let show_progress =
         !quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
@@ -210,9 +222,6 @@ pub fn run(
     writer
         .finish(&stats)
         .with_context(|| format!("writing {}", out.display()))?;
-    if let Some(journal) = journal {
-        journal.finish()?;
-    }
     if let Some(path) = &args.report {
         let mut csv = String::from(
             "frame,window,t,seconds,cells,gathered,interpolated,elements,links,varying_links,rays,bytes_pools,bytes_kept,residual\n",
@@ -283,6 +292,11 @@ pub fn run(
             stored * std::mem::size_of::<rhier::solver::Leaf>() as u64,
         );
         println!("{m}");
+    }
+    // The pools' files live in the journal directory by default: closed first.
+    drop(run);
+    if let Some(journal) = journal {
+        journal.finish()?;
     }
     Ok(())
 }

@@ -109,12 +109,17 @@ impl Journal {
         Ok((Journal { dir }, count))
     }
 
+    /// The journal's directory (a space-time solve's default scratch directory).
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
     /// Reads finished window `index`, checking every field and the CRC.
     pub fn read(&self, index: u32) -> Result<JournalWindow> {
         read_window(&self.dir.join(window_name(index)), index)
     }
 
-    /// Records a finished window (a [`JournalWindow`] whose leaves are borrowed).
+    /// Records a finished window held in memory.
     pub fn append(&self, w: &JournalWindow) -> Result<()> {
         self.append_leaves(w.index, [w.t0, w.t1], w.frame_cells, &w.leaves, || {})
     }

@@ -5,13 +5,14 @@
 //! header goes (so a partial file has no magic and is refused), then the scene and
 //! patch sections. Each [`Writer::write_chunk`] appends one chunk section of leaves (in
 //! time order; the leaves are checked and fed to zstd a block at a time, never
-//! copied: a `Leaf` is its archived record) and remembers its index entry. [`Writer::finish`] appends the links,
-//! chunk index and stats sections and the section table, writes the header at offset
-//! 0, fsyncs, renames `<path>.tmp` to `<path>` and fsyncs the directory. Dropping an
-//! unfinished writer removes the temporary file. Nothing is ever rewritten except the
-//! header, so memory stays at one chunk's compressed bytes whatever the animation's
-//! length. A path that exists and is not a regular file (`/dev/null`, a FIFO) is
-//! written in place at the end, never renamed over: the file is then built in memory.
+//! copied: a `Leaf` is its archived record) and remembers its index entry.
+//! [`Writer::finish`] appends the links, chunk index and stats sections and the
+//! section table, writes the header at offset 0, fsyncs, renames `<path>.tmp` to
+//! `<path>` and fsyncs the directory. Dropping an unfinished writer removes the
+//! temporary file. Nothing is ever rewritten except the header, so memory stays at
+//! one chunk's compressed bytes whatever the animation's length. A path that exists
+//! and is not a regular file (`/dev/null`, a FIFO) is written in place at the end,
+//! never renamed over: the file is then built in memory.
 //!
 //! What it stores: only what playback needs. Motion tracks only for objects that move;
 //! each leaf once, in the chunk where its time range starts (a leaf that holds over
