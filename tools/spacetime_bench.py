@@ -136,7 +136,7 @@ def frame_times(start, end, fps):
 
 
 def run_measured(cmd, log):
-    """Runs cmd (a list), returns (wall seconds, peak RSS in MB)."""
+    """Runs cmd (a list), returns (wall seconds, peak RSS in MiB)."""
     rss_file = log + ".rss"
     timer = shutil.which("time") or ("/usr/bin/time" if os.path.exists("/usr/bin/time") else None)
     full = [timer, "-f", "%M", "-o", rss_file] + cmd if timer else cmd
@@ -276,7 +276,7 @@ def write_png(rows, path):
                              xytext=(5, 4), fontsize=8, color=colour)
         top.set_title(scene)
         top.set_ylabel("relative RMS error vs reference (%)")
-        bottom.set_ylabel("peak RSS (MB)")
+        bottom.set_ylabel("peak RSS (MiB)")
         bottom.set_xlabel("run time (s, whole process)")
         for ax in (top, bottom):
             ax.set_xscale("log")
@@ -345,7 +345,7 @@ def main():
         cmd = expand(DEFAULT_METHOD, rhier=args.rhier, scene=scene_file, eps=args.ref_eps,
                      fps=args.ref_fps, out=ref_file) + threads
         s, m = run_measured(cmd, ref_file + ".log")
-        print(f"reference: {shlex.join(cmd)}: {s:.1f} s, {m:.0f} MB", flush=True)
+        print(f"reference: {shlex.join(cmd)}: {s:.1f} s, {m:.0f} MiB", flush=True)
     ref = probe_all(args.rhier, ref_file, points_file, times)
     ref_desc = f"per-frame fps {args.ref_fps:g} eps {args.ref_eps:g}"
 
