@@ -773,8 +773,8 @@ mod tests {
 
     #[test]
     fn closed_leaves_come_out_in_the_file_order() {
-        // Leaves of 7 start times, 3 patches and 2 × 3 corner positions, closed in a
-        // scrambled order (blocks of the scatter pass cross bucket boundaries).
+        // Leaves of 7 start times, 3 patches and 6 first corners (each its own cell),
+        // closed in a scrambled order (blocks of the scatter pass cross buckets).
         let mut leaves = Vec::new();
         for i in 0..(7 * 3 * 6 * 500) {
             let h = crate::oracle::hash3(i as u64, 17, 3);
