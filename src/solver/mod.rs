@@ -499,9 +499,12 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
 }
 
 /// Points gathered in parallel at a time by the reconstruction: enough to keep the
-/// threads busy, few enough that the terms they return to keep stay small (ACTOR
-/// out of core peaks at 40.9 MB with 512, 37.7 MB with 256, at the same time).
-const GATHER_BATCH: usize = 256;
+/// threads busy, few enough that the terms they return to keep stay small and, out
+/// of core, that the kept terms' pages a batch reads stay few (each point touches
+/// up to three pages). ACTOR out of core peaked at 40.9 MB with 512 and 37.7 MB
+/// with 256; with its leaves out of core too, 128 takes another 0.6–1.8 MiB off
+/// both scenes at the same time (BENCHMARKS.md).
+const GATHER_BATCH: usize = 128;
 
 /// What one space-time frame cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
