@@ -505,12 +505,8 @@ fn in_file_order(closed: Column<Leaf>, storage: &crate::pools::Storage) -> Resul
     }
     drop(closed);
     for (&end, &(_, count)) in next.iter().zip(&starts) {
-        out.as_mut_slice()[end - count..end].sort_unstable_by(|a, b| {
-            a.patch.cmp(&b.patch).then_with(|| {
-                let bits = |l: &Leaf| l.uv.map(|c| c.map(f32::to_bits));
-                bits(a).cmp(&bits(b))
-            })
-        });
+        // A cell's key is its patch, then its corners' bits.
+        out.as_mut_slice()[end - count..end].sort_unstable_by_key(cell_key);
         out.release_resident();
     }
     Ok(out)
