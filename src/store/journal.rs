@@ -133,7 +133,7 @@ impl Journal {
         time: [f64; 2],
         frame_cells: u64,
         leaves: &[Leaf],
-        mut after_block: impl FnMut(),
+        after_block: impl FnMut(),
     ) -> Result<()> {
         let name = window_name(index);
         let path = self.dir.join(&name);
@@ -142,13 +142,7 @@ impl Journal {
         let mut f = std::io::BufWriter::new(File::create(&tmp).map_err(io)?);
         // The header goes last, when the CRC is known.
         f.write_all(&[0u8; HEADER]).map_err(io)?;
-        let mut crc = crc32fast::Hasher::new();
-        for block in leaves.chunks(super::writer::LEAF_BLOCK) {
-            let bytes: &[u8] = bytemuck::cast_slice(block);
-            crc.update(bytes);
-            f.write_all(bytes).map_err(io)?;
-            after_block();
-        }
+        let crc = super::writer::leaf_blocks(leaves, |b| f.write_all(b).map_err(io), after_block)?;
         let mut head = Vec::with_capacity(HEADER);
         head.extend_from_slice(MAGIC);
         head.extend_from_slice(&VERSION.to_le_bytes());

@@ -64,6 +64,24 @@ fn vec_root(n: usize) -> [u8; 16] {
     root
 }
 
+/// Hands the bytes of `leaves` to `write` a block of [`LEAF_BLOCK`] at a time,
+/// calling `after_block` after each (the chunk writer's raw sections, the resume
+/// journal); returns the CRC-32 state over them.
+pub(crate) fn leaf_blocks(
+    leaves: &[Leaf],
+    mut write: impl FnMut(&[u8]) -> Result<()>,
+    mut after_block: impl FnMut(),
+) -> Result<crc32fast::Hasher> {
+    let mut crc = crc32fast::Hasher::new();
+    for block in leaves.chunks(LEAF_BLOCK) {
+        let bytes: &[u8] = bytemuck::cast_slice(block);
+        crc.update(bytes);
+        write(bytes)?;
+        after_block();
+    }
+    Ok(crc)
+}
+
 /// Choices of the writer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WriteOptions {
@@ -353,13 +371,7 @@ impl Writer {
             None => {
                 // Stored raw: the records again, a block at a time.
                 let offset = self.pos;
-                let mut crc = crc32fast::Hasher::new();
-                for block in leaves.chunks(LEAF_BLOCK) {
-                    let bytes: &[u8] = bytemuck::cast_slice(block);
-                    crc.update(bytes);
-                    self.emit(bytes)?;
-                    after_block();
-                }
+                let mut crc = leaf_blocks(leaves, |b| self.emit(b), &mut after_block)?;
                 crc.update(&root);
                 self.emit(&root)?;
                 self.entries.push(SectionEntry {
