@@ -341,25 +341,29 @@ impl Writer {
         let root = vec_root(leaves.len());
         let raw_len = std::mem::size_of_val(leaves) + root.len();
         let mut reach = t0;
-        let mut packed = None;
-        if self.options.compress {
-            let io = |e| Error::io(&self.path, e);
+        let io = |e| Error::io(&self.path, e);
+        let mut encoder = if self.options.compress {
             let mut z = zstd::stream::Encoder::new(Vec::new(), ZSTD_LEVEL).map_err(io)?;
             z.set_pledged_src_size(Some(raw_len as u64)).map_err(io)?;
-            for (k, block) in leaves.chunks(LEAF_BLOCK).enumerate() {
-                reach = self.check_leaves(index, t0, t1, k * LEAF_BLOCK, block, reach)?;
-                z.write_all(bytemuck::cast_slice(block)).map_err(io)?;
-                after_block();
-            }
-            z.write_all(&root).map_err(io)?;
-            let z = z.finish().map_err(io)?;
-            packed = (z.len() < raw_len).then_some(z);
+            Some(z)
         } else {
-            for (k, block) in leaves.chunks(LEAF_BLOCK).enumerate() {
-                reach = self.check_leaves(index, t0, t1, k * LEAF_BLOCK, block, reach)?;
-                after_block();
+            None
+        };
+        for (k, block) in leaves.chunks(LEAF_BLOCK).enumerate() {
+            reach = self.check_leaves(index, t0, t1, k * LEAF_BLOCK, block, reach)?;
+            if let Some(z) = &mut encoder {
+                z.write_all(bytemuck::cast_slice(block)).map_err(io)?;
             }
+            after_block();
         }
+        let packed = match encoder {
+            Some(mut z) => {
+                z.write_all(&root).map_err(io)?;
+                let z = z.finish().map_err(io)?;
+                (z.len() < raw_len).then_some(z)
+            }
+            None => None,
+        };
         let section = self.entries.len() as u32;
         match packed {
             Some(z) => {
