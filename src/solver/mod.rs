@@ -2563,8 +2563,10 @@ impl<'a> Solver<'a> {
     ///
     /// Cells start as the hierarchy's leaves and split (in parameter space, like
     /// elements) while the gather at a cell's centre differs from the interpolant of
-    /// its corners by more than `recon_tol · B_ref` and the cell is larger than the
-    /// reconstruction's smallest size; a split cell keeps the links of its leaf. This
+    /// its corners by more than `recon_tol · B_ref`, across each direction in which
+    /// it is at least twice the reconstruction's smallest size (both: four children;
+    /// one: two halves, see [`Cell::split_dirs`]); a split cell keeps the links of its
+    /// leaf. This
     /// meshes the stored answer to where `B(x)` bends (room edges, contact lines,
     /// shadow boundaries) without refining the link hierarchy there.
     ///
@@ -2617,7 +2619,7 @@ impl<'a> Solver<'a> {
         };
         let tol = self.opts.recon_tol * b_ref;
         let limits = self.gather_limits(b_ref);
-        let min_area = (self.opts.recon_min_size * self.patches.diameter).powi(2);
+        let min_len = self.opts.recon_min_size * self.patches.diameter;
         let mut cache = VertexCache::default();
         let mut cells: Vec<Cell> = self
             .leaves
@@ -2687,8 +2689,13 @@ impl<'a> Solver<'a> {
                 let off = (0..3)
                     .map(|k| (cv[k] - interp[k]).abs())
                     .fold(0.0, f64::max);
-                if ok && off > tol && c.area >= 4.0 * min_area {
-                    next.extend(c.split());
+                let split = if ok && off > tol {
+                    c.split_dirs(min_len, &self.patches)
+                } else {
+                    (false, false)
+                };
+                if split != (false, false) {
+                    next.extend(c.split_along(split));
                 } else {
                     if ok {
                         let e = self.patches.emissions[c.patch as usize];
@@ -2868,6 +2875,53 @@ impl Cell {
             area: self.area / 4.0,
             ..*self
         })
+    }
+
+    /// Which parameter directions `(u, v)` the cell may split along: a direction
+    /// whose world edge is at least twice `min_len` (so no child is thinner than
+    /// the reconstruction's smallest size), both for a triangle above four times
+    /// the smallest area. A thin quad (a strip between two contact lines) keeps
+    /// halving along its length; an area bound stopped it while it was long, or
+    /// cut it thinner than the smallest size while it was short.
+    fn split_dirs(&self, min_len: f64, patches: &Patches) -> (bool, bool) {
+        if self.n == 3 {
+            let ok = self.area >= 4.0 * min_len * min_len;
+            return (ok, ok);
+        }
+        let p = |i: usize| {
+            patches.point(
+                self.patch as usize,
+                self.uv[i][0] as f64,
+                self.uv[i][1] as f64,
+            )
+        };
+        let len_u = p(0).distance(p(1)).max(p(3).distance(p(2)));
+        let len_v = p(0).distance(p(3)).max(p(1).distance(p(2)));
+        (len_u >= 2.0 * min_len, len_v >= 2.0 * min_len)
+    }
+
+    /// The children of a split along `(u, v)`: four ([`Cell::split`]) along both,
+    /// two halves of a quad along one.
+    fn split_along(&self, (su, sv): (bool, bool)) -> Vec<Cell> {
+        if su && sv {
+            return self.split().to_vec();
+        }
+        let (u0, v0, u1, v1) = (self.uv[0][0], self.uv[0][1], self.uv[2][0], self.uv[2][1]);
+        let r = |a: f32, b: f32, c: f32, d: f32| [[a, b], [c, b], [c, d], [a, d]];
+        let kids = if su {
+            let um = (u0 + u1) * 0.5;
+            [r(u0, v0, um, v1), r(um, v0, u1, v1)]
+        } else {
+            let vm = (v0 + v1) * 0.5;
+            [r(u0, v0, u1, vm), r(u0, vm, u1, v1)]
+        };
+        kids.iter()
+            .map(|&uv| Cell {
+                uv,
+                area: self.area / 2.0,
+                ..*self
+            })
+            .collect()
     }
 }
 
@@ -3061,6 +3115,61 @@ mod tests {
             );
         }
         assert!(straddling > 0, "no ceiling leaf straddles the lamp's edge");
+    }
+
+    #[test]
+    fn a_thin_cell_splits_along_its_length_and_no_thinner_than_the_smallest_size() {
+        let scene = crate::scene::cornell_box(false);
+        let patches = Patches::at_time(&scene, 0.0);
+        let quad = (0..patches.len())
+            .find(|&i| patches.polys[i].n == 4)
+            .expect("the Cornell box has quads");
+        let world = |uv: [f32; 2]| patches.point(quad, uv[0] as f64, uv[1] as f64);
+        let cell = |u1: f32, v1: f32| {
+            let uv = [[0.0, 0.0], [u1, 0.0], [u1, v1], [0.0, v1]];
+            let e = |a: usize, b: usize| world(uv[a]).distance(world(uv[b]));
+            Cell {
+                leaf: ElementId(0),
+                patch: quad as u32,
+                n: 4,
+                uv,
+                area: e(0, 1) * e(0, 3),
+            }
+        };
+        let strip = cell(1.0, 0.02);
+        let long = world([0.0, 0.0]).distance(world([1.0, 0.0]));
+        let thin = world([0.0, 0.0]).distance(world([0.0, 0.02]));
+        assert!(long > 0.3 && thin > 0.005, "{long} {thin}");
+        // Thinner than twice the smallest size, far larger than four times its area:
+        // halved along its length only.
+        let min_len = 0.6 * thin;
+        assert!(strip.area >= 4.0 * min_len * min_len);
+        assert_eq!(strip.split_dirs(min_len, &patches), (true, false));
+        let halves = strip.split_along((true, false));
+        assert_eq!(halves.len(), 2);
+        assert_eq!(
+            halves[0].uv,
+            [[0.0, 0.0], [0.5, 0.0], [0.5, 0.02], [0.0, 0.02]]
+        );
+        assert_eq!(
+            halves[1].uv,
+            [[0.5, 0.0], [1.0, 0.0], [1.0, 0.02], [0.5, 0.02]]
+        );
+        assert!((halves[0].area + halves[1].area - strip.area).abs() < 1e-12);
+        // Wide enough both ways: the four children of an element split.
+        assert_eq!(strip.split_dirs(0.4 * thin, &patches), (true, true));
+        let quarters = strip.split_along((true, true));
+        assert_eq!(quarters.len(), 4);
+        assert_eq!(
+            quarters[0].uv,
+            [[0.0, 0.0], [0.5, 0.0], [0.5, 0.01], [0.0, 0.01]]
+        );
+        // Short both ways: not split.
+        assert_eq!(
+            cell(0.02, 0.02).split_dirs(min_len, &patches),
+            (false, false)
+        );
+        assert_eq!(strip.split_dirs(0.6 * long, &patches), (false, false));
     }
 
     #[test]
