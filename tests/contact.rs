@@ -122,6 +122,24 @@ fn every_box_on_a_floor_loses_its_footprint_and_its_bottom() {
         (floor_area - expected).abs() < 1e-9,
         "floor area {floor_area} vs {expected}"
     );
+    // The boxes' 6 x and 6 z edge lines (each met by three boxes in a row, and by a
+    // box's bottom and its sides) cut the floor into 7 × 7 rectangles; the 9 under
+    // the boxes are dropped.
+    let floor: Vec<usize> = (0..after.len())
+        .filter(|&i| after.normals[i].y > 0.99 && after.polys[i].v[0].y.abs() < 1e-9)
+        .collect();
+    assert_eq!(floor.len(), 49 - 9);
+    for &i in &floor {
+        let c = after.polys[i].corners();
+        assert_eq!(c.len(), 4, "floor piece {i} is not a rectangle");
+        let (lo, hi) = c
+            .iter()
+            .fold((c[0], c[0]), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        assert!(
+            ((hi.x - lo.x) * (hi.z - lo.z) - after.areas[i]).abs() < 1e-9,
+            "floor piece {i} is not axis-aligned"
+        );
+    }
     let bottoms = (0..after.len())
         .filter(|&i| after.normals[i].y < -0.99 && after.polys[i].v[0].y.abs() < 1e-9)
         .count();

@@ -89,14 +89,18 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
             hi = hi.max(c);
         }
         let pad = DVec3::splat(tol * 2.0 + near_gap);
+        // In first-met order, each once (a floor under a field of boxes meets
+        // every box: a linear `contains` made this quadratic).
         let mut seen = Vec::new();
         bvh.for_each_triangle_in_box(lo - pad, hi + pad, |j, _| {
             let j = j as usize;
-            if j != i && !moving(j) && !seen.contains(&j) {
+            if j != i && !moving(j) {
                 seen.push(j);
             }
             true
         });
+        let mut met = std::collections::HashSet::with_capacity(seen.len());
+        seen.retain(|&j| met.insert(j));
         for &j in &seen {
             let other = &patches.polys[j];
             let nj = patches.normals[j];
@@ -132,8 +136,14 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
                 }
             }
         }
-        // Cut by each line that crosses the polygon's interior.
+        // Cut by each line that crosses the polygon's interior. A line met again
+        // (boxes in a row share their edges' lines; a box's bottom and its sides
+        // give each edge twice) cuts nothing the first did not, but slivers within
+        // the tolerance: skipped, the first of each kept in order (the pieces of
+        // the generated cube rooms are bit for bit those of cutting by all).
         let mut pieces = vec![poly];
+        let mut next = Vec::new();
+        let mut cut_lines = std::collections::HashSet::new();
         for (p0, dir) in lines {
             let cut_n = n.cross(dir);
             let len = cut_n.length();
@@ -141,9 +151,16 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
                 continue;
             }
             let cut_n = cut_n / len;
-            let mut next = Vec::with_capacity(pieces.len() + 1);
-            for piece in pieces {
-                let s: Vec<f64> = piece.corners().iter().map(|&v| cut_n.dot(v - p0)).collect();
+            if !cut_lines.insert(line_key(cut_n, cut_n.dot(p0), tol)) {
+                continue;
+            }
+            next.clear();
+            for &piece in &pieces {
+                let mut s = [0.0f64; super::polygon::MAX_CORNERS];
+                for (x, &v) in s.iter_mut().zip(piece.corners()) {
+                    *x = cut_n.dot(v - p0);
+                }
+                let s = &s[..piece.n];
                 let crosses = s.iter().any(|&x| x > tol) && s.iter().any(|&x| x < -tol);
                 if !crosses {
                     next.push(piece);
@@ -156,7 +173,7 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
                     }
                 }
             }
-            pieces = next;
+            std::mem::swap(&mut pieces, &mut next);
         }
         // Hidden: inside the solid resting on the patch (the first thing straight
         // above is a back face), or a face resting face to face on a coplanar
@@ -170,14 +187,11 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
                 bvh.intersect(x + dir * (tol * 4.0), dir * patches.diameter, 0.0, 1.0)
                     .is_some_and(|h| patches.normals[h.patch as usize].dot(dir) > 0.0)
             };
-            let resting = facing
-                .iter()
-                .any(|&j| contains(&patches.polys[j], patches.normals[j], x, tol));
-            let covered = covering
-                .iter()
-                .any(|&j| contains(&patches.polys[j], patches.normals[j], x, tol));
-            (pieces.len() > 1 && !covered && behind_is_back_face(n))
-                || (resting && behind_is_back_face(-n))
+            let on = |&j: &usize| contains(&patches.polys[j], patches.normals[j], x, tol);
+            // The ray first: a floor under a field of boxes faces every box bottom,
+            // and nothing lies behind the floor.
+            (pieces.len() > 1 && !covering.iter().any(on) && behind_is_back_face(n))
+                || (behind_is_back_face(-n) && facing.iter().any(on))
         };
         if pieces.len() == 1 {
             if hidden(&poly) {
@@ -229,6 +243,25 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
     }
     out.finish();
     (out, stats)
+}
+
+/// The infinite line `{x : m·x = off}` (unit `m`, in the patch's plane) as a key:
+/// sign fixed so the largest component of `m` is positive, direction to 1e-9 and
+/// offset to `tol`. Equal keys are the same line within those; the same line can
+/// still get two keys at a rounding boundary, which only costs a cut that splits
+/// nothing.
+fn line_key(m: DVec3, off: f64, tol: f64) -> [i64; 4] {
+    let a = m.abs();
+    let big = if a.x >= a.y && a.x >= a.z {
+        m.x
+    } else if a.y >= a.z {
+        m.y
+    } else {
+        m.z
+    };
+    let (m, off) = if big < 0.0 { (-m, -off) } else { (m, off) };
+    let q = |x: f64| (x * 1e9).round() as i64;
+    [q(m.x), q(m.y), q(m.z), (off / tol).round() as i64]
 }
 
 /// Largest gap, as a fraction of the scene's diameter, between a patch and a
