@@ -2565,10 +2565,9 @@ impl<'a> Solver<'a> {
     /// elements) while the gather at a cell's centre differs from the interpolant of
     /// its corners by more than `recon_tol · B_ref`, across each direction in which
     /// it is at least twice the reconstruction's smallest size (both: four children;
-    /// one: two halves, see [`Cell::split_dirs`]); a split cell keeps the links of its
-    /// leaf. This
-    /// meshes the stored answer to where `B(x)` bends (room edges, contact lines,
-    /// shadow boundaries) without refining the link hierarchy there.
+    /// one: two halves, see `Cell::split_dirs`); a split cell keeps the links of its
+    /// leaf. This meshes the stored answer to where `B(x)` bends (room edges, contact
+    /// lines, shadow boundaries) without refining the link hierarchy there.
     ///
     /// Its estimated error combines the last round's (the hierarchy's) with the
     /// reconstruction's interpolation error, `sqrt(e_h² + e_i²)` (`NaN` if the
