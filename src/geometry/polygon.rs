@@ -56,23 +56,7 @@ impl Poly {
 
     /// Area-weighted centroid.
     pub fn centroid(&self) -> DVec3 {
-        let c = self.corners();
-        if c.len() < 3 {
-            return c.iter().copied().sum::<DVec3>() / (c.len().max(1) as f64);
-        }
-        let o = c[0];
-        let mut acc = DVec3::ZERO;
-        let mut w = 0.0;
-        for i in 1..c.len() - 1 {
-            let a = (c[i] - o).cross(c[i + 1] - o).length();
-            acc += a * (o + c[i] + c[i + 1]) / 3.0;
-            w += a;
-        }
-        if w > 0.0 {
-            acc / w
-        } else {
-            c.iter().copied().sum::<DVec3>() / c.len() as f64
-        }
+        centroid_of(self.corners())
     }
 
     /// Longest distance between two corners.
@@ -112,6 +96,27 @@ impl Poly {
             }
         }
         out
+    }
+}
+
+/// Area-weighted centroid of the convex planar polygon with corners `c` (the mean
+/// of the corners if it has no area): [`Poly::centroid`], on any corner slice.
+pub fn centroid_of(c: &[DVec3]) -> DVec3 {
+    if c.len() < 3 {
+        return c.iter().copied().sum::<DVec3>() / (c.len().max(1) as f64);
+    }
+    let o = c[0];
+    let mut acc = DVec3::ZERO;
+    let mut w = 0.0;
+    for i in 1..c.len() - 1 {
+        let a = (c[i] - o).cross(c[i + 1] - o).length();
+        acc += a * (o + c[i] + c[i + 1]) / 3.0;
+        w += a;
+    }
+    if w > 0.0 {
+        acc / w
+    } else {
+        c.iter().copied().sum::<DVec3>() / c.len() as f64
     }
 }
 

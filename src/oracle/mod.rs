@@ -190,27 +190,11 @@ pub fn sphere(g: &Geom) -> (DVec3, f64) {
         let hi = DVec3::from_array(g.corners[1]);
         ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
     } else {
-        // `Poly::centroid` and the farthest corner, on the record's corners (no
-        // `Poly` built: a space-time window calls this at every term it gathers).
+        // No `Poly` built: a space-time window calls this at every term it gathers.
         let n = (g.n as usize).min(4);
         let v: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(g.corners[i]));
         let v = &v[..n];
-        let c = if n < 3 {
-            v.iter().copied().sum::<DVec3>() / (n.max(1) as f64)
-        } else {
-            let o = v[0];
-            let (mut acc, mut w) = (DVec3::ZERO, 0.0);
-            for i in 1..n - 1 {
-                let a = (v[i] - o).cross(v[i + 1] - o).length();
-                acc += a * (o + v[i] + v[i + 1]) / 3.0;
-                w += a;
-            }
-            if w > 0.0 {
-                acc / w
-            } else {
-                v.iter().copied().sum::<DVec3>() / n as f64
-            }
-        };
+        let c = crate::geometry::centroid_of(v);
         let r = v.iter().map(|&p| p.distance(c)).fold(0.0, f64::max);
         (c, r)
     }

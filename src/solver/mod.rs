@@ -191,9 +191,9 @@ struct GatherLimits {
     spread: Vec<f32>,
     /// Per element: [`oracle::sphere`], centre and bounding radius, computed once
     /// per reconstruction instead of at every term of every point (9% of a
-    /// cluttered scene's run; `gen_cubes 50` 69.4 → 62.5 s). 32 bytes per element:
-    /// empty in a space-time window, whose peak memory is held to twice a static
-    /// frame's (each term computes its own there).
+    /// cluttered scene's run; `gen_cubes 50` 69.4 → 62.5 s). 32 bytes per element;
+    /// empty where each term computes its own (a space-time window, the error
+    /// samples).
     spheres: Vec<(DVec3, f64)>,
 }
 
@@ -1002,7 +1002,8 @@ impl<'a> Solver<'a> {
         for &l in &self.leaves {
             by_patch.entry(geoms[l.ix()].patch).or_default().push(l);
         }
-        let limits = self.gather_limits(self.rms_radiosity());
+        // A few points: each term computes its own sphere.
+        let limits = self.gather_limits(self.rms_radiosity(), false);
         samples
             .par_iter()
             .enumerate()
@@ -2527,8 +2528,10 @@ impl<'a> Solver<'a> {
 
     /// The limits of a reconstruction at radiosity scale `b_ref`: the options
     /// scaled, and each element's radiosity spread from the pool's radiosities as
-    /// they are now (leaves up, children after their parent in the pool).
-    fn gather_limits(&self, b_ref: f64) -> GatherLimits {
+    /// they are now (leaves up, children after their parent in the pool); with
+    /// `spheres`, every element's bounding sphere (worth it where many points are
+    /// gathered, see [`GatherLimits::spheres`]).
+    fn gather_limits(&self, b_ref: f64, spheres: bool) -> GatherLimits {
         let nodes = self.elems.nodes.as_slice();
         let b = self.elems.radiosities.as_slice();
         let mut lo = b.to_vec();
@@ -2555,15 +2558,15 @@ impl<'a> Solver<'a> {
                 f64::INFINITY
             },
             spread,
-            spheres: if self.window.is_some() {
-                Vec::new()
-            } else {
+            spheres: if spheres {
                 self.elems
                     .geoms
                     .as_slice()
                     .par_iter()
                     .map(oracle::sphere)
                     .collect()
+            } else {
+                Vec::new()
             },
         }
     }
@@ -2643,7 +2646,9 @@ impl<'a> Solver<'a> {
             None => self.rms_radiosity(),
         };
         let tol = self.opts.recon_tol * b_ref;
-        let limits = self.gather_limits(b_ref);
+        // Not in a space-time window: its peak memory is held to twice a static
+        // frame's.
+        let limits = self.gather_limits(b_ref, self.window.is_none());
         let min_len = self.opts.recon_min_size * self.patches.diameter;
         let mut cache = VertexCache::default();
         let mut cells: Vec<Cell> = self
