@@ -242,14 +242,31 @@ pub(super) fn load(args: &Args) -> anyhow::Result<(Scene, String)> {
     }
 }
 
+/// Where the pools live: `--storage`, else memory-mapped if `out_of_core` (a
+/// space-time solve) and RAM otherwise; `--budget` always maps. Mapped files go in
+/// `--scratch`, else `dir` (a space-time solve's journal directory), else the system
+/// temp directory.
+pub(super) fn storage(args: &Args, out_of_core: bool, dir: Option<&Path>) -> Storage {
+    let mapped = args.budget.is_some()
+        || match args.storage {
+            Some(kind) => kind == StorageKind::Mmap,
+            None => out_of_core,
+        };
+    if !mapped {
+        return Storage::Ram;
+    }
+    Storage::Mmap(
+        args.scratch
+            .clone()
+            .or_else(|| dir.map(Path::to_path_buf))
+            .unwrap_or_else(std::env::temp_dir),
+    )
+}
+
 /// The solver settings the arguments ask for (shared by every mode of `solve`).
 pub(super) fn solve_options(args: &Args) -> SolveOptions {
-    let storage = match (args.storage, args.budget) {
-        (None | Some(StorageKind::Ram), None) => Storage::Ram,
-        _ => Storage::Mmap(args.scratch.clone().unwrap_or_else(std::env::temp_dir)),
-    };
     SolveOptions {
-        storage,
+        storage: storage(args, false, None),
         eps: args.eps,
         min_size: args.min_size,
         recon_tol: args.recon_tol,

@@ -9,14 +9,13 @@ use std::time::Instant;
 
 use anyhow::Context;
 use rhier::playback::{probe, read_probe_points, write_probe_results};
-use rhier::pools::Storage;
 use rhier::scene::Scene;
 use rhier::solver::spacetime::{FrameRecord, SpaceTime, SpaceTimeOptions};
 use rhier::solver::{SolveOptions, SolveStats};
 use rhier::store::journal::Journal;
 use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
 
-use super::solve::{Args, StorageKind};
+use super::solve::{Args, storage};
 
 /// Checks the time settings: finite and positive.
 fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
@@ -120,14 +119,10 @@ pub fn run(
     // Out of core unless asked for RAM: the pools, kept terms and leaves page through
     // files in the journal directory, beside the output on its file system (a
     // system temp directory may be a RAM-backed tmpfs) and removed with it.
-    let mut opts = opts;
-    if args.storage != Some(StorageKind::Ram) || args.budget.is_some() {
-        let dir = args
-            .scratch
-            .clone()
-            .or_else(|| journal.as_ref().map(|j| j.dir().to_path_buf()));
-        opts.storage = Storage::Mmap(dir.unwrap_or_else(std::env::temp_dir));
-    }
+    let opts = SolveOptions {
+        storage: storage(args, true, journal.as_ref().map(|j| j.dir())),
+        ..opts
+    };
     let quiet = args.quiet;
     let show_progress =
         !quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
