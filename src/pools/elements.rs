@@ -69,6 +69,56 @@ pub struct Geom {
 
 const _: () = assert!(std::mem::size_of::<Geom>() == 168);
 
+/// How an element's power leaves it by direction, summed over its surfaces (`B̄` a
+/// surface's largest channel, `A` its area, `n` its unit normal). `repr(C)`, Pod,
+/// 36 bytes. Set by the solver's pull; read by [`crate::oracle::cluster_emission`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Emission {
+    /// Power-weighted normal `Σ A B̄ n`: the part of the power that leaves as from
+    /// one surface.
+    pub normal: [f32; 3],
+    /// Power by axis, `Σ A B̄ n_k²` over the surfaces facing `+k` (slot `2k`) and
+    /// `−k` (slot `2k + 1`), `k` = x, y, z: where the rest goes (`Σ n_k² = 1`, so
+    /// the slots sum to the power).
+    pub axes: [f32; 6],
+}
+
+const _: () = assert!(std::mem::size_of::<Emission>() == 36);
+
+impl Emission {
+    /// A surface of area `area`, largest-channel radiosity `b` and unit normal `n`.
+    pub fn surface(area: f64, b: f64, n: [f64; 3]) -> Self {
+        let p = area * b;
+        let mut axes = [0.0f32; 6];
+        for k in 0..3 {
+            axes[2 * k + usize::from(n[k] < 0.0)] = (p * n[k] * n[k]) as f32;
+        }
+        Emission {
+            normal: [(p * n[0]) as f32, (p * n[1]) as f32, (p * n[2]) as f32],
+            axes,
+        }
+    }
+
+    /// The sum of two (a cluster's is its children's).
+    pub fn add(&self, o: &Emission) -> Self {
+        Emission {
+            normal: std::array::from_fn(|k| self.normal[k] + o.normal[k]),
+            axes: std::array::from_fn(|k| self.axes[k] + o.axes[k]),
+        }
+    }
+
+    /// `self + alpha · (o − self)`, slot by slot.
+    pub fn lerp(&self, o: &Emission, alpha: f32) -> Self {
+        Emission {
+            normal: std::array::from_fn(|k| {
+                self.normal[k] + alpha * (o.normal[k] - self.normal[k])
+            }),
+            axes: std::array::from_fn(|k| self.axes[k] + alpha * (o.axes[k] - self.axes[k])),
+        }
+    }
+}
+
 /// The element arena.
 #[derive(Debug)]
 pub struct ElementPool {
@@ -80,10 +130,10 @@ pub struct ElementPool {
     pub times: Column<[f32; 2]>,
     /// Radiosity `B` (RGB): at leaves the solution, above the area average (pull).
     pub radiosities: Column<[f32; 3]>,
-    /// Power-weighted normal `Σ A_i B̄_i n_i` over the element's surfaces (`B̄` the
-    /// largest channel): how directional a cluster's emission is (see
-    /// [`crate::oracle`], links with a cluster). Set by the solver's pull.
-    pub directions: Column<[f32; 3]>,
+    /// How the element's power leaves it by direction ([`Emission`]): how
+    /// directional a cluster's emission is (see [`crate::oracle`], links with a
+    /// cluster). Set by the solver's pull.
+    pub directions: Column<Emission>,
     /// Irradiance gathered through the element's own links in the last gather.
     pub irradiances: Column<[f32; 3]>,
 }
@@ -117,7 +167,7 @@ impl ElementPool {
         self.geoms.push(geom)?;
         self.times.push(time)?;
         self.radiosities.push([0.0; 3])?;
-        self.directions.push([0.0; 3])?;
+        self.directions.push(Emission::default())?;
         self.irradiances.push([0.0; 3])?;
         Ok(ElementId(id))
     }

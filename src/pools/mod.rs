@@ -17,6 +17,6 @@ mod ids;
 pub mod links;
 
 pub use column::{Column, Storage};
-pub use elements::{ElementKind, ElementPool};
+pub use elements::{ElementKind, ElementPool, Emission};
 pub use ids::{ElementId, LinkId};
 pub use links::{LinkPool, LinkState};

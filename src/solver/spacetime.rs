@@ -527,8 +527,8 @@ pub struct SpaceTime<'a> {
     windows: Vec<Vec<f64>>,
     shared_tr: Vec<crate::pools::links::Transport>,
     shared_b: Vec<[f32; 3]>,
-    /// The shared part's power-weighted normals (cluster emission depends on `B`).
-    shared_dir: Vec<[f32; 3]>,
+    /// The shared part's directional power ([`crate::pools::Emission`]; cluster emission depends on `B`).
+    shared_dir: Vec<crate::pools::Emission>,
     start: Instant,
     /// Totals so far.
     pub stats: SpaceTimeStats,
