@@ -71,6 +71,11 @@ pub struct EvalSettings {
     pub cluster_rays: u32,
     /// Seed of the ray jitter.
     pub seed: u64,
+    /// Draw a cluster source's visibility points by power ([`source_point`]), not by
+    /// area: only where the radiosity holds as long as the coefficient is used (not
+    /// in a space-time window of a scene that moves, whose links and terms outlive a
+    /// frame's `B`).
+    pub sources_by_power: bool,
 }
 
 /// The point-evaluation samples of a surface element: quadrature points with weights
@@ -366,13 +371,29 @@ pub fn evaluate(
     let (mut vis, mut rays) = (1.0, 0);
     let key = hash3(set.seed ^ 0xc105, r.0 as u64, s.0 as u64);
     if f > 0.0 {
-        (vis, rays) = cluster_visibility(elems, bvh, r, s, set.cluster_rays, key);
+        (vis, rays) = cluster_visibility(
+            elems,
+            bvh,
+            r,
+            s,
+            set.cluster_rays,
+            key,
+            set.sources_by_power,
+        );
         f *= vis;
     } else if spread.is_infinite() && r != s {
         // Too close for the estimate: the spread stays unbounded (the link is opened
         // wherever its error counts), but a link left whole — the power criterion
         // leaves such links at small receivers — must still carry its light.
-        (f, vis, rays) = close_cluster_factor(elems, bvh, r, s, 4 * set.cluster_rays, key);
+        (f, vis, rays) = close_cluster_factor(
+            elems,
+            bvh,
+            r,
+            s,
+            4 * set.cluster_rays,
+            key,
+            set.sources_by_power,
+        );
     }
     LinkEval {
         transport: Transport {
@@ -400,6 +421,11 @@ pub fn surface_point(elems: &ElementPool, e: ElementId, h: u64) -> (DVec3, DVec3
 /// ([`cluster_visibility`]).
 pub fn source_point(elems: &ElementPool, e: ElementId, h: u64) -> (DVec3, DVec3, u32) {
     descend(elems, e, h, true)
+}
+
+/// A link's source end: [`source_point`] if `by_power`, else [`surface_point`].
+fn source_end(elems: &ElementPool, s: ElementId, h: u64, by_power: bool) -> (DVec3, DVec3, u32) {
+    descend(elems, s, h, by_power)
 }
 
 /// [`surface_point`] (`by_power` false) and [`source_point`] (true).
@@ -474,14 +500,19 @@ pub fn point_cluster_visibility(
     s: ElementId,
     m: u32,
     key: u64,
+    by_power: bool,
 ) -> (f64, u32) {
     kernel_weighted_visibility(bvh, m, |j| {
-        ((x, n, patch), source_point(elems, s, hash3(key, j, 2)))
+        (
+            (x, n, patch),
+            source_end(elems, s, hash3(key, j, 2), by_power),
+        )
     })
 }
 
 /// Visibility of a link with a cluster end: `m` rays between [`surface_point`]s of
-/// `r` and [`source_point`]s of `s` (Sillion 1995 §4.3), the visible fraction
+/// `r` and [`source_point`]s of `s` (`by_power`; else [`surface_point`]s) (Sillion
+/// 1995 §4.3), the visible fraction
 /// weighted by the point kernel. Pairs facing away from each other cast nothing; if
 /// every pair does, the visibility is 0. Returns `(visibility, rays cast)`.
 ///
@@ -489,7 +520,9 @@ pub fn point_cluster_visibility(
 /// `s` hands on (`Σ A_i B_i K V / Σ A_i B_i K` over its surfaces), which is what the
 /// link's coefficient multiplies by `B_s`; by area, a lit floor seen between black
 /// boxes counted the boxes' visible tops as much as the floor's hidden light.
-/// Depends on `B` when evaluated: see `Solver::reevaluate_cluster_sources`.
+/// Depends on `B` when evaluated: see `Solver::reevaluate_cluster_sources`; a
+/// space-time window of a scene that moves, whose links outlive a frame, draws by
+/// area.
 pub fn cluster_visibility(
     elems: &ElementPool,
     bvh: &SceneBvh,
@@ -497,11 +530,12 @@ pub fn cluster_visibility(
     s: ElementId,
     m: u32,
     key: u64,
+    by_power: bool,
 ) -> (f64, u32) {
     kernel_weighted_visibility(bvh, m, |j| {
         (
             surface_point(elems, r, hash3(key, j, 1)),
-            source_point(elems, s, hash3(key, j, 2)),
+            source_end(elems, s, hash3(key, j, 2), by_power),
         )
     })
 }
@@ -534,7 +568,7 @@ fn kernel_weighted_visibility(
 /// Form factor of a link with a cluster end too close for the cluster estimate:
 /// the Monte Carlo estimate `A_s · mean_j K(x_j, y_j) V(x_j, y_j)` over `m` pairs,
 /// `x_j` a [`surface_point`] of the receiver (by area), `y_j` a [`source_point`] of
-/// the source (by power, so that `factor · B̄_s` is the light `s` hands on, not its
+/// the source (`by_power`, so that `factor · B̄_s` is the light `s` hands on, not its
 /// mean radiosity times its mean factor), with the squared distance of a pair held
 /// above `A_s / (π m)`, the disc each source sample stands for (the kernel is
 /// singular where the ends touch). Unbiased but for that clamp (and colour: the
@@ -552,6 +586,7 @@ pub fn close_cluster_factor(
     s: ElementId,
     m: u32,
     key: u64,
+    by_power: bool,
 ) -> (f64, f64, u32) {
     let a_s = elems.geoms.as_slice()[s.ix()].area;
     let m = m.max(1);
@@ -559,7 +594,7 @@ pub fn close_cluster_factor(
     let (mut ksum, mut kvis, mut rays) = (0.0, 0.0, 0);
     for j in 0..m as u64 {
         let (x, nx, px) = surface_point(elems, r, hash3(key, j, 1));
-        let (y, ny, py) = source_point(elems, s, hash3(key, j, 2));
+        let (y, ny, py) = source_end(elems, s, hash3(key, j, 2), by_power);
         let d = y - x;
         let (cx, cy) = (nx.dot(d), -ny.dot(d));
         if cx <= 0.0 || cy <= 0.0 {
