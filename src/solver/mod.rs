@@ -361,6 +361,9 @@ pub struct Solver<'a> {
     window: Option<Window>,
     /// Solving the part shared by all windows: varying links are not refined.
     shared_phase: bool,
+    /// A space-time solve ([`Solver::run_shared`] and its windows): links and kept
+    /// terms outlive one frame's radiosity (see [`Solver::sources_by_power`]).
+    space_time: bool,
     /// World boxes of the moving objects at the current time.
     moving_now: Vec<(DVec3, DVec3)>,
     /// The time the moving objects are placed at.
@@ -785,6 +788,7 @@ impl<'a> Solver<'a> {
             tree_moving: Vec::new(),
             window: None,
             shared_phase: false,
+            space_time: false,
             moving_now: Vec::new(),
             now: t,
             kept_budget: None,
@@ -1396,6 +1400,7 @@ impl<'a> Solver<'a> {
         swept: Vec<(DVec3, DVec3)>,
         on_round: impl FnMut(&mut RoundRecord, &Solver),
     ) -> Result<Vec<RoundRecord>> {
+        self.space_time = true;
         self.window = Some(Window {
             swept: swept.clone(),
             ..Window::default()
@@ -1513,12 +1518,12 @@ impl<'a> Solver<'a> {
         }
     }
 
-    /// True if a cluster source's visibility points are drawn by power
-    /// ([`oracle::EvalSettings::sources_by_power`]): everywhere but in a space-time
-    /// window of a scene that moves, whose constant links and kept terms outlive the
-    /// radiosity of the frame that made them.
+    /// True if a cluster source's visibility points are drawn by power and its rest
+    /// radiates by axes ([`oracle::EvalSettings::sources_by_power`]): everywhere but
+    /// in a space-time solve of a scene that moves, whose constant links and kept
+    /// terms outlive the radiosity of the frame that made them.
     fn sources_by_power(&self) -> bool {
-        self.window.is_none() || !self.has_motion()
+        !(self.space_time && self.has_motion())
     }
 
     /// Evaluates again the links of `ids` whose source is a cluster. A cluster
@@ -1532,8 +1537,8 @@ impl<'a> Solver<'a> {
     /// the floor between them hands on the light; by area, a room of black boxes
     /// (`tools/gen_cubes.py 20`, boxes ρ = 0) came out with its ceiling 7.2% and its
     /// walls 3.3% too bright against the path tracer, by power 1.1% and 0.7%. Not in
-    /// a space-time window, whose constant links keep their visibility for every
-    /// frame while `B` changes: there sources are seen by area
+    /// a space-time solve of a moving scene, whose constant links keep their
+    /// visibility for every frame while `B` changes: there sources are seen by area
     /// ([`oracle::EvalSettings::sources_by_power`]; by power, LIGHT's error against
     /// its reference went from 1.49% to 1.89%).
     fn reevaluate_cluster_sources(&mut self, ids: &[LinkId]) {
@@ -1710,13 +1715,14 @@ impl<'a> Solver<'a> {
         let (c, _) = oracle::sphere(gs);
         let dir = &elems.directions.as_slice()[s as usize];
         let bs = b_of(elems, s as usize);
+        let by_axes = self.sources_by_power();
         (0..q.count)
             .map(|i| {
                 let d = c - q.points[i];
                 let d2 = d.length_squared().max(f64::MIN_POSITIVE);
                 let u = d / d2.sqrt();
                 let cos = n.dot(u).max(0.0);
-                let cs = oracle::cluster_emission(gs, dir, bs, -u);
+                let cs = oracle::cluster_emission(gs, dir, bs, -u, by_axes);
                 q.weights[i] * gs.area * cs * cos / (std::f64::consts::PI * d2)
             })
             .sum()
@@ -2028,22 +2034,38 @@ impl<'a> Solver<'a> {
             *out = [v[0] as f32, v[1] as f32, v[2] as f32];
         }
         // Directional power, bottom-up: a surface's own, a cluster the sum of its
-        // children's (surface children below a patch root are not needed).
+        // children's (surface children below a patch root are not needed); summed in
+        // f64, stored in f32.
         let nodes = self.elems.nodes.as_slice();
         let geoms = self.elems.geoms.as_slice();
-        let mut dirs = vec![Emission::default(); nodes.len()];
+        let mut dirs = vec![(DVec3::ZERO, [0.0f64; 6]); nodes.len()];
         for i in (0..nodes.len()).rev() {
             let g = &geoms[i];
             dirs[i] = if g.patch != u32::MAX {
-                let bmax = b[i].iter().copied().fold(0.0, f64::max);
-                Emission::surface(g.area, bmax, g.normal)
+                let p = g.area * b[i].iter().copied().fold(0.0, f64::max);
+                let n = DVec3::from_array(g.normal);
+                let mut axes = [0.0; 6];
+                for k in 0..3 {
+                    axes[2 * k + usize::from(n[k] < 0.0)] = p * n[k] * n[k];
+                }
+                (n * p, axes)
             } else {
                 let n = nodes[i];
-                (n.first_child..n.first_child + n.child_count)
-                    .fold(Emission::default(), |acc, c| acc.add(&dirs[c as usize]))
+                (n.first_child..n.first_child + n.child_count).fold(
+                    (DVec3::ZERO, [0.0; 6]),
+                    |(sn, sa), c| {
+                        let (cn, ca) = &dirs[c as usize];
+                        (sn + *cn, std::array::from_fn(|k| sa[k] + ca[k]))
+                    },
+                )
             };
         }
-        self.elems.directions.as_mut_slice().copy_from_slice(&dirs);
+        for (out, (n, axes)) in self.elems.directions.as_mut_slice().iter_mut().zip(&dirs) {
+            *out = Emission {
+                normal: n.as_vec3().to_array(),
+                axes: axes.map(|a| a as f32),
+            };
+        }
     }
 
     /// Applies `A = I − ρ·(rows ∘ pull)` to leaf radiosities `x` (3 per leaf).
@@ -2324,6 +2346,7 @@ impl<'a> Solver<'a> {
                 &self.elems.directions.as_slice()[s],
                 b_of(&self.elems, s),
                 -u,
+                self.sources_by_power(),
             );
             let f = gs.area * n.dot(u).max(0.0) * cs / (std::f64::consts::PI * d * d) * vis;
             if f > 0.0 {
