@@ -945,9 +945,13 @@ mod tests {
         let mut g = Geom::zeroed();
         g.patch = u32::MAX;
         g.area = faces.iter().map(|f| f.1).sum();
-        let em = faces.iter().fold(Emission::default(), |acc, &(n, a, b)| {
-            acc.add(&Emission::surface(a, b, n))
-        });
+        let (mut sn, mut sa) = ([0.0; 3], [0.0; 6]);
+        for &(n, a, b) in faces {
+            let (fn_, fa) = Emission::surface_parts(a, b, n);
+            sn = std::array::from_fn(|k| sn[k] + fn_[k]);
+            sa = std::array::from_fn(|k| sa[k] + fa[k]);
+        }
+        let em = Emission::from_parts(sn, sa);
         let b = faces.iter().map(|f| f.1 * f.2).sum::<f64>() / g.area;
         (g, em, b)
     }

@@ -87,24 +87,23 @@ pub struct Emission {
 const _: () = assert!(std::mem::size_of::<Emission>() == 36);
 
 impl Emission {
-    /// A surface of area `area`, largest-channel radiosity `b` and unit normal `n`.
-    pub fn surface(area: f64, b: f64, n: [f64; 3]) -> Self {
+    /// The normal part and the axis powers of a surface of area `area`,
+    /// largest-channel radiosity `b` and unit normal `n`, in `f64` (a pull sums
+    /// them before storing [`Emission::from_parts`]).
+    pub fn surface_parts(area: f64, b: f64, n: [f64; 3]) -> ([f64; 3], [f64; 6]) {
         let p = area * b;
-        let mut axes = [0.0f32; 6];
+        let mut axes = [0.0; 6];
         for k in 0..3 {
-            axes[2 * k + usize::from(n[k] < 0.0)] = (p * n[k] * n[k]) as f32;
+            axes[2 * k + usize::from(n[k] < 0.0)] = p * n[k] * n[k];
         }
-        Emission {
-            normal: [(p * n[0]) as f32, (p * n[1]) as f32, (p * n[2]) as f32],
-            axes,
-        }
+        (n.map(|x| p * x), axes)
     }
 
-    /// The sum of two (a cluster's is its children's).
-    pub fn add(&self, o: &Emission) -> Self {
+    /// The record of summed parts.
+    pub fn from_parts(normal: [f64; 3], axes: [f64; 6]) -> Self {
         Emission {
-            normal: std::array::from_fn(|k| self.normal[k] + o.normal[k]),
-            axes: std::array::from_fn(|k| self.axes[k] + o.axes[k]),
+            normal: normal.map(|x| x as f32),
+            axes: axes.map(|x| x as f32),
         }
     }
 

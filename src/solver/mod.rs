@@ -2038,33 +2038,28 @@ impl<'a> Solver<'a> {
         // f64, stored in f32.
         let nodes = self.elems.nodes.as_slice();
         let geoms = self.elems.geoms.as_slice();
-        let mut dirs = vec![(DVec3::ZERO, [0.0f64; 6]); nodes.len()];
+        let mut dirs = vec![([0.0f64; 3], [0.0f64; 6]); nodes.len()];
         for i in (0..nodes.len()).rev() {
             let g = &geoms[i];
             dirs[i] = if g.patch != u32::MAX {
-                let p = g.area * b[i].iter().copied().fold(0.0, f64::max);
-                let n = DVec3::from_array(g.normal);
-                let mut axes = [0.0; 6];
-                for k in 0..3 {
-                    axes[2 * k + usize::from(n[k] < 0.0)] = p * n[k] * n[k];
-                }
-                (n * p, axes)
+                let bmax = b[i].iter().copied().fold(0.0, f64::max);
+                Emission::surface_parts(g.area, bmax, g.normal)
             } else {
                 let n = nodes[i];
                 (n.first_child..n.first_child + n.child_count).fold(
-                    (DVec3::ZERO, [0.0; 6]),
+                    ([0.0; 3], [0.0; 6]),
                     |(sn, sa), c| {
                         let (cn, ca) = &dirs[c as usize];
-                        (sn + *cn, std::array::from_fn(|k| sa[k] + ca[k]))
+                        (
+                            std::array::from_fn(|k| sn[k] + cn[k]),
+                            std::array::from_fn(|k| sa[k] + ca[k]),
+                        )
                     },
                 )
             };
         }
-        for (out, (n, axes)) in self.elems.directions.as_mut_slice().iter_mut().zip(&dirs) {
-            *out = Emission {
-                normal: n.as_vec3().to_array(),
-                axes: axes.map(|a| a as f32),
-            };
+        for (out, &(n, axes)) in self.elems.directions.as_mut_slice().iter_mut().zip(&dirs) {
+            *out = Emission::from_parts(n, axes);
         }
     }
 
