@@ -439,24 +439,13 @@ pub fn source_point(elems: &ElementPool, e: ElementId, h: u64) -> (DVec3, DVec3,
     descend(elems, e, h, true)
 }
 
-/// A link's source end: [`source_point`] if `by_power`, else [`surface_point`].
-fn source_end(elems: &ElementPool, s: ElementId, h: u64, by_power: bool) -> (DVec3, DVec3, u32) {
-    descend(elems, s, h, by_power)
-}
-
 /// [`surface_point`] (`by_power` false) and [`source_point`] (true).
 fn descend(elems: &ElementPool, e: ElementId, h: u64, by_power: bool) -> (DVec3, DVec3, u32) {
-    let bs = elems.radiosities.as_slice();
-    let weight = |c: usize, g: &Geom| {
-        let a = g.area.max(0.0);
-        if by_power {
-            a * bs[c].iter().copied().fold(0.0f32, f32::max) as f64
-        } else {
-            a
-        }
-    };
     let nodes = elems.nodes.as_slice();
     let geoms = elems.geoms.as_slice();
+    let bs = elems.radiosities.as_slice();
+    let area = |c: usize| geoms[c].area.max(0.0);
+    let power = |c: usize| area(c) * bs[c].iter().copied().fold(0.0f32, f32::max) as f64;
     let mut cur = e.ix();
     let mut level = 0u64;
     while geoms[cur].patch == u32::MAX {
@@ -465,22 +454,24 @@ fn descend(elems: &ElementPool, e: ElementId, h: u64, by_power: bool) -> (DVec3,
             break;
         }
         let kids = node.first_child as usize..(node.first_child + node.child_count) as usize;
-        let mut total: f64 = kids.clone().map(|c| weight(c, &geoms[c])).sum();
-        // No power under this cluster (or NaN): by area.
-        let by_area = total.is_nan() || total <= 0.0;
-        if by_area {
-            total = geoms[kids.clone()].iter().map(|g| g.area.max(0.0)).sum();
-        }
+        // By power where the children have any (a NaN fails the test), else by area.
+        let power_total: f64 = if by_power {
+            kids.clone().map(power).sum()
+        } else {
+            0.0
+        };
+        let weight = |c| if power_total > 0.0 { power(c) } else { area(c) };
+        let total = if power_total > 0.0 {
+            power_total
+        } else {
+            kids.clone().map(area).sum()
+        };
         let u = (hash3(h, level, 0x5a3) >> 11) as f64 / (1u64 << 53) as f64 * total;
         let mut acc = 0.0;
         let mut pick = kids.start;
         for c in kids {
             pick = c;
-            acc += if by_area {
-                geoms[c].area.max(0.0)
-            } else {
-                weight(c, &geoms[c])
-            };
+            acc += weight(c);
             if u < acc {
                 break;
             }
@@ -519,10 +510,7 @@ pub fn point_cluster_visibility(
     by_power: bool,
 ) -> (f64, u32) {
     kernel_weighted_visibility(bvh, m, |j| {
-        (
-            (x, n, patch),
-            source_end(elems, s, hash3(key, j, 2), by_power),
-        )
+        ((x, n, patch), descend(elems, s, hash3(key, j, 2), by_power))
     })
 }
 
@@ -551,7 +539,7 @@ pub fn cluster_visibility(
     kernel_weighted_visibility(bvh, m, |j| {
         (
             surface_point(elems, r, hash3(key, j, 1)),
-            source_end(elems, s, hash3(key, j, 2), by_power),
+            descend(elems, s, hash3(key, j, 2), by_power),
         )
     })
 }
@@ -610,7 +598,7 @@ pub fn close_cluster_factor(
     let (mut ksum, mut kvis, mut rays) = (0.0, 0.0, 0);
     for j in 0..m as u64 {
         let (x, nx, px) = surface_point(elems, r, hash3(key, j, 1));
-        let (y, ny, py) = source_end(elems, s, hash3(key, j, 2), by_power);
+        let (y, ny, py) = descend(elems, s, hash3(key, j, 2), by_power);
         let d = y - x;
         let (cx, cy) = (nx.dot(d), -ny.dot(d));
         if cx <= 0.0 || cy <= 0.0 {

@@ -2319,6 +2319,8 @@ impl<'a> Solver<'a> {
             // smooth across the patch (independent jitter per point is noise the
             // reconstruction would mesh).
             let key = oracle::hash3(self.opts.seed ^ 0xc105, s as u64, receiver_patch as u64);
+            // Visibility and emission by the same model.
+            let by_power = self.sources_by_power();
             // `clear`: the caller supplies the visibility.
             let (vis, _) = if clear {
                 (1.0, 0)
@@ -2332,7 +2334,7 @@ impl<'a> Solver<'a> {
                     ElementId(s as u32),
                     self.opts.cluster_rays,
                     key,
-                    self.sources_by_power(),
+                    by_power,
                 )
             };
             let u = (c - x) / d;
@@ -2341,7 +2343,7 @@ impl<'a> Solver<'a> {
                 &self.elems.directions.as_slice()[s],
                 b_of(&self.elems, s),
                 -u,
-                self.sources_by_power(),
+                by_power,
             );
             let f = gs.area * n.dot(u).max(0.0) * cs / (std::f64::consts::PI * d * d) * vis;
             if f > 0.0 {
