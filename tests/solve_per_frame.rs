@@ -160,13 +160,44 @@ fn file_has_one_chunk_per_frame_and_plays_back_each_frame() {
         .count();
     assert!(changed > 0, "no point changed between frames 0 and 4");
 
-    // An independent single-frame solve of frame 2 gives the same values.
+    // An independent single-frame solve of frame 2, frozen as the baseline freezes
+    // its frames, gives the same values.
     let (t, range) = (0.5, [0.375f32, 0.625f32]);
     let mut solver = Solver::at_time(&scene, coarse(), t, range).unwrap();
+    solver.freeze_motion();
     solver.run(|_, _| {}).unwrap();
     let single = solver.solution();
     assert_eq!(single.leaves, solutions[2].leaves);
     assert_eq!(probe(&single, &pts, t).unwrap(), per_frame[2]);
+
+    // And a frozen frame is the static scene of the objects where they stand at t:
+    // the baseline solves each frame as `rhier solve` solves a static scene. (Save
+    // for contact meshing, which cuts along static objects only, so that every
+    // frame of the file has the same patches: compared without it.)
+    let mut still = scene.clone();
+    for track in still.objects.iter_mut().filter_map(|o| o.motion.as_mut()) {
+        track.keys = vec![track.key_at(t)];
+    }
+    assert!(!still.has_motion());
+    let uncut = SolveOptions {
+        contact_meshing: false,
+        ..coarse()
+    };
+    let solve = |scene: &Scene, freeze: bool| {
+        let mut solver = Solver::at_time(scene, uncut.clone(), t, range).unwrap();
+        if freeze {
+            solver.freeze_motion();
+        }
+        solver.run(|_, _| {}).unwrap();
+        solver.solution().leaves
+    };
+    let frozen = solve(&scene, true);
+    assert_eq!(frozen, solve(&still, false));
+    assert_ne!(
+        frozen,
+        solve(&scene, false),
+        "freezing changes how a frame is solved"
+    );
 }
 
 #[test]

@@ -194,6 +194,21 @@ impl SceneBvh {
         SceneBvh { parts }
     }
 
+    /// Builds one world-space BVH of `patches` as they stand, moving or not: a
+    /// frame solved as a static scene ([`crate::solver::Solver::freeze_motion`])
+    /// sees the same triangles as the static scene of that frame would.
+    pub fn build_static(patches: &Patches) -> SceneBvh {
+        let (mut st, mut sp) = (Vec::new(), Vec::new());
+        for i in 0..patches.len() {
+            push_triangles(patches.polys[i].corners(), i as u32, &mut st, &mut sp);
+        }
+        SceneBvh {
+            parts: Part::build(st, sp, DAffine3::IDENTITY, u32::MAX)
+                .into_iter()
+                .collect(),
+        }
+    }
+
     /// Moves every moving object's BVH to its place at time `t` (no rebuild: only
     /// the part's transform changes).
     pub fn place(&mut self, scene: &Scene, t: f64) {

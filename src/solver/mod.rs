@@ -1278,6 +1278,22 @@ impl<'a> Solver<'a> {
         !self.tree_moving.is_empty()
     }
 
+    /// Treats the scene as it stands now as a static one: no object counts as
+    /// moving any more. A frame of the frame-by-frame baseline is then solved
+    /// exactly as `rhier solve` solves a static scene (refinement in levels with
+    /// the error estimate, leaf rows kept from round to round, the cheap final
+    /// gather of faint and small-leaf sources), not with the caution a space-time
+    /// window needs where links outlive the frame that evaluated them.
+    pub fn freeze_motion(&mut self) {
+        if !self.has_motion() {
+            return;
+        }
+        self.bvh = SceneBvh::build_static(&self.patches);
+        self.moving_patch.iter_mut().for_each(|m| *m = false);
+        self.tree_moving.clear();
+        self.moving_now.clear();
+    }
+
     /// Places the moving objects at time `t`: their patches, their elements (corners
     /// and normals from the patch at `t`, area unchanged), the boxes of the clusters
     /// that hold them, and their BVHs. A static scene does nothing.

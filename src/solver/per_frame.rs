@@ -10,8 +10,9 @@
 //! frame's interval reaches the domain's end, so that every time of the domain is
 //! covered by exactly one frame; consecutive intervals share their bounds, computed
 //! once, so that [`Leaf::is_live`] picks exactly one frame at a bound). Each frame is
-//! solved by [`Solver::at_time`] with its leaves labelled with that interval, run to
-//! completion and reconstructed; [`solve_per_frame`] hands each frame's [`Solution`]
+//! placed by [`Solver::at_time`] with its leaves labelled with that interval, frozen
+//! ([`Solver::freeze_motion`]: solved exactly as a static scene is, with every
+//! shortcut a static solve takes), run to completion and reconstructed; [`solve_per_frame`] hands each frame's [`Solution`]
 //! to a callback and drops it, and [`write_per_frame`] streams the frames' leaves into
 //! a `.rhier` file as one chunk per frame, in time order, through the store's
 //! [`Writer`], so memory holds one frame whatever the animation's length.
@@ -153,6 +154,7 @@ pub fn solve_per_frame(
         let start = Instant::now();
         let label = [range[0] as f32, range[1] as f32];
         let mut solver = Solver::at_time(scene, opts.clone(), t, label)?;
+        solver.freeze_motion();
         let records = solver.run(|_, _| {})?;
         let mut solution = solver.solution();
         drop(solver);
