@@ -368,6 +368,10 @@ pub struct Solver<'a> {
     moving_now: Vec<(DVec3, DVec3)>,
     /// The time the moving objects are placed at.
     now: f64,
+    /// Time the varying links were last evaluated at: their visibility (and shaft
+    /// test) holds at `now` only when the two are equal ([`Solver::place_between`]
+    /// moves the objects without evaluating them).
+    links_at: f64,
     /// Most bytes a window keeps in final-gather terms (`None`: no bound).
     kept_budget: Option<usize>,
 }
@@ -791,6 +795,7 @@ impl<'a> Solver<'a> {
             space_time: false,
             moving_now: Vec::new(),
             now: t,
+            links_at: t,
             kept_budget: None,
         };
         s.moving_patch = (0..s.patches.len())
@@ -1579,6 +1584,7 @@ impl<'a> Solver<'a> {
         self.set_time(t);
         let varying = self.active_links(true);
         self.reevaluate(&varying);
+        self.links_at = t;
         let n_varying = varying.len() as u64;
         let mut residual = 0.0;
         // Refine and solve again while refining changes something (radiosity moved
@@ -2465,6 +2471,10 @@ impl<'a> Solver<'a> {
             .row_cache
             .get(&leaf.0)
             .filter(|_| !self.has_motion() && g.area < self.power_area);
+        // A varying link's visibility and shaft test hold at the time it was
+        // evaluated; a frame between keyframes that skips its solve gathers from
+        // links evaluated at another time.
+        let links_now = self.links_at == self.now;
         let mut e = leaf.0;
         while e != u32::MAX {
             for &l in self.links_of(e as usize) {
@@ -2537,7 +2547,9 @@ impl<'a> Solver<'a> {
                     n,
                     p as u32,
                     s,
-                    cheap.is_some() || clear || (keep.is_none() && t.shaft_clear()),
+                    cheap.is_some()
+                        || clear
+                        || (keep.is_none() && t.shaft_clear() && (!t.varying() || links_now)),
                     key,
                     keep.map(|w| &w.swept[..]),
                     limits,
