@@ -196,7 +196,7 @@ pub fn sphere(g: &Geom) -> (DVec3, f64) {
         let hi = DVec3::from_array(g.corners[1]);
         ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
     } else {
-        // No `Poly` built: a space-time window calls this at every term it gathers.
+        // No `Poly` built: link evaluation and the error samples call this per term.
         let n = (g.n as usize).min(4);
         let v: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(g.corners[i]));
         let v = &v[..n];

@@ -193,9 +193,9 @@ struct GatherLimits {
     spread: Vec<f32>,
     /// Per element: [`oracle::sphere`], centre and bounding radius, computed once
     /// per reconstruction instead of at every term of every point (9% of a
-    /// cluttered scene's run; `gen_cubes 50` 69.4 → 62.5 s). 32 bytes per element;
-    /// empty where each term computes its own (a space-time window, the error
-    /// samples).
+    /// cluttered scene's run; `gen_cubes 50` 69.4 → 62.5 s). 32 bytes per element
+    /// (a space-time frame's 2 000 elements: 64 KB); empty where each term computes
+    /// its own (the error samples).
     spheres: Vec<(DVec3, f64)>,
 }
 
@@ -2735,9 +2735,7 @@ impl<'a> Solver<'a> {
             None => self.rms_radiosity(),
         };
         let tol = self.opts.recon_tol * b_ref;
-        // Not in a space-time window: its peak memory is held to twice a static
-        // frame's.
-        let limits = self.gather_limits(b_ref, self.window.is_none());
+        let limits = self.gather_limits(b_ref, true);
         let min_len = self.opts.recon_min_size * self.patches.diameter;
         let mut cache = VertexCache::default();
         let mut cells: Vec<Cell> = self
