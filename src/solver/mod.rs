@@ -1288,7 +1288,9 @@ impl<'a> Solver<'a> {
     /// exactly as `rhier solve` solves a static scene (refinement in levels with
     /// the error estimate, leaf rows kept from round to round, the cheap final
     /// gather of faint and small-leaf sources), not with the caution a space-time
-    /// window needs where links outlive the frame that evaluated them.
+    /// window needs where links outlive the frame that evaluated them. The patches
+    /// stay those of [`Solver::at_time`] (contact meshing cut along static objects
+    /// only), so that a file's frames share them.
     pub fn freeze_motion(&mut self) {
         if !self.has_motion() {
             return;

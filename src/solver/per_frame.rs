@@ -11,11 +11,12 @@
 //! covered by exactly one frame; consecutive intervals share their bounds, computed
 //! once, so that [`Leaf::is_live`] picks exactly one frame at a bound). Each frame is
 //! placed by [`Solver::at_time`] with its leaves labelled with that interval, frozen
-//! ([`Solver::freeze_motion`]: solved exactly as a static scene is, with every
-//! shortcut a static solve takes), run to completion and reconstructed; [`solve_per_frame`] hands each frame's [`Solution`]
-//! to a callback and drops it, and [`write_per_frame`] streams the frames' leaves into
-//! a `.rhier` file as one chunk per frame, in time order, through the store's
-//! [`Writer`], so memory holds one frame whatever the animation's length.
+//! ([`Solver::freeze_motion`]: solved as a static scene is, with every shortcut a
+//! static solve takes), run to completion and reconstructed; [`solve_per_frame`]
+//! hands each frame's [`Solution`] to a callback and drops it, and
+//! [`write_per_frame`] streams the frames' leaves into a `.rhier` file as one chunk
+//! per frame, in time order, through the store's [`Writer`], so memory holds one
+//! frame whatever the animation's length.
 //!
 //! What it does not do: share anything between frames (that is the space-time
 //! solver's job), or interpolate between frames: playback at `t` shows the frame
