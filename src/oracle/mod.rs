@@ -72,9 +72,9 @@ pub struct EvalSettings {
     /// Seed of the ray jitter.
     pub seed: u64,
     /// Draw a cluster source's visibility points by power ([`source_point`]), not by
-    /// area, and radiate its rest by axes ([`cluster_emission`]): only where the
-    /// radiosity holds as long as the coefficient is used (not in a space-time solve
-    /// of a scene that moves, whose links and terms outlive a frame's `B`).
+    /// area, and radiate its rest by axes ([`cluster_emission`]). The solver always
+    /// does; `false` is Sillion's isotropic cluster seen by area, kept to compare
+    /// the two.
     pub sources_by_power: bool,
 }
 
@@ -253,11 +253,10 @@ fn all_behind(g: &Geom, pts: &[DVec3], eps: f64) -> bool {
 /// as isotropic.
 ///
 /// With `axes` false the rest is isotropic, `R = 1/4` (Sillion 1995): the model
-/// that goes with a visibility drawn by area (a space-time solve of a moving scene,
-/// [`EvalSettings::sources_by_power`]). Each alone errs one way, the axes darker
-/// and the area visibility brighter: axes with area visibility in its windows
-/// (build b278d87) gave LIGHT's space-time solve 1.60% against its reference, 1.46%
-/// with neither, and `gen_cubes 20` 3.52% against 3.47%; both together give 3.40%.
+/// that goes with a visibility drawn by area ([`EvalSettings::sources_by_power`]
+/// false). Each alone errs one way, the axes darker and the area visibility
+/// brighter: axes with area visibility gave `gen_cubes 20` 3.52% against 3.47%
+/// with neither; both together give 3.40%.
 pub fn cluster_emission(g: &Geom, em: &Emission, b: f64, v: DVec3, axes: bool) -> f64 {
     let p = g.area * b;
     let n = DVec3::new(

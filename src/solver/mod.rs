@@ -361,9 +361,6 @@ pub struct Solver<'a> {
     window: Option<Window>,
     /// Solving the part shared by all windows: varying links are not refined.
     shared_phase: bool,
-    /// A space-time solve ([`Solver::run_shared`] and its windows): links and kept
-    /// terms outlive one frame's radiosity (see [`Solver::sources_by_power`]).
-    space_time: bool,
     /// World boxes of the moving objects at the current time.
     moving_now: Vec<(DVec3, DVec3)>,
     /// The time the moving objects are placed at.
@@ -792,7 +789,6 @@ impl<'a> Solver<'a> {
             tree_moving: Vec::new(),
             window: None,
             shared_phase: false,
-            space_time: false,
             moving_now: Vec::new(),
             now: t,
             links_at: t,
@@ -830,7 +826,7 @@ impl<'a> Solver<'a> {
             rays_per_point: self.opts.rays_per_point,
             cluster_rays: self.opts.cluster_rays,
             seed: self.opts.seed,
-            sources_by_power: self.sources_by_power(),
+            sources_by_power: true,
         }
     }
 
@@ -894,7 +890,7 @@ impl<'a> Solver<'a> {
                 true
             } else {
                 let active = self.active_links(false);
-                if !clusters_reevaluated && self.sources_by_power() {
+                if !clusters_reevaluated {
                     self.reevaluate_cluster_sources(&active);
                     clusters_reevaluated = true;
                 }
@@ -1423,7 +1419,6 @@ impl<'a> Solver<'a> {
         swept: Vec<(DVec3, DVec3)>,
         on_round: impl FnMut(&mut RoundRecord, &Solver),
     ) -> Result<Vec<RoundRecord>> {
-        self.space_time = true;
         self.window = Some(Window {
             swept: swept.clone(),
             ..Window::default()
@@ -1541,14 +1536,6 @@ impl<'a> Solver<'a> {
         }
     }
 
-    /// True if a cluster source's visibility points are drawn by power and its rest
-    /// radiates by axes ([`oracle::EvalSettings::sources_by_power`]): everywhere but
-    /// in a space-time solve of a scene that moves, whose constant links and kept
-    /// terms outlive the radiosity of the frame that made them.
-    fn sources_by_power(&self) -> bool {
-        !(self.space_time && self.has_motion())
-    }
-
     /// Evaluates again the links of `ids` whose source is a cluster. A cluster
     /// source's coefficient depends on its radiosity: the directional emission of
     /// [`oracle::cluster_emission`] and the visibility, whose source points are drawn
@@ -1559,11 +1546,12 @@ impl<'a> Solver<'a> {
     /// Why: boxes on a floor are seen from above by their (black or lit) tops while
     /// the floor between them hands on the light; by area, a room of black boxes
     /// (`tools/gen_cubes.py 20`, boxes ρ = 0) came out with its ceiling 7.2% and its
-    /// walls 3.3% too bright against the path tracer, by power 1.1% and 0.7%. Not in
-    /// a space-time solve of a moving scene, whose constant links keep their
-    /// visibility for every frame while `B` changes: there sources are seen by area
-    /// ([`oracle::EvalSettings::sources_by_power`]; by power, LIGHT's error against
-    /// its reference went from 1.49% to 1.89%).
+    /// walls 3.3% too bright against the path tracer, by power 1.1% and 0.7%. A
+    /// space-time solve does the same, though its constant links keep their
+    /// visibility while `B` changes: by area, a cluster holding a small lamp is
+    /// seen from its other surfaces, and LIGHT's panel hid the wall lamp from no
+    /// coarse link (14% too bright at eps 0.5 while it covers the lamp; 8.4%
+    /// against its reference over the shot, by power 3.6%).
     fn reevaluate_cluster_sources(&mut self, ids: &[LinkId]) {
         let geoms = self.elems.geoms.as_slice();
         let ends = self.links.ends.as_slice();
@@ -1739,14 +1727,13 @@ impl<'a> Solver<'a> {
         let (c, _) = oracle::sphere(gs);
         let dir = &elems.directions.as_slice()[s as usize];
         let bs = b_of(elems, s as usize);
-        let by_axes = self.sources_by_power();
         (0..q.count)
             .map(|i| {
                 let d = c - q.points[i];
                 let d2 = d.length_squared().max(f64::MIN_POSITIVE);
                 let u = d / d2.sqrt();
                 let cos = n.dot(u).max(0.0);
-                let cs = oracle::cluster_emission(gs, dir, bs, -u, by_axes);
+                let cs = oracle::cluster_emission(gs, dir, bs, -u, true);
                 q.weights[i] * gs.area * cs * cos / (std::f64::consts::PI * d2)
             })
             .sum()
@@ -2343,8 +2330,7 @@ impl<'a> Solver<'a> {
             // smooth across the patch (independent jitter per point is noise the
             // reconstruction would mesh).
             let key = oracle::hash3(self.opts.seed ^ 0xc105, s as u64, receiver_patch as u64);
-            // Visibility and emission by the same model.
-            let by_power = self.sources_by_power();
+            // Visibility by power, emission by axes: the model of the links.
             // `clear`: the caller supplies the visibility.
             let (vis, _) = if clear {
                 (1.0, 0)
@@ -2358,7 +2344,7 @@ impl<'a> Solver<'a> {
                     ElementId(s as u32),
                     self.opts.cluster_rays,
                     key,
-                    by_power,
+                    true,
                 )
             };
             let u = (c - x) / d;
@@ -2367,7 +2353,7 @@ impl<'a> Solver<'a> {
                 &self.elems.directions.as_slice()[s],
                 b_of(&self.elems, s),
                 -u,
-                by_power,
+                true,
             );
             let f = gs.area * n.dot(u).max(0.0) * cs / (std::f64::consts::PI * d * d) * vis;
             if f > 0.0 {
