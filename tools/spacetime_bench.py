@@ -205,7 +205,7 @@ def write_svg(rows, path):
             series.setdefault((r["method"], r["scene"]), []).append((s, e, r["eps"]))
     if not series:
         return
-    W, H, L, R, T, B = 720, 460, 80, 200, 30, 60
+    W, H, L, R, T, B = 820, 460, 80, 300, 30, 60
     xs = [p[0] for v in series.values() for p in v]
     ys = [p[1] for v in series.values() for p in v]
     x0, x1 = math.floor(math.log10(min(xs))), math.ceil(math.log10(max(xs)))
@@ -274,16 +274,31 @@ def write_png(rows, path):
         return
     scenes = sorted(data)
     fig, axes = plt.subplots(2, len(scenes), figsize=(5.2 * len(scenes), 7.5), squeeze=False)
-    styles = {"per-frame": ("#1f77b4", "o"), "space-time": ("#d62728", "s")}
+    # A family per method ("per-frame", "space-time"), its variants ("space-time,
+    # recon-tol 0.04") in lighter shades of its colour and other line styles.
+    families = {"per-frame": (["#1f77b4", "#3b8fd0", "#6aaee0", "#9fcbed"], "o"),
+                "space-time": (["#d62728", "#e0504f", "#e9807f", "#f2b0af"], "s")}
     extra = ["#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"]
+    dashes = ["-", "--", ":", "-."]
+
+    def style(method, k):
+        family = method.split(",")[0].strip()
+        if family not in families:
+            return extra[k % len(extra)], "^", "-"
+        shades, marker = families[family]
+        variants = sorted({m for rs in data.values() for m in rs if m.split(",")[0].strip() == family})
+        i = variants.index(method) if method in variants else 0
+        return shades[i % len(shades)], marker, dashes[i % len(dashes)]
     for j, scene in enumerate(scenes):
         top, bottom = axes[0][j], axes[1][j]
         for k, (method, pts) in enumerate(sorted(data[scene].items())):
-            colour, marker = styles.get(method, (extra[k % len(extra)], "^"))
+            colour, marker, dash = style(method, k)
             pts.sort()
             xs = [p[0] for p in pts]
-            top.plot(xs, [100 * p[1] for p in pts], marker=marker, color=colour, label=method)
-            bottom.plot(xs, [p[2] for p in pts], marker=marker, color=colour, label=method)
+            top.plot(xs, [100 * p[1] for p in pts], marker=marker, color=colour, linestyle=dash,
+                     label=method)
+            bottom.plot(xs, [p[2] for p in pts], marker=marker, color=colour, linestyle=dash,
+                        label=method)
             for s, e, m, eps in pts:
                 top.annotate(f"eps {eps}", (s, 100 * e), textcoords="offset points",
                              xytext=(5, 4), fontsize=8, color=colour)
