@@ -503,20 +503,18 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
             .iter()
             .all(|&(a, b)| (0..3).any(|k| b[k] < lo[k] || a[k] > hi[k]));
     }
-    let corners: Vec<DVec3> = g.corners[..g.n as usize]
-        .iter()
-        .map(|&c| DVec3::from_array(c))
-        .collect();
+    let k = g.n as usize;
+    let corners: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(g.corners[i.min(k - 1)]));
     // The shaft lies in the box of the point and the element: boxes that miss it
     // need no shaft (most of them, for the current boxes of the moving objects).
-    let (lo, hi) = corners
+    let (lo, hi) = corners[..k]
         .iter()
         .fold((x, x), |(lo, hi), &c| (lo.min(c), hi.max(c)));
     let overlaps = |&(a, b): &(DVec3, DVec3)| (0..3).all(|k| b[k] >= lo[k] && a[k] <= hi[k]);
     if !swept.iter().any(overlaps) {
         return true;
     }
-    let shaft = crate::shafts::Shaft::new(&[x], n, &corners, DVec3::from_array(g.normal));
+    let shaft = crate::shafts::Shaft::new(&[x], n, &corners[..k], DVec3::from_array(g.normal));
     swept.iter().all(|&(lo, hi)| shaft.misses_box(lo, hi))
 }
 
