@@ -13,7 +13,9 @@ For one scene it
      per-frame eps 0.25: 0.98% against a same-seed reference, 1.35% with --seed 7).
      The RMS difference of two seeds' references, halved, is the averaged
      reference's own noise; it is printed and kept in the CSV's `ref` column;
-  3. runs a METHOD command at each eps (placeholders below), measuring wall time and
+  3. runs a METHOD command at each eps (placeholders below), --repeat times with the
+     eps values interleaved (the median time is kept: on a shared 2-core VM identical
+     runs differ by up to 20%), measuring wall time and
      peak RSS of the whole process (/usr/bin/time, else getrusage of the children),
      probes the result at the same times and computes the relative RMS error
          sqrt( sum (B - Bref)^2 / sum Bref^2 )  over points, channels and times;
@@ -31,7 +33,7 @@ Usage:
         --eps 1.0,0.5 --out-dir out/bench [--fps 25] [--ref-fps 5] [--ref-eps 0.1] \
         [--ref-seeds 1,2] \
         [--points 200] [--csv tools/spacetime_bench.csv] [--name per-frame] \
-        [--method TEMPLATE] [--threads 2]
+        [--method TEMPLATE] [--threads 2] [--repeat 1]
 
 --scene takes a builtin name with a JSON example (actor, actor150, actor750, light,
 light150, light750: formats/examples/NAME.json) or any native JSON scene path.
@@ -59,7 +61,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_METHOD = "{rhier} solve {scene} --per-frame --fps {fps} --eps {eps} -o {out} -q"
 CSV_FIELDS = ["method", "scene", "eps", "seconds", "peak_rss_mb", "error", "frames_compared",
-              "ref", "command"]
+              "ref", "command", "runs"]
 
 
 def scene_path(name):
@@ -347,6 +349,8 @@ def main():
                     help="comma-separated seeds of the averaged reference (not the methods' seed)")
     ap.add_argument("--points", type=int, default=200)
     ap.add_argument("--threads", type=int, default=2, help="appended as --threads N (0: not)")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="runs per eps, interleaved across the eps values; the median time is kept")
     ap.add_argument("--out-dir", default="spacetime_bench_out")
     ap.add_argument("--csv", default=os.path.join(ROOT, "tools", "spacetime_bench.csv"))
     ap.add_argument("--plot-only", action="store_true", help="only redraw the plots from --csv")
@@ -392,17 +396,36 @@ def main():
         ref_desc += f" (own noise {100 * noise:.2f}%)"
         print(f"reference: {ref_desc}", flush=True)
 
+    # Each eps is run --repeat times, the eps values in turn (a, b, a, b, ...), so
+    # that a machine whose speed drifts slows every eps alike; the row keeps the
+    # median time, the largest peak RSS and every run's time in `runs`. The error is
+    # that of the last run: a solve is deterministic for a seed and a thread count,
+    # and a run whose error differs is reported.
+    eps_list = [float(e) for e in args.eps.split(",") if e.strip()]
+    runs = {eps: [] for eps in eps_list}
+    for _ in range(max(1, args.repeat)):
+        for eps in eps_list:
+            out = os.path.join(args.out_dir, f"{label}_{args.name}_eps{eps:g}.rhier")
+            cmd = expand(args.method, rhier=args.rhier, scene=scene_file, eps=eps, fps=args.fps,
+                         out=out) + threads
+            seconds, rss = run_measured(cmd, out + ".log")
+            err = relative_rms(probe_all(args.rhier, out, points_file, times), ref)
+            if runs[eps] and abs(err - runs[eps][-1][2]) > 1e-9:
+                print(f"spacetime_bench: eps {eps:g}: error {err:.5f} differs from an "
+                      f"earlier run's {runs[eps][-1][2]:.5f}", file=sys.stderr)
+            runs[eps].append((seconds, rss, err, cmd))
     new_rows = []
-    for eps in [float(e) for e in args.eps.split(",") if e.strip()]:
-        out = os.path.join(args.out_dir, f"{label}_{args.name}_eps{eps:g}.rhier")
-        cmd = expand(args.method, rhier=args.rhier, scene=scene_file, eps=eps, fps=args.fps,
-                     out=out) + threads
-        seconds, rss = run_measured(cmd, out + ".log")
-        err = relative_rms(probe_all(args.rhier, out, points_file, times), ref)
-        row = {"method": args.name, "scene": label, "eps": f"{eps:g}", "seconds": f"{seconds:.2f}",
+    for eps in eps_list:
+        times_s = sorted(r[0] for r in runs[eps])
+        median = times_s[len(times_s) // 2] if len(times_s) % 2 else \
+            0.5 * (times_s[len(times_s) // 2 - 1] + times_s[len(times_s) // 2])
+        rss = max(r[1] for r in runs[eps])
+        _, _, err, cmd = runs[eps][-1]
+        row = {"method": args.name, "scene": label, "eps": f"{eps:g}", "seconds": f"{median:.2f}",
                "peak_rss_mb": f"{rss:.1f}", "error": f"{err:.5f}",
-               "frames_compared": len(times), "ref": ref_desc, "command": shlex.join(cmd)}
-        print(",".join(str(row[k]) for k in CSV_FIELDS[:7]), flush=True)
+               "frames_compared": len(times), "ref": ref_desc, "command": shlex.join(cmd),
+               "runs": " ".join(f"{r[0]:.2f}" for r in runs[eps])}
+        print(",".join(str(row[k]) for k in CSV_FIELDS[:7]) + f",runs {row['runs']}", flush=True)
         new_rows.append(row)
 
     rows = read_rows(args.csv) + new_rows
