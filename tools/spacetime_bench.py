@@ -55,6 +55,7 @@ import resource
 import shlex
 import shutil
 import subprocess
+import statistics
 import sys
 import time
 
@@ -416,9 +417,7 @@ def main():
             runs[eps].append((seconds, rss, err, cmd))
     new_rows = []
     for eps in eps_list:
-        times_s = sorted(r[0] for r in runs[eps])
-        median = times_s[len(times_s) // 2] if len(times_s) % 2 else \
-            0.5 * (times_s[len(times_s) // 2 - 1] + times_s[len(times_s) // 2])
+        median = statistics.median(r[0] for r in runs[eps])
         rss = max(r[1] for r in runs[eps])
         _, _, err, cmd = runs[eps][-1]
         row = {"method": args.name, "scene": label, "eps": f"{eps:g}", "seconds": f"{median:.2f}",
