@@ -112,6 +112,12 @@ use kept::{MaskedTerm, PointCache};
 pub use report::RoundRecord;
 pub use solution::{Leaf, PatchGeometry, Shape, Solution, SolveStats};
 
+/// The cluster-source model of every link, leaf row and final gather: a cluster's
+/// visibility rays aim at points drawn by power and its emission leaves by the axes
+/// its surfaces face ([`oracle::EvalSettings::sources_by_power`]). The oracle keeps
+/// the area-drawn, isotropic model only as the contrast its unit tests check.
+const SOURCES_BY_POWER: bool = true;
+
 /// Most refine-and-solve passes in one space-time frame.
 const FRAME_PASSES: usize = 3;
 
@@ -824,7 +830,7 @@ impl<'a> Solver<'a> {
             rays_per_point: self.opts.rays_per_point,
             cluster_rays: self.opts.cluster_rays,
             seed: self.opts.seed,
-            sources_by_power: true,
+            sources_by_power: SOURCES_BY_POWER,
         }
     }
 
@@ -1731,7 +1737,7 @@ impl<'a> Solver<'a> {
                 let d2 = d.length_squared().max(f64::MIN_POSITIVE);
                 let u = d / d2.sqrt();
                 let cos = n.dot(u).max(0.0);
-                let cs = oracle::cluster_emission(gs, dir, bs, -u, true);
+                let cs = oracle::cluster_emission(gs, dir, bs, -u, SOURCES_BY_POWER);
                 q.weights[i] * gs.area * cs * cos / (std::f64::consts::PI * d2)
             })
             .sum()
@@ -2342,7 +2348,7 @@ impl<'a> Solver<'a> {
                     ElementId(s as u32),
                     self.opts.cluster_rays,
                     key,
-                    true,
+                    SOURCES_BY_POWER,
                 )
             };
             let u = (c - x) / d;
@@ -2351,7 +2357,7 @@ impl<'a> Solver<'a> {
                 &self.elems.directions.as_slice()[s],
                 b_of(&self.elems, s),
                 -u,
-                true,
+                SOURCES_BY_POWER,
             );
             let f = gs.area * n.dot(u).max(0.0) * cs / (std::f64::consts::PI * d * d) * vis;
             if f > 0.0 {
