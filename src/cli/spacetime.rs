@@ -46,9 +46,10 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
 /// changes a result (not the storage, thread count being part of determinism).
 fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> String {
     let settings = format!(
-        "eps {} min_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {} contact {} fps {} window {} merge {} keys {} interp {} threads {}",
+        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {} contact {} fps {} window {} merge {} keys {} interp {} threads {}",
         opts.eps,
         opts.min_size,
+        opts.power_size,
         opts.rays_per_point,
         opts.corner_rays,
         opts.open_ratio,
