@@ -225,10 +225,13 @@ fn power_criterion_and_cheap_gather_keep_point_radiosity() {
         ..coarse()
     });
     // With the boxes' faces facing out (they faced in before the generator was fixed)
-    // the power criterion no longer saves links at this size (9426 vs 9322 links,
+    // the power criterion no longer saves links at this size (9435 vs 9322 links,
     // measured); at 6 × 6 boxes, measured before the contact-meshing and close
     // cluster fixes, it saved 12% of the links and moved the points by 6.7% RMS, over
-    // this test's bound. What is asserted here is the point radiosity at 4 × 4 boxes.
+    // this test's bound. What is asserted here is the point radiosity at 4 × 4 boxes:
+    // 2.0% RMS apart while a small leaf's points took every non-emitting surface
+    // source's visibility from its row, 1.1% since they cast their own rays where
+    // that visibility is partial (`Solver::leaf_visibility`).
     eprintln!("links {fast_links} (power criterion) vs {full_links}");
     let scale = (full.iter().map(|b| b[1] * b[1]).sum::<f64>() / full.len() as f64).sqrt();
     assert!(scale > 0.01, "scene is dark: {scale}");
@@ -243,7 +246,7 @@ fn power_criterion_and_cheap_gather_keep_point_radiosity() {
         "links {fast_links} (power) vs {full_links}; RMS difference {rms:.4}, scale {scale:.4}"
     );
     assert!(
-        rms < 0.05 * scale,
+        rms < 0.015 * scale,
         "RMS difference {rms:.4} vs scale {scale:.4} ({} points)",
         pts.len()
     );
