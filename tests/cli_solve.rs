@@ -7,6 +7,17 @@ fn rhier() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rhier"))
 }
 
+/// Runs `cmd` and fails the test with its standard error unless it succeeds.
+fn succeed(cmd: &mut Command) -> std::process::Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 #[test]
 fn default_job_writes_the_cornell_box() {
     let dir = tempfile::tempdir().unwrap();
@@ -16,12 +27,7 @@ fn default_job_writes_the_cornell_box() {
         .output()
         .unwrap();
     assert!(out.status.success());
-    let out = rhier().current_dir(dir.path()).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeed(rhier().current_dir(dir.path()));
     let file = dir.path().join("cornell.rhier");
     let reader = rhier::store::Reader::open(&file).unwrap();
     assert_eq!(reader.patches().len(), 10);
@@ -38,21 +44,16 @@ fn solve_probe_equals_file_probe_and_report_has_rounds() {
         dir.path().join("b.rhier"),
         dir.path().join("r.csv"),
     );
-    let out = rhier()
-        .args(["solve", "--blocks", "-q", "--keep-links", "--probe"])
-        .arg(&pts)
-        .arg("--probe-out")
-        .arg(&vals)
-        .arg("--report")
-        .arg(&csv)
-        .arg("-o")
-        .arg(&file)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeed(
+        rhier()
+            .args(["solve", "--blocks", "-q", "--keep-links", "--probe"])
+            .arg(&pts)
+            .arg("--probe-out")
+            .arg(&vals)
+            .arg("--report")
+            .arg(&csv)
+            .arg("-o")
+            .arg(&file),
     );
     let from_solve: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&vals).unwrap()).unwrap();
@@ -129,27 +130,22 @@ fn mmap_storage_creates_its_scratch_directory_and_gives_the_ram_answer() {
     .unwrap();
     let run = |extra: &[&str], name: &str| {
         let vals = dir.path().join(name);
-        let out = rhier()
-            .current_dir(dir.path())
-            .args([
-                "solve",
-                "--builtin",
-                "cornell",
-                "-q",
-                "--threads",
-                "1",
-                "--probe",
-            ])
-            .arg(&pts)
-            .arg("--probe-out")
-            .arg(&vals)
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        succeed(
+            rhier()
+                .current_dir(dir.path())
+                .args([
+                    "solve",
+                    "--builtin",
+                    "cornell",
+                    "-q",
+                    "--threads",
+                    "1",
+                    "--probe",
+                ])
+                .arg(&pts)
+                .arg("--probe-out")
+                .arg(&vals)
+                .args(extra),
         );
         std::fs::read_to_string(vals).unwrap()
     };
@@ -170,18 +166,13 @@ fn power_size_sets_which_receivers_refine_on_power() {
     let dir = tempfile::tempdir().unwrap();
     let links = |extra: &[&str]| {
         let csv = dir.path().join("r.csv");
-        let out = rhier()
-            .args(["solve", "--blocks", "-q", "-o"])
-            .arg(dir.path().join("b.rhier"))
-            .arg("--report")
-            .arg(&csv)
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        succeed(
+            rhier()
+                .args(["solve", "--blocks", "-q", "-o"])
+                .arg(dir.path().join("b.rhier"))
+                .arg("--report")
+                .arg(&csv)
+                .args(extra),
         );
         let text = std::fs::read_to_string(&csv).unwrap();
         let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
