@@ -92,8 +92,8 @@ pub struct Args {
     pub recon_tol: f64,
     /// Receivers smaller than the square of this fraction of the scene's diameter
     /// are refined on the power their links may get wrong, not on their radiosity
-    /// (0: never). Smaller is slower and more accurate in cluttered scenes, where
-    /// small faces seen from close by hand on their average radiosity.
+    /// (0: never). Smaller is slower and, in cluttered scenes, more accurate
+    /// (BENCHMARKS.md, "Scale").
     #[arg(long, default_value_t = SolveOptions::default().power_size, value_parser = non_negative)]
     pub power_size: f64,
     /// Most refine-and-solve rounds.
