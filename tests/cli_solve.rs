@@ -159,8 +159,7 @@ fn mmap_storage_creates_its_scratch_directory_and_gives_the_ram_answer() {
 
 /// `--power-size` reaches the solver: at half the Cornell box's diameter every
 /// receiver is below the power area, refined on power only, and the solve ends
-/// with far fewer links than at the default (measured 429 against 3 670); a
-/// negative or non-finite value is a usage error.
+/// with far fewer links than at the default (measured 429 against 3 670).
 #[test]
 fn power_size_sets_which_receivers_refine_on_power() {
     let dir = tempfile::tempdir().unwrap();
@@ -186,17 +185,75 @@ fn power_size_sets_which_receivers_refine_on_power() {
         coarse * 4 < default,
         "links at --power-size 0.5: {coarse}, at the default: {default}"
     );
-    for bad in ["-1", "nan", "inf"] {
-        let out = rhier()
-            .args(["solve", "--blocks", "-q", "-o", "/dev/null"])
-            .arg(format!("--power-size={bad}"))
-            .output()
-            .unwrap();
-        assert_eq!(out.status.code(), Some(2), "--power-size={bad}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            err.contains("--power-size") && err.contains(">= 0"),
-            "{err}"
-        );
+}
+
+/// Every solver setting is checked before any work: a value outside its domain is
+/// an error (exit 1) naming the flag and the domain, and no output is left. Before
+/// the check, `--eps=-1` refined without end and `--max-rounds 0` ran no round and
+/// wrote an unsolved file. Values that are not numbers stay clap's usage errors (2).
+#[test]
+fn solver_settings_out_of_their_domain_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.rhier");
+    for (arg, code, needle) in [
+        ("--eps=-1", 1, "--eps: expected a finite number > 0"),
+        ("--eps=0", 1, "--eps: expected a finite number > 0"),
+        ("--eps=inf", 1, "--eps: expected a finite number > 0"),
+        (
+            "--min-size=0",
+            1,
+            "--min-size: expected a finite number > 0",
+        ),
+        (
+            "--recon-tol=nan",
+            1,
+            "--recon-tol: expected a finite number > 0",
+        ),
+        (
+            "--power-size=-1",
+            1,
+            "--power-size: expected a finite number >= 0",
+        ),
+        (
+            "--power-size=inf",
+            1,
+            "--power-size: expected a finite number >= 0",
+        ),
+        (
+            "--max-rounds=0",
+            1,
+            "--max-rounds: expected a whole number >= 1",
+        ),
+        (
+            "--target-error=0",
+            1,
+            "--target-error: expected a finite number > 0",
+        ),
+        (
+            "--time-budget=-1",
+            1,
+            "--time-budget: expected a finite number >= 0",
+        ),
+        ("--eps=small", 2, "--eps"),
+    ] {
+        // The check comes before the mode is chosen: the same for a static scene,
+        // a moving one (space-time) and the per-frame baseline.
+        for mode in [
+            &["--blocks"][..],
+            &["--builtin", "actor"],
+            &["--builtin", "actor", "--per-frame"],
+        ] {
+            let o = rhier()
+                .args(["solve", "-q", "-o"])
+                .arg(&out)
+                .args(mode)
+                .arg(arg)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(code), "{arg} {mode:?}: {err}");
+            assert!(err.contains(needle), "{arg} {mode:?}: {err}");
+            assert!(!out.exists(), "{arg} {mode:?} left {}", out.display());
+        }
     }
 }

@@ -281,3 +281,64 @@ fn slivers_touching_and_coplanar_polygons_stay_finite() {
         }
     }
 }
+
+/// The library refuses settings outside their domain when a solver is made, with
+/// an error naming the setting, instead of refining without end (`eps <= 0`,
+/// `min_size = 0`) or returning an unsolved hierarchy (`max_rounds = 0`).
+#[test]
+fn settings_outside_their_domain_are_refused_by_the_solver() {
+    let scene = lit_box();
+    let base = SolveOptions::default();
+    assert!(base.validate().is_ok());
+    let cases: [(&str, SolveOptions); 6] = [
+        (
+            "--eps",
+            SolveOptions {
+                eps: -0.5,
+                ..base.clone()
+            },
+        ),
+        (
+            "--min-size",
+            SolveOptions {
+                min_size: 0.0,
+                ..base.clone()
+            },
+        ),
+        (
+            "--recon-tol",
+            SolveOptions {
+                recon_tol: f64::NAN,
+                ..base.clone()
+            },
+        ),
+        (
+            "--power-size",
+            SolveOptions {
+                power_size: f64::INFINITY,
+                ..base.clone()
+            },
+        ),
+        (
+            "--max-rounds",
+            SolveOptions {
+                max_rounds: 0,
+                ..base.clone()
+            },
+        ),
+        (
+            "rays_per_point",
+            SolveOptions {
+                rays_per_point: 0,
+                ..base.clone()
+            },
+        ),
+    ];
+    for (name, opts) in cases {
+        let err = match Solver::new(&scene, opts) {
+            Ok(_) => panic!("{name}: a solver was made"),
+            Err(e) => e.to_string(),
+        };
+        assert!(err.starts_with(&format!("{name}: expected ")), "{err}");
+    }
+}

@@ -8,13 +8,14 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use rhier::Error;
+use rhier::solver::SolveOptions;
 use rhier::solver::per_frame::{FrameReport, write_per_frame};
 use rhier::store::WriteOptions;
 
-use super::solve::{Args, load, solve_options};
+use super::solve::{Args, load};
 
-/// Runs `rhier solve --per-frame`.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+/// Runs `rhier solve --per-frame` with the checked settings `opts`.
+pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
     let unsupported = [
         (args.reference.is_some(), "--reference"),
         (args.probe.is_some(), "--probe"),
@@ -30,7 +31,6 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     for w in &scene.warnings {
         eprintln!("rhier: warning: {w}");
     }
-    let opts = solve_options(args);
     let out = args
         .out
         .clone()

@@ -94,7 +94,7 @@ pub struct Args {
     /// are refined on the power their links may get wrong, not on their radiosity
     /// (0: never). Smaller is slower and, in cluttered scenes, more accurate
     /// (BENCHMARKS.md, "Scale").
-    #[arg(long, default_value_t = SolveOptions::default().power_size, value_parser = non_negative)]
+    #[arg(long, default_value_t = SolveOptions::default().power_size)]
     pub power_size: f64,
     /// Most refine-and-solve rounds.
     #[arg(long, default_value_t = SolveOptions::default().max_rounds)]
@@ -269,17 +269,10 @@ pub(super) fn storage(args: &Args, out_of_core: bool, dir: Option<&Path>) -> Sto
     )
 }
 
-/// Parses a finite number >= 0.
-fn non_negative(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("expected a finite number >= 0, found {s:?}")),
-    }
-}
-
-/// The solver settings the arguments ask for (shared by every mode of `solve`).
-pub(super) fn solve_options(args: &Args) -> SolveOptions {
-    SolveOptions {
+/// The solver settings the arguments ask for (shared by every mode of `solve`),
+/// checked against their domains ([`SolveOptions::validate`]).
+pub(super) fn solve_options(args: &Args) -> anyhow::Result<SolveOptions> {
+    let opts = SolveOptions {
         storage: storage(args, false, None),
         eps: args.eps,
         min_size: args.min_size,
@@ -291,7 +284,9 @@ pub(super) fn solve_options(args: &Args) -> SolveOptions {
         seed: args.seed,
         contact_meshing: !args.no_contact_meshing,
         ..SolveOptions::default()
-    }
+    };
+    opts.validate()?;
+    Ok(opts)
 }
 
 /// Runs `rhier solve`.
@@ -306,15 +301,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("--scratch {}: cannot create the directory", dir.display()))?;
     }
+    let opts = solve_options(&args)?;
     if args.per_frame {
-        return super::per_frame::run(&args);
+        return super::per_frame::run(&args, opts);
     }
     let start = std::time::Instant::now();
     let (scene, stem) = load(&args)?;
     for w in &scene.warnings {
         eprintln!("rhier: warning: {w}");
     }
-    let opts = solve_options(&args);
     if scene.has_motion() {
         return super::spacetime::run(&args, &scene, &stem, opts, start);
     }

@@ -318,6 +318,59 @@ impl Default for SolveOptions {
     }
 }
 
+impl SolveOptions {
+    /// Checks every setting against its domain before any work starts, so that a
+    /// bad value is an error naming it rather than a solve that never ends
+    /// (`eps <= 0` refines until memory runs out) or silently solves nothing
+    /// (`max_rounds = 0`). Settings are named by the `rhier solve` flag that sets
+    /// them (`--eps` for [`Self::eps`]); those without a flag by their field.
+    pub fn validate(&self) -> Result<()> {
+        let positive = [
+            ("--eps", Some(self.eps)),
+            ("--min-size", Some(self.min_size)),
+            ("--recon-tol", Some(self.recon_tol)),
+            ("--target-error", self.target_error),
+            ("recon_min_size", Some(self.recon_min_size)),
+            ("tolerance", Some(self.tolerance)),
+        ];
+        let non_negative = [
+            ("--power-size", Some(self.power_size)),
+            ("--time-budget", self.time_budget),
+            ("open_ratio", Some(self.open_ratio)),
+            ("open_spread", Some(self.open_spread)),
+            ("row_open_ratio", Some(self.row_open_ratio)),
+            ("faint_source", Some(self.faint_source)),
+        ];
+        let bad = |name: &str, domain: &str, found: &dyn std::fmt::Display| {
+            Err(crate::Error::Usage(format!(
+                "{name}: expected {domain}, found {found}"
+            )))
+        };
+        for (name, v) in positive.iter().filter_map(|&(n, v)| Some((n, v?))) {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(name, "a finite number > 0", &v);
+            }
+        }
+        for (name, v) in non_negative.iter().filter_map(|&(n, v)| Some((n, v?))) {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(name, "a finite number >= 0", &v);
+            }
+        }
+        let counts = [
+            ("--max-rounds", self.max_rounds),
+            ("rays_per_point", self.rays_per_point),
+            ("cluster_rays", self.cluster_rays),
+            ("corner_rays", self.corner_rays),
+        ];
+        for (name, v) in counts {
+            if v == 0 {
+                return bad(name, "a whole number >= 1", &v);
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The solver's state: pools, geometry and the leaf system of the last round.
 pub struct Solver<'a> {
     scene: &'a Scene,
@@ -750,6 +803,7 @@ impl<'a> Solver<'a> {
     /// labels the solution's leaves with the time range `range`. The patch set does
     /// not depend on `t`: contact meshing only cuts along static objects.
     pub fn at_time(scene: &'a Scene, opts: SolveOptions, t: f64, range: [f32; 2]) -> Result<Self> {
+        opts.validate()?;
         let mut patches = Patches::at_time(scene, t);
         if opts.contact_meshing {
             patches = split_at_contacts(scene, &patches, t).0;
@@ -769,7 +823,7 @@ impl<'a> Solver<'a> {
             scene,
             eps_len: diam * 1e-9,
             min_area: (opts.min_size * diam).powi(2),
-            power_area: (opts.power_size.max(0.0) * diam).powi(2),
+            power_area: (opts.power_size * diam).powi(2),
             opts,
             patches,
             bvh,
