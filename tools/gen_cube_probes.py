@@ -4,7 +4,12 @@ between cubes, cube tops, cube sides, walls and ceiling (deterministic), as a JS
 array of {"p": [x, y, z], "n": [x, y, z]} for `rhier reference --points` and
 `rhier solve --probe`.
 
-usage: tools/gen_cube_probes.py N OUT.json [COUNT]   (COUNT defaults to 100)
+usage: tools/gen_cube_probes.py N OUT.json [COUNT] [--block LO HI]
+       (COUNT defaults to 100)
+
+With --block (the scene made by `gen_cubes.py N ... --block LO HI`), the gap, top and
+side points are on cubes inside the block, one cube in from its edge, so that every
+gap and side point lies in a slot between two cubes.
 """
 import json
 import random
@@ -12,8 +17,16 @@ import sys
 
 
 def main():
-    n, out = int(sys.argv[1]), sys.argv[2]
-    count = int(sys.argv[3]) if len(sys.argv) > 3 else 100
+    args = sys.argv[1:]
+    block = None
+    if "--block" in args:
+        k = args.index("--block")
+        block = (int(args[k + 1]), int(args[k + 2]))
+        del args[k : k + 3]
+    n, out = int(args[0]), args[1]
+    count = int(args[2]) if len(args) > 2 else 100
+    if block is not None and not (0 <= block[0] and block[0] + 3 <= block[1] <= n):
+        sys.exit(f"--block: expected 0 <= LO, LO + 3 <= HI <= {n}, found {block}")
     size, h = 10.0, 4.0
     pitch = (size - 1.0) / n
     w = pitch * 0.6
@@ -27,7 +40,12 @@ def main():
     kinds = ["floor_gap", "top", "side", "wall", "ceiling"]
     for k in range(count):
         kind = kinds[k % len(kinds)]
-        i, j = rng.randrange(n), rng.randrange(n)
+        if block is None:
+            i, j = rng.randrange(n), rng.randrange(n)
+        else:
+            # The +x neighbour (gap) and the -z neighbour (side) are in the block.
+            i = block[0] + 1 + rng.randrange(block[1] - block[0] - 2)
+            j = block[0] + 1 + rng.randrange(block[1] - block[0] - 1)
         x0, z0 = 0.5 + i * pitch, 0.5 + j * pitch
         if kind == "floor_gap":
             # Middle of the gap to the +x neighbour, somewhere along the cube.

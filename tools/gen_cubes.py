@@ -2,7 +2,13 @@
 """Writes a native rhier scene: a closed room with a lamp and an N x N grid of small
 cubes on the floor (6 quads each), for scale benchmarks.
 
-usage: tools/gen_cubes.py N OUT.json      (N=129 gives 6*129*129 + 10 ≈ 100k polygons)
+usage: tools/gen_cubes.py N OUT.json [--block LO HI]
+       (N=129 gives 6*129*129 + 10 ≈ 100k polygons)
+
+--block LO HI keeps only the cubes of rows and columns LO..HI-1 of the N x N grid,
+the rest of the room unchanged: `--block 0 20` of N=129 is a corner of the 100k
+scene (2 410 polygons) whose shadowed gaps show the same fault in seconds
+(BENCHMARKS.md, "Scale").
 """
 import json
 import sys
@@ -50,16 +56,29 @@ def outward(faces, centre):
     return True
 
 
+def block(args, n):
+    """The grid rows/columns `--block LO HI` asks for (all of them without it)."""
+    if not args:
+        return 0, n
+    if len(args) != 3 or args[0] != "--block":
+        sys.exit(f"expected --block LO HI, found {' '.join(args)}")
+    lo, hi = int(args[1]), int(args[2])
+    if not 0 <= lo < hi <= n:
+        sys.exit(f"--block: expected 0 <= LO < HI <= {n}, found {lo} {hi}")
+    return lo, hi
+
+
 def main():
     n, out = int(sys.argv[1]), sys.argv[2]
+    lo, hi = block(sys.argv[3:], n)
     size, h = 10.0, 4.0
     polys = room(size, h)
     l0, l1 = 4.0, 6.0
     lamp = [quad([l0, h - 0.01, l0], [l1, h - 0.01, l0], [l1, h - 0.01, l1], [l0, h - 0.01, l1], "lamp")]
     cubes = []
     pitch = (size - 1.0) / n
-    for i in range(n):
-        for j in range(n):
+    for i in range(lo, hi):
+        for j in range(lo, hi):
             hgt = 0.05 + 0.3 * (((i * 7 + j * 13) % 11) / 10.0)
             x0, z0, w = 0.5 + i * pitch, 0.5 + j * pitch, pitch * 0.6
             faces = cube(x0, z0, w, hgt)
