@@ -225,6 +225,11 @@ fn solver_settings_out_of_their_domain_are_refused() {
             "--max-rounds: expected a whole number >= 1",
         ),
         (
+            "--split-spread=-0.1",
+            1,
+            "--split-spread: expected a finite number >= 0",
+        ),
+        (
             "--target-error=0",
             1,
             "--target-error: expected a finite number > 0",

@@ -23,7 +23,8 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Solve a scene (native JSON, glTF, OBJ; none = the embedded Cornell box).
-    Solve(solve::Args),
+    /// (Boxed: its arguments are many times the size of the others'.)
+    Solve(Box<solve::Args>),
     /// Radiosity at points from a stored `.rhier` solution.
     Probe(probe::Args),
     /// Render frames of a stored solution to PNG (or glTF).
@@ -40,7 +41,7 @@ enum Command {
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         None => solve::run(solve::Args::default_job()),
-        Some(Command::Solve(a)) => solve::run(a),
+        Some(Command::Solve(a)) => solve::run(*a),
         Some(Command::Probe(a)) => probe::run(a),
         Some(Command::Play(a)) => play::run(a),
         Some(Command::Inspect(a)) => inspect::run(a),
