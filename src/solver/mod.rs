@@ -1028,23 +1028,7 @@ impl<'a> Solver<'a> {
                 current = Some(values);
             }
             at_level += 1;
-            let (active, passive) = self.links.counts();
-            let mut rec = RoundRecord {
-                round,
-                seconds: start.elapsed().as_secs_f64(),
-                elements: self.elems.len() as u64,
-                leaves: self.leaves.len() as u64,
-                links_active: active,
-                links_passive: passive,
-                bytes_elements: self.elems.bytes() as u64,
-                bytes_links: self.links.bytes() as u64,
-                bytes_bvh: self.bvh.resident_bytes() as u64,
-                rays: self.rays - rays0,
-                shaft_clear: self.shaft_clear - clear0,
-                estimated_error: estimate,
-                residual,
-                true_error: None,
-            };
+            let mut rec = self.round_record(round, start, (rays0, clear0), estimate, residual);
             on_round(&mut rec, self);
             let stop = self
                 .opts
@@ -1075,28 +1059,41 @@ impl<'a> Solver<'a> {
             }
             self.index_links();
             let residual = self.solve_rows()?;
-            let (active, passive) = self.links.counts();
-            let mut rec = RoundRecord {
-                round,
-                seconds: start.elapsed().as_secs_f64(),
-                elements: self.elems.len() as u64,
-                leaves: self.leaves.len() as u64,
-                links_active: active,
-                links_passive: passive,
-                bytes_elements: self.elems.bytes() as u64,
-                bytes_links: self.links.bytes() as u64,
-                bytes_bvh: self.bvh.resident_bytes() as u64,
-                rays: self.rays - rays0,
-                shaft_clear: self.shaft_clear - clear0,
-                estimated_error: estimate,
-                residual,
-                true_error: None,
-            };
+            let mut rec = self.round_record(round, start, (rays0, clear0), estimate, residual);
             on_round(&mut rec, self);
             records.push(rec);
             round += 1;
         }
         Ok(records)
+    }
+
+    /// The record of round `round` of a run begun at `start`, with the ray and
+    /// shaft counters as they stood when the round began (`counters0`).
+    fn round_record(
+        &self,
+        round: u32,
+        start: Instant,
+        counters0: (u64, u64),
+        estimate: f64,
+        residual: f64,
+    ) -> RoundRecord {
+        let (active, passive) = self.links.counts();
+        RoundRecord {
+            round,
+            seconds: start.elapsed().as_secs_f64(),
+            elements: self.elems.len() as u64,
+            leaves: self.leaves.len() as u64,
+            links_active: active,
+            links_passive: passive,
+            bytes_elements: self.elems.bytes() as u64,
+            bytes_links: self.links.bytes() as u64,
+            bytes_bvh: self.bvh.resident_bytes() as u64,
+            rays: self.rays - counters0.0,
+            shaft_clear: self.shaft_clear - counters0.1,
+            estimated_error: estimate,
+            residual,
+            true_error: None,
+        }
     }
 
     /// `count` sample points of the error estimate, spread over the patches by
