@@ -2022,7 +2022,7 @@ impl<'a> Solver<'a> {
 
     /// Subdivides every leaf below the power area whose [`Solver::leaf_spread`]
     /// exceeds `split_spread · B_ref`, down to the reconstruction's smallest cell
-    /// (children no smaller in area than `recon_min_size²`). The children gather
+    /// (children no smaller in area than `(recon_min_size · diameter)²`). The children gather
     /// through their ancestors' links, so no link changes. Returns how many leaves
     /// were split.
     fn split_on_spread(&mut self) -> Result<usize> {
