@@ -1838,6 +1838,17 @@ impl<'a> Solver<'a> {
         &self.csr_links[self.csr_start[e] as usize..self.csr_start[e + 1] as usize]
     }
 
+    /// The links of `leaf` and of each of its ancestors, the leaf's first: the links
+    /// whose sources a leaf gathers from, which cover the scene exactly once
+    /// (module docs).
+    fn chain_links(&self, leaf: ElementId) -> impl Iterator<Item = u32> + '_ {
+        let nodes = self.elems.nodes.as_slice();
+        std::iter::successors(Some(leaf.0), move |&e| {
+            Some(nodes[e as usize].parent).filter(|&p| p != u32::MAX)
+        })
+        .flat_map(move |e| self.links_of(e as usize).iter().copied())
+    }
+
     /// Unoccluded cluster estimate from cluster `s` at a leaf's quadrature points
     /// `q` (normal `n`): Sillion 1995, with the cluster's directional emission
     /// ([`oracle::cluster_emission`]), at the leaf's own points and orientation — a
@@ -1951,7 +1962,6 @@ impl<'a> Solver<'a> {
     /// what the mean hides (module docs, "Leaves split on their spread").
     fn leaf_spread(&self, leaf: ElementId) -> f64 {
         let geoms = self.elems.geoms.as_slice();
-        let nodes = self.elems.nodes.as_slice();
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
         let b = self.elems.radiosities.as_slice();
@@ -1960,52 +1970,46 @@ impl<'a> Solver<'a> {
         let n = DVec3::from_array(g.normal);
         let row = self.row_cache.get(&leaf.0);
         let mut h = [[0.0f64; 3]; 4];
-        let mut e = leaf.0;
-        while e != u32::MAX {
-            for &l in self.links_of(e as usize) {
-                let t = &tr[l as usize];
-                let s = ends[l as usize].source;
-                let gs = &geoms[s as usize];
-                let mut f = [0.0f64; 4];
-                if gs.patch == u32::MAX {
-                    if t.spread >= f32::MAX {
-                        f[..q.count].fill(t.f as f64);
-                    } else if t.f > 0.0 {
-                        let (c, _) = oracle::sphere(gs);
-                        let dir = &self.elems.directions.as_slice()[s as usize];
-                        let bs = b_of(&self.elems, s as usize);
-                        for (fi, &x) in f.iter_mut().zip(&q.points).take(q.count) {
-                            *fi = cluster_kernel(gs, c, dir, bs, x, n) * t.visibility as f64;
-                        }
-                    }
-                } else {
-                    let ps = oracle::poly(gs);
-                    let ns = DVec3::from_array(gs.normal);
-                    let common = if t.shaft_clear() {
-                        Some(1.0)
-                    } else {
-                        row.and_then(|r| self.leaf_visibility(r, l, s as usize))
-                    };
-                    for (i, (fi, &x)) in f.iter_mut().zip(&q.points).take(q.count).enumerate() {
-                        let fx = point_to_polygon(x, n, &ps);
-                        if fx > 0.0 {
-                            let v = common.unwrap_or_else(|| {
-                                self.row_point_visibility(
-                                    leaf, g, l, s, gs, &ps, ns, x, n, i as u64,
-                                )
-                            });
-                            *fi = fx * v;
-                        }
+        for l in self.chain_links(leaf) {
+            let t = &tr[l as usize];
+            let s = ends[l as usize].source;
+            let gs = &geoms[s as usize];
+            let mut f = [0.0f64; 4];
+            if gs.patch == u32::MAX {
+                if t.spread >= f32::MAX {
+                    f[..q.count].fill(t.f as f64);
+                } else if t.f > 0.0 {
+                    let (c, _) = oracle::sphere(gs);
+                    let dir = &self.elems.directions.as_slice()[s as usize];
+                    let bs = b_of(&self.elems, s as usize);
+                    for (fi, &x) in f.iter_mut().zip(&q.points).take(q.count) {
+                        *fi = cluster_kernel(gs, c, dir, bs, x, n) * t.visibility as f64;
                     }
                 }
-                let bs = b[s as usize];
-                for (hi, fi) in h.iter_mut().zip(f).take(q.count) {
-                    for c in 0..3 {
-                        hi[c] += fi * bs[c] as f64;
+            } else {
+                let ps = oracle::poly(gs);
+                let ns = DVec3::from_array(gs.normal);
+                let common = if t.shaft_clear() {
+                    Some(1.0)
+                } else {
+                    row.and_then(|r| self.leaf_visibility(r, l, s as usize))
+                };
+                for (i, (fi, &x)) in f.iter_mut().zip(&q.points).take(q.count).enumerate() {
+                    let fx = point_to_polygon(x, n, &ps);
+                    if fx > 0.0 {
+                        let v = common.unwrap_or_else(|| {
+                            self.row_point_visibility(leaf, g, l, s, gs, &ps, ns, x, n, i as u64)
+                        });
+                        *fi = fx * v;
                     }
                 }
             }
-            e = nodes[e as usize].parent;
+            let bs = b[s as usize];
+            for (hi, fi) in h.iter_mut().zip(f).take(q.count) {
+                for c in 0..3 {
+                    hi[c] += fi * bs[c] as f64;
+                }
+            }
         }
         let rho = self.patches.rhos[g.patch as usize];
         (0..3)
@@ -2138,7 +2142,6 @@ impl<'a> Solver<'a> {
     fn compute_leaf_rows(&mut self) {
         let elems = &self.elems;
         let geoms = elems.geoms.as_slice();
-        let nodes = elems.nodes.as_slice();
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
         let cache = self.window.as_ref().map(|w| &w.rows);
@@ -2158,68 +2161,64 @@ impl<'a> Solver<'a> {
                 let mut fresh = Vec::new();
                 let mut kept = Vec::new();
                 let before = self.row_cache.get(&leaf.0).filter(|_| keep_rows);
-                let mut e = leaf.0;
-                while e != u32::MAX {
-                    for &l in self.links_of(e as usize) {
-                        let t = &tr[l as usize];
-                        let s = ends[l as usize].source;
-                        let gs = &geoms[s as usize];
-                        if let Some(k) = before
-                            .and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]))
-                        {
-                            kept.push(k);
-                            self.push_opened(&q, n, s, k.coef as f64, k.vis as f64, &mut row);
-                            continue;
-                        }
-                        // Constant link, static leaf: the coefficient of an earlier
-                        // frame of the window holds. Not for a cluster source: its
-                        // estimate follows the cluster's radiosity (directional
-                        // emission), which changes from round to round and frame to
-                        // frame; it costs no rays to recompute.
-                        let cluster_source = gs.patch == u32::MAX;
-                        let cacheable = !leaf_moving
-                            && !cluster_source
-                            && !t.varying()
-                            && self.window.as_ref().is_some_and(|w| {
-                                leaf.ix() < w.frame.elems_len && (l as usize) < w.frame.links_len
-                            });
-                        if let Some(&(c, v)) = cache
-                            .filter(|_| cacheable)
-                            .and_then(|c| c.get(&(leaf.0, l)))
-                        {
-                            self.push_opened(&q, n, s, c as f64, v as f64, &mut row);
-                            continue;
-                        }
-                        let (coef, vis) = if gs.patch == u32::MAX {
-                            (self.cluster_entry(&q, n, s, t), t.visibility as f64)
-                        } else if t.shaft_clear() {
-                            let ps = oracle::poly(gs);
-                            let f = (0..q.count)
-                                .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
-                                .sum();
-                            (f, 1.0)
-                        } else {
-                            // Partly hidden: visibility from the leaf's own points, not
-                            // the ancestor's average.
-                            self.hidden_row_coef(leaf, l, s, &q, n)
-                        };
-                        if cache.is_some() && cacheable {
-                            fresh.push(((leaf.0, l), (coef as f32, vis as f32)));
-                        }
-                        // Rounded once, so a reused coefficient equals the first.
-                        let coef = if keep_rows && !cluster_source {
-                            kept.push(KeptCoef {
-                                link: l,
-                                coef: coef as f32,
-                                vis: vis as f32,
-                            });
-                            coef as f32 as f64
-                        } else {
-                            coef
-                        };
-                        self.push_opened(&q, n, s, coef, vis, &mut row);
+                for l in self.chain_links(leaf) {
+                    let t = &tr[l as usize];
+                    let s = ends[l as usize].source;
+                    let gs = &geoms[s as usize];
+                    if let Some(k) = before
+                        .and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]))
+                    {
+                        kept.push(k);
+                        self.push_opened(&q, n, s, k.coef as f64, k.vis as f64, &mut row);
+                        continue;
                     }
-                    e = nodes[e as usize].parent;
+                    // Constant link, static leaf: the coefficient of an earlier
+                    // frame of the window holds. Not for a cluster source: its
+                    // estimate follows the cluster's radiosity (directional
+                    // emission), which changes from round to round and frame to
+                    // frame; it costs no rays to recompute.
+                    let cluster_source = gs.patch == u32::MAX;
+                    let cacheable = !leaf_moving
+                        && !cluster_source
+                        && !t.varying()
+                        && self.window.as_ref().is_some_and(|w| {
+                            leaf.ix() < w.frame.elems_len && (l as usize) < w.frame.links_len
+                        });
+                    if let Some(&(c, v)) = cache
+                        .filter(|_| cacheable)
+                        .and_then(|c| c.get(&(leaf.0, l)))
+                    {
+                        self.push_opened(&q, n, s, c as f64, v as f64, &mut row);
+                        continue;
+                    }
+                    let (coef, vis) = if gs.patch == u32::MAX {
+                        (self.cluster_entry(&q, n, s, t), t.visibility as f64)
+                    } else if t.shaft_clear() {
+                        let ps = oracle::poly(gs);
+                        let f = (0..q.count)
+                            .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
+                            .sum();
+                        (f, 1.0)
+                    } else {
+                        // Partly hidden: visibility from the leaf's own points, not
+                        // the ancestor's average.
+                        self.hidden_row_coef(leaf, l, s, &q, n)
+                    };
+                    if cache.is_some() && cacheable {
+                        fresh.push(((leaf.0, l), (coef as f32, vis as f32)));
+                    }
+                    // Rounded once, so a reused coefficient equals the first.
+                    let coef = if keep_rows && !cluster_source {
+                        kept.push(KeptCoef {
+                            link: l,
+                            coef: coef as f32,
+                            vis: vis as f32,
+                        });
+                        coef as f32 as f64
+                    } else {
+                        coef
+                    };
+                    self.push_opened(&q, n, s, coef, vis, &mut row);
                 }
                 kept.sort_unstable_by_key(|x| x.link);
                 (row, fresh, kept)
@@ -2367,7 +2366,6 @@ impl<'a> Solver<'a> {
     /// entry.
     fn refresh_cluster_rows(&mut self) {
         let geoms = self.elems.geoms.as_slice();
-        let nodes = self.elems.nodes.as_slice();
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
         let rows: Vec<Vec<(u32, f64)>> = self
@@ -2385,19 +2383,15 @@ impl<'a> Solver<'a> {
                 let g = &geoms[leaf.ix()];
                 let q = oracle::samples(g);
                 let n = DVec3::from_array(g.normal);
-                let mut e = leaf.0;
-                while e != u32::MAX {
-                    for &l in self.links_of(e as usize) {
-                        let t = &tr[l as usize];
-                        let s = ends[l as usize].source;
-                        if geoms[s as usize].patch == u32::MAX {
-                            let f = self.cluster_entry(&q, n, s, t);
-                            if f > 0.0 {
-                                row.push((s, f));
-                            }
+                for l in self.chain_links(leaf) {
+                    let t = &tr[l as usize];
+                    let s = ends[l as usize].source;
+                    if geoms[s as usize].patch == u32::MAX {
+                        let f = self.cluster_entry(&q, n, s, t);
+                        if f > 0.0 {
+                            row.push((s, f));
                         }
                     }
-                    e = nodes[e as usize].parent;
                 }
                 row
             })
@@ -2678,7 +2672,6 @@ impl<'a> Solver<'a> {
             0x9017,
         );
         let geoms = self.elems.geoms.as_slice();
-        let nodes = self.elems.nodes.as_slice();
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
         let g = &geoms[leaf.ix()];
@@ -2702,104 +2695,100 @@ impl<'a> Solver<'a> {
         // evaluated; a frame between keyframes that skips its solve gathers from
         // links evaluated at another time.
         let links_now = self.links_at == self.now;
-        let mut e = leaf.0;
-        while e != u32::MAX {
-            for &l in self.links_of(e as usize) {
-                let t = &tr[l as usize];
-                let s = ends[l as usize].source as usize;
-                // A static source seen from a static point: what does not change in
-                // the window is kept (fixed terms, and the static part of the rays of
-                // the others).
-                // Kept per source (the link may be this frame's: a varying link
-                // refined at the receiver's end keeps the older source).
-                let keep = window
-                    .filter(|w| !self.elem_moving(ElementId(s as u32)) && s < w.frame.elems_len);
-                // A varying link's shaft test holds for one frame only.
-                let clear = t.shaft_clear() && !t.varying();
-                let ck = (s as u32) << 1 | clear as u32;
-                if let Some((fixed, masked)) = keep.and(cached).and_then(|c| c.get(ck)) {
-                    for t in fixed {
-                        for c in 0..3 {
-                            h[c] += t.f as f64 * b[t.elem as usize][c] as f64;
-                        }
-                    }
-                    for t in masked {
-                        let gs = &geoms[t.elem as usize];
-                        // Rays are only cast where a moving object is now.
-                        let near = !point_shaft_clear(x, n, gs, &self.moving_now);
-                        let v = if near {
-                            oracle::visible_fraction_masked(
-                                Some(&self.bvh),
-                                x,
-                                n,
-                                gs,
-                                &oracle::poly(gs),
-                                DVec3::from_array(gs.normal),
-                                self.corner_rays_to(gs),
-                                u64::from(t.key),
-                                [p as u32, gs.patch],
-                                t.mask,
-                            )
-                        } else {
-                            f64::from(t.vis_static)
-                        };
-                        for c in 0..3 {
-                            h[c] += t.f as f64 * v * b[t.elem as usize][c] as f64;
-                        }
-                    }
-                    continue;
-                }
-                terms.clear();
-                let key = oracle::hash3(self.opts.seed, s as u64, point_key);
-                // A static source that can hand this point little light takes the
-                // link's visibility instead of rays (see `faint`).
-                let cheap = if self.has_motion() || clear || t.shaft_clear() {
-                    None
-                } else if let Some(v) = small_leaf.and_then(|row| self.leaf_visibility(row, l, s)) {
-                    Some(v)
-                } else if small_leaf.is_some()
-                    && geoms[s].patch == u32::MAX
-                    && !self.emits_under.get(s).copied().unwrap_or(true)
-                {
-                    // A cluster with no emitter under it, seen from a small leaf: the
-                    // link's visibility, as the leaf row takes it.
-                    Some(t.visibility as f64)
-                } else if faint > 0.0 && self.faint_source(x, s, b, limits) {
-                    Some(t.visibility as f64)
-                } else {
-                    None
-                };
-                self.point_terms(
-                    x,
-                    n,
-                    p as u32,
-                    s,
-                    cheap.is_some()
-                        || clear
-                        || (keep.is_none() && t.shaft_clear() && (!t.varying() || links_now)),
-                    key,
-                    keep.map(|w| &w.swept[..]),
-                    limits,
-                    &mut terms,
-                );
-                if let Some(v) = cheap {
-                    for term in &mut terms.fixed {
-                        term.1 *= v;
+        for l in self.chain_links(leaf) {
+            let t = &tr[l as usize];
+            let s = ends[l as usize].source as usize;
+            // A static source seen from a static point: what does not change in
+            // the window is kept (fixed terms, and the static part of the rays of
+            // the others).
+            // Kept per source (the link may be this frame's: a varying link
+            // refined at the receiver's end keeps the older source).
+            let keep =
+                window.filter(|w| !self.elem_moving(ElementId(s as u32)) && s < w.frame.elems_len);
+            // A varying link's shaft test holds for one frame only.
+            let clear = t.shaft_clear() && !t.varying();
+            let ck = (s as u32) << 1 | clear as u32;
+            if let Some((fixed, masked)) = keep.and(cached).and_then(|c| c.get(ck)) {
+                for t in fixed {
+                    for c in 0..3 {
+                        h[c] += t.f as f64 * b[t.elem as usize][c] as f64;
                     }
                 }
-                terms.gather(b, &mut h);
-                // Terms on elements of this frame's refinement are not kept: the
-                // next frame drops those elements.
-                if let Some(w) = keep.filter(|_| admit || cached.is_some()) {
-                    let shared = |e: u32| (e as usize) < w.frame.elems_len;
-                    if terms.fixed.iter().all(|t| shared(t.0))
-                        && terms.masked.iter().all(|t| shared(t.0.elem))
-                    {
-                        fresh.push((ck, terms.clone()));
+                for t in masked {
+                    let gs = &geoms[t.elem as usize];
+                    // Rays are only cast where a moving object is now.
+                    let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                    let v = if near {
+                        oracle::visible_fraction_masked(
+                            Some(&self.bvh),
+                            x,
+                            n,
+                            gs,
+                            &oracle::poly(gs),
+                            DVec3::from_array(gs.normal),
+                            self.corner_rays_to(gs),
+                            u64::from(t.key),
+                            [p as u32, gs.patch],
+                            t.mask,
+                        )
+                    } else {
+                        f64::from(t.vis_static)
+                    };
+                    for c in 0..3 {
+                        h[c] += t.f as f64 * v * b[t.elem as usize][c] as f64;
                     }
+                }
+                continue;
+            }
+            terms.clear();
+            let key = oracle::hash3(self.opts.seed, s as u64, point_key);
+            // A static source that can hand this point little light takes the
+            // link's visibility instead of rays (see `faint`).
+            let cheap = if self.has_motion() || clear || t.shaft_clear() {
+                None
+            } else if let Some(v) = small_leaf.and_then(|row| self.leaf_visibility(row, l, s)) {
+                Some(v)
+            } else if small_leaf.is_some()
+                && geoms[s].patch == u32::MAX
+                && !self.emits_under.get(s).copied().unwrap_or(true)
+            {
+                // A cluster with no emitter under it, seen from a small leaf: the
+                // link's visibility, as the leaf row takes it.
+                Some(t.visibility as f64)
+            } else if faint > 0.0 && self.faint_source(x, s, b, limits) {
+                Some(t.visibility as f64)
+            } else {
+                None
+            };
+            self.point_terms(
+                x,
+                n,
+                p as u32,
+                s,
+                cheap.is_some()
+                    || clear
+                    || (keep.is_none() && t.shaft_clear() && (!t.varying() || links_now)),
+                key,
+                keep.map(|w| &w.swept[..]),
+                limits,
+                &mut terms,
+            );
+            if let Some(v) = cheap {
+                for term in &mut terms.fixed {
+                    term.1 *= v;
                 }
             }
-            e = nodes[e as usize].parent;
+            terms.gather(b, &mut h);
+            // Terms on elements of this frame's refinement are not kept: the
+            // next frame drops those elements.
+            if let Some(w) = keep.filter(|_| admit || cached.is_some()) {
+                let shared = |e: u32| (e as usize) < w.frame.elems_len;
+                if terms.fixed.iter().all(|t| shared(t.0))
+                    && terms.masked.iter().all(|t| shared(t.0.elem))
+                {
+                    fresh.push((ck, terms.clone()));
+                }
+            }
         }
         let rho = self.patches.rhos[p];
         let em = self.patches.emissions[p];
