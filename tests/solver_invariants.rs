@@ -341,4 +341,30 @@ fn settings_outside_their_domain_are_refused_by_the_solver() {
         };
         assert!(err.starts_with(&format!("{name}: expected ")), "{err}");
     }
+    // The time settings of a space-time solve, checked by the same rule
+    // (`SpaceTime::new` calls this before any work; `fps = 0` made one frame at a
+    // NaN time).
+    use rhier::solver::spacetime::SpaceTimeOptions;
+    let st = SpaceTimeOptions::default();
+    assert!(st.validate().is_ok());
+    for (name, bad) in [
+        ("--fps", SpaceTimeOptions { fps: 0.0, ..st }),
+        (
+            "--window",
+            SpaceTimeOptions {
+                window: f64::NAN,
+                ..st
+            },
+        ),
+        (
+            "--key-stride",
+            SpaceTimeOptions {
+                key_stride: 0,
+                ..st
+            },
+        ),
+    ] {
+        let err = bad.validate().expect_err(name).to_string();
+        assert!(err.starts_with(&format!("{name}: expected ")), "{err}");
+    }
 }

@@ -17,29 +17,18 @@ use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
 
 use super::solve::{Args, storage};
 
-/// Checks the time settings: finite and positive.
+/// The time settings the arguments ask for, checked ([`SpaceTimeOptions::validate`]).
 fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
-    for (name, v) in [
-        ("--fps", args.fps),
-        ("--window", args.window),
-        ("--merge-tol", args.merge_tol),
-        ("--interp-tol", args.interp_tol),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
-            anyhow::bail!("{name}: expected a finite number > 0, found {v}");
-        }
-    }
-    if args.key_stride == 0 {
-        anyhow::bail!("--key-stride: expected a whole number >= 1, found 0");
-    }
-    Ok(SpaceTimeOptions {
+    let st = SpaceTimeOptions {
         fps: args.fps,
         window: args.window,
         merge_tol: args.merge_tol,
         kept_budget: args.budget,
         key_stride: args.key_stride,
         interp_tol: args.interp_tol,
-    })
+    };
+    st.validate()?;
+    Ok(st)
 }
 
 /// What makes two solves produce the same windows: the scene and every setting that

@@ -352,51 +352,65 @@ impl SolveOptions {
     /// (`max_rounds = 0`). Settings are named by the `rhier solve` flag that sets
     /// them (`--eps` for [`Self::eps`]); those without a flag by their field.
     pub fn validate(&self) -> Result<()> {
-        let positive = [
-            ("--eps", Some(self.eps)),
-            ("--min-size", Some(self.min_size)),
-            ("--recon-tol", Some(self.recon_tol)),
-            ("--target-error", self.target_error),
-            ("recon_min_size", Some(self.recon_min_size)),
-            ("tolerance", Some(self.tolerance)),
-        ];
-        let non_negative = [
-            ("--power-size", Some(self.power_size)),
-            ("--time-budget", self.time_budget),
-            ("open_ratio", Some(self.open_ratio)),
-            ("open_spread", Some(self.open_spread)),
-            ("row_open_ratio", Some(self.row_open_ratio)),
-            ("faint_source", Some(self.faint_source)),
-            ("--split-spread", Some(self.split_spread)),
-        ];
-        let bad = |name: &str, domain: &str, found: &dyn std::fmt::Display| {
-            Err(crate::Error::Usage(format!(
-                "{name}: expected {domain}, found {found}"
-            )))
-        };
-        for (name, v) in positive.iter().filter_map(|&(n, v)| Some((n, v?))) {
-            if !(v.is_finite() && v > 0.0) {
-                return bad(name, "a finite number > 0", &v);
-            }
-        }
-        for (name, v) in non_negative.iter().filter_map(|&(n, v)| Some((n, v?))) {
-            if !(v.is_finite() && v >= 0.0) {
-                return bad(name, "a finite number >= 0", &v);
-            }
-        }
-        let counts = [
-            ("--max-rounds", self.max_rounds),
-            ("rays_per_point", self.rays_per_point),
-            ("cluster_rays", self.cluster_rays),
-            ("corner_rays", self.corner_rays),
-        ];
-        for (name, v) in counts {
-            if v == 0 {
-                return bad(name, "a whole number >= 1", &v);
-            }
-        }
-        Ok(())
+        check_domains(
+            &[
+                ("--eps", Some(self.eps)),
+                ("--min-size", Some(self.min_size)),
+                ("--recon-tol", Some(self.recon_tol)),
+                ("--target-error", self.target_error),
+                ("recon_min_size", Some(self.recon_min_size)),
+                ("tolerance", Some(self.tolerance)),
+            ],
+            &[
+                ("--power-size", Some(self.power_size)),
+                ("--time-budget", self.time_budget),
+                ("open_ratio", Some(self.open_ratio)),
+                ("open_spread", Some(self.open_spread)),
+                ("row_open_ratio", Some(self.row_open_ratio)),
+                ("faint_source", Some(self.faint_source)),
+                ("--split-spread", Some(self.split_spread)),
+            ],
+            &[
+                ("--max-rounds", self.max_rounds),
+                ("rays_per_point", self.rays_per_point),
+                ("cluster_rays", self.cluster_rays),
+                ("corner_rays", self.corner_rays),
+            ],
+        )
     }
+}
+
+/// Checks named settings against their domains, in order: `positive` finite and
+/// above 0, `non_negative` finite and at least 0 (`None`: not set, not checked),
+/// `counts` at least 1.
+/// The first that fails is a [`crate::Error::Usage`] naming it: `"{name}: expected
+/// {domain}, found {value}"`.
+pub(crate) fn check_domains(
+    positive: &[(&str, Option<f64>)],
+    non_negative: &[(&str, Option<f64>)],
+    counts: &[(&str, u32)],
+) -> Result<()> {
+    let bad = |name: &str, domain: &str, found: &dyn std::fmt::Display| {
+        Err(crate::Error::Usage(format!(
+            "{name}: expected {domain}, found {found}"
+        )))
+    };
+    for (name, v) in positive.iter().filter_map(|&(n, v)| Some((n, v?))) {
+        if !(v.is_finite() && v > 0.0) {
+            return bad(name, "a finite number > 0", &v);
+        }
+    }
+    for (name, v) in non_negative.iter().filter_map(|&(n, v)| Some((n, v?))) {
+        if !(v.is_finite() && v >= 0.0) {
+            return bad(name, "a finite number >= 0", &v);
+        }
+    }
+    for &(name, v) in counts {
+        if v == 0 {
+            return bad(name, "a whole number >= 1", &v);
+        }
+    }
+    Ok(())
 }
 
 /// The solver's state: pools, geometry and the leaf system of the last round.

@@ -125,6 +125,24 @@ pub struct SpaceTimeOptions {
     pub interp_tol: f64,
 }
 
+impl SpaceTimeOptions {
+    /// Checks the time settings before any work (as [`SolveOptions::validate`]):
+    /// `fps`, `window`, `merge_tol` and `interp_tol` finite and > 0, `key_stride`
+    /// >= 1, each named by its `rhier solve` flag.
+    pub fn validate(&self) -> Result<()> {
+        super::check_domains(
+            &[
+                ("--fps", Some(self.fps)),
+                ("--window", Some(self.window)),
+                ("--merge-tol", Some(self.merge_tol)),
+                ("--interp-tol", Some(self.interp_tol)),
+            ],
+            &[],
+            &[("--key-stride", self.key_stride)],
+        )
+    }
+}
+
 impl Default for SpaceTimeOptions {
     fn default() -> Self {
         SpaceTimeOptions {
@@ -542,6 +560,7 @@ impl<'a> SpaceTime<'a> {
         st: SpaceTimeOptions,
         on_round: impl FnMut(&mut RoundRecord, &Solver),
     ) -> Result<Self> {
+        st.validate()?;
         let start = Instant::now();
         let (t_start, t_end) = (scene.time.start, scene.time.end);
         let times = frame_times(t_start, t_end, st.fps);
