@@ -1975,6 +1975,25 @@ impl<'a> Solver<'a> {
     /// link too close for it. The leaf system only knows a leaf's mean; this is
     /// what the mean hides (module docs, "Leaves split on their spread").
     fn leaf_spread(&self, leaf: ElementId) -> f64 {
+        let (h, count) = self.leaf_point_light(leaf);
+        let g = &self.elems.geoms.as_slice()[leaf.ix()];
+        let rho = self.patches.rhos[g.patch as usize];
+        (0..3)
+            .map(|c| {
+                let (lo, hi) = h[..count]
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                        (lo.min(v[c]), hi.max(v[c]))
+                    });
+                rho[c] * (hi - lo)
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// The light leaf `leaf`'s row hands each of its quadrature points, `Σ_s F(x_q →
+    /// s) V(x_q, s) B_s` per channel (see [`Solver::leaf_spread`]), and how many
+    /// points the leaf has.
+    fn leaf_point_light(&self, leaf: ElementId) -> ([[f64; 3]; 4], usize) {
         let geoms = self.elems.geoms.as_slice();
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
@@ -2025,17 +2044,7 @@ impl<'a> Solver<'a> {
                 }
             }
         }
-        let rho = self.patches.rhos[g.patch as usize];
-        (0..3)
-            .map(|c| {
-                let (lo, hi) = h[..q.count]
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                        (lo.min(v[c]), hi.max(v[c]))
-                    });
-                rho[c] * (hi - lo)
-            })
-            .fold(0.0, f64::max)
+        (h, q.count)
     }
 
     /// Subdivides every leaf below the power area whose [`Solver::leaf_spread`]
@@ -3179,9 +3188,6 @@ fn b_of(elems: &ElementPool, e: usize) -> f64 {
         .fold(0.0f32, f32::max) as f64
 }
 
-/// Area-weighted pull: every element with children gets the area-weighted mean of its
-/// children's `b`; childless elements keep theirs. Children follow their parent in id
-/// order, so the reverse sweep is bottom-up.
 /// The unoccluded cluster estimate of the factor from point `x` (normal `n`) to
 /// cluster `gs` (centre `c`, directional power `dir`, radiosity `bs`): Sillion 1995
 /// with the cluster's directional emission ([`oracle::cluster_emission`]).
@@ -3194,6 +3200,9 @@ fn cluster_kernel(gs: &Geom, c: DVec3, dir: &Emission, bs: f64, x: DVec3, n: DVe
     gs.area * cs * cos / (std::f64::consts::PI * d2)
 }
 
+/// Area-weighted pull: every element with children gets the area-weighted mean of its
+/// children's `b`; childless elements keep theirs. Children follow their parent in id
+/// order, so the reverse sweep is bottom-up.
 fn pull(nodes: &[Node], geoms: &[Geom], b: &mut [[f64; 3]]) {
     for i in (0..nodes.len()).rev() {
         let node = nodes[i];
