@@ -230,6 +230,11 @@ fn solver_settings_out_of_their_domain_are_refused() {
             "--split-spread: expected a finite number >= 0",
         ),
         (
+            "--leaf-shapes=nan",
+            1,
+            "--leaf-shapes: expected a finite number >= 0",
+        ),
+        (
             "--target-error=0",
             1,
             "--target-error: expected a finite number > 0",

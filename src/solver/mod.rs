@@ -68,6 +68,20 @@
 //! (+70–75% time, 2.1× the memory at 100k polygons) but 50 from 4.78% to 5.22%,
 //! where the boxes' faces are too dark, not too bright.
 //!
+//! **Leaves seen by their shape.** The same fault mended where it shows, in the
+//! final gather, without new leaves or a second solve
+//! ([`SolveOptions::leaf_shapes`], off by default). After the last round, each
+//! quad leaf below the power area takes its radiosity at its four quadrature
+//! points from its row (as the split does); where one strays from their mean by
+//! more than `leaf_shapes` of it, the leaf keeps one factor per quadrant (value
+//! over mean, so its power is unchanged), and a point gathering from it sums the
+//! exact factors of the four quadrants times theirs instead of the whole leaf's
+//! factor times 1 (`shaped_factor`). The leaf's own radiosity and the leaf system
+//! are untouched. Measured at 0.1 (BENCHMARKS.md, "Scale"): the 100k-polygon room
+//! 9.80% → 8.86% for 14% more time and no more memory (the split: 8.54% for 75%
+//! more and 2.1× the memory); like the split it makes `gen_cubes 50` worse, 4.78%
+//! → 5.03%.
+//!
 //! **Sources larger than they look.** A leaf row gathers each source's average
 //! radiosity; a surface source that looks large from the leaf is opened into its
 //! children in that row ([`SolveOptions::row_open_ratio`]), which keeps the leaf
@@ -315,6 +329,13 @@ pub struct SolveOptions {
     /// (two passes at most; 0, the default: never). 0.15 is the value measured in
     /// BENCHMARKS.md ("Scale"). See the module docs, "Leaves split on their spread".
     pub split_spread: f64,
+    /// After the last round (static scenes), a quad leaf below the power area whose
+    /// radiosity at one of its quadrature points strays from their mean by more than
+    /// this fraction of it is seen by the final gather with that shape, one factor
+    /// per quadrant, instead of as its mean (0, the default: never). 0.1 is the value
+    /// measured in BENCHMARKS.md ("Scale"). See the module docs, "Leaves seen by
+    /// their shape".
+    pub leaf_shapes: f64,
 }
 
 impl Default for SolveOptions {
@@ -340,6 +361,7 @@ impl Default for SolveOptions {
             power_size: 1.0 / 64.0,
             faint_source: 0.005,
             split_spread: 0.0,
+            leaf_shapes: 0.0,
             row_open_ratio: 0.25,
         }
     }
@@ -369,6 +391,7 @@ impl SolveOptions {
                 ("row_open_ratio", Some(self.row_open_ratio)),
                 ("faint_source", Some(self.faint_source)),
                 ("--split-spread", Some(self.split_spread)),
+                ("--leaf-shapes", Some(self.leaf_shapes)),
             ],
             &[
                 ("--max-rounds", self.max_rounds),
@@ -452,6 +475,11 @@ pub struct Solver<'a> {
     /// Static solve: each leaf's row coefficients by chain link (`(link, coef)`,
     /// sorted by link), reused by the next round for links that did not change.
     row_cache: HashMap<u32, Vec<KeptCoef>>,
+    /// Static solve with [`SolveOptions::leaf_shapes`]: the shape of the radiosity
+    /// over the small quad leaves whose light varies over them, `leaf →` one factor
+    /// per quadrant (mean 1 by the quadrature weights), for the final gather
+    /// ([`Solver::leaf_shapes`]).
+    shapes: HashMap<u32, [f32; 4]>,
     rays: u64,
     shaft_clear: u64,
     /// Per patch: its object moves somewhere in the time domain.
@@ -884,6 +912,7 @@ impl<'a> Solver<'a> {
             row_sources: Vec::new(),
             row_coefs: Vec::new(),
             row_cache: HashMap::new(),
+            shapes: HashMap::new(),
             rays: 0,
             shaft_clear: 0,
             moving_patch: Vec::new(),
@@ -946,6 +975,8 @@ impl<'a> Solver<'a> {
     ) -> Result<Vec<RoundRecord>> {
         let start = Instant::now();
         let mut records = Vec::new();
+        // Shapes belong to the leaves of the last round (computed at the end).
+        self.shapes.clear();
         let Some(root) = self.root else {
             return Ok(records);
         };
@@ -1077,6 +1108,9 @@ impl<'a> Solver<'a> {
             on_round(&mut rec, self);
             records.push(rec);
             round += 1;
+        }
+        if self.opts.leaf_shapes > 0.0 && !self.has_motion() {
+            self.shapes = self.leaf_shapes();
         }
         Ok(records)
     }
@@ -1990,6 +2024,44 @@ impl<'a> Solver<'a> {
             .fold(0.0, f64::max)
     }
 
+    /// The shapes of the final gather's sources ([`Solver::shapes`]): every quad
+    /// leaf below the power area whose radiosity at its quadrature points, `E + ρ`
+    /// times the light its row hands each ([`Solver::leaf_point_light`]), strays
+    /// from their weighted mean by more than [`SolveOptions::leaf_shapes`] of it, in
+    /// the channel whose mean is largest. Quadrant `q` (cut at the parametric
+    /// midpoints) holds quadrature point `q`, and takes its value over the mean.
+    fn leaf_shapes(&self) -> HashMap<u32, [f32; 4]> {
+        let geoms = self.elems.geoms.as_slice();
+        self.leaves
+            .par_iter()
+            .filter_map(|&leaf| {
+                let g = &geoms[leaf.ix()];
+                if g.n != 4 || g.area >= self.power_area {
+                    return None;
+                }
+                let (h, count) = self.leaf_point_light(leaf);
+                let q = oracle::samples(g);
+                let p = g.patch as usize;
+                let (rho, em) = (self.patches.rhos[p], self.patches.emissions[p]);
+                // The largest channel of the mean.
+                let mean = |c: usize| {
+                    (0..count)
+                        .map(|i| q.weights[i] * (em[c] + rho[c] * h[i][c]))
+                        .sum::<f64>()
+                };
+                let c = (0..3).max_by(|&a, &b| mean(a).total_cmp(&mean(b)))?;
+                let m = mean(c);
+                if m <= 0.0 {
+                    return None;
+                }
+                let r: [f64; 4] = std::array::from_fn(|i| (em[c] + rho[c] * h[i][c]) / m);
+                r.iter()
+                    .any(|x| (x - 1.0).abs() > self.opts.leaf_shapes)
+                    .then(|| (leaf.0, r.map(|x| x as f32)))
+            })
+            .collect()
+    }
+
     /// The light leaf `leaf`'s row hands each of its quadrature points, `Σ_s F(x_q →
     /// s) V(x_q, s) B_s` per channel (see [`Solver::leaf_spread`]), and how many
     /// points the leaf has.
@@ -2618,7 +2690,10 @@ impl<'a> Solver<'a> {
             return;
         }
         let ps = oracle::poly(gs);
-        let f = point_to_polygon(x, n, &ps);
+        let f = match self.shapes.get(&(s as u32)) {
+            Some(r) => shaped_factor(x, n, gs, r),
+            None => point_to_polygon(x, n, &ps),
+        };
         if f <= 0.0 {
             return;
         }
@@ -3200,6 +3275,32 @@ fn cluster_kernel(gs: &Geom, c: DVec3, dir: &Emission, bs: f64, x: DVec3, n: DVe
     gs.area * cs * cos / (std::f64::consts::PI * d2)
 }
 
+/// The factor from point `x` (normal `n`) to quad `g` whose radiosity is the mean
+/// times `r[q]` on quadrant `q` (cut at the parametric midpoints; quadrant `q` holds
+/// quadrature point `q` of [`oracle::samples`]): `Σ_q r_q F(x → quadrant q)`.
+fn shaped_factor(x: DVec3, n: DVec3, g: &Geom, r: &[f32; 4]) -> f64 {
+    let c = |i: usize| DVec3::from_array(g.corners[i]);
+    let (p0, p1, p2, p3) = (c(0), c(1), c(2), c(3));
+    let (m01, m12, m23, m30) = (
+        (p0 + p1) / 2.0,
+        (p1 + p2) / 2.0,
+        (p2 + p3) / 2.0,
+        (p3 + p0) / 2.0,
+    );
+    let mid = (p0 + p1 + p2 + p3) / 4.0;
+    let quads = [
+        [p0, m01, mid, m30],
+        [m01, p1, m12, mid],
+        [mid, m12, p2, m23],
+        [m30, mid, m23, p3],
+    ];
+    quads
+        .iter()
+        .zip(r)
+        .map(|(q, &ri)| ri as f64 * point_to_polygon(x, n, &crate::geometry::Poly::new(q)))
+        .sum()
+}
+
 /// Area-weighted pull: every element with children gets the area-weighted mean of its
 /// children's `b`; childless elements keep theirs. Children follow their parent in id
 /// order, so the reverse sweep is bottom-up.
@@ -3494,6 +3595,64 @@ mod tests {
             );
         }
         assert!(straddling > 0, "no ceiling leaf straddles the lamp's edge");
+    }
+
+    /// A 2 × 1 quad in the plane z = 0, facing +z, and the factor of the whole quad
+    /// from a point above it facing down.
+    fn facing_quad(x: DVec3) -> (Geom, f64) {
+        let corners = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
+        let g = Geom {
+            corners,
+            normal: [0.0, 0.0, 1.0],
+            area: 2.0,
+            uv: [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            patch: 0,
+            n: 4,
+        };
+        let whole = point_to_polygon(x, -DVec3::Z, &oracle::poly(&g));
+        (g, whole)
+    }
+
+    #[test]
+    fn a_flat_shape_gathers_the_whole_quads_factor() {
+        // The contour integral is additive over the quadrants: shape 1 everywhere is
+        // the whole quad's factor, from any point.
+        for x in [
+            DVec3::new(0.3, 0.2, 0.5),
+            DVec3::new(1.7, 0.9, 2.0),
+            DVec3::new(-1.0, 0.5, 0.3),
+        ] {
+            let (g, whole) = facing_quad(x);
+            let shaped = shaped_factor(x, -DVec3::Z, &g, &[1.0; 4]);
+            assert!(whole > 0.0);
+            assert!(
+                (shaped - whole).abs() < 1e-12 * whole.max(1.0),
+                "{x}: {shaped} vs {whole}"
+            );
+        }
+        // Above the centre the four quadrants look alike: any shape of mean 1 gathers
+        // the whole factor.
+        let x = DVec3::new(1.0, 0.5, 0.7);
+        let (g, whole) = facing_quad(x);
+        let shaped = shaped_factor(x, -DVec3::Z, &g, &[0.2, 1.8, 0.5, 1.5]);
+        assert!((shaped - whole).abs() < 1e-6 * whole, "{shaped} vs {whole}");
+    }
+
+    #[test]
+    fn a_shape_weighs_the_quadrants_a_point_sees_most() {
+        // Above quadrant 0 (the corner at the origin), a quad dark there and lit
+        // elsewhere hands on less than its mean, and more when lit there.
+        let x = DVec3::new(0.4, 0.2, 0.3);
+        let (g, whole) = facing_quad(x);
+        let dark = shaped_factor(x, -DVec3::Z, &g, &[0.1, 1.3, 1.3, 1.3]);
+        let lit = shaped_factor(x, -DVec3::Z, &g, &[1.9, 0.7, 0.7, 0.7]);
+        assert!(dark < 0.5 * whole, "{dark} vs {whole}");
+        assert!(lit > 1.5 * whole, "{lit} vs {whole}");
     }
 
     #[test]
