@@ -102,10 +102,10 @@ pub struct Args {
     /// narrow slots in clutter; 0.15 measured (BENCHMARKS.md, "Scale").
     #[arg(long, default_value_t = SolveOptions::default().split_spread)]
     pub split_spread: f64,
-    /// After the last round of a static solve, let the final gather see the leaves
-    /// below the power area whose radiosity strays across their quadrants by more
-    /// than this fraction of their mean with that shape, not at their mean (0:
-    /// never). Mends narrow slots in clutter at little cost; 0.1 measured
+    /// After the last round of a static solve, a leaf below the power area whose
+    /// radiosity across its quadrants strays from its mean by more than this
+    /// fraction of it is gathered quadrant by quadrant, not at its mean (0: never).
+    /// Mends narrow slots in clutter for about 14% more time; 0.1 measured
     /// (BENCHMARKS.md, "Scale").
     #[arg(long, default_value_t = SolveOptions::default().leaf_shapes)]
     pub leaf_shapes: f64,
