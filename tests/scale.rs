@@ -3,8 +3,8 @@
 //! the clutter grows, and the power criterion for small receivers
 //! (`SolveOptions::power_size`) with the cheap final gather of small leaves must give
 //! the same point radiosity as the radiosity criterion with rays everywhere; leaves
-//! split on their spread must bring the shadowed slots of a corner of the
-//! 100k-polygon room towards the path tracer.
+//! split on their spread, or seen by their shape, must bring the shadowed slots of a
+//! corner of the 100k-polygon room towards the path tracer.
 
 use std::path::Path;
 
