@@ -2009,12 +2009,12 @@ impl<'a> Solver<'a> {
     /// link too close for it. The leaf system only knows a leaf's mean; this is
     /// what the mean hides (module docs, "Leaves split on their spread").
     fn leaf_spread(&self, leaf: ElementId) -> f64 {
-        let (h, count) = self.leaf_point_light(leaf);
+        let (h, q) = self.leaf_point_light(leaf);
         let g = &self.elems.geoms.as_slice()[leaf.ix()];
         let rho = self.patches.rhos[g.patch as usize];
         (0..3)
             .map(|c| {
-                let (lo, hi) = h[..count]
+                let (lo, hi) = h[..q.count]
                     .iter()
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
                         (lo.min(v[c]), hi.max(v[c]))
@@ -2039,18 +2039,17 @@ impl<'a> Solver<'a> {
                 if g.n != 4 || g.area >= self.power_area {
                     return None;
                 }
-                let (h, count) = self.leaf_point_light(leaf);
-                let q = oracle::samples(g);
+                let (h, q) = self.leaf_point_light(leaf);
                 let p = g.patch as usize;
                 let (rho, em) = (self.patches.rhos[p], self.patches.emissions[p]);
-                // The largest channel of the mean.
-                let mean = |c: usize| {
-                    (0..count)
+                let means: [f64; 3] = std::array::from_fn(|c| {
+                    (0..q.count)
                         .map(|i| q.weights[i] * (em[c] + rho[c] * h[i][c]))
-                        .sum::<f64>()
-                };
-                let c = (0..3).max_by(|&a, &b| mean(a).total_cmp(&mean(b)))?;
-                let m = mean(c);
+                        .sum()
+                });
+                // The largest channel of the mean.
+                let c = (0..3).max_by(|&a, &b| means[a].total_cmp(&means[b]))?;
+                let m = means[c];
                 if m <= 0.0 {
                     return None;
                 }
@@ -2063,9 +2062,9 @@ impl<'a> Solver<'a> {
     }
 
     /// The light leaf `leaf`'s row hands each of its quadrature points, `Σ_s F(x_q →
-    /// s) V(x_q, s) B_s` per channel (see [`Solver::leaf_spread`]), and how many
-    /// points the leaf has.
-    fn leaf_point_light(&self, leaf: ElementId) -> ([[f64; 3]; 4], usize) {
+    /// s) V(x_q, s) B_s` per channel (see [`Solver::leaf_spread`]), and those points
+    /// ([`oracle::samples`]).
+    fn leaf_point_light(&self, leaf: ElementId) -> ([[f64; 3]; 4], oracle::Samples) {
         let geoms = self.elems.geoms.as_slice();
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
@@ -2116,7 +2115,7 @@ impl<'a> Solver<'a> {
                 }
             }
         }
-        (h, q.count)
+        (h, q)
     }
 
     /// Subdivides every leaf below the power area whose [`Solver::leaf_spread`]
