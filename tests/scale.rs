@@ -408,9 +408,11 @@ fn absorbed_over_emitted(solver: &Solver) -> f64 {
 /// it, which no surface receives (about half a point here). Cluster links too
 /// close for the cluster estimate, left whole at small receivers by the power
 /// criterion, once carried nothing: 0.913 at 32 × 32 boxes (measured), 0.964 once
-/// they carried their Monte Carlo factor, 0.982 on 2026-11-25. Most of the rest is
-/// in cluster-source entries seen at grazing angles (BENCHMARKS.md, "Leaves seen by
-/// their shape"); the bound is 5%.
+/// they carried their Monte Carlo factor, 0.982 on 2026-11-25, 0.985 once a leaf saw
+/// a cluster source by the part of its bounding sphere above the leaf's horizon.
+/// Most of the rest is in cluster-source entries whose visibility is the link's,
+/// averaged over the receiving cluster (BENCHMARKS.md, "Leaves seen by their
+/// shape"); the bound is 2.5%.
 #[test]
 fn the_clutter_keeps_its_light() {
     let n = 32;
@@ -426,5 +428,5 @@ fn the_clutter_keeps_its_light() {
     solver.run(|_, _| {}).expect("rounds");
     let ratio = absorbed_over_emitted(&solver);
     eprintln!("{n} x {n} boxes: absorbed / emitted = {ratio:.4}");
-    assert!((ratio - 1.0).abs() < 0.05, "{n} x {n} boxes: {ratio}");
+    assert!((ratio - 1.0).abs() < 0.025, "{n} x {n} boxes: {ratio}");
 }
