@@ -2682,7 +2682,9 @@ impl<'a> Solver<'a> {
                 -u,
                 SOURCES_BY_POWER,
             );
-            let f = gs.area * n.dot(u).max(0.0) * cs / (std::f64::consts::PI * d * d) * vis;
+            // The receiver's cosine as the leaf rows take it ([`cluster_kernel`]).
+            let cos = clipped_cosine(n.dot(u), rad * rad / (d * d));
+            let f = gs.area * cos * cs / (std::f64::consts::PI * d * d) * vis;
             if f > 0.0 {
                 out.fixed.push((s as u32, f));
             }
