@@ -142,6 +142,17 @@ fn bad_time_settings_are_refused() {
         (vec!["--key-stride=-1"], 2, "--key-stride"),
         (vec!["--interp-tol", "0"], 1, "--interp-tol"),
         (vec!["--interp-tol", "NaN"], 1, "--interp-tol"),
+        // Settings of the static solve's last round, which a window never reaches.
+        (
+            vec!["--leaf-shapes", "0.1"],
+            1,
+            "--leaf-shapes applies to static solves",
+        ),
+        (
+            vec!["--split-spread", "0.15"],
+            1,
+            "--split-spread applies to static",
+        ),
     ] {
         let o = rhier()
             .args(["solve", SCENE, "-q", "-o"])

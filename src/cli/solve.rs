@@ -99,14 +99,16 @@ pub struct Args {
     /// After the last round of a static solve, split the leaves below the power area
     /// whose radiosity differs across their own quadrature points by more than this
     /// fraction of the RMS reflected radiosity, and solve again (0: never). Mends
-    /// narrow slots in clutter; 0.15 measured (BENCHMARKS.md, "Scale").
+    /// narrow slots in clutter; 0.15 measured (BENCHMARKS.md, "Scale"). Static
+    /// scenes and `--per-frame` frames only: refused by a space-time solve.
     #[arg(long, default_value_t = SolveOptions::default().split_spread)]
     pub split_spread: f64,
     /// After the last round of a static solve, a leaf below the power area whose
     /// radiosity across its quadrants strays from its mean by more than this
     /// fraction of it is gathered quadrant by quadrant, not at its mean (0: never).
     /// Mends narrow slots in clutter for about 14% more time; 0.1 measured
-    /// (BENCHMARKS.md, "Scale").
+    /// (BENCHMARKS.md, "Scale"). Static scenes and `--per-frame` frames only:
+    /// refused by a space-time solve.
     #[arg(long, default_value_t = SolveOptions::default().leaf_shapes)]
     pub leaf_shapes: f64,
     /// Most refine-and-solve rounds.

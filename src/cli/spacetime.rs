@@ -72,6 +72,7 @@ pub fn run(
     start: Instant,
 ) -> anyhow::Result<()> {
     let st = options(args)?;
+    rhier::solver::spacetime::static_only(&opts)?;
     if args.reference.is_some() {
         anyhow::bail!(
             "--reference measures one static solve; for an animation compare probes at every frame (tools/spacetime_bench.py)"

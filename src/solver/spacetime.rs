@@ -561,6 +561,7 @@ impl<'a> SpaceTime<'a> {
         on_round: impl FnMut(&mut RoundRecord, &Solver),
     ) -> Result<Self> {
         st.validate()?;
+        static_only(&opts)?;
         let start = Instant::now();
         let (t_start, t_end) = (scene.time.start, scene.time.end);
         let times = frame_times(t_start, t_end, st.fps);
@@ -762,6 +763,24 @@ impl<'a> SpaceTime<'a> {
             frame_cells,
         })
     }
+}
+
+/// Refuses the settings a space-time solve has no use for: `leaf_shapes` and
+/// `split_spread` act after the last round of one static solve, and a window's
+/// frames gather from leaves shared over time without reaching that point.
+/// [`SpaceTime::new`] calls it; a caller may call it before creating its output.
+pub fn static_only(opts: &SolveOptions) -> Result<()> {
+    for (on, flag) in [
+        (opts.leaf_shapes > 0.0, "--leaf-shapes"),
+        (opts.split_spread > 0.0, "--split-spread"),
+    ] {
+        if on {
+            return Err(crate::Error::Usage(format!(
+                "{flag} applies to static solves and to the frames of --per-frame; a space-time solve of a moving scene does not use it"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Solves every window of `scene` in order (see the module docs); `on_window`
