@@ -154,7 +154,49 @@ fn mmap_storage_creates_its_scratch_directory_and_gives_the_ram_answer() {
         "m.json",
     );
     assert!(scratch.is_dir());
-    assert_eq!(mapped, run(&[], "r.json"));
+    assert_eq!(mapped, run(&["--storage", "ram"], "r.json"));
+}
+
+/// `RHIER_STORAGE` picks the default backend (CI runs the whole suite once with
+/// `mmap`): a directory that does not exist fails the solve on its first scratch
+/// file, named; a value that names no backend is refused before any work; `ram` and
+/// `--storage ram` override it.
+#[test]
+fn the_storage_variable_names_the_default_backend() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing");
+    let out = dir.path().join("x.rhier");
+    let solve = |env: &str, extra: &[&str]| {
+        rhier()
+            .env("RHIER_STORAGE", env)
+            .args(["solve", "-q", "--eps", "2", "-o"])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = solve(&format!("mmap:{}", missing.display()), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&*missing.to_string_lossy()) && err.contains(".col"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = solve("disk", &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("RHIER_STORAGE: expected ram, mmap or mmap:DIR, found \"disk\""),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = solve(
+        &format!("mmap:{}", missing.display()),
+        &["--storage", "ram"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.exists());
 }
 
 /// `--power-size` reaches the solver: at half the Cornell box's diameter every

@@ -489,7 +489,11 @@ fn a_window_on_mapped_storage_is_the_one_in_ram() {
             .unwrap();
         (w, kept)
     };
-    let (ram, kept) = window(opts());
+    let ram = SolveOptions {
+        storage: rhier::pools::Storage::Ram,
+        ..opts()
+    };
+    let (ram, kept) = window(ram);
     assert!(kept > 10_000, "the window keeps terms: {kept} bytes");
     let (on_disk, kept_mapped) = window(mapped);
     assert!(on_disk.leaves.is_mapped() && !ram.leaves.is_mapped());

@@ -264,22 +264,29 @@ pub(super) fn load(args: &Args) -> anyhow::Result<(Scene, String)> {
 }
 
 /// Where the pools live: `--storage`, else memory-mapped if `out_of_core` (a
-/// space-time solve) and RAM otherwise; `--budget` always maps. Mapped files go in
-/// `--scratch`, else `dir` (a space-time solve's journal directory), else the system
-/// temp directory.
+/// space-time solve) and the library's default otherwise (RAM unless
+/// `RHIER_STORAGE` says otherwise, [`Storage::ENV`]); `--budget` always maps. Mapped
+/// files go in `--scratch`, else `dir` (a space-time solve's journal directory),
+/// else the directory `RHIER_STORAGE` names, else the system temp directory.
 pub(super) fn storage(args: &Args, out_of_core: bool, dir: Option<&Path>) -> Storage {
+    let default = Storage::from_env().unwrap_or_default();
     let mapped = args.budget.is_some()
         || match args.storage {
             Some(kind) => kind == StorageKind::Mmap,
-            None => out_of_core,
+            None => out_of_core || default != Storage::Ram,
         };
     if !mapped {
         return Storage::Ram;
     }
+    let env_dir = match default {
+        Storage::Mmap(d) => Some(d),
+        Storage::Ram => None,
+    };
     Storage::Mmap(
         args.scratch
             .clone()
             .or_else(|| dir.map(Path::to_path_buf))
+            .or(env_dir)
             .unwrap_or_else(std::env::temp_dir),
     )
 }

@@ -25,6 +25,32 @@ pub enum Storage {
     Mmap(PathBuf),
 }
 
+impl Storage {
+    /// The environment variable that chooses the default backend of
+    /// [`crate::solver::SolveOptions::default`] (as `RAYON_NUM_THREADS` chooses
+    /// rayon's thread count): unset, empty or `ram` for RAM, `mmap` for files in the
+    /// system temp directory, `mmap:DIR` for files in `DIR`. CI runs the test suite
+    /// once with each, so every solver test runs on both backends.
+    pub const ENV: &'static str = "RHIER_STORAGE";
+
+    /// The backend [`Storage::ENV`] names.
+    pub fn from_env() -> Result<Storage> {
+        let value = std::env::var_os(Self::ENV).unwrap_or_default();
+        match value.to_str() {
+            Some("" | "ram") => Ok(Storage::Ram),
+            Some("mmap") => Ok(Storage::Mmap(std::env::temp_dir())),
+            Some(v) if v.starts_with("mmap:") && v.len() > 5 => {
+                Ok(Storage::Mmap(PathBuf::from(&v[5..])))
+            }
+            _ => Err(Error::Usage(format!(
+                "{}: expected ram, mmap or mmap:DIR, found {:?}",
+                Self::ENV,
+                value
+            ))),
+        }
+    }
+}
+
 enum Backing<T: Pod> {
     Ram(Vec<T>),
     Mmap {

@@ -5,7 +5,8 @@
 //!   mapped with memmap2 that grows by doubling (the OS pages it in and out). Both
 //!   hand out plain slices, so the solver's loops are the same on either backend.
 //! - [`ElementPool`], [`LinkPool`]: the hierarchy's element and link columns.
-//! - [`Storage`]: which backend new columns use (`--storage ram|mmap --scratch DIR`).
+//! - [`Storage`]: which backend new columns use (`--storage ram|mmap --scratch DIR`; the
+//!   default from `RHIER_STORAGE`, [`Storage::ENV`]).
 //!
 //! Nothing here knows about radiosity beyond the record layouts; the solver gives
 //! the columns their meaning. Every pool has `validate()`, run by tests and by debug

@@ -257,7 +257,8 @@ pub const CORNER_INSET: f64 = 1e-3;
 /// Settings of a solve.
 #[derive(Clone, Debug)]
 pub struct SolveOptions {
-    /// Where the pools live.
+    /// Where the pools live; the default is RAM unless [`Storage::ENV`] says
+    /// otherwise.
     pub storage: Storage,
     /// Refinement threshold relative to the scene's RMS radiosity.
     pub eps: f64,
@@ -341,7 +342,8 @@ pub struct SolveOptions {
 impl Default for SolveOptions {
     fn default() -> Self {
         SolveOptions {
-            storage: Storage::Ram,
+            // `RHIER_STORAGE` (a bad value is refused by `validate`).
+            storage: Storage::from_env().unwrap_or_default(),
             eps: 0.5,
             min_size: 1.0 / 256.0,
             rays_per_point: 4,
@@ -372,8 +374,10 @@ impl SolveOptions {
     /// bad value is an error naming it rather than a solve that never ends
     /// (`eps <= 0` refines until memory runs out) or silently solves nothing
     /// (`max_rounds = 0`). Settings are named by the `rhier solve` flag that sets
-    /// them (`--eps` for [`Self::eps`]); those without a flag by their field.
+    /// them (`--eps` for [`Self::eps`]); those without a flag by their field. A
+    /// value of [`Storage::ENV`] that names no backend is refused too.
     pub fn validate(&self) -> Result<()> {
+        Storage::from_env()?;
         check_domains(
             &[
                 ("--eps", Some(self.eps)),
