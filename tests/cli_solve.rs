@@ -159,8 +159,8 @@ fn mmap_storage_creates_its_scratch_directory_and_gives_the_ram_answer() {
 
 /// `RHIER_STORAGE` picks the default backend (CI runs the whole suite once with
 /// `mmap`): a directory that does not exist fails the solve on its first scratch
-/// file, named; a value that names no backend is refused before any work; `ram` and
-/// `--storage ram` override it.
+/// file, named; a value that names no backend is refused before any work;
+/// `--storage ram` overrides it.
 #[test]
 fn the_storage_variable_names_the_default_backend() {
     let dir = tempfile::tempdir().unwrap();
