@@ -26,7 +26,7 @@
 //! | [`store`] | the `.rhier` file: writer, reader, validation; the journal `solve --resume` continues from |
 //! | [`playback`] | evaluation of a stored solution: probes, frames, exports |
 //! | [`flatland`] | exact 2D radiosity with the visibility complex |
-//! | [`reference`] | an independent Monte Carlo path tracer used to validate the solver |
+//! | [`mod@reference`] | an independent Monte Carlo path tracer used to validate the solver |
 
 pub mod error;
 pub mod flatland;

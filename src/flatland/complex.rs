@@ -53,7 +53,7 @@
 //! (`O(m log m)` once the views are known); this sweep remains the reference they are
 //! tested against, the builder of faces with chains, and the clipped measure of
 //! [`Clip`]. Neither reaches the paper's output-sensitive `O(m + n log n)` sweep of
-//! Rivière [17] (`m` = size of the visibility graph).
+//! Rivière \[17\] (`m` = size of the visibility graph).
 //!
 //! # What it does not do
 //!

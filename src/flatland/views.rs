@@ -123,7 +123,7 @@ impl Topology {
     }
 }
 
-/// Counters of [`all_views`] / [`form_factors`].
+/// Counters of [`all_views`] / [`crate::flatland::radiosity::form_factors`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ViewStats {
     /// Points swept.

@@ -4,7 +4,7 @@
 //! [`Solution`] and by an opened `.rhier` [`Reader`], so that `solve --probe` and
 //! `rhier probe FILE` share one code path and agree by construction. A [`Frame`] holds
 //! the world-space patches at `t` and the leaves live at `t` grouped per patch; the
-//! [`probe`] engine finds, per point, the nearest patch facing the point's normal
+//! [`mod@probe`] engine finds, per point, the nearest patch facing the point's normal
 //! through a bounding-volume hierarchy ([`nearest`]), maps the point to the patch's
 //! parameters (inverse bilinear for quads, barycentric for triangles) and evaluates the
 //! leaf there ([`Leaf::eval`]). [`raster`] draws a frame with a software z-buffer and

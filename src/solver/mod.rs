@@ -58,7 +58,7 @@
 //! its dark part at its mean: the 2.8 cm slots of a 100k-polygon room of boxes
 //! came out twice as bright as the path tracer. After the last round of a static
 //! solve, each leaf below the power area sums its row's sources at each of its
-//! quadrature points ([`Solver::leaf_spread`]: exact factors, the row's
+//! quadrature points (`Solver::leaf_spread`: exact factors, the row's
 //! visibility or the row's own rays again); a leaf whose reflected radiosity spreads
 //! there by more than [`SolveOptions::split_spread`] `· B_ref` is subdivided, down
 //! to the reconstruction's smallest cell, and the leaf system is solved again, in

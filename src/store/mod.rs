@@ -2,7 +2,7 @@
 //! probed and inspected without the solver and without loading everything.
 //!
 //! The byte layout is specified in `formats/rhier.md`; this module mirrors it:
-//! [`format`] holds the header and section-table layout, [`records`] the rkyv records
+//! [`mod@format`] holds the header and section-table layout, [`records`] the rkyv records
 //! of each section, [`writer`] streams a file chunk by chunk in time order and makes it
 //! valid only when finished (temporary name, fsync, rename), [`reader`] maps a file and
 //! validates it before any rkyv access, and [`memory`] holds the named counters that

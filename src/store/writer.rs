@@ -314,7 +314,7 @@ impl Writer {
     ///
     /// The leaves are never copied: the archive of a `Vec<LeafRecord>` is the
     /// records' bytes (a `Leaf` is a `LeafRecord` in memory, little-endian) followed
-    /// by the 16-byte root ([`vec_root`]), and zstd takes them as a stream, with the
+    /// by the 16-byte root (`vec_root`), and zstd takes them as a stream, with the
     /// size pledged so that the frame is the one a single call would make. The leaves
     /// are checked in the same pass; nothing reaches the file before all are.
     pub fn write_chunk_paged(
