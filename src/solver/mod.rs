@@ -2678,17 +2678,9 @@ impl<'a> Solver<'a> {
                     SOURCES_BY_POWER,
                 )
             };
-            let u = (c - x) / d;
-            let cs = oracle::cluster_emission(
-                gs,
-                &self.elems.directions.as_slice()[s],
-                b_of(&self.elems, s),
-                -u,
-                SOURCES_BY_POWER,
-            );
-            // The receiver's cosine as the leaf rows take it ([`cluster_kernel`]).
-            let cos = clipped_cosine(n.dot(u), rad * rad / (d * d));
-            let f = gs.area * cos * cs / (std::f64::consts::PI * d * d) * vis;
+            // The estimate the leaf rows take.
+            let dir = &self.elems.directions.as_slice()[s];
+            let f = cluster_kernel(gs, c, rad, dir, b_of(&self.elems, s), x, n) * vis;
             if f > 0.0 {
                 out.fixed.push((s as u32, f));
             }
