@@ -1908,14 +1908,23 @@ impl<'a> Solver<'a> {
     /// surfaces (1/4 for a cluster), which lights leaves that face away, e.g. the
     /// bottom of a box resting on the floor.
     fn cluster_coef(&self, q: &oracle::Samples, n: DVec3, s: u32) -> f64 {
+        let k = self.cluster_kernels(q, n, s);
+        (0..q.count).map(|i| q.weights[i] * k[i]).sum()
+    }
+
+    /// [`cluster_kernel`] from cluster `s` at each of the quadrature points `q`
+    /// (normal `n`); entries past `q.count` are 0.
+    fn cluster_kernels(&self, q: &oracle::Samples, n: DVec3, s: u32) -> [f64; 4] {
         let elems = &self.elems;
         let gs = &elems.geoms.as_slice()[s as usize];
         let (c, r) = oracle::sphere(gs);
         let dir = &elems.directions.as_slice()[s as usize];
         let bs = b_of(elems, s as usize);
-        (0..q.count)
-            .map(|i| q.weights[i] * cluster_kernel(gs, c, r, dir, bs, q.points[i], n))
-            .sum()
+        let mut k = [0.0; 4];
+        for (ki, &x) in k.iter_mut().zip(&q.points).take(q.count) {
+            *ki = cluster_kernel(gs, c, r, dir, bs, x, n);
+        }
+        k
     }
 
     /// A leaf's row coefficient for the chain link `t` to cluster `s`: the cluster
@@ -2087,11 +2096,9 @@ impl<'a> Solver<'a> {
                 if t.spread >= f32::MAX {
                     f[..q.count].fill(t.f as f64);
                 } else if t.f > 0.0 {
-                    let (c, r) = oracle::sphere(gs);
-                    let dir = &self.elems.directions.as_slice()[s as usize];
-                    let bs = b_of(&self.elems, s as usize);
-                    for (fi, &x) in f.iter_mut().zip(&q.points).take(q.count) {
-                        *fi = cluster_kernel(gs, c, r, dir, bs, x, n) * t.visibility as f64;
+                    let k = self.cluster_kernels(&q, n, s);
+                    for (fi, ki) in f.iter_mut().zip(k).take(q.count) {
+                        *fi = ki * t.visibility as f64;
                     }
                 }
             } else {
