@@ -269,19 +269,18 @@ pub(super) fn load(args: &Args) -> anyhow::Result<(Scene, String)> {
 /// files go in `--scratch`, else `dir` (a space-time solve's journal directory),
 /// else the directory `RHIER_STORAGE` names, else the system temp directory.
 pub(super) fn storage(args: &Args, out_of_core: bool, dir: Option<&Path>) -> Storage {
-    let default = Storage::from_env().unwrap_or_default();
+    let env_dir = match Storage::from_env().unwrap_or_default() {
+        Storage::Mmap(d) => Some(d),
+        Storage::Ram => None,
+    };
     let mapped = args.budget.is_some()
         || match args.storage {
             Some(kind) => kind == StorageKind::Mmap,
-            None => out_of_core || default != Storage::Ram,
+            None => out_of_core || env_dir.is_some(),
         };
     if !mapped {
         return Storage::Ram;
     }
-    let env_dir = match default {
-        Storage::Mmap(d) => Some(d),
-        Storage::Ram => None,
-    };
     Storage::Mmap(
         args.scratch
             .clone()
