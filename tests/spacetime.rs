@@ -671,9 +671,17 @@ fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
         assert_eq!(f.interpolated, 0, "keyframe {}", f.frame);
     }
     // The block's faces change the light they hand on by more than 1% of the
-    // block's power between keyframes (measured), so every frame between keyframes
-    // solves its leaf system (its varying links are re-evaluated).
-    assert!(keyed_frames.iter().all(|f| f.varying_links > 0));
+    // block's power between keyframes (measured), so the midpoint of each interval
+    // (frames 2 and 6, solved first by the bisection) solves its leaf system (its
+    // varying links are re-evaluated); the quarter frames then lie between solved
+    // frames two apart.
+    let solved: Vec<u32> = keyed_frames
+        .iter()
+        .filter(|f| f.varying_links > 0)
+        .map(|f| f.frame)
+        .collect();
+    eprintln!("solved frames: {solved:?}");
+    assert!(solved.contains(&2) && solved.contains(&6), "{solved:?}");
     let interpolated: u64 = keyed_frames
         .iter()
         .filter(between)
@@ -689,7 +697,8 @@ fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
         interpolated > gathered,
         "most points hold between keyframes"
     );
-    // The floor the block's shadow crosses is gathered (about 16% of the points;
+    // The floor the block's shadow crosses is gathered (13% of the points with the
+    // bisection, 16% when each frame between looked at the keyframes alone;
     // interpolating every point the keyframes share would gather 0.2%).
     assert!(
         gathered * 20 > interpolated,
@@ -728,9 +737,10 @@ fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
             worst * 100.0
         );
         // Each interpolated point is within `interp_tol` (1% of B_ref) of agreeing
-        // or linear keyframes. Measured: 0.18–0.27% apart, worst point 0.9–1.8%;
-        // interpolating every point both keyframes hold instead: 0.47–0.99% apart,
-        // worst point 1.4–5.3%.
+        // or linear solved frames. Measured: 0.17–0.35% apart, worst point 0.8–1.9%
+        // (0.18–0.27% and 0.9–1.8% when each frame between looked at the keyframes
+        // alone); interpolating every point both keyframes hold instead: 0.47–0.99%
+        // apart, worst point 1.4–5.3%.
         assert!(apart < 0.005, "t = {t}: {apart}");
         assert!(worst < 0.03, "t = {t}: worst point {worst}");
         assert!(e_keyed <= 1.1 * e_every + 1e-3, "t = {t}");

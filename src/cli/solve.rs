@@ -166,14 +166,15 @@ pub struct Args {
     #[arg(long, default_value_t = 0.01)]
     pub merge_tol: f64,
     /// Space-time: every N-th frame of a window (and its first and last) is a
-    /// keyframe gathered at every reconstruction point; the frames between
-    /// interpolate the points where their two keyframes agree, or follow a line
-    /// with the keyframe before, and gather the rest (1: gather every frame).
+    /// keyframe gathered at every reconstruction point; the frames between, taken
+    /// by bisection, interpolate the points where the two nearest solved frames
+    /// agree, or follow a line with the frame as far before, and gather the rest
+    /// (1: gather every frame).
     #[arg(long, default_value_t = SpaceTimeOptions::default().key_stride)]
     pub key_stride: u32,
     /// Space-time: how far (a fraction of the RMS reflected radiosity) a point's
-    /// keyframe values may stray from agreeing, or from a line, for the frames
-    /// between to interpolate it.
+    /// values at the solved frames around may stray from agreeing, or from a line,
+    /// for a frame between to interpolate it.
     #[arg(long, default_value_t = SpaceTimeOptions::default().interp_tol)]
     pub interp_tol: f64,
     /// Continue an interrupted space-time solve from its last finished window (kept

@@ -39,7 +39,8 @@ use crate::pools::{Column, Storage};
 
 /// Reconstructions (frames) after which a point no reconstruction registered is
 /// dropped. Frames are solved keyframe first, then the frames between (see
-/// `spacetime::solve_order`): 8 covers two keyframe intervals at the default stride 4.
+/// `spacetime::solve_order`): 8 covers a keyframe interval at the default stride 8,
+/// so a point each keyframe registers survives the frames between.
 pub const STALE_AFTER: u32 = 8;
 
 /// Bytes a compaction slides before it hands the pages of mapped arenas back

@@ -697,17 +697,17 @@ impl SharedRadiosity {
 /// A reconstruction point: patch and quantised parameters.
 type PointKey = (u32, u32, u32);
 
-/// The values a keyframe's reconstruction gathered at its points (radiosity, and
-/// whether the point lies outside every solid), by point key: what the frames
-/// between two keyframes interpolate ([`Between`]).
+/// The values a frame's reconstruction gave its points, gathered or interpolated
+/// (radiosity, and whether the point lies outside every solid), by point key: what
+/// the frames between two solved frames interpolate ([`Between`]).
 ///
 /// With [`KeyValues::with_cells`], a point the keyframe did not gather takes the
 /// value of the keyframe's cell that holds it (the stored interpolant), so a frame
 /// that meshes a cell differently can still interpolate its new points.
 ///
 /// The points are a sorted array of 28-byte records with `f32` radiosity, what the
-/// leaves store (a window keeps up to four keyframes: a hash map of `f64`s held
-/// 2.4 MB of ACTOR's out-of-core peak).
+/// leaves store (a window keeps those of about six frames: a hash map of `f64`s
+/// held 2.4 MB of ACTOR's out-of-core peak for four).
 #[derive(Clone, Debug, Default)]
 pub struct KeyValues {
     /// (point, radiosity, outside every solid), sorted by point.
@@ -730,8 +730,9 @@ impl KeyValues {
         }
     }
 
-    /// The value gathered at point `pk` and whether it lay outside every solid.
-    fn gathered(&self, pk: &PointKey) -> Option<([f64; 3], bool)> {
+    /// The value the frame gave point `pk` (gathered or interpolated) and whether it
+    /// lay outside every solid.
+    fn known(&self, pk: &PointKey) -> Option<([f64; 3], bool)> {
         let i = self.points.binary_search_by_key(pk, |p| p.0).ok()?;
         let (_, b, ok) = self.points[i];
         Some((b.map(f64::from), ok))
@@ -743,10 +744,10 @@ impl KeyValues {
         self
     }
 
-    /// The value at point `pk` outside every solid: the one gathered there if it
-    /// was (and lay outside the solids then), else the keyframe's cell holding it.
+    /// The value at point `pk` outside every solid: the frame's own if it had the
+    /// point (and it lay outside the solids then), else the frame's cell holding it.
     fn at(&self, pk: &PointKey) -> Option<[f64; 3]> {
-        if let Some((v, true)) = self.gathered(pk) {
+        if let Some((v, true)) = self.known(pk) {
             return Some(v);
         }
         let lo = self.cells.partition_point(|l| l.patch < pk.0);
@@ -761,51 +762,56 @@ fn point_param(q: u32) -> f64 {
     q as f64 / (1u64 << 24) as f64
 }
 
-/// A keyframe of a space-time window: its position (frame index, or any time unit
-/// shared by the keyframes of a [`Between`]) and the values it gathered.
+/// A solved frame of a space-time window: its position (frame index, or any time
+/// unit shared by the frames of a [`Between`]) and the values it gave its points.
 pub type Keyframe<'k> = (f64, &'k KeyValues);
 
-/// A frame at `t` between two keyframes `a` and `b` of a space-time window, with the
-/// keyframe before them when there is one. A reconstruction point gathered at
-/// both keyframes with the same validity takes the linear interpolation of their
-/// values instead of a final gather when
+/// A frame at `t` between two solved frames `a` and `b` of a space-time window (two
+/// keyframes, or a keyframe and the midpoint of a bisection, see
+/// [`crate::solver::spacetime::solve_order`]), with the frame `before` as far
+/// before `a` as `b` is after, when there is one. A reconstruction point known at
+/// both with the same validity takes the linear interpolation of their values
+/// instead of a final gather when
 /// - their values differ by at most `tol` in every channel, or
-/// - the point's values are linear in time over the three keyframes: `a` lies
+/// - the point's values are linear in time over the three frames: `a` lies
 ///   within `tol` of the line through `before` and `b`.
 ///
-/// Every other point is gathered at the frame.
+/// Every other point is gathered at the frame. A frame's values hold its
+/// interpolated points as well as its gathered ones, so a bisection step
+/// interpolates what the step above it interpolated (the same line) and gathers
+/// only within the half a change was found in.
 ///
-/// Why this holds: a point's value changes between keyframes through the
+/// Why this holds: a point's value changes between two frames through the
 /// radiosity of its sources, which varies smoothly, and through moving objects
 /// crossing its view of them. A moving blocker larger than the distance it travels
-/// between two keyframes cannot cover and uncover a point's view within that time,
+/// between the two frames cannot cover and uncover a point's view within that time,
 /// so a point whose values agree at both ends, or follow one line over three
-/// keyframes, saw no shadow edge pass in between; a shadow edge that passes within
+/// frames, saw no shadow edge pass in between; a shadow edge that passes within
 /// the interval puts `a` off the line through `before` and `b` by about half the
 /// edge's contrast, and the point is gathered.
 #[derive(Clone, Copy, Debug)]
 pub struct Between<'k> {
-    /// The keyframe before `a`, if any.
+    /// The frame as far before `a` as `b` is after, if any.
     pub before: Option<Keyframe<'k>>,
-    /// The keyframe that starts the interval.
+    /// The solved frame that starts the interval.
     pub a: Keyframe<'k>,
-    /// The keyframe that ends the interval.
+    /// The solved frame that ends the interval.
     pub b: Keyframe<'k>,
     /// Position of the frame, strictly between `a` and `b`.
     pub t: f64,
-    /// Largest deviation (radiosity units) of a point's keyframe values from
-    /// agreement or from a line for the point to be interpolated.
+    /// Largest deviation (radiosity units) of a point's values at the solved
+    /// frames from agreement or from a line for the point to be interpolated.
     pub tol: f64,
 }
 
 impl Between<'_> {
     /// The interpolated value of point `pk` and whether it lies outside every
-    /// solid, if the keyframes allow it. A point both keyframes gathered keeps their
+    /// solid, if the solved frames allow it. A point both frames had keeps their
     /// validity (they must agree on it); any other point asks `outside_now` (one
-    /// ray, no gather) and, if outside the solids, interpolates the keyframes'
-    /// cells ([`KeyValues::with_cells`]).
+    /// ray, no gather) and, if outside the solids, interpolates the frames' cells
+    /// ([`KeyValues::with_cells`]).
     fn value(&self, pk: &PointKey, outside_now: impl FnOnce() -> bool) -> Option<([f64; 3], bool)> {
-        let (va, vb, valid) = match (self.a.1.gathered(pk), self.b.1.gathered(pk)) {
+        let (va, vb, valid) = match (self.a.1.known(pk), self.b.1.known(pk)) {
             (Some((va, oka)), Some((vb, okb))) if oka == okb => (va, vb, oka),
             (Some(_), Some(_)) => return None,
             _ => {
@@ -842,8 +848,8 @@ impl Between<'_> {
 pub struct Reconstruction {
     /// The cells, as [`Solver::reconstruct`] returns them.
     pub leaves: Vec<Leaf>,
-    /// The values gathered at every point (a keyframe's, for later interpolation;
-    /// empty when interpolating).
+    /// The value at every point, gathered or interpolated, for later frames of a
+    /// space-time window to interpolate (empty outside a window).
     pub values: KeyValues,
     /// Points gathered by a final gather.
     pub gathered: u64,
@@ -3045,9 +3051,10 @@ impl<'a> Solver<'a> {
         self.reconstruct_between(None).leaves
     }
 
-    /// [`Solver::reconstruct`], with the points of a frame between two keyframes
-    /// interpolated where the keyframes agree (see [`Between`]); `None` gathers
-    /// every point and returns their values (a keyframe).
+    /// [`Solver::reconstruct`], with the points of a frame between two solved
+    /// frames interpolated where those agree (see [`Between`]); `None` gathers
+    /// every point (a keyframe). In a space-time window the values of every point
+    /// come back too.
     pub fn reconstruct_between(&self, between: Option<&Between>) -> Reconstruction {
         let geoms = self.elems.geoms.as_slice();
         let interpolated = std::sync::atomic::AtomicU64::new(0);
@@ -3190,13 +3197,15 @@ impl<'a> Solver<'a> {
         }
         drop(guard);
         let interpolated = interpolated.into_inner();
-        let values = if between.is_some() {
-            KeyValues::default()
-        } else {
+        // Later frames of a window interpolate this one's values; a solve
+        // outside a window has no use for them.
+        let values = if self.window.is_some() {
             KeyValues::from_points(cache.index.iter().map(|(&pk, &i)| {
                 let (b, ok) = cache.values[i];
                 (pk, b, ok)
             }))
+        } else {
+            KeyValues::default()
         };
         Reconstruction {
             leaves,

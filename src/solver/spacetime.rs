@@ -43,18 +43,22 @@
 //!    *Keyframes.* Every [`SpaceTimeOptions::key_stride`]-th frame of a window (and
 //!    its first and last) is solved and reconstructed by a final gather at every
 //!    point; the frames between are solved right after the keyframe that ends
-//!    their interval, and a point whose keyframe values agree, or lie on one line
-//!    with the keyframe before the interval, takes the linear interpolation in time
-//!    instead of a gather ([`Between`]; the paper's elements are constant over a
-//!    time range, eq. 8, these are linear over one). Only points a moving object's
-//!    shadow or reflection changes in a way a line cannot follow, and cells the
-//!    frame meshes anew, are gathered. Those gathers need the frame's radiosity:
+//!    their interval, by bisection ([`solve_order`]: the midpoint first, between
+//!    the two keyframes, then each half's midpoint between its ends, as the paper
+//!    splits elements in time at the midpoint, §4.3). A point whose values at the
+//!    two ends agree, or lie on one line with the frame as far before, takes the
+//!    linear interpolation in time instead of a gather ([`Between`]; the paper's
+//!    elements are constant over a time range, eq. 8, these are linear over one).
+//!    Only points a moving object's shadow or reflection changes in a way a line
+//!    cannot follow, and cells the frame meshes anew, are gathered, and only in
+//!    the halves where the change is. Those gathers need the frame's radiosity:
 //!    when no moving surface changes the power it hands on between the two
-//!    keyframes (by more than 1% of the moving surfaces' total), the frame skips
-//!    its leaf solve, places the moving objects and gathers from the hierarchy the
-//!    keyframe left, with the shared elements' radiosity interpolated between the
-//!    keyframes ([`Solver::place_between`]); otherwise (a panel sliding over a lamp
-//!    changes what light it hands on) it is solved like a keyframe.
+//!    nearest solved frames (by more than 1% of the moving surfaces' total), the
+//!    frame skips its leaf solve, places the moving objects and gathers from the
+//!    hierarchy the last solve left, with the shared elements' radiosity
+//!    interpolated between those two frames ([`Solver::place_between`]); otherwise
+//!    (a panel sliding over a lamp changes what light it hands on) it is solved like
+//!    a keyframe, and the halves below it interpolate from it.
 //! 3. *Release*: the window's leaves go to the output (one `.rhier` chunk per
 //!    window; they are kept on the pools' storage as their runs close, so out of
 //!    core on `--storage mmap`, and written without a copy), and everything the
@@ -115,13 +119,14 @@ pub struct SpaceTimeOptions {
     pub kept_budget: Option<u64>,
     /// Every `key_stride`-th frame of a window (and its first and last) is a
     /// keyframe, reconstructed by final gathers at every point; the frames between
-    /// two keyframes interpolate the points where the keyframes allow it ([`Between`]). 1:
-    /// every frame is a keyframe.
+    /// two keyframes, taken by bisection ([`solve_order`]), interpolate the points
+    /// where the solved frames around allow it ([`Between`]). 1: every frame is a
+    /// keyframe.
     pub key_stride: u32,
-    /// A point is interpolated between two keyframes when their values differ by at
-    /// most this fraction of the RMS reflected radiosity in every channel, or the
-    /// earlier lies within it of the line through the keyframe before and the later
-    /// ([`Between`]).
+    /// A point is interpolated between two solved frames when their values differ by
+    /// at most this fraction of the RMS reflected radiosity in every channel, or the
+    /// earlier lies within it of the line through the frame as far before and the
+    /// later ([`Between`]).
     pub interp_tol: f64,
 }
 
@@ -150,7 +155,7 @@ impl Default for SpaceTimeOptions {
             window: 1.0,
             merge_tol: 0.01,
             kept_budget: None,
-            key_stride: 4,
+            key_stride: 8,
             interp_tol: 0.01,
         }
     }
@@ -158,10 +163,12 @@ impl Default for SpaceTimeOptions {
 
 /// Frames between two keyframes skip their leaf solve when no moving surface's
 /// power changes by more than this fraction of the moving surfaces' total between
-/// the keyframes. Measured (BENCHMARKS.md): at 0.01 ACTOR skips 42 of its 54
-/// frames between keyframes at the same error and LIGHT none; at 0.05 LIGHT skips
-/// 9 and its error grows from 1.41% to 1.44%; skipping every one, LIGHT's error
-/// is 2.6% (points beside the lamp the panel slides over, off by 20%).
+/// the two nearest solved frames. Measured (BENCHMARKS.md): at 0.01 ACTOR skips 52
+/// of its 63 frames between keyframes (stride 8, bisection; 42 of 54 at stride 4
+/// without) at the same error and LIGHT none; at 0.02 ACTOR takes 7% less time
+/// and its error grows from 3.169% to 3.185%; at 0.05 LIGHT skips 9 of 54 (stride
+/// 4) and its error grows from 1.41% to 1.44%; skipping every one, LIGHT's error is
+/// 2.6% (points beside the lamp the panel slides over, off by 20%).
 const MOVING_POWER_TOL: f64 = 0.01;
 
 /// Keyframes of a window of `n` frames: every `stride`-th and the last.
@@ -174,16 +181,52 @@ pub fn key_frames(n: usize, stride: u32) -> Vec<usize> {
     keys
 }
 
+/// One frame of a window's solve order: a keyframe (`brackets: None`), or a frame
+/// between two frames already solved, the nearest on each side.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Step {
+    /// Frame index within the window.
+    pub frame: usize,
+    /// The frames already solved just before and just after it.
+    pub brackets: Option<(usize, usize)>,
+}
+
 /// The order a window's frames are solved in: each keyframe, then the frames
-/// between it and the keyframe before (they interpolate both, and may gather from
-/// the hierarchy it leaves in the pools).
-pub fn solve_order(keys: &[usize]) -> Vec<usize> {
-    let mut order: Vec<usize> = keys.iter().take(1).copied().collect();
+/// between it and the keyframe before by bisection of their interval: its midpoint
+/// between the two keyframes, then the midpoints of both halves between the
+/// keyframe and that midpoint, and so on (the paper's time split at the midpoint,
+/// §4.3, applied to the reconstruction). A frame interpolates its brackets where
+/// they allow it ([`Between`]), so a point gathered at the midpoint because a
+/// shadow passed in one half need not be gathered in the other.
+pub fn solve_order(keys: &[usize]) -> Vec<Step> {
+    fn halves(lo: usize, hi: usize, out: &mut Vec<Step>) {
+        if hi - lo < 2 {
+            return;
+        }
+        let mid = lo + (hi - lo) / 2;
+        out.push(Step {
+            frame: mid,
+            brackets: Some((lo, hi)),
+        });
+        halves(lo, mid, out);
+        halves(mid, hi, out);
+    }
+    let key = |frame| Step {
+        frame,
+        brackets: None,
+    };
+    let mut order: Vec<Step> = keys.iter().take(1).map(|&k| key(k)).collect();
     for pair in keys.windows(2) {
-        order.push(pair[1]);
-        order.extend(pair[0] + 1..pair[1]);
+        order.push(key(pair[1]));
+        halves(pair[0], pair[1], &mut order);
     }
     order
+}
+
+/// The frame whose values tell whether a frame between `lo` and `hi` lies on a
+/// line through time ([`Between::before`]): as far before `lo` as `hi` is after.
+fn before(lo: usize, hi: usize) -> Option<usize> {
+    lo.checked_sub(hi - lo)
 }
 
 /// What one frame cost.
@@ -643,62 +686,81 @@ impl<'a> SpaceTime<'a> {
         let mut frame_cells = 0u64;
         let keys = key_frames(frames.len(), self.st.key_stride);
         let interp_tol = self.st.interp_tol * b_ref;
-        // The values of the keyframes around the frames being solved (at most three,
-        // about 0.9 MB each on ACTOR), and finished frames waiting for the ones
-        // before them to be merged in time order.
-        let mut key_values: HashMap<usize, KeyValues> = HashMap::new();
-        let mut key_rad: HashMap<usize, SharedRadiosity> = HashMap::new();
+        let order = solve_order(&keys);
+        // The values of the frames that later frames interpolate (about 0.9 MB each
+        // on ACTOR: the keyframes around the interval being solved, its frames
+        // solved so far and the frames before it a bisection step looks back to),
+        // the shared radiosity of the interval's solved frames, and finished frames
+        // waiting for the ones before them to be merged in time order.
+        let mut values: HashMap<usize, KeyValues> = HashMap::new();
+        let mut rad: HashMap<usize, SharedRadiosity> = HashMap::new();
         let mut pending: std::collections::BTreeMap<usize, Arc<[Leaf]>> = Default::default();
         let mut next_merge = 0;
-        for k in solve_order(&keys) {
+        for (at, step) in order.iter().enumerate() {
+            let k = step.frame;
             let t = frames[k];
-            // The frame's cells are shared by the time merge and, for a keyframe,
-            // its values (which interpolate the points it did not gather).
-            let (cost, cells, gathered, interpolated): (_, Arc<[Leaf]>, _, _) = match keys
-                .binary_search(&k)
-            {
-                Ok(_) => {
+            let (cost, r) = match step.brackets {
+                None => {
                     let cost = solver.frame(t, b_ref)?;
-                    key_rad.insert(k, solver.shared_radiosity());
-                    let mut r = solver.reconstruct_between(None);
-                    let cells: Arc<[Leaf]> = std::mem::take(&mut r.leaves).into();
-                    let values = std::mem::take(&mut r.values).with_cells(cells.clone());
-                    key_values.insert(k, values);
-                    (cost, cells, r.gathered, r.interpolated)
+                    rad.insert(k, solver.shared_radiosity());
+                    (cost, solver.reconstruct_between(None))
                 }
-                Err(i) => {
-                    // `solve_order` solves the keyframe ending `k`'s interval just
-                    // before the frames in it; keyframes before the one before the
-                    // interval are no longer needed.
-                    let (a, b) = (keys[i - 1], keys[i]);
-                    let oldest = keys[i.saturating_sub(2)];
-                    key_values.retain(|&f, _| f >= oldest);
-                    key_rad.retain(|&f, _| f >= a);
-                    let cost = match (key_rad.get(&a), key_rad.get(&b)) {
-                        (Some(ra), Some(rb))
-                            if SharedRadiosity::moving_power_holds(ra, rb, MOVING_POWER_TOL) =>
-                        {
-                            let alpha = (k - a) as f64 / (b - a) as f64;
+                Some((lo, hi)) => {
+                    // The keyframe starting the interval (`solve_order` solves the
+                    // one ending it just before the frames in it).
+                    let a = keys[keys.partition_point(|&f| f < k) - 1];
+                    // What the rest of the window still reads: the brackets and
+                    // look-back frames of the steps to come.
+                    let needed: std::collections::HashSet<usize> = order[at..]
+                        .iter()
+                        .filter_map(|s| s.brackets)
+                        .flat_map(|(l, h)| [Some(l), Some(h), before(l, h)])
+                        .flatten()
+                        .collect();
+                    values.retain(|f, _| needed.contains(f));
+                    rad.retain(|&f, _| f >= a);
+                    // The solved frames nearest on either side (the keyframes, or
+                    // a midpoint that had to be solved): the moving surfaces' light
+                    // is checked, and the shared radiosity interpolated, between
+                    // them.
+                    let sa = rad.keys().filter(|&&f| f < k).max().copied();
+                    let sb = rad.keys().filter(|&&f| f > k).min().copied();
+                    let holds = match (sa, sb) {
+                        (Some(sa), Some(sb)) => {
+                            let (ra, rb) = (&rad[&sa], &rad[&sb]);
+                            SharedRadiosity::moving_power_holds(ra, rb, MOVING_POWER_TOL)
+                                .then_some((sa, ra, sb, rb))
+                        }
+                        _ => None,
+                    };
+                    let cost = match holds {
+                        Some((sa, ra, sb, rb)) => {
+                            let alpha = (k - sa) as f64 / (sb - sa) as f64;
                             solver.place_between(t, ra, rb, alpha);
                             FrameCost::default()
                         }
-                        _ => solver.frame(t, b_ref)?,
+                        None => {
+                            let cost = solver.frame(t, b_ref)?;
+                            rad.insert(k, solver.shared_radiosity());
+                            cost
+                        }
                     };
-                    let key = |j: Option<usize>| {
-                        let f = keys.get(j?)?;
-                        Some((*f as f64, key_values.get(f)?))
-                    };
-                    let between = key(Some(i - 1)).zip(key(Some(i))).map(|(a, b)| Between {
-                        before: key(i.checked_sub(2)),
+                    let known = |f: Option<usize>| Some((f? as f64, values.get(&f?)?));
+                    let between = known(Some(lo)).zip(known(Some(hi))).map(|(a, b)| Between {
+                        before: known(before(lo, hi)),
                         a,
                         b,
                         t: k as f64,
                         tol: interp_tol,
                     });
-                    let r = solver.reconstruct_between(between.as_ref());
-                    (cost, r.leaves.into(), r.gathered, r.interpolated)
+                    (cost, solver.reconstruct_between(between.as_ref()))
                 }
             };
+            let (gathered, interpolated) = (r.gathered, r.interpolated);
+            // The frame's cells are shared by the time merge and its values (which
+            // later frames interpolate where the frame did not gather).
+            let cells: Arc<[Leaf]> = r.leaves.into();
+            values.insert(k, r.values.with_cells(cells.clone()));
             // The frame's gathers leave the heaps fragmented (ACTOR, out of core:
             // 6 MB less resident at the end of a window).
             super::release_free_memory();
@@ -865,27 +927,51 @@ mod tests {
         assert_eq!(key_frames(3, 1), [0, 1, 2]);
         assert_eq!(key_frames(1, 4), [0]);
         assert_eq!(key_frames(0, 4), Vec::<usize>::new());
-        for (n, stride) in [(26, 4), (25, 8), (5, 2), (1, 3), (7, 1)] {
+        // Bisection: the midpoint between the keyframes first, then each half's.
+        let frames = |o: &[Step]| o.iter().map(|s| s.frame).collect::<Vec<_>>();
+        assert_eq!(
+            frames(&solve_order(&[0, 4, 8])),
+            [0, 4, 2, 1, 3, 8, 6, 5, 7]
+        );
+        assert_eq!(frames(&solve_order(&[0, 8])), [0, 8, 4, 2, 1, 3, 6, 5, 7]);
+        assert_eq!(before(4, 6), Some(2));
+        assert_eq!(before(0, 4), None);
+        for (n, stride) in [(26, 4), (25, 8), (5, 2), (1, 3), (7, 1), (26, 7), (40, 16)] {
             let keys = key_frames(n, stride);
             let order = solve_order(&keys);
             // Every frame once.
-            let mut sorted = order.clone();
+            let mut sorted = frames(&order);
             sorted.sort_unstable();
             assert_eq!(sorted, (0..n).collect::<Vec<_>>(), "n {n}, stride {stride}");
-            // A frame between keyframes comes after the keyframes before it and the
-            // one ending its interval, and before the next keyframe is solved.
-            let at = |f: usize| order.iter().position(|&x| x == f).unwrap_or(usize::MAX);
-            for f in 0..n {
-                if let Err(i) = keys.binary_search(&f) {
-                    for key in &keys[..=i] {
-                        assert!(at(*key) < at(f), "n {n}, stride {stride}: {key} before {f}");
-                    }
-                    if let Some(&next) = keys.get(i + 1) {
+            let at = |f: usize| {
+                order
+                    .iter()
+                    .position(|s| s.frame == f)
+                    .unwrap_or(usize::MAX)
+            };
+            for (i, step) in order.iter().enumerate() {
+                let f = step.frame;
+                match (keys.binary_search(&f), step.brackets) {
+                    (Ok(_), None) => {}
+                    (Err(k), Some((lo, hi))) => {
+                        // Between the keyframes of its interval, after both...
+                        assert!(keys[k - 1] <= lo && lo < f && f < hi && hi <= keys[k]);
+                        assert!(at(lo) < i && at(hi) < i, "n {n}, stride {stride}: {f}");
+                        // ...and the nearest frames solved so far on either side.
                         assert!(
-                            at(f) < at(next),
-                            "n {n}, stride {stride}: {f} before {next}"
+                            order[..i].iter().all(|s| s.frame <= lo || s.frame >= hi),
+                            "n {n}, stride {stride}: {f} in ({lo}, {hi})"
                         );
+                        // Its look-back frame is solved before it too.
+                        if let Some(p) = before(lo, hi) {
+                            assert!(at(p) < i, "n {n}, stride {stride}: {p} before {f}");
+                        }
+                        // Solved before the next keyframe.
+                        if let Some(&next) = keys.get(k + 1) {
+                            assert!(i < at(next), "n {n}, stride {stride}: {f} before {next}");
+                        }
                     }
+                    other => panic!("n {n}, stride {stride}: frame {f} is {other:?}"),
                 }
             }
         }
