@@ -1796,10 +1796,10 @@ impl<'a> Solver<'a> {
     /// Places the moving objects at `t` (inside the current window) without solving:
     /// the hierarchy of the last frame solved stays, and the radiosity of the
     /// window's own elements (those every frame of the window shares) is set to
-    /// `B_a + alpha · (B_b − B_a)` between two earlier frames' values `a` and `b`
-    /// ([`Solver::shared_radiosity`]; `b` is the last frame solved). The elements
-    /// that frame refined keep its values. For the gathers of a frame between two
-    /// keyframes ([`spacetime`]).
+    /// `B_a + alpha · (B_b − B_a)` between two solved frames' values `a` and `b`
+    /// ([`Solver::shared_radiosity`]; the solved frames nearest `t` on either
+    /// side). The elements the last frame solved refined keep its values. For the
+    /// gathers of a frame between two keyframes ([`spacetime`]).
     pub fn place_between(&mut self, t: f64, a: &SharedRadiosity, b: &SharedRadiosity, alpha: f64) {
         let n = a.b.len().min(b.b.len()).min(self.elems.len());
         let lerp =
