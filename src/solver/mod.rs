@@ -569,7 +569,7 @@ impl Window {
     /// table's control byte, over its capacity.
     fn rows_bytes(&self) -> usize {
         self.rows.capacity() * (std::mem::size_of::<((u32, u32), (f32, f32))>() + 1)
-            + self.opened.capacity() * (std::mem::size_of::<((u32, u32), Box<[(u32, f64)]>)>() + 1)
+            + self.opened.capacity() * (std::mem::size_of::<((u32, u32), RowEntries)>() + 1)
             + self.opened_entries * std::mem::size_of::<(u32, f64)>()
     }
 }
@@ -3616,7 +3616,7 @@ mod tests {
         for t in [0.0, 0.04, 0.08] {
             s.frame(t, b_ref).unwrap();
         }
-        // Reused at this frame: kept and not refined under by it.
+        // Kept entries this frame reuses (none of them under its refinement).
         let reused = s.window.as_ref().map_or(0, |w| {
             w.opened
                 .values()
