@@ -30,8 +30,11 @@
 //!    re-evaluates and refines the varying links only (so the hierarchy near a moving
 //!    object is as fine as this frame needs, not the union over the window), and
 //!    solves the leaf system warm-started from the previous frame. Constant links
-//!    keep their coefficients, leaf-row coefficients and final-gather terms for the
-//!    whole window. A static point gathering from a static source through a swept
+//!    keep their coefficients, leaf-row coefficients (with the entries they open
+//!    into) and final-gather terms for the whole window; a varying link between
+//!    static ends of the base keeps its leaf-row coefficient for the frames where no
+//!    moving object is near both ends (its rays then meet the same static geometry
+//!    with the same keys). A static point gathering from a static source through a swept
 //!    box keeps the static half of every ray (a mask, [`crate::oracle::static_clear_mask`])
 //!    and re-casts it against the moving objects only, and only when one of them is
 //!    between the point and the source at that frame. The kept terms are flat
