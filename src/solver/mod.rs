@@ -2345,12 +2345,13 @@ impl<'a> Solver<'a> {
                     // emission), which changes from round to round and frame to
                     // frame; it costs no rays to recompute.
                     let cluster_source = gs.patch == u32::MAX;
-                    let cacheable = !leaf_moving
-                        && !cluster_source
-                        && !t.varying()
+                    // Static leaf and link of the window's base: what the window's
+                    // caches key on.
+                    let static_base = !leaf_moving
                         && self.window.as_ref().is_some_and(|w| {
                             leaf.ix() < w.frame.elems_len && (l as usize) < w.frame.links_len
                         });
+                    let cacheable = static_base && !cluster_source && !t.varying();
                     if let Some(&(c, v)) = cache
                         .filter(|_| cacheable)
                         .and_then(|c| c.get(&(leaf.0, l)))
@@ -2385,11 +2386,8 @@ impl<'a> Solver<'a> {
                         // box of both ends now, casts only at static geometry with
                         // the same keys as at any other such frame.
                         let steady = hidden.is_some()
-                            && !leaf_moving
+                            && static_base
                             && !self.elem_moving(ElementId(s))
-                            && self.window.as_ref().is_some_and(|w| {
-                                leaf.ix() < w.frame.elems_len && (l as usize) < w.frame.links_len
-                            })
                             && self.clear_of_moving(&geoms[leaf.ix()], gs);
                         match hidden.filter(|_| steady).and_then(|h| h.get(&(leaf.0, l))) {
                             Some(&cv) => cv,
