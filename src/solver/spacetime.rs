@@ -33,8 +33,9 @@
 //!    keep their coefficients, leaf-row coefficients (with the entries they open
 //!    into) and final-gather terms for the whole window; a varying link between
 //!    static ends of the base keeps its leaf-row coefficient for the frames where no
-//!    moving object is near both ends (its rays then meet the same static geometry
-//!    with the same keys). A static point gathering from a static source through a swept
+//!    moving object's box meets the shaft between the ends (its rays then meet the
+//!    same static geometry with the same keys), and a static leaf of the base keeps
+//!    its factors to the static elements its sources open into. A static point gathering from a static source through a swept
 //!    box keeps the static half of every ray (a mask, [`crate::oracle::static_clear_mask`])
 //!    and re-casts it against the moving objects only, and only when one of them is
 //!    between the point and the source at that frame. The kept terms are flat
