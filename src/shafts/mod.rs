@@ -153,6 +153,62 @@ impl Shaft {
     }
 }
 
+/// True if the segment `p q` runs through the box `[lo, hi]` shrunk by `margin` on
+/// every side (a slab test), at a place at least `margin` in front of both planes
+/// `ends` (`(n, d)`, front is `n · x > d`). When `p` and `q` lie on the two polygons
+/// of a shaft (their centroids, say) and `ends` are the polygons' planes, the shaft
+/// then meets the box whatever its hull planes, so [`Shaft::misses_box`] is false:
+/// a caller that only needs that answer need not build the shaft. (A shaft ignores
+/// what lies behind either polygon, hence the planes.) `margin` above the shaft's
+/// tolerance (`1e-9` of its box's diagonal) keeps the answer exactly the one
+/// `misses_box` gives.
+pub fn segment_crosses_box(
+    p: DVec3,
+    q: DVec3,
+    lo: DVec3,
+    hi: DVec3,
+    ends: [(DVec3, f64); 2],
+    margin: f64,
+) -> bool {
+    let (lo, hi) = (lo + DVec3::splat(margin), hi - DVec3::splat(margin));
+    let d = q - p;
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    // In front of each end plane by `margin`: n·p + t n·d >= e + margin.
+    for (n, e) in ends {
+        let (at, slope) = (n.dot(p) - e - margin, n.dot(d));
+        if slope == 0.0 {
+            if at < 0.0 {
+                return false;
+            }
+        } else if slope > 0.0 {
+            t0 = t0.max(-at / slope);
+        } else {
+            t1 = t1.min(-at / slope);
+        }
+    }
+    if t0 > t1 {
+        return false;
+    }
+    for k in 0..3 {
+        if lo[k] > hi[k] {
+            return false;
+        }
+        if d[k] == 0.0 {
+            if p[k] < lo[k] || p[k] > hi[k] {
+                return false;
+            }
+            continue;
+        }
+        let (a, b) = ((lo[k] - p[k]) / d[k], (hi[k] - p[k]) / d[k]);
+        t0 = t0.max(a.min(b));
+        t1 = t1.min(a.max(b));
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -219,5 +275,97 @@ mod tests {
             DVec3::new(0.5, 0.6, 0.5),
         ];
         assert!(!s.culls(&on));
+    }
+
+    #[test]
+    fn a_box_the_centres_segment_crosses_is_never_missed() {
+        // Random quads and boxes: wherever the segment between the quads' centroids
+        // runs through a box, the shaft must not miss it (the shortcut callers take
+        // before building a shaft); and the shortcut must fire on a fair share.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let quad = |z: f64, up: bool, rnd: &mut dyn FnMut() -> f64| {
+            let (x, y, w) = (rnd() * 4.0, rnd() * 4.0, 0.2 + rnd());
+            let mut q = square(0.0, up);
+            for v in &mut q {
+                *v = DVec3::new(x + v.x * w, y + v.y * w, z);
+            }
+            q
+        };
+        let (mut crossed, mut missed_elsewhere) = (0, 0);
+        for i in 0..4000 {
+            let a = quad(0.0, true, &mut rnd);
+            // Half the pairs face each other; in the other half `b` stands upright
+            // beside `a`, partly behind `a`'s plane, where a shaft ignores boxes.
+            let (b, nb) = if i % 2 == 0 {
+                (quad(2.0 + rnd() * 2.0, false, &mut rnd), -DVec3::Z)
+            } else {
+                let (x, y, z, w) = (5.0 + rnd(), rnd() * 4.0, rnd() - 0.9, 0.2 + rnd());
+                let b = vec![
+                    DVec3::new(x, y, z),
+                    DVec3::new(x, y, z + w),
+                    DVec3::new(x, y + w, z + w),
+                    DVec3::new(x, y + w, z),
+                ];
+                (b, -DVec3::X)
+            };
+            let s = Shaft::new(&a, DVec3::Z, &b, nb);
+            let c = |p: &[DVec3]| p.iter().sum::<DVec3>() / p.len() as f64;
+            // Boxes about the segment: some across it, some beside it.
+            let on = c(&a).lerp(c(&b), rnd());
+            let lo = on - DVec3::new(rnd(), rnd(), rnd()) * 0.8;
+            let hi = lo + DVec3::new(0.05 + rnd(), 0.05 + rnd(), 0.05 + rnd());
+            let ends = [(DVec3::Z, 0.0), (nb, nb.dot(b[0]))];
+            if segment_crosses_box(c(&a), c(&b), lo, hi, ends, 1e-6) {
+                crossed += 1;
+                assert!(
+                    !s.misses_box(lo, hi),
+                    "box {lo} {hi} between {a:?} and {b:?}"
+                );
+            } else {
+                missed_elsewhere += s.misses_box(lo, hi) as u32;
+            }
+        }
+        // Measured 1 339 crossed, 1 199 of the rest missed.
+        assert!(
+            crossed > 1000 && missed_elsewhere > 800,
+            "{crossed} crossed, {missed_elsewhere} missed"
+        );
+        // On the box's face (within the margin) it does not count, nor does a box
+        // behind an end.
+        let x = DVec3::new(0.0, 0.5, 0.5);
+        let open = [(DVec3::X, -1.0), (-DVec3::X, -2.0)];
+        let face = DVec3::new(0.0, 0.5, 0.5);
+        assert!(!segment_crosses_box(
+            x,
+            x + DVec3::X,
+            face,
+            DVec3::ONE,
+            open,
+            1e-6
+        ));
+        let inner = DVec3::new(0.0, 0.4, 0.4);
+        assert!(segment_crosses_box(
+            x,
+            x + DVec3::X,
+            inner,
+            DVec3::ONE,
+            open,
+            1e-6
+        ));
+        let behind = [(DVec3::X, 0.99), (-DVec3::X, -2.0)];
+        assert!(!segment_crosses_box(
+            x,
+            x + DVec3::X,
+            inner,
+            DVec3::new(0.9, 1.0, 1.0),
+            behind,
+            1e-6
+        ));
     }
 }

@@ -661,6 +661,12 @@ impl Terms {
     }
 }
 
+/// How far inside a box (a fraction of the diagonal of the two ends' box) the
+/// segment between two ends' centres must run to decide that a shaft between
+/// them meets the box without building it ([`crate::shafts::segment_crosses_box`]):
+/// 1000 times the shaft's own tolerance, so the answer is the shaft's.
+const SHAFT_SHORTCUT_MARGIN: f64 = 1e-6;
+
 /// True if nothing inside the boxes `swept` can lie between the point `x` (normal
 /// `n`) and element `g` (the convex hull of the point and a surface element, or the
 /// box around the point and a cluster).
@@ -682,6 +688,17 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
     let overlaps = |&(a, b): &(DVec3, DVec3)| (0..3).all(|k| b[k] >= lo[k] && a[k] <= hi[k]);
     if !swept.iter().any(overlaps) {
         return true;
+    }
+    // A box on the line from the point to the element's centre meets the shaft.
+    let centre = corners[..k].iter().sum::<DVec3>() / k as f64;
+    let ng = DVec3::from_array(g.normal);
+    let ends = [(n, n.dot(x)), (ng, ng.dot(corners[0]))];
+    let margin = SHAFT_SHORTCUT_MARGIN * (hi - lo).length();
+    if swept
+        .iter()
+        .any(|&(a, b)| crate::shafts::segment_crosses_box(x, centre, a, b, ends, margin))
+    {
+        return false;
     }
     let shaft = crate::shafts::Shaft::new(&[x], n, &corners[..k], DVec3::from_array(g.normal));
     swept.iter().all(|&(lo, hi)| shaft.misses_box(lo, hi))
@@ -2331,6 +2348,22 @@ impl<'a> Solver<'a> {
                 .map(|c| DVec3::from_array(*c))
                 .collect()
         };
+        // A moving box on the line between the centres meets the shaft: no need
+        // to build it (ACTOR's actors stand between many pairs).
+        let centre = |g: &Geom| corners(g).iter().sum::<DVec3>() / g.n as f64;
+        let plane = |g: &Geom| {
+            let n = DVec3::from_array(g.normal);
+            (n, n.dot(DVec3::from_array(g.corners[0])))
+        };
+        let (ca, cb, ends) = (centre(a), centre(b), [plane(a), plane(b)]);
+        let margin = SHAFT_SHORTCUT_MARGIN * (hi - lo).length();
+        if self
+            .moving_now
+            .iter()
+            .any(|m| crate::shafts::segment_crosses_box(ca, cb, m.0, m.1, ends, margin))
+        {
+            return false;
+        }
         let shaft = crate::shafts::Shaft::new(
             &corners(a),
             DVec3::from_array(a.normal),
