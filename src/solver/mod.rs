@@ -2342,20 +2342,18 @@ impl<'a> Solver<'a> {
         if self.moving_now.iter().all(apart) {
             return true;
         }
-        let corners = |g: &Geom| -> Vec<DVec3> {
-            g.corners[..g.n as usize]
-                .iter()
-                .map(|c| DVec3::from_array(*c))
-                .collect()
-        };
+        let corners =
+            |g: &Geom| -> [DVec3; 4] { std::array::from_fn(|i| DVec3::from_array(g.corners[i])) };
+        let (pa, pb) = (corners(a), corners(b));
+        let (pa, pb) = (&pa[..a.n as usize], &pb[..b.n as usize]);
         // A moving box on the line between the centres meets the shaft: no need
         // to build it (ACTOR's actors stand between many pairs).
-        let centre = |g: &Geom| corners(g).iter().sum::<DVec3>() / g.n as f64;
-        let plane = |g: &Geom| {
+        let centre = |p: &[DVec3]| p.iter().sum::<DVec3>() / p.len() as f64;
+        let plane = |g: &Geom, p: &[DVec3]| {
             let n = DVec3::from_array(g.normal);
-            (n, n.dot(DVec3::from_array(g.corners[0])))
+            (n, n.dot(p[0]))
         };
-        let (ca, cb, ends) = (centre(a), centre(b), [plane(a), plane(b)]);
+        let (ca, cb, ends) = (centre(pa), centre(pb), [plane(a, pa), plane(b, pb)]);
         let margin = SHAFT_SHORTCUT_MARGIN * (hi - lo).length();
         if self
             .moving_now
@@ -2365,9 +2363,9 @@ impl<'a> Solver<'a> {
             return false;
         }
         let shaft = crate::shafts::Shaft::new(
-            &corners(a),
+            pa,
             DVec3::from_array(a.normal),
-            &corners(b),
+            pb,
             DVec3::from_array(b.normal),
         );
         self.moving_now
