@@ -562,9 +562,10 @@ struct Window {
     /// Entries held by [`Window::opened`].
     opened_entries: usize,
     /// Leaf-row `(F, visible fraction)` of varying links between static ends of
-    /// the window's base, computed at a frame with no moving object in the box of
-    /// both ends: at any such frame their rays meet static geometry only, with the
-    /// same keys, so the value is the same bit for bit.
+    /// the window's base, computed at a frame with no moving object's box in the
+    /// shaft between the ends ([`Solver::clear_of_moving`]): at any such frame their
+    /// rays meet static geometry only, with the same keys, so the value is the same
+    /// bit for bit.
     hidden: HashMap<(u32, u32), (f64, f64)>,
     /// Exact factors `Σ_q w_q F(x_q → e)` from a static leaf of the window's base to
     /// a static element `e` of the base that a source of its row opens into
@@ -2325,9 +2326,11 @@ impl<'a> Solver<'a> {
     /// surface elements `a` and `b` (Haines & Wallace; [`crate::shafts::Shaft`]),
     /// which holds every segment between them and so every ray of a leaf row
     /// between them: their rays then meet static geometry only. The box of both
-    /// ends is tried first (most moving boxes miss it); a box that meets it is
-    /// tried against the shaft's hull planes, which clears the leaves whose view
-    /// of a lamp passes beside a moving object inside that box.
+    /// ends is tried first (most moving boxes miss it); then the line between the
+    /// ends' centres ([`crate::shafts::segment_crosses_box`]: a box it runs through
+    /// meets the shaft); only then is the shaft built, and its hull planes clear
+    /// the leaves whose view of a lamp passes beside a moving object inside the
+    /// box of both ends.
     fn clear_of_moving(&self, a: &Geom, b: &Geom) -> bool {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -2501,9 +2504,9 @@ impl<'a> Solver<'a> {
                     } else {
                         // Partly hidden: visibility from the leaf's own points, not
                         // the ancestor's average. A varying link between static
-                        // ends of the window's base, with no moving object in the
-                        // box of both ends now, casts only at static geometry with
-                        // the same keys as at any other such frame.
+                        // ends of the window's base, with no moving object's box in
+                        // the shaft between the ends now, casts only at static
+                        // geometry with the same keys as at any other such frame.
                         let steady = hidden.is_some()
                             && static_base
                             && !self.elem_moving(ElementId(s))
