@@ -153,6 +153,50 @@ impl Shaft {
     }
 }
 
+/// How far inside a box (a fraction of the diagonal of the two ends' box) the
+/// segment between two ends' centres must run for [`clear_of_boxes`] to decide that
+/// the shaft between them meets the box without building it: 1000 times the
+/// shaft's own tolerance, so the answer is the shaft's.
+const SHORTCUT_MARGIN: f64 = 1e-6;
+
+/// True if no box of `boxes` can lie on a segment between the polygons `a` and `b`
+/// (corners in order, unit normals `na`, `nb`; `a` may be a single point, seen
+/// from the side `na` faces). Decided as cheaply as it can be: boxes that miss the
+/// box of both ends need nothing more (most of them, for the current boxes of the
+/// moving objects); a box on the line between the two centres, in front of both
+/// ends, meets the shaft ([`segment_crosses_box`]); only then is the [`Shaft`]
+/// built and every box tried against it ([`Shaft::misses_box`]).
+pub fn clear_of_boxes(
+    a: &[DVec3],
+    na: DVec3,
+    b: &[DVec3],
+    nb: DVec3,
+    boxes: &[(DVec3, DVec3)],
+) -> bool {
+    let (lo, hi) = a
+        .iter()
+        .chain(b)
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &c| {
+            (lo.min(c), hi.max(c))
+        });
+    let overlaps = |&(l, h): &(DVec3, DVec3)| (0..3).all(|k| h[k] >= lo[k] && l[k] <= hi[k]);
+    if !boxes.iter().any(overlaps) {
+        return true;
+    }
+    let centre = |p: &[DVec3]| p.iter().sum::<DVec3>() / p.len() as f64;
+    let ends = [(na, na.dot(a[0])), (nb, nb.dot(b[0]))];
+    let margin = SHORTCUT_MARGIN * (hi - lo).length();
+    let (ca, cb) = (centre(a), centre(b));
+    if boxes
+        .iter()
+        .any(|&(l, h)| segment_crosses_box(ca, cb, l, h, ends, margin))
+    {
+        return false;
+    }
+    let shaft = Shaft::new(a, na, b, nb);
+    boxes.iter().all(|&(l, h)| shaft.misses_box(l, h))
+}
+
 /// True if the segment `p q` runs through the box `[lo, hi]` shrunk by `margin` on
 /// every side (a slab test), at a place at least `margin` in front of both planes
 /// `ends` (`(n, d)`, front is `n · x > d`). When `p` and `q` lie on the two polygons

@@ -662,12 +662,6 @@ impl Terms {
     }
 }
 
-/// How far inside a box (a fraction of the diagonal of the two ends' box) the
-/// segment between two ends' centres must run to decide that a shaft between
-/// them meets the box without building it ([`crate::shafts::segment_crosses_box`]):
-/// 1000 times the shaft's own tolerance, so the answer is the shaft's.
-const SHAFT_SHORTCUT_MARGIN: f64 = 1e-6;
-
 /// True if nothing inside the boxes `swept` can lie between the point `x` (normal
 /// `n`) and element `g` (the convex hull of the point and a surface element, or the
 /// box around the point and a cluster).
@@ -681,28 +675,7 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
     }
     let k = g.n as usize;
     let corners: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(g.corners[i.min(k - 1)]));
-    // The shaft lies in the box of the point and the element: boxes that miss it
-    // need no shaft (most of them, for the current boxes of the moving objects).
-    let (lo, hi) = corners[..k]
-        .iter()
-        .fold((x, x), |(lo, hi), &c| (lo.min(c), hi.max(c)));
-    let overlaps = |&(a, b): &(DVec3, DVec3)| (0..3).all(|k| b[k] >= lo[k] && a[k] <= hi[k]);
-    if !swept.iter().any(overlaps) {
-        return true;
-    }
-    // A box on the line from the point to the element's centre meets the shaft.
-    let centre = corners[..k].iter().sum::<DVec3>() / k as f64;
-    let ng = DVec3::from_array(g.normal);
-    let ends = [(n, n.dot(x)), (ng, ng.dot(corners[0]))];
-    let margin = SHAFT_SHORTCUT_MARGIN * (hi - lo).length();
-    if swept
-        .iter()
-        .any(|&(a, b)| crate::shafts::segment_crosses_box(x, centre, a, b, ends, margin))
-    {
-        return false;
-    }
-    let shaft = crate::shafts::Shaft::new(&[x], n, &corners[..k], DVec3::from_array(g.normal));
-    swept.iter().all(|&(lo, hi)| shaft.misses_box(lo, hi))
+    crate::shafts::clear_of_boxes(&[x], n, &corners[..k], DVec3::from_array(g.normal), swept)
 }
 
 /// Points gathered in parallel at a time by the reconstruction: enough to keep the
@@ -2306,8 +2279,9 @@ impl<'a> Solver<'a> {
                     .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
                     .sum::<f64>()
             };
-            let steady = (ch as usize) < base_len && !self.elem_moving(ElementId(ch));
-            let f = match memo.as_deref_mut().filter(|_| steady) {
+            // Asked only with a memo: a static scene or a moving leaf pays nothing.
+            let steady = || (ch as usize) < base_len && !self.elem_moving(ElementId(ch));
+            let f = match memo.as_deref_mut().filter(|_| steady()) {
                 Some(m) => match m.kept.get(&(m.leaf, ch)) {
                     Some(&f) => f,
                     None => {
@@ -2325,55 +2299,21 @@ impl<'a> Solver<'a> {
     /// True if no moving object's box (where it is now) meets the shaft between the
     /// surface elements `a` and `b` (Haines & Wallace; [`crate::shafts::Shaft`]),
     /// which holds every segment between them and so every ray of a leaf row
-    /// between them: their rays then meet static geometry only. The box of both
-    /// ends is tried first (most moving boxes miss it); then the line between the
-    /// ends' centres ([`crate::shafts::segment_crosses_box`]: a box it runs through
-    /// meets the shaft); only then is the shaft built, and its hull planes clear
-    /// the leaves whose view of a lamp passes beside a moving object inside the
-    /// box of both ends.
+    /// between them: their rays then meet static geometry only
+    /// ([`crate::shafts::clear_of_boxes`]: the box of both ends, the line between
+    /// their centres, then the shaft, whose hull planes clear the leaves whose view
+    /// of a lamp passes beside a moving object inside the box of both ends).
     fn clear_of_moving(&self, a: &Geom, b: &Geom) -> bool {
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for g in [a, b] {
-            for c in &g.corners[..g.n as usize] {
-                let p = DVec3::from_array(*c);
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
-        }
-        let apart = |(mlo, mhi): &(DVec3, DVec3)| mlo.cmpgt(hi).any() || mhi.cmplt(lo).any();
-        if self.moving_now.iter().all(apart) {
-            return true;
-        }
         let corners =
             |g: &Geom| -> [DVec3; 4] { std::array::from_fn(|i| DVec3::from_array(g.corners[i])) };
         let (pa, pb) = (corners(a), corners(b));
-        let (pa, pb) = (&pa[..a.n as usize], &pb[..b.n as usize]);
-        // A moving box on the line between the centres meets the shaft: no need
-        // to build it (ACTOR's actors stand between many pairs).
-        let centre = |p: &[DVec3]| p.iter().sum::<DVec3>() / p.len() as f64;
-        let plane = |g: &Geom, p: &[DVec3]| {
-            let n = DVec3::from_array(g.normal);
-            (n, n.dot(p[0]))
-        };
-        let (ca, cb, ends) = (centre(pa), centre(pb), [plane(a, pa), plane(b, pb)]);
-        let margin = SHAFT_SHORTCUT_MARGIN * (hi - lo).length();
-        if self
-            .moving_now
-            .iter()
-            .any(|m| crate::shafts::segment_crosses_box(ca, cb, m.0, m.1, ends, margin))
-        {
-            return false;
-        }
-        let shaft = crate::shafts::Shaft::new(
-            pa,
+        crate::shafts::clear_of_boxes(
+            &pa[..a.n as usize],
             DVec3::from_array(a.normal),
-            pb,
+            &pb[..b.n as usize],
             DVec3::from_array(b.normal),
-        );
-        self.moving_now
-            .iter()
-            .all(|m| apart(m) || shaft.misses_box(m.0, m.1))
+            &self.moving_now,
+        )
     }
 
     /// True if opening a source again would give `entries` again: each is an
