@@ -291,7 +291,15 @@ fn a_flat_emitter_cluster_radiates_like_its_surface() {
         (2, DVec3::new(0.0, 3.0, 0.0), DVec3::NEG_Y),
     ] {
         let r = root_of(object);
-        let ev = oracle::evaluate(&s.elems, &s.bvh, r, lamp, &set, 1e-9);
+        let ev = oracle::evaluate(
+            &s.elems,
+            &s.bvh,
+            r,
+            lamp,
+            [r.0 as u64, lamp.0 as u64],
+            &set,
+            1e-9,
+        );
         assert!(!ev.empty);
         let exact = point_to_polygon(x, n, &whole);
         let (f, spread) = (ev.transport.f as f64, ev.transport.spread as f64);

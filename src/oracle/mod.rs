@@ -310,12 +310,16 @@ fn cluster_factor(area_s: f64, cr: f64, cs: f64, d2: f64) -> f64 {
     area_s * cr * cs / (std::f64::consts::PI * d2)
 }
 
-/// Evaluates the link receiver `r` ← source `s`.
+/// Evaluates the link receiver `r` ← source `s`. `ids` are what the rays' jitter
+/// is hashed from for the two ends: their element ids, or in a space-time window
+/// keys that follow the elements' geometry, so that an element a frame makes again
+/// casts the same rays at every frame (`Solver::ray_id`).
 pub fn evaluate(
     elems: &ElementPool,
     bvh: &SceneBvh,
     r: ElementId,
     s: ElementId,
+    ids: [u64; 2],
     set: &EvalSettings,
     eps_len: f64,
 ) -> LinkEval {
@@ -340,7 +344,7 @@ pub fn evaluate(
         return empty;
     }
     if r_surface && s_surface {
-        return evaluate_surfaces(gr, gs, bvh, r, s, set);
+        return evaluate_surfaces(gr, gs, bvh, ids, set);
     }
     // A cluster is involved: isotropic estimate, error = whole transport.
     let (cr_c, rr) = sphere(gr);
@@ -384,7 +388,7 @@ pub fn evaluate(
     // Visibility by rays between the ends' surfaces; the spread keeps the unoccluded
     // bound (see module docs).
     let (mut vis, mut rays) = (1.0, 0);
-    let key = hash3(set.seed ^ 0xc105, r.0 as u64, s.0 as u64);
+    let key = hash3(set.seed ^ 0xc105, ids[0], ids[1]);
     if f > 0.0 {
         (vis, rays) = cluster_visibility(
             elems,
@@ -623,8 +627,7 @@ fn evaluate_surfaces(
     gr: &Geom,
     gs: &Geom,
     bvh: &SceneBvh,
-    r: ElementId,
-    s: ElementId,
+    ids: [u64; 2],
     set: &EvalSettings,
 ) -> LinkEval {
     let nr = DVec3::from_array(gr.normal);
@@ -667,7 +670,7 @@ fn evaluate_surfaces(
     let mut vq = [0.0f64; 4];
     let mut rays = 0;
     for (i, (v, &x)) in vq.iter_mut().zip(&q.points).take(q.count).enumerate() {
-        let key = hash3(set.seed, r.0 as u64, (s.0 as u64) << 8 | i as u64);
+        let key = hash3(set.seed, ids[0], ids[1] << 8 | i as u64);
         *v = visible_fraction(bvh, x, nr, gs, &pols, ns, m, key, skip);
         rays += m;
     }

@@ -551,7 +551,8 @@ struct Window {
     /// True once the window's base is built: refinement now belongs to a frame.
     in_frame: bool,
     /// Leaf-row coefficients of constant links on static leaves: `(leaf, link) →
-    /// (F, visible fraction)`.
+    /// (F, visible fraction)`, keyed as [`Solver::row_key`] keys them (the leaves
+    /// and links a frame makes by what they stand for).
     rows: HashMap<(u32, u32), (f32, f32)>,
     /// The row entries a cached coefficient of [`Window::rows`] opens into when its
     /// source is opened ([`Solver::push_opened`]): the same children and factors at
@@ -561,19 +562,30 @@ struct Window {
     opened: HashMap<(u32, u32), RowEntries>,
     /// Entries held by [`Window::opened`].
     opened_entries: usize,
-    /// Leaf-row `(F, visible fraction)` of varying links between static ends of
-    /// the window's base, computed at a frame with no moving object's box in the
-    /// shaft between the ends ([`Solver::clear_of_moving`]): at any such frame their
+    /// Leaf-row `(F, visible fraction)` of varying links between static ends (a
+    /// static leaf or source a frame made too, [`Solver::row_key`]), computed at a
+    /// frame with no moving object's box in the shaft between the ends ([`Solver::clear_of_moving`]): at any such frame their
     /// rays meet static geometry only, with the same keys, so the value is the same
     /// bit for bit.
     hidden: HashMap<(u32, u32), (f64, f64)>,
-    /// Exact factors `Σ_q w_q F(x_q → e)` from a static leaf of the window's base to
-    /// a static element `e` of the base that a source of its row opens into
+    /// Exact factors `Σ_q w_q F(x_q → e)` from a static leaf (keyed by
+    /// [`Solver::stable_id`]) to a static element `e` of the window's base that a
+    /// source of its row opens into
     /// ([`Solver::push_opened`]): the geometry of both holds over the window, so the
     /// factor is the same bit for bit at every frame. Those of a varying link's
     /// source were computed again at every solved frame (LIGHT: 5.0 M of them over
     /// its 76 frames), where [`Window::opened`] keeps only a constant link's entries.
     factors: HashMap<(u32, u32), f64>,
+    /// Ids that the caches above key a frame's own elements by, which the next frame
+    /// makes again with other ids: `(element of the window's base, path of child
+    /// indices below it) → id` from [`FRAME_SID`] up ([`Solver::intern_frame_elements`]).
+    /// A static leaf a frame's refinement makes has the same geometry and casts the
+    /// same rays ([`Solver::ray_id`]) at every frame that makes it, so what the
+    /// caches hold for it holds at all of them.
+    stable: HashMap<(u32, u64), u32>,
+    /// This frame's elements past the window's base: their ids in [`Window::stable`]
+    /// (`u32::MAX`: too deep to key).
+    sids: Vec<u32>,
     /// Final-gather terms that hold over the window at static reconstruction points.
     /// `None` in the shared part's rounds (nothing is reconstructed there).
     points: std::sync::Mutex<Option<PointCache>>,
@@ -594,8 +606,18 @@ impl Window {
             + self.opened_entries * std::mem::size_of::<(u32, f64)>()
             + self.hidden.capacity() * (std::mem::size_of::<((u32, u32), (f64, f64))>() + 1)
             + self.factors.capacity() * (std::mem::size_of::<((u32, u32), f64)>() + 1)
+            + self.stable.capacity() * (std::mem::size_of::<((u32, u64), u32)>() + 1)
     }
 }
+
+/// First id [`Window::stable`] gives a frame's own elements: above every element id
+/// of a window's base (the pools hold far fewer), below the link keys' tag bit
+/// ([`Solver::row_key`]).
+const FRAME_SID: u32 = 1 << 30;
+
+/// Levels below the window's base a frame's element may lie and still get an id
+/// in [`Window::stable`] (3 bits a level under a sentinel bit, in 64).
+const MAX_FRAME_DEPTH: u32 = 20;
 
 /// Hands the heap pages freed by a collection, a released window or a frame's
 /// gathers back to the system: glibc keeps them mapped otherwise (the gathers' many
@@ -1050,6 +1072,7 @@ impl<'a> Solver<'a> {
                     &self.bvh,
                     root,
                     root,
+                    [u64::from(root.0); 2],
                     &self.settings(),
                     self.eps_len,
                 );
@@ -1400,7 +1423,9 @@ impl<'a> Solver<'a> {
             let evals: Vec<_> = pairs
                 .par_iter()
                 .map(|&(r, s)| {
-                    let ev = oracle::evaluate(&this.elems, &this.bvh, r, s, &set, this.eps_len);
+                    let ids = [this.ray_id(r.0), this.ray_id(s.0)];
+                    let ev =
+                        oracle::evaluate(&this.elems, &this.bvh, r, s, ids, &set, this.eps_len);
                     (ev, this.varying(r, s))
                 })
                 .collect();
@@ -1728,6 +1753,7 @@ impl<'a> Solver<'a> {
                     &this.bvh,
                     ElementId(e.receiver),
                     ElementId(e.source),
+                    [this.ray_id(e.receiver), this.ray_id(e.source)],
                     &set,
                     this.eps_len,
                 )
@@ -2206,13 +2232,18 @@ impl<'a> Solver<'a> {
         n: DVec3,
         i: u64,
     ) -> f64 {
+        let leaf_id = self.ray_id(leaf.0);
         let key = if i < 4 {
-            oracle::hash3(self.opts.seed ^ 0x1eaf, l as u64, (leaf.0 as u64) << 3 | i)
+            oracle::hash3(
+                self.opts.seed ^ 0x1eaf,
+                self.row_link_id(l, s),
+                leaf_id << 3 | i,
+            )
         } else {
             oracle::hash3(
                 self.opts.seed ^ 0x1eb0,
-                s as u64,
-                (leaf.0 as u64) << 5 | (i - 4),
+                self.ray_id(s),
+                leaf_id << 5 | (i - 4),
             )
         };
         let skip = [g.patch, gs.patch];
@@ -2239,7 +2270,7 @@ impl<'a> Solver<'a> {
     /// link is made. Cluster sources are not opened: their children would take the
     /// cluster's visibility average, which measured worse on cluttered scenes.
     ///
-    /// `memo`, for a static leaf of a window's base, holds the factors to static
+    /// `memo`, for a static leaf in a window's frame, holds the factors to static
     /// base elements already computed in the window ([`Window::factors`]): they are
     /// taken from it, and the new ones handed back in it.
     #[allow(clippy::too_many_arguments)]
@@ -2296,6 +2327,128 @@ impl<'a> Solver<'a> {
         }
     }
 
+    /// Element `e` as the path down to it from the nearest ancestor below `base`
+    /// (ids below `base` are their own ancestor): `(ancestor, path)`, the path a 1
+    /// followed by 3 bits per level (the child's index under its parent), and the
+    /// number of levels.
+    fn path_below(&self, e: u32, base: usize) -> (u32, u64, u32) {
+        let nodes = self.elems.nodes.as_slice();
+        let (mut x, mut path, mut depth) = (e, 1u64, 0u32);
+        while x as usize >= base {
+            let parent = nodes[x as usize].parent;
+            let index = x.wrapping_sub(nodes[parent as usize].first_child);
+            path = path.wrapping_shl(3) | u64::from(index.min(7));
+            depth += if index < 8 { 1 } else { MAX_FRAME_DEPTH + 1 };
+            x = parent;
+        }
+        (x, path, depth)
+    }
+
+    /// What the rays' jitter of element `e` is hashed from: its id outside a
+    /// space-time window and for the part all windows share, else its shared
+    /// ancestor and the path of child indices down to it. A window's and a frame's
+    /// refinement make elements again with other ids (each frame starts from the
+    /// window's base, each window from the shared part), with the same geometry
+    /// when they split the same element: keyed by the path, such an element casts
+    /// the same rays at every frame and in every window, so a static one gets the
+    /// same coefficients wherever nothing moves between it and its sources (the
+    /// caches of [`Window`] can then keep them), and its jitter does not flicker
+    /// from frame to frame.
+    fn ray_id(&self, e: u32) -> u64 {
+        let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
+        if shared == 0 || (e as usize) < shared {
+            return u64::from(e);
+        }
+        let (ancestor, path, _) = self.path_below(e, shared);
+        oracle::hash3(u64::from(ancestor), path, 0x5ab1e) | 1 << 63
+    }
+
+    /// Gives the elements a frame's refinement made (past the window's base) their
+    /// ids in [`Window::stable`], for the caches of the leaf rows.
+    fn intern_frame_elements(&mut self) {
+        let Some(base) = self
+            .window
+            .as_ref()
+            .filter(|w| w.in_frame)
+            .map(|w| w.frame.elems_len)
+        else {
+            return;
+        };
+        let keys: Vec<Option<(u32, u64)>> = (base..self.elems.len())
+            .map(|e| {
+                let (ancestor, path, depth) = self.path_below(e as u32, base);
+                (depth <= MAX_FRAME_DEPTH).then_some((ancestor, path))
+            })
+            .collect();
+        if let Some(w) = self.window.as_mut() {
+            // Over the kept budget no new id is given: nothing new would be kept
+            // under it.
+            let admits = w
+                .points
+                .get_mut()
+                .map_or(true, |p| p.as_ref().is_none_or(PointCache::admits));
+            w.sids.clear();
+            for key in keys {
+                let next = FRAME_SID.saturating_add(w.stable.len() as u32);
+                let sid = match key {
+                    Some(k) if admits && next < 2 * FRAME_SID => *w.stable.entry(k).or_insert(next),
+                    Some(k) => w.stable.get(&k).copied().unwrap_or(u32::MAX),
+                    None => u32::MAX,
+                };
+                w.sids.push(sid);
+            }
+        }
+    }
+
+    /// The id the caches of a window key element `e` by: its own in the window's
+    /// base, [`Window::stable`]'s for a frame's element (`u32::MAX`: none).
+    fn stable_id(&self, e: u32) -> u32 {
+        match &self.window {
+            Some(w) if w.in_frame && (e as usize) >= w.frame.elems_len => w
+                .sids
+                .get(e as usize - w.frame.elems_len)
+                .copied()
+                .unwrap_or(u32::MAX),
+            _ => e,
+        }
+    }
+
+    /// The key of a static leaf's row entry for chain link `l` from source `s` in
+    /// the window's caches: `(leaf, link)` for a link of the window's base; a link
+    /// a frame made is keyed by its source (a leaf's chain links have distinct
+    /// sources), whose coefficient does not depend on the link's receiver
+    /// ([`Solver::row_link_id`]). `None` outside a frame, for a moving leaf, or
+    /// an element with no stable id.
+    fn row_key(&self, leaf: ElementId, l: u32, s: u32) -> Option<(u32, u32)> {
+        let w = self.window.as_ref().filter(|w| w.in_frame)?;
+        if self.elem_moving(leaf) {
+            return None;
+        }
+        let sl = self.stable_id(leaf.0);
+        let lk = if (l as usize) < w.frame.links_len {
+            l
+        } else {
+            let ss = self.stable_id(s);
+            if ss == u32::MAX {
+                return None;
+            }
+            1 << 31 | ss
+        };
+        (sl != u32::MAX).then_some((sl, lk))
+    }
+
+    /// What the row rays of chain link `l` (source `s`) hash their jitter from:
+    /// the link's id for a link of the shared part, else its source's
+    /// [`Solver::ray_id`] (a leaf's chain links have distinct sources).
+    fn row_link_id(&self, l: u32, s: u32) -> u64 {
+        let shared = self.window.as_ref().map_or(0, |w| w.base.links_len);
+        if shared == 0 || (l as usize) < shared {
+            u64::from(l)
+        } else {
+            self.ray_id(s) ^ 1 << 62
+        }
+    }
+
     /// True if no moving object's box (where it is now) meets the shaft between the
     /// surface elements `a` and `b` (Haines & Wallace; [`crate::shafts::Shaft`]),
     /// which holds every segment between them and so every ray of a leaf row
@@ -2332,6 +2485,7 @@ impl<'a> Solver<'a> {
     /// Leaf rows: every chain link's source with its coefficient re-integrated over
     /// the leaf (see module docs).
     fn compute_leaf_rows(&mut self) {
+        self.intern_frame_elements();
         let elems = &self.elems;
         let geoms = elems.geoms.as_slice();
         let ends = self.links.ends.as_slice();
@@ -2373,15 +2527,16 @@ impl<'a> Solver<'a> {
                 let mut fresh_opened = Vec::new();
                 let mut fresh_hidden = Vec::new();
                 let before = self.row_cache.get(&leaf.0).filter(|_| keep_rows);
-                // A static leaf of the window's base reuses the factors to the
-                // static base elements its sources open into.
-                let mut memo = factors
-                    .filter(|&(_, base_len)| !leaf_moving && leaf.ix() < base_len)
-                    .map(|(kept, _)| FactorMemo {
-                        leaf: leaf.0,
-                        kept,
-                        fresh: Vec::new(),
-                    });
+                // A static leaf (of the window's base or made again by this
+                // frame) reuses the factors to the static base elements its
+                // sources open into.
+                let leaf_sid =
+                    Some(self.stable_id(leaf.0)).filter(|&x| !leaf_moving && x != u32::MAX);
+                let mut memo = factors.zip(leaf_sid).map(|((kept, _), sid)| FactorMemo {
+                    leaf: sid,
+                    kept,
+                    fresh: Vec::new(),
+                });
                 for l in self.chain_links(leaf) {
                     let t = &tr[l as usize];
                     let s = ends[l as usize].source;
@@ -2407,20 +2562,15 @@ impl<'a> Solver<'a> {
                     // emission), which changes from round to round and frame to
                     // frame; it costs no rays to recompute.
                     let cluster_source = gs.patch == u32::MAX;
-                    // Static leaf and link of the window's base: what the window's
-                    // caches key on.
-                    let static_base = !leaf_moving
-                        && self.window.as_ref().is_some_and(|w| {
-                            leaf.ix() < w.frame.elems_len && (l as usize) < w.frame.links_len
-                        });
+                    // A static leaf in a frame, keyed as the window's caches key it
+                    // (a frame's own leaves and links by what they stand for).
+                    let key = self.row_key(leaf, l, s);
+                    let static_base = key.is_some();
                     let cacheable = static_base && !cluster_source && !t.varying();
-                    if let Some(&(c, v)) = cache
-                        .filter(|_| cacheable)
-                        .and_then(|c| c.get(&(leaf.0, l)))
-                    {
-                        if let Some(entries) = opened
-                            .and_then(|o| o.get(&(leaf.0, l)))
-                            .filter(|e| settled(e))
+                    let key = key.unwrap_or_default();
+                    if let Some(&(c, v)) = cache.filter(|_| cacheable).and_then(|c| c.get(&key)) {
+                        if let Some(entries) =
+                            opened.and_then(|o| o.get(&key)).filter(|e| settled(e))
                         {
                             row.extend_from_slice(entries);
                             continue;
@@ -2429,7 +2579,7 @@ impl<'a> Solver<'a> {
                         self.push_opened(&q, n, s, c as f64, v as f64, &mut row, memo.as_mut());
                         let entries = &row[at..];
                         if entries.len() > 1 && settled(entries) {
-                            fresh_opened.push(((leaf.0, l), entries.into()));
+                            fresh_opened.push((key, entries.into()));
                         }
                         continue;
                     }
@@ -2444,26 +2594,26 @@ impl<'a> Solver<'a> {
                     } else {
                         // Partly hidden: visibility from the leaf's own points, not
                         // the ancestor's average. A varying link between static
-                        // ends of the window's base, with no moving object's box in
-                        // the shaft between the ends now, casts only at static
-                        // geometry with the same keys as at any other such frame.
+                        // ends, with no moving object's box in the shaft between
+                        // the ends now, casts only at static geometry with the same
+                        // keys as at any other such frame (`ray_id`).
                         let steady = hidden.is_some()
                             && static_base
                             && !self.elem_moving(ElementId(s))
                             && self.clear_of_moving(&geoms[leaf.ix()], gs);
-                        match hidden.filter(|_| steady).and_then(|h| h.get(&(leaf.0, l))) {
+                        match hidden.filter(|_| steady).and_then(|h| h.get(&key)) {
                             Some(&cv) => cv,
                             None => {
                                 let cv = self.hidden_row_coef(leaf, l, s, &q, n);
                                 if steady {
-                                    fresh_hidden.push(((leaf.0, l), cv));
+                                    fresh_hidden.push((key, cv));
                                 }
                                 cv
                             }
                         }
                     };
                     if cache.is_some() && cacheable {
-                        fresh.push(((leaf.0, l), (coef as f32, vis as f32)));
+                        fresh.push((key, (coef as f32, vis as f32)));
                     }
                     // Rounded once, so a reused coefficient equals the first.
                     let coef = if keep_rows && !cluster_source {
@@ -2820,7 +2970,7 @@ impl<'a> Solver<'a> {
                     receiver_patch,
                     ch as usize,
                     clear,
-                    oracle::hash3(key, ch as u64, 1),
+                    oracle::hash3(key, self.ray_id(ch), 1),
                     swept,
                     limits,
                     out,
@@ -3011,7 +3161,7 @@ impl<'a> Solver<'a> {
                 continue;
             }
             terms.clear();
-            let key = oracle::hash3(self.opts.seed, s as u64, point_key);
+            let key = oracle::hash3(self.opts.seed, self.ray_id(s as u32), point_key);
             // A static source that can hand this point little light takes the
             // link's visibility instead of rays (see `faint`).
             let cheap = if self.has_motion() || clear || t.shaft_clear() {
@@ -3761,6 +3911,7 @@ mod tests {
             let reused: Vec<(&Geom, &Geom)> = w
                 .hidden
                 .keys()
+                .filter(|&&(leaf, l)| leaf < FRAME_SID && (l as usize) < w.frame.links_len)
                 .map(|&(leaf, l)| {
                     let src = s.links.ends.as_slice()[l as usize].source;
                     (&geoms[leaf as usize], &geoms[src as usize])
@@ -3779,6 +3930,16 @@ mod tests {
             "reused: {reused} opened entries, {steady} hidden coefficients ({by_planes} by the shaft's planes), {factors} factors"
         );
         assert!(factors > 1000, "{factors} opened factors kept");
+        // Entries kept for the leaves this frame's refinement made (keyed by their
+        // place under the window's base, made again by each frame with other ids).
+        let (own, own_hit) = s.window.as_ref().map_or((0, 0), |w| {
+            let now: std::collections::HashSet<u32> =
+                w.sids.iter().copied().filter(|&x| x != u32::MAX).collect();
+            let kept = w.rows.keys().chain(w.hidden.keys());
+            (now.len(), kept.filter(|k| now.contains(&k.0)).count())
+        });
+        eprintln!("this frame's own leaves: {own}, with {own_hit} kept coefficients");
+        assert!(own_hit > 300, "{own_hit} kept coefficients of frame leaves");
         // At one state (the rows a frame solved with are one step behind its end:
         // cluster sources' coefficients follow the radiosity the solve gave).
         s.compute_leaf_rows();
@@ -3795,6 +3956,86 @@ mod tests {
         assert_eq!(with.1, without.1);
         let bits = |c: &[f64]| c.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&with.2), bits(&without.2));
+        // The constant links' coefficients too (kept as f32, so equal to f32's
+        // rounding): a coefficient kept for a leaf a frame made is the one its
+        // leaf gets afresh.
+        if let Some(w) = s.window.as_mut() {
+            w.rows.clear();
+        }
+        s.compute_leaf_rows();
+        let fresh = rows(&s);
+        assert_eq!(with.1, fresh.1);
+        for (i, (a, b)) in with.2.iter().zip(&fresh.2).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-6 * b.abs(),
+                "entry {i}: kept {a}, fresh {b}"
+            );
+        }
+    }
+
+    #[test]
+    fn an_element_a_frame_makes_again_keeps_its_keys_under_another_id() {
+        // LIGHT: frames far apart refine around the board where it is, so the
+        // elements they both make (the same split of the same element) get other
+        // ids. What the rays and the caches key them by must not change, and
+        // different elements must not share it.
+        let scene = crate::scene::light_scene(75);
+        let opts = SolveOptions {
+            eps: 0.5,
+            ..SolveOptions::default()
+        };
+        let (t0, t1) = (scene.time.start, scene.time.end);
+        let mut s = Solver::at_time(&scene, opts, t0, [t0 as f32, t1 as f32]).unwrap();
+        s.run_shared(spacetime::swept_boxes(&scene, t0, t1), |_, _| {})
+            .unwrap();
+        let b_ref = s.radiosity_scale();
+        s.begin_window(spacetime::swept_boxes(&scene, t0, 1.0), b_ref)
+            .unwrap();
+        type Keys = HashMap<Vec<u64>, (u32, u64, u32)>;
+        let frame_keys = |s: &mut Solver, t: f64| -> Keys {
+            s.frame(t, b_ref).unwrap();
+            s.intern_frame_elements();
+            let base = s.window.as_ref().map_or(0, |w| w.frame.elems_len);
+            (base..s.elems.len())
+                .map(|e| {
+                    let g = &s.elems.geoms.as_slice()[e];
+                    let shape: Vec<u64> = g.corners[..g.n as usize]
+                        .iter()
+                        .flatten()
+                        .map(|c| c.to_bits())
+                        .chain([u64::from(g.patch)])
+                        .collect();
+                    let e = e as u32;
+                    (shape, (e, s.ray_id(e), s.stable_id(e)))
+                })
+                .collect()
+        };
+        let a = frame_keys(&mut s, 0.0);
+        let b = frame_keys(&mut s, 0.9);
+        let (mut same, mut moved) = (0, 0);
+        for (shape, &(ea, ra, sa)) in &a {
+            if let Some(&(eb, rb, sb)) = b.get(shape) {
+                same += 1;
+                moved += usize::from(ea != eb);
+                assert_eq!(
+                    (ra, sa),
+                    (rb, sb),
+                    "elements {ea} and {eb}: same place, other keys"
+                );
+            }
+        }
+        eprintln!(
+            "{} and {} frame elements, {same} in both, {moved} of them under another id",
+            a.len(),
+            b.len()
+        );
+        assert!(moved > 10, "{moved} elements made again under another id");
+        for keys in [&a, &b] {
+            let rays: std::collections::HashSet<u64> = keys.values().map(|k| k.1).collect();
+            let sids: std::collections::HashSet<u32> = keys.values().map(|k| k.2).collect();
+            assert_eq!(rays.len(), keys.len(), "two elements share a ray key");
+            assert_eq!(sids.len(), keys.len(), "two elements share a cache id");
+        }
     }
 
     #[test]

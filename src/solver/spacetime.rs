@@ -32,10 +32,15 @@
 //!    solves the leaf system warm-started from the previous frame. Constant links
 //!    keep their coefficients, leaf-row coefficients (with the entries they open
 //!    into) and final-gather terms for the whole window; a varying link between
-//!    static ends of the base keeps its leaf-row coefficient for the frames where no
-//!    moving object's box meets the shaft between the ends (its rays then meet the
-//!    same static geometry with the same keys), and a static leaf of the base keeps
-//!    its factors to the static elements its sources open into. A static point gathering from a static source through a swept
+//!    static ends keeps its leaf-row coefficient for the frames where no moving
+//!    object's box meets the shaft between the ends (its rays then meet the same
+//!    static geometry with the same keys), and a static leaf keeps its factors to
+//!    the static elements its sources open into. The leaves and links a frame's
+//!    refinement makes are made again by the next frame under other ids; their
+//!    rays are keyed by their place under the shared part (the path of child
+//!    indices, `Solver::ray_id`) and the caches key them by it too, so a static
+//!    leaf a frame made keeps its row like a leaf of the base (and its jitter does
+//!    not change from frame to frame). A static point gathering from a static source through a swept
 //!    box keeps the static half of every ray (a mask, [`crate::oracle::static_clear_mask`])
 //!    and re-casts it against the moving objects only, and only when one of them is
 //!    between the point and the source at that frame. The kept terms are flat
