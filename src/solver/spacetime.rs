@@ -93,10 +93,23 @@
 //! Light does not flow between different times (no inter-temporal exchange, which
 //! §4.3 notes is an artefact of the discretisation); the reconstruction, the
 //! costliest part, is interpolated in time between keyframes where that holds, and
-//! so is the leaf solve where the moving surfaces' light holds. What is missing:
-//! time-split links whose coefficient is evaluated once for several frames (eq. 9
-//! over a range) when a varying link changes slowly; every varying link is evaluated
-//! at every keyframe and every frame that is solved.
+//! so is the leaf solve where the moving surfaces' light holds.
+//!
+//! **Interactions over a time range (eq. 8–9).** What the leaf system transports
+//! is its rows' coefficients, so that is where time ranges apply to a varying
+//! interaction. A frame solved between two solved frames (a midpoint of the
+//! bisection whose moving light does not hold) takes each row entry with a moving
+//! end (a moving leaf, or a moving source) on the line between its values at
+//! those two frames when its light changes by at most `interp_tol · B_ref` between
+//! them: the entry is not split in time over the range, and costs no factors and
+//! no rays at the frames in it. Any other entry is split in time there (computed
+//! at the frame, which becomes an end for the halves). Entries between two static
+//! ends stay per frame where a moving object is in the shaft between them (the
+//! transient blocker the paper's shaft test splits in time for, §5.2); where none
+//! is they are constant and kept (above). ([`crate::solver::TimeRange`].) The
+//! links themselves are still evaluated at every solved frame: their coefficients
+//! only choose what the rows gather from, and their evaluation is 3% of ACTOR's
+//! profile.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -106,7 +119,8 @@ use bytemuck::Zeroable;
 use glam::DVec3;
 
 use super::{
-    Between, FrameCost, KeyValues, Leaf, RoundRecord, SharedRadiosity, SolveOptions, Solver,
+    Between, FrameCost, FrameRows, KeyValues, Leaf, RoundRecord, SharedRadiosity, SolveOptions,
+    Solver, TimeRange,
 };
 use crate::Result;
 use crate::pools::Column;
@@ -259,6 +273,11 @@ pub struct FrameRecord {
     pub varying_links: u64,
     /// Rays cast by link evaluation and leaf rows.
     pub rays: u64,
+    /// Leaf-row entries with a moving end taken between the solved frames around
+    /// instead of computed ([`crate::solver::TimeRange`]).
+    pub rows_between: u64,
+    /// Leaf-row entries with a moving end.
+    pub rows_moving: u64,
     /// Bytes of the element and link pools.
     pub bytes_pools: u64,
     /// Bytes of the final-gather terms and leaf rows the window keeps.
@@ -275,7 +294,7 @@ impl FrameRecord {
     /// One line for the terminal.
     pub fn summary(&self) -> String {
         format!(
-            "frame {:4} (window {}) t={:.3}  {:7.2}s  cells {} (points: {} gathered, {} interpolated)  elements {}  links {} ({} varying)  rays {}  pools {:.1} MB  kept {:.1} MB  residual {:.1e}",
+            "frame {:4} (window {}) t={:.3}  {:7.2}s  cells {} (points: {} gathered, {} interpolated)  elements {}  links {} ({} varying)  rays {}  moving rows {} ({} between)  pools {:.1} MB  kept {:.1} MB  residual {:.1e}",
             self.frame,
             self.window,
             self.t,
@@ -287,6 +306,8 @@ impl FrameRecord {
             self.links,
             self.varying_links,
             self.rays,
+            self.rows_moving,
+            self.rows_between,
             self.bytes_pools as f64 / 1e6,
             self.bytes_kept as f64 / 1e6,
             self.residual
@@ -703,6 +724,8 @@ impl<'a> SpaceTime<'a> {
         // waiting for the ones before them to be merged in time order.
         let mut values: HashMap<usize, KeyValues> = HashMap::new();
         let mut rad: HashMap<usize, SharedRadiosity> = HashMap::new();
+        // The row entries with a moving end of the same solved frames.
+        let mut rows_at: HashMap<usize, Arc<FrameRows>> = HashMap::new();
         let mut pending: std::collections::BTreeMap<usize, Arc<[Leaf]>> = Default::default();
         let mut next_merge = 0;
         for (at, step) in order.iter().enumerate() {
@@ -712,6 +735,7 @@ impl<'a> SpaceTime<'a> {
                 None => {
                     let cost = solver.frame(t, b_ref)?;
                     rad.insert(k, solver.shared_radiosity());
+                    rows_at.insert(k, Arc::new(solver.take_frame_rows()));
                     (cost, solver.reconstruct_between(None))
                 }
                 Some((lo, hi)) => {
@@ -728,6 +752,7 @@ impl<'a> SpaceTime<'a> {
                         .collect();
                     values.retain(|f, _| needed.contains(f));
                     rad.retain(|&f, _| f >= a);
+                    rows_at.retain(|f, _| needed.contains(f));
                     // The solved frames nearest on either side (the keyframes, or
                     // a midpoint that had to be solved): the moving surfaces' light
                     // is checked, and the shared radiosity interpolated, between
@@ -749,8 +774,22 @@ impl<'a> SpaceTime<'a> {
                             FrameCost::default()
                         }
                         None => {
-                            let cost = solver.frame(t, b_ref)?;
+                            // Row entries with a moving end that hold over the
+                            // solved frames around are taken between them.
+                            let range = sa.zip(sb).and_then(|(sa, sb)| {
+                                Some(TimeRange {
+                                    a: rows_at.get(&sa)?.clone(),
+                                    b: rows_at.get(&sb)?.clone(),
+                                    alpha: (k - sa) as f64 / (sb - sa) as f64,
+                                    tol: interp_tol,
+                                })
+                            });
+                            solver.set_time_range(range);
+                            let cost = solver.frame(t, b_ref);
+                            solver.set_time_range(None);
+                            let cost = cost?;
                             rad.insert(k, solver.shared_radiosity());
+                            rows_at.insert(k, Arc::new(solver.take_frame_rows()));
                             cost
                         }
                     };
@@ -798,6 +837,8 @@ impl<'a> SpaceTime<'a> {
                 links: solver.links.len() as u64,
                 varying_links: cost.varying_links,
                 rays: cost.rays,
+                rows_between: cost.rows_between,
+                rows_moving: cost.rows_moving,
                 bytes_pools: bytes,
                 bytes_kept: kept,
                 residual: cost.residual,
