@@ -512,8 +512,14 @@ pub struct Solver<'a> {
     /// The row entries with a moving end the last leaf rows of a window's frame
     /// computed or took ([`Solver::take_frame_rows`]).
     frame_rows: FrameRows,
-    /// Row entries the last leaf rows took from [`Solver::time_range`].
+    /// Row entries the leaf rows of this frame took from [`Solver::time_range`].
     rows_between: u64,
+    /// Row coefficients a window's frame computed, `(leaf, link) → (F, visible
+    /// fraction)`, for its next refine-and-solve pass: within a frame the geometry
+    /// and the ids hold, so a leaf whose chain link did not change gets the same
+    /// coefficient bit for bit (LIGHT computed its rows 1.8 times a frame).
+    /// Emptied when the frame's passes end. Sorted by key, 24 bytes an entry.
+    pass_rows: Vec<((u32, u32), (f64, f64))>,
 }
 
 /// Pool lengths at some moment, and what was done since to older records (links
@@ -1066,6 +1072,7 @@ impl<'a> Solver<'a> {
             time_range: None,
             frame_rows: FrameRows::default(),
             rows_between: 0,
+            pass_rows: Vec::new(),
         };
         s.moving_patch = (0..s.patches.len())
             .map(|i| {
@@ -1813,6 +1820,8 @@ impl<'a> Solver<'a> {
     /// hierarchy near a moving object is as fine as this frame needs, not the union
     /// over the window.
     fn reset_frame(&mut self) {
+        self.pass_rows = Vec::new();
+        self.rows_between = 0;
         if let Some(mut w) = self.window.take() {
             if w.in_frame {
                 self.restore(&mut w.frame);
@@ -1908,6 +1917,8 @@ impl<'a> Solver<'a> {
             residual = self.solve_rows()?;
             wave = self.active_links(true);
         }
+        // Only the passes share them; the frame's gathers need the memory.
+        self.pass_rows = Vec::new();
         // The window's reconstruction scale: the first solved frame's.
         if self.window.as_ref().is_some_and(|w| w.b_ref.is_none()) {
             let scale = self.rms_radiosity();
@@ -2610,6 +2621,7 @@ impl<'a> Solver<'a> {
         type Hidden = Vec<((u32, u32), (f64, f64))>;
         type Factors = Vec<((u32, u32), f64)>;
         type Timed = Vec<TimedEntry>;
+        type Passed = Vec<((u32, u32), (f64, f64))>;
         type Row = (
             Vec<(u32, f64)>,
             Fresh,
@@ -2617,11 +2629,12 @@ impl<'a> Solver<'a> {
             Opened,
             Hidden,
             Factors,
-            (Timed, u64),
+            (Timed, u64, Passed),
         );
         // A window's frame records its entries with a moving end, and takes them
         // between the solved frames around it where they hold.
         let timed = self.window.as_ref().is_some_and(|w| w.in_frame);
+        let passed = Some(&self.pass_rows).filter(|_| timed);
         let radiosities = self.elems.radiosities.as_slice();
         let rows: Vec<Row> = self
             .leaves
@@ -2638,6 +2651,7 @@ impl<'a> Solver<'a> {
                 let mut fresh_hidden = Vec::new();
                 let mut time_entries = Vec::new();
                 let mut between = 0u64;
+                let mut fresh_pass = Vec::new();
                 let leaf_ray = self.ray_id(leaf.0);
                 let rho_leaf = self.rho_of(leaf);
                 let before = self.row_cache.get(&leaf.0).filter(|_| keep_rows);
@@ -2702,22 +2716,35 @@ impl<'a> Solver<'a> {
                         && gs.patch != u32::MAX
                         && (leaf_moving || self.elem_moving(ElementId(s))))
                     .then(|| (leaf_ray, self.row_link_id(l, s)));
-                    let on_line = tkey.zip(self.time_range.as_ref()).and_then(|(k, r)| {
+                    let on_line = || {
+                        let (k, r) = tkey.zip(self.time_range.as_ref())?;
                         let bs = radiosities[s as usize]
                             .iter()
                             .fold(0.0f32, |m, &x| m.max(x));
                         r.value(&k, rho_leaf * f64::from(bs))
+                    };
+                    // What an earlier pass of this frame computed for this entry.
+                    let earlier = passed.filter(|_| !cluster_source).and_then(|p| {
+                        let i = p.binary_search_by_key(&(leaf.0, l), |e| e.0).ok()?;
+                        Some(p[i].1)
                     });
-                    let (coef, vis) = if gs.patch == u32::MAX {
+                    let (coef, vis) = if cluster_source {
                         (self.cluster_entry(&q, n, s, t), t.visibility as f64)
-                    } else if let Some(cv) = on_line {
+                    } else if let Some(cv) = on_line() {
+                        // Decided again at each pass: the light it weighs moves.
                         between += 1;
+                        cv
+                    } else if let Some(cv) = earlier {
                         cv
                     } else if t.shaft_clear() {
                         let ps = oracle::poly(gs);
                         let f = (0..q.count)
                             .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
                             .sum();
+                        // Not what the window keeps anyway.
+                        if timed && !cacheable {
+                            fresh_pass.push(((leaf.0, l), (f, 1.0)));
+                        }
                         (f, 1.0)
                     } else {
                         // Partly hidden: visibility from the leaf's own points, not
@@ -2735,6 +2762,9 @@ impl<'a> Solver<'a> {
                                 let cv = self.hidden_row_coef(leaf, l, s, &q, n);
                                 if steady {
                                     fresh_hidden.push((key, cv));
+                                }
+                                if timed && !cacheable && !steady {
+                                    fresh_pass.push(((leaf.0, l), cv));
                                 }
                                 cv
                             }
@@ -2768,22 +2798,30 @@ impl<'a> Solver<'a> {
                     fresh_opened,
                     fresh_hidden,
                     fresh_factors,
-                    (time_entries, between),
+                    (time_entries, between, fresh_pass),
                 )
             })
             .collect();
         self.clear_rows();
         self.row_cache.clear();
         self.frame_rows.0.clear();
-        self.rows_between = 0;
         let leaves = std::mem::take(&mut self.leaves);
         for (
             &leaf,
-            (row, fresh, kept, fresh_opened, fresh_hidden, fresh_factors, (time_entries, between)),
+            (
+                row,
+                fresh,
+                kept,
+                fresh_opened,
+                fresh_hidden,
+                fresh_factors,
+                (time_entries, between, fresh_pass),
+            ),
         ) in leaves.iter().zip(rows)
         {
             self.frame_rows.0.extend(time_entries);
             self.rows_between += between;
+            self.pass_rows.extend(fresh_pass);
             if let Some(w) = &mut self.window
                 && !(fresh.is_empty()
                     && fresh_opened.is_empty()
@@ -2814,6 +2852,8 @@ impl<'a> Solver<'a> {
             self.push_row(row);
         }
         self.leaves = leaves;
+        self.pass_rows.sort_unstable_by_key(|e| e.0);
+        self.pass_rows.shrink_to_fit();
     }
 
     /// Empties the leaf rows (CSR) before they are pushed again, leaf by leaf.
@@ -4101,6 +4141,19 @@ mod tests {
         assert_eq!(with.1, without.1);
         let bits = |c: &[f64]| c.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&with.2), bits(&without.2));
+        // A frame's next pass takes the entries the last one computed (those no
+        // window cache keeps): the same rows as computing them again.
+        let passed = s.pass_rows.len();
+        eprintln!("{passed} entries for the next pass");
+        assert!(passed > 1000, "{passed} entries for the next pass");
+        s.compute_leaf_rows();
+        let again = rows(&s);
+        s.pass_rows.clear();
+        s.compute_leaf_rows();
+        let afresh = rows(&s);
+        assert_eq!(again.1, afresh.1);
+        assert_eq!(bits(&again.2), bits(&afresh.2));
+        assert_eq!(bits(&again.2), bits(&with.2));
         // The constant links' coefficients too (kept as f32, so equal to f32's
         // rounding): a coefficient kept for a leaf a frame made is the one its
         // leaf gets afresh.
