@@ -512,7 +512,7 @@ pub struct Solver<'a> {
     /// The row entries with a moving end the last leaf rows of a window's frame
     /// computed or took ([`Solver::take_frame_rows`]).
     frame_rows: FrameRows,
-    /// Row entries the leaf rows of this frame took from [`Solver::time_range`].
+    /// Row entries the last leaf rows took from [`Solver::time_range`].
     rows_between: u64,
     /// Row coefficients a window's frame computed, `(leaf, link) → (F, visible
     /// fraction)`, for its next refine-and-solve pass: within a frame the geometry
@@ -579,17 +579,17 @@ struct Window {
     opened_entries: usize,
     /// Leaf-row `(F, visible fraction)` of varying links between static ends (a
     /// static leaf or source a frame made too, [`Solver::row_key`]), computed at a
-    /// frame with no moving object's box in the shaft between the ends ([`Solver::clear_of_moving`]): at any such frame their
-    /// rays meet static geometry only, with the same keys, so the value is the same
-    /// bit for bit.
+    /// frame with no moving object's box in the shaft between the ends
+    /// ([`Solver::clear_of_moving`]): at any such frame their rays meet static
+    /// geometry only, with the same keys, so the value is the same bit for bit.
     hidden: HashMap<(u32, u32), (f64, f64)>,
     /// Exact factors `Σ_q w_q F(x_q → e)` from a static leaf (keyed by
     /// [`Solver::stable_id`]) to a static element `e` of the window's base that a
-    /// source of its row opens into
-    /// ([`Solver::push_opened`]): the geometry of both holds over the window, so the
-    /// factor is the same bit for bit at every frame. Those of a varying link's
-    /// source were computed again at every solved frame (LIGHT: 5.0 M of them over
-    /// its 76 frames), where [`Window::opened`] keeps only a constant link's entries.
+    /// source of its row opens into ([`Solver::push_opened`]): the geometry of both
+    /// holds over the window, so the factor is the same bit for bit at every frame.
+    /// Those of a varying link's source were computed again at every solved frame
+    /// (LIGHT: 5.0 M of them over its 76 frames), where [`Window::opened`] keeps
+    /// only a constant link's entries.
     factors: HashMap<(u32, u32), f64>,
     /// Ids that the caches above key a frame's own elements by, which the next frame
     /// makes again with other ids: `(element of the window's base, path of child
@@ -800,10 +800,11 @@ pub struct FrameCost {
     pub rays: u64,
     /// GMRES relative residual.
     pub residual: f64,
-    /// Leaf-row entries with a moving end taken between the solved frames around
-    /// ([`TimeRange`]) rather than computed.
+    /// Leaf-row entries with a moving end the frame's last rows took between the
+    /// solved frames around ([`TimeRange`]) rather than computed.
     pub rows_between: u64,
-    /// Leaf-row entries with a moving end (taken between or computed).
+    /// Leaf-row entries with a moving end in the frame's last rows (taken between
+    /// or computed).
     pub rows_moving: u64,
 }
 
@@ -1821,7 +1822,6 @@ impl<'a> Solver<'a> {
     /// over the window.
     fn reset_frame(&mut self) {
         self.pass_rows = Vec::new();
-        self.rows_between = 0;
         if let Some(mut w) = self.window.take() {
             if w.in_frame {
                 self.restore(&mut w.frame);
@@ -2805,6 +2805,7 @@ impl<'a> Solver<'a> {
         self.clear_rows();
         self.row_cache.clear();
         self.frame_rows.0.clear();
+        self.rows_between = 0;
         let leaves = std::mem::take(&mut self.leaves);
         for (
             &leaf,
