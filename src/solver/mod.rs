@@ -545,6 +545,29 @@ impl Snapshot {
 /// Row entries `(source element, coefficient)`, as a leaf's row holds them.
 type RowEntries = Box<[(u32, f64)]>;
 
+/// What one leaf's row computation hands back ([`Solver::compute_leaf_rows`]): the
+/// row, and what the caches are to keep of it.
+struct LeafRow {
+    /// The row's entries `(source, coefficient)`.
+    row: Vec<(u32, f64)>,
+    /// New constant-link coefficients for [`Window::rows`].
+    fresh: Vec<((u32, u32), (f32, f32))>,
+    /// A static solve's coefficients by link, for the next round.
+    kept: Vec<KeptCoef>,
+    /// New opened entries for [`Window::opened`].
+    opened: Vec<((u32, u32), RowEntries)>,
+    /// New hidden coefficients for [`Window::hidden`].
+    hidden: Vec<((u32, u32), (f64, f64))>,
+    /// New factors for [`Window::factors`].
+    factors: Vec<((u32, u32), f64)>,
+    /// Its entries with a moving end ([`FrameRows`]).
+    timed: Vec<TimedEntry>,
+    /// How many of them it took between the solved frames around.
+    between: u64,
+    /// Coefficients for the frame's next pass (`Solver::pass_rows`).
+    passed: Vec<((u32, u32), (f64, f64))>,
+}
+
 /// The factors one static leaf's row reuses and adds while it opens sources
 /// ([`Window::factors`]).
 struct FactorMemo<'m> {
@@ -2616,27 +2639,12 @@ impl<'a> Solver<'a> {
         let settled = |entries: &[(u32, f64)]| self.opened_settled(entries);
         // A static scene keeps each leaf's coefficients from round to round.
         let keep_rows = !self.has_motion();
-        type Fresh = Vec<((u32, u32), (f32, f32))>;
-        type Opened = Vec<((u32, u32), RowEntries)>;
-        type Hidden = Vec<((u32, u32), (f64, f64))>;
-        type Factors = Vec<((u32, u32), f64)>;
-        type Timed = Vec<TimedEntry>;
-        type Passed = Vec<((u32, u32), (f64, f64))>;
-        type Row = (
-            Vec<(u32, f64)>,
-            Fresh,
-            Vec<KeptCoef>,
-            Opened,
-            Hidden,
-            Factors,
-            (Timed, u64, Passed),
-        );
         // A window's frame records its entries with a moving end, and takes them
         // between the solved frames around it where they hold.
         let timed = self.window.as_ref().is_some_and(|w| w.in_frame);
         let passed = Some(&self.pass_rows).filter(|_| timed);
         let radiosities = self.elems.radiosities.as_slice();
-        let rows: Vec<Row> = self
+        let rows: Vec<LeafRow> = self
             .leaves
             .par_iter()
             .map(|&leaf| {
@@ -2790,16 +2798,17 @@ impl<'a> Solver<'a> {
                     self.push_opened(&q, n, s, coef, vis, &mut row, memo.as_mut());
                 }
                 kept.sort_unstable_by_key(|x| x.link);
-                let fresh_factors = memo.map(|m| m.fresh).unwrap_or_default();
-                (
+                LeafRow {
                     row,
                     fresh,
                     kept,
-                    fresh_opened,
-                    fresh_hidden,
-                    fresh_factors,
-                    (time_entries, between, fresh_pass),
-                )
+                    opened: fresh_opened,
+                    hidden: fresh_hidden,
+                    factors: memo.map(|m| m.fresh).unwrap_or_default(),
+                    timed: time_entries,
+                    between,
+                    passed: fresh_pass,
+                }
             })
             .collect();
         self.clear_rows();
@@ -2807,22 +2816,21 @@ impl<'a> Solver<'a> {
         self.frame_rows.0.clear();
         self.rows_between = 0;
         let leaves = std::mem::take(&mut self.leaves);
-        for (
-            &leaf,
-            (
+        for (&leaf, out) in leaves.iter().zip(rows) {
+            let LeafRow {
                 row,
                 fresh,
                 kept,
-                fresh_opened,
-                fresh_hidden,
-                fresh_factors,
-                (time_entries, between, fresh_pass),
-            ),
-        ) in leaves.iter().zip(rows)
-        {
-            self.frame_rows.0.extend(time_entries);
+                opened: fresh_opened,
+                hidden: fresh_hidden,
+                factors: fresh_factors,
+                timed,
+                between,
+                passed,
+            } = out;
+            self.frame_rows.0.extend(timed);
             self.rows_between += between;
-            self.pass_rows.extend(fresh_pass);
+            self.pass_rows.extend(passed);
             if let Some(w) = &mut self.window
                 && !(fresh.is_empty()
                     && fresh_opened.is_empty()
@@ -4037,6 +4045,23 @@ fn corner_values(
 mod tests {
     use super::*;
 
+    /// LIGHT's shared part solved at `eps`, and a window over `[start, end]` begun:
+    /// the solver and its radiosity scale.
+    fn light_window(scene: &Scene, eps: f64, end: f64) -> (Solver<'_>, f64) {
+        let opts = SolveOptions {
+            eps,
+            ..SolveOptions::default()
+        };
+        let (t0, t1) = (scene.time.start, scene.time.end);
+        let mut s = Solver::at_time(scene, opts, t0, [t0 as f32, t1 as f32]).unwrap();
+        s.run_shared(spacetime::swept_boxes(scene, t0, t1), |_, _| {})
+            .unwrap();
+        let b_ref = s.radiosity_scale();
+        s.begin_window(spacetime::swept_boxes(scene, t0, end), b_ref)
+            .unwrap();
+        (s, b_ref)
+    }
+
     #[test]
     fn row_terms_kept_over_a_window_are_the_ones_computed_afresh() {
         // LIGHT's first frames: the window keeps the row entries cached
@@ -4046,17 +4071,7 @@ mod tests {
         // on. The rows built with them must be the rows built without, bit for bit.
         // (End to end, LIGHT and ACTOR write the same files with and without.)
         let scene = crate::scene::light_scene(75);
-        let opts = SolveOptions {
-            eps: 1.0,
-            ..SolveOptions::default()
-        };
-        let (t0, t1) = (scene.time.start, scene.time.end);
-        let mut s = Solver::at_time(&scene, opts, t0, [t0 as f32, t1 as f32]).unwrap();
-        s.run_shared(spacetime::swept_boxes(&scene, t0, t1), |_, _| {})
-            .unwrap();
-        let b_ref = s.radiosity_scale();
-        s.begin_window(spacetime::swept_boxes(&scene, t0, 0.5), b_ref)
-            .unwrap();
+        let (mut s, b_ref) = light_window(&scene, 1.0, 0.5);
         let rows = |s: &Solver| {
             (
                 s.row_start.clone(),
@@ -4179,17 +4194,7 @@ mod tests {
         // ids. What the rays and the caches key them by must not change, and
         // different elements must not share it.
         let scene = crate::scene::light_scene(75);
-        let opts = SolveOptions {
-            eps: 0.5,
-            ..SolveOptions::default()
-        };
-        let (t0, t1) = (scene.time.start, scene.time.end);
-        let mut s = Solver::at_time(&scene, opts, t0, [t0 as f32, t1 as f32]).unwrap();
-        s.run_shared(spacetime::swept_boxes(&scene, t0, t1), |_, _| {})
-            .unwrap();
-        let b_ref = s.radiosity_scale();
-        s.begin_window(spacetime::swept_boxes(&scene, t0, 1.0), b_ref)
-            .unwrap();
+        let (mut s, b_ref) = light_window(&scene, 0.5, 1.0);
         type Keys = HashMap<Vec<u64>, (u32, u64, u32)>;
         let frame_keys = |s: &mut Solver, t: f64| -> Keys {
             s.frame(t, b_ref).unwrap();
@@ -4244,17 +4249,7 @@ mod tests {
         // the board) whose light holds over [0, 8] on the line between them. Its
         // solve must stay with the solve that computes every entry at frame 4.
         let scene = crate::scene::light_scene(75);
-        let opts = SolveOptions {
-            eps: 1.0,
-            ..SolveOptions::default()
-        };
-        let (t0, t1) = (scene.time.start, scene.time.end);
-        let mut s = Solver::at_time(&scene, opts, t0, [t0 as f32, t1 as f32]).unwrap();
-        s.run_shared(spacetime::swept_boxes(&scene, t0, t1), |_, _| {})
-            .unwrap();
-        let b_ref = s.radiosity_scale();
-        s.begin_window(spacetime::swept_boxes(&scene, t0, 0.5), b_ref)
-            .unwrap();
+        let (mut s, b_ref) = light_window(&scene, 1.0, 0.5);
         let (ta, t, tb) = (0.0, 0.16, 0.32);
         s.frame(ta, b_ref).unwrap();
         let a = Arc::new(s.take_frame_rows());
