@@ -735,7 +735,29 @@ impl<'a> SpaceTime<'a> {
                 None => {
                     let cost = solver.frame(t, b_ref)?;
                     rad.insert(k, solver.shared_radiosity());
-                    rows_at.insert(k, Arc::new(solver.take_frame_rows()));
+                    // Where the moving light holds between this keyframe and the
+                    // one before, the frames between skip their solve: the one
+                    // before ends no range of rows any more, and this one is
+                    // kept only if the light did not hold (the next interval
+                    // likely does as this one did; ACTOR's mostly hold, LIGHT's
+                    // never).
+                    let i = keys.partition_point(|&f| f < k);
+                    let held = i
+                        .checked_sub(1)
+                        .and_then(|i| keys.get(i))
+                        .and_then(|p| Some((p, rad.get(p)?)))
+                        .is_some_and(|(p, ra)| {
+                            let holds =
+                                SharedRadiosity::moving_power_holds(ra, &rad[&k], MOVING_POWER_TOL);
+                            if holds {
+                                rows_at.remove(p);
+                            }
+                            holds
+                        });
+                    let rows = solver.take_frame_rows();
+                    if !held {
+                        rows_at.insert(k, Arc::new(rows));
+                    }
                     (cost, solver.reconstruct_between(None))
                 }
                 Some((lo, hi)) => {
@@ -752,7 +774,13 @@ impl<'a> SpaceTime<'a> {
                         .collect();
                     values.retain(|f, _| needed.contains(f));
                     rad.retain(|&f, _| f >= a);
-                    rows_at.retain(|f, _| needed.contains(f));
+                    // Rows end ranges only: the brackets of the steps to come.
+                    rows_at.retain(|f, _| {
+                        order[at..]
+                            .iter()
+                            .filter_map(|s| s.brackets)
+                            .any(|(l, h)| *f == l || *f == h)
+                    });
                     // The solved frames nearest on either side (the keyframes, or
                     // a midpoint that had to be solved): the moving surfaces' light
                     // is checked, and the shared radiosity interpolated, between
