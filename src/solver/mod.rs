@@ -545,6 +545,18 @@ impl Snapshot {
 /// Row entries `(source element, coefficient)`, as a leaf's row holds them.
 type RowEntries = Box<[(u32, f64)]>;
 
+/// The ray ids a leaf row's rays to one source hash their jitter from
+/// ([`Solver::row_ray_ids`]). 24 bytes.
+#[derive(Clone, Copy, Debug)]
+struct RowRayIds {
+    /// The leaf's [`Solver::ray_id`].
+    leaf: u64,
+    /// The chain link's [`Solver::row_link_id`] (rays at the leaf's points).
+    link: u64,
+    /// The source's [`Solver::ray_id`] (rays at its corners and finer points).
+    source: u64,
+}
+
 /// What one leaf's row computation hands back ([`Solver::compute_leaf_rows`]): the
 /// row, and what the caches are to keep of it.
 struct LeafRow {
@@ -2163,8 +2175,8 @@ impl<'a> Solver<'a> {
         let g = &self.elems.geoms.as_slice()[leaf.ix()];
         let ps = oracle::poly(gs);
         let ns = DVec3::from_array(gs.normal);
-        let vis_at =
-            |x: DVec3, i: u64| self.row_point_visibility(leaf, g, l, s, gs, &ps, ns, x, n, i);
+        let ids = self.row_ray_ids(leaf, l, s);
+        let vis_at = |x: DVec3, i: u64| self.row_point_visibility(ids, g, gs, &ps, ns, x, n, i);
         let integrate = |pts: &mut dyn Iterator<Item = (DVec3, f64, u64)>| {
             let (mut f, mut unoccluded) = (0.0, 0.0);
             let (mut vmin, mut vmax) = (1.0f64, 0.0f64);
@@ -2305,11 +2317,12 @@ impl<'a> Solver<'a> {
                 } else {
                     row.and_then(|r| self.leaf_visibility(r, l, s as usize))
                 };
+                let ids = self.row_ray_ids(leaf, l, s);
                 for (i, (fi, &x)) in f.iter_mut().zip(&q.points).take(q.count).enumerate() {
                     let fx = point_to_polygon(x, n, &ps);
                     if fx > 0.0 {
                         let v = common.unwrap_or_else(|| {
-                            self.row_point_visibility(leaf, g, l, s, gs, &ps, ns, x, n, i as u64)
+                            self.row_point_visibility(ids, g, gs, &ps, ns, x, n, i as u64)
                         });
                         *fi = fx * v;
                     }
@@ -2359,10 +2372,8 @@ impl<'a> Solver<'a> {
     #[allow(clippy::too_many_arguments)]
     fn row_point_visibility(
         &self,
-        leaf: ElementId,
+        ids: RowRayIds,
         g: &Geom,
-        l: u32,
-        s: u32,
         gs: &Geom,
         ps: &crate::geometry::Poly,
         ns: DVec3,
@@ -2370,19 +2381,10 @@ impl<'a> Solver<'a> {
         n: DVec3,
         i: u64,
     ) -> f64 {
-        let leaf_id = self.ray_id(leaf.0);
         let key = if i < 4 {
-            oracle::hash3(
-                self.opts.seed ^ 0x1eaf,
-                self.row_link_id(l, s),
-                leaf_id << 3 | i,
-            )
+            oracle::hash3(self.opts.seed ^ 0x1eaf, ids.link, ids.leaf << 3 | i)
         } else {
-            oracle::hash3(
-                self.opts.seed ^ 0x1eb0,
-                self.ray_id(s),
-                leaf_id << 5 | (i - 4),
-            )
+            oracle::hash3(self.opts.seed ^ 0x1eb0, ids.source, ids.leaf << 5 | (i - 4))
         };
         let skip = [g.patch, gs.patch];
         let m = self.opts.rays_per_point;
@@ -2573,6 +2575,16 @@ impl<'a> Solver<'a> {
             1 << 31 | ss
         };
         (sl != u32::MAX).then_some((sl, lk))
+    }
+
+    /// What the row rays of leaf `leaf` to the source `s` of its chain link `l`
+    /// hash their jitter from, worked out once for all the leaf's points.
+    fn row_ray_ids(&self, leaf: ElementId, l: u32, s: u32) -> RowRayIds {
+        RowRayIds {
+            leaf: self.ray_id(leaf.0),
+            link: self.row_link_id(l, s),
+            source: self.ray_id(s),
+        }
     }
 
     /// What the row rays of chain link `l` (source `s`) hash their jitter from:

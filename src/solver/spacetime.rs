@@ -742,20 +742,14 @@ impl<'a> SpaceTime<'a> {
                     // likely does as this one did; ACTOR's mostly hold, LIGHT's
                     // never).
                     let i = keys.partition_point(|&f| f < k);
-                    let held = i
-                        .checked_sub(1)
-                        .and_then(|i| keys.get(i))
-                        .and_then(|p| Some((p, rad.get(p)?)))
-                        .is_some_and(|(p, ra)| {
-                            let holds =
-                                SharedRadiosity::moving_power_holds(ra, &rad[&k], MOVING_POWER_TOL);
-                            if holds {
-                                rows_at.remove(p);
-                            }
-                            holds
-                        });
+                    let prev = i.checked_sub(1).map(|i| keys[i]);
+                    let held = prev.and_then(|p| rad.get(&p)).is_some_and(|ra| {
+                        SharedRadiosity::moving_power_holds(ra, &rad[&k], MOVING_POWER_TOL)
+                    });
                     let rows = solver.take_frame_rows();
-                    if !held {
+                    if let Some(p) = prev.filter(|_| held) {
+                        rows_at.remove(&p);
+                    } else {
                         rows_at.insert(k, Arc::new(rows));
                     }
                     (cost, solver.reconstruct_between(None))
@@ -766,21 +760,15 @@ impl<'a> SpaceTime<'a> {
                     let a = keys[keys.partition_point(|&f| f < k) - 1];
                     // What the rest of the window still reads: the brackets and
                     // look-back frames of the steps to come.
-                    let needed: std::collections::HashSet<usize> = order[at..]
-                        .iter()
-                        .filter_map(|s| s.brackets)
-                        .flat_map(|(l, h)| [Some(l), Some(h), before(l, h)])
-                        .flatten()
-                        .collect();
-                    values.retain(|f, _| needed.contains(f));
+                    let to_come = || order[at..].iter().filter_map(|s| s.brackets);
+                    let brackets: std::collections::HashSet<usize> =
+                        to_come().flat_map(|(l, h)| [l, h]).collect();
+                    let looked_back: std::collections::HashSet<usize> =
+                        to_come().filter_map(|(l, h)| before(l, h)).collect();
+                    values.retain(|f, _| brackets.contains(f) || looked_back.contains(f));
                     rad.retain(|&f, _| f >= a);
-                    // Rows end ranges only: the brackets of the steps to come.
-                    rows_at.retain(|f, _| {
-                        order[at..]
-                            .iter()
-                            .filter_map(|s| s.brackets)
-                            .any(|(l, h)| *f == l || *f == h)
-                    });
+                    // Rows end ranges only.
+                    rows_at.retain(|f, _| brackets.contains(f));
                     // The solved frames nearest on either side (the keyframes, or
                     // a midpoint that had to be solved): the moving surfaces' light
                     // is checked, and the shared radiosity interpolated, between
