@@ -119,13 +119,19 @@ fn out_of_core_by_default_with_the_leaves_of_ram_and_no_scratch_left() {
         v
     };
     assert_eq!(names(dir.path()), ["paged.rhier", "ram.rhier"]);
-    // Interrupted after two windows: the journal holds its windows and key only.
+    // Interrupted after two windows: the journal holds its windows, the terms the
+    // last one hands on, and its key only.
     let cut = dir.path().join("cut.rhier");
     let o = solve(&cut, &["--stop-after-windows", "2"]);
     assert_eq!(o.status.code(), Some(1));
     assert_eq!(
         names(&rhier::store::journal::journal_dir(&cut)),
-        ["solve.key", "window-00000.bin", "window-00001.bin"]
+        [
+            "kept-00001.bin",
+            "solve.key",
+            "window-00000.bin",
+            "window-00001.bin"
+        ]
     );
 }
 

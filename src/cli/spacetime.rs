@@ -57,7 +57,7 @@ fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> Str
     );
     let scene_text = rhier::scene::to_json_string(scene);
     format!(
-        "rhier space-time journal 1\n{settings}\nscene crc32 {:#010x}, {} bytes\n",
+        "rhier space-time journal 2\n{settings}\nscene crc32 {:#010x}, {} bytes\n",
         crc32fast::hash(scene_text.as_bytes()),
         scene_text.len()
     )
@@ -152,6 +152,12 @@ pub fn run(
     let mut frames: Vec<FrameRecord> = Vec::new();
     let (mut stored, mut frame_cells) = (0u64, 0u64);
     if let Some(journal) = &journal {
+        // The next window starts from the terms the last journaled one handed on.
+        if done > 0 {
+            journal.read_kept(done as u32 - 1, |r, len, path| {
+                run.decode_carried(r, len, path)
+            })?;
+        }
         for wi in 0..done {
             let w = journal.read(wi as u32)?;
             writer.write_chunk(w.t0, w.t1, &w.leaves)?;
@@ -180,9 +186,14 @@ pub fn run(
         stored += leaves.len() as u64;
         frame_cells += w.frame_cells;
         if let Some(journal) = &journal {
+            // The terms handed on first: a journaled window always has them.
+            journal.write_kept(w.index, |out| run.encode_carried(out))?;
             journal.append_leaves(w.index, [w.t0, w.t1], w.frame_cells, leaves, || {
                 leaves.release_resident()
             })?;
+            if let Some(before) = w.index.checked_sub(1) {
+                journal.drop_kept(before)?;
+            }
         }
         if let Some(budget) = args.budget
             && run.stats.peak_pool_bytes > budget

@@ -28,6 +28,17 @@
 //! reconstruction did not register are dropped too and no new point is admitted
 //! while over it. Dropping changes the work, never the values: a point gathered
 //! afresh gets the same terms it had.
+//!
+//! **Carried.** A window's terms on the shared part's elements outlive it
+//! ([`PointCache::carried`], called by `Solver::release_window`): the next window
+//! starts from them, keeping a source's masked terms and its terms keyed clear
+//! whatever moves, and its fixed terms (visibility included) only where the box
+//! around the point and the source meets none of the boxes the new window's
+//! objects sweep; a masked term whose own box meets none becomes the fixed term
+//! a fresh gather would make (`Solver::revalidated`). A carried cache is rebuilt in point-key
+//! order, so one read back from a resumed solve's journal
+//! ([`PointCache::encode`], [`PointCache::decode`]) is the same, arena for arena,
+//! as the one the uninterrupted solve carried.
 
 use std::collections::HashMap;
 
@@ -138,6 +149,10 @@ impl<'a> PointView<'a> {
     }
 }
 
+/// One source of a point's kept terms: its key (`source << 1 | clear`), its fixed
+/// and its masked terms.
+pub type SourceTerms = (u32, Vec<FixedTerm>, Vec<MaskedTerm>);
+
 /// The kept final-gather terms of a window (module docs).
 pub struct PointCache {
     slots: HashMap<PointKey, u32>,
@@ -213,7 +228,7 @@ impl PointCache {
             return;
         }
         // The point's sources, old and new, by key; each source's terms.
-        let mut sources: Vec<(u32, Vec<FixedTerm>, Vec<MaskedTerm>)> = Vec::new();
+        let mut sources: Vec<SourceTerms> = Vec::new();
         if let Some(view) = slot.and_then(|_| self.get(&pk)) {
             for e in view.index {
                 if let Some((f, m)) = view.get(e.key) {
@@ -240,6 +255,13 @@ impl PointCache {
             return;
         }
         sources.sort_by_key(|s| s.0);
+        self.append(pk, slot, &sources);
+    }
+
+    /// Writes point `pk`'s `sources` (sorted by key) at the arenas' ends, in place
+    /// of slot `slot`'s records if it has one. A point whose terms would not fit
+    /// the 16-bit offsets is not kept.
+    fn append(&mut self, pk: PointKey, slot: Option<u32>, sources: &[SourceTerms]) {
         let n_fixed: usize = sources.iter().map(|s| s.1.len()).sum();
         let n_masked: usize = sources.iter().map(|s| s.2.len()).sum();
         if n_fixed > usize::from(u16::MAX) || n_masked > usize::from(u16::MAX) {
@@ -251,7 +273,7 @@ impl PointCache {
         }
         let mut index = Vec::with_capacity(sources.len());
         let (mut f, mut m) = (0u16, 0u16);
-        for s in &sources {
+        for s in sources {
             index.push(TermIndex {
                 key: s.0,
                 fixed: f,
@@ -270,7 +292,7 @@ impl PointCache {
             stamp: self.seq,
         };
         let appended = self.index.extend_from_slice(&index).and_then(|()| {
-            for s in &sources {
+            for s in sources {
                 self.fixed.extend_from_slice(&s.1)?;
                 self.masked.extend_from_slice(&s.2)?;
             }
@@ -421,7 +443,238 @@ impl PointCache {
         self.fixed.release_resident();
         self.masked.release_resident();
     }
+
+    /// The points kept, in key order.
+    fn keys_sorted(&self) -> Vec<PointKey> {
+        let mut k: Vec<PointKey> = self.slots.keys().copied().collect();
+        k.sort_unstable();
+        k
+    }
+
+    /// Point `pk`'s sources in key order.
+    fn sources(&self, pk: &PointKey) -> Vec<SourceTerms> {
+        let Some(view) = self.get(pk) else {
+            return Vec::new();
+        };
+        view.index
+            .iter()
+            .filter_map(|e| {
+                view.get(e.key)
+                    .map(|(f, m)| (e.key, f.to_vec(), m.to_vec()))
+            })
+            .collect()
+    }
+
+    /// A new cache on `storage` (at most `budget` bytes) with the sources of each
+    /// point that `keep` accepts, as `keep` leaves them (it may turn masked terms
+    /// into fixed ones): what a window hands the next one (module docs,
+    /// "Carried"). Points go in key order and count as registered by no
+    /// reconstruction yet, so the same content makes the same cache whether it was
+    /// carried or read back from the journal by [`PointCache::decode`].
+    pub fn carried(
+        &self,
+        storage: &Storage,
+        budget: Option<usize>,
+        mut keep: impl FnMut(PointKey, &mut SourceTerms) -> bool,
+    ) -> Result<PointCache> {
+        let mut out = PointCache::new(storage, budget)?;
+        for (i, pk) in self.keys_sorted().into_iter().enumerate() {
+            let mut sources = self.sources(&pk);
+            sources.retain_mut(|s| keep(pk, s));
+            out.push_carried(pk, &sources);
+            // Out of core, both caches' pages go back as it goes.
+            if i % 1024 == 1023 {
+                self.release_resident();
+                out.release_resident();
+            }
+        }
+        out.release_resident();
+        Ok(out)
+    }
+
+    /// Adds a carried point (see [`PointCache::carried`]) if it has sources and the
+    /// budget admits it.
+    fn push_carried(&mut self, pk: PointKey, sources: &[SourceTerms]) {
+        if !sources.is_empty() && self.admits() {
+            self.append(pk, None, sources);
+        }
+    }
+
+    /// Writes the cache to `w` for the journal: per point in key order, its key
+    /// (3 × u32), its source, fixed-term and masked-term counts (3 × u32), then its
+    /// [`TermIndex`], [`FixedTerm`] and [`MaskedTerm`] records as they lie in
+    /// memory (little-endian). Read back by [`PointCache::decode`].
+    pub fn encode(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        for pk in self.keys_sorted() {
+            let sp = self.spans[self.slots[&pk] as usize];
+            let mut head = [0u8; POINT_HEAD];
+            for (i, v) in [pk.0, pk.1, pk.2, sp.n_index, sp.n_fixed, sp.n_masked]
+                .into_iter()
+                .enumerate()
+            {
+                head[4 * i..4 * i + 4].copy_from_slice(&v.to_le_bytes());
+            }
+            w.write_all(&head)?;
+            let at = |start: u32, n: u32| start as usize..(start + n) as usize;
+            w.write_all(bytemuck::cast_slice(
+                &self.index.as_slice()[at(sp.index, sp.n_index)],
+            ))?;
+            w.write_all(bytemuck::cast_slice(
+                &self.fixed.as_slice()[at(sp.fixed, sp.n_fixed)],
+            ))?;
+            w.write_all(bytemuck::cast_slice(
+                &self.masked.as_slice()[at(sp.masked, sp.n_masked)],
+            ))?;
+        }
+        Ok(())
+    }
+
+    /// Reads [`PointCache::encode`]'s bytes (`len` of them, from `path`) into a cache
+    /// on `storage` as [`PointCache::carried`] builds it, checking every field:
+    /// points in increasing key order on patches `patch_ok` accepts, sources in
+    /// increasing key order whose offsets stay within the point's terms, elements
+    /// `elem_ok` accepts, finite factors and visibilities in [0, 1]. A damaged file
+    /// is an error that names the place.
+    #[allow(clippy::too_many_arguments)]
+    pub fn decode(
+        r: &mut dyn std::io::Read,
+        len: u64,
+        path: &std::path::Path,
+        storage: &Storage,
+        budget: Option<usize>,
+        elem_ok: impl Fn(u32) -> bool,
+        patch_ok: impl Fn(u32) -> bool,
+    ) -> Result<PointCache> {
+        let bad = |place: String, expected: &str, found: String| {
+            crate::Error::invalid(path, place, expected, found)
+        };
+        let io = |e| crate::Error::io(path, e);
+        let mut out = PointCache::new(storage, budget)?;
+        let mut left = len;
+        let mut last: Option<PointKey> = None;
+        let mut n_points = 0u64;
+        while left > 0 {
+            let place = |what: &str| format!("kept point {n_points} {what}");
+            if left < POINT_HEAD as u64 {
+                return Err(bad(
+                    place("header"),
+                    "24 bytes",
+                    format!("{left} bytes left"),
+                ));
+            }
+            let mut head = [0u8; POINT_HEAD];
+            r.read_exact(&mut head).map_err(io)?;
+            left -= POINT_HEAD as u64;
+            let v: [u32; 6] = std::array::from_fn(|i| {
+                u32::from_le_bytes([
+                    head[4 * i],
+                    head[4 * i + 1],
+                    head[4 * i + 2],
+                    head[4 * i + 3],
+                ])
+            });
+            let pk = (v[0], v[1], v[2]);
+            let (n_index, n_fixed, n_masked) = (v[3] as usize, v[4] as usize, v[5] as usize);
+            if !patch_ok(pk.0) {
+                return Err(bad(
+                    place("patch"),
+                    "a patch of the scene",
+                    pk.0.to_string(),
+                ));
+            }
+            if last.is_some_and(|l| l >= pk) {
+                return Err(bad(
+                    place("key"),
+                    "points in increasing key order",
+                    format!("{pk:?} after {last:?}"),
+                ));
+            }
+            let max = usize::from(u16::MAX);
+            if n_index == 0 || n_fixed > max || n_masked > max {
+                return Err(bad(
+                    place("counts"),
+                    "1 or more sources, at most 65535 fixed and masked terms",
+                    format!("{n_index} sources, {n_fixed} fixed, {n_masked} masked"),
+                ));
+            }
+            let bytes = (n_index * 8 + n_fixed * 8 + n_masked * 24) as u64;
+            if bytes > left {
+                return Err(bad(
+                    place("records"),
+                    "records within the file",
+                    format!("{bytes} bytes with {left} left"),
+                ));
+            }
+            left -= bytes;
+            let mut index = vec![TermIndex::zeroed(); n_index];
+            let mut fixed = vec![FixedTerm::zeroed(); n_fixed];
+            let mut masked = vec![MaskedTerm::zeroed(); n_masked];
+            r.read_exact(bytemuck::cast_slice_mut(&mut index))
+                .map_err(io)?;
+            r.read_exact(bytemuck::cast_slice_mut(&mut fixed))
+                .map_err(io)?;
+            r.read_exact(bytemuck::cast_slice_mut(&mut masked))
+                .map_err(io)?;
+            let mut sources = Vec::with_capacity(n_index);
+            for (i, e) in index.iter().enumerate() {
+                let next = index.get(i + 1);
+                let f1 = next.map_or(n_fixed, |n| n.fixed as usize);
+                let m1 = next.map_or(n_masked, |n| n.masked as usize);
+                let (f0, m0) = (e.fixed as usize, e.masked as usize);
+                let first_ok = i > 0 || (f0 == 0 && m0 == 0);
+                let order_ok = next.is_none_or(|n| n.key > e.key);
+                if !first_ok || !order_ok || f0 > f1 || m0 > m1 || f1 > n_fixed || m1 > n_masked {
+                    return Err(bad(
+                        place(&format!("source {i}")),
+                        "sources in increasing key order, each starting where the one before ends",
+                        format!("key {} at fixed {f0}..{f1}, masked {m0}..{m1}", e.key),
+                    ));
+                }
+                if !elem_ok(e.key >> 1) {
+                    return Err(bad(
+                        place(&format!("source {i}")),
+                        "an element of the shared part",
+                        (e.key >> 1).to_string(),
+                    ));
+                }
+                sources.push((e.key, fixed[f0..f1].to_vec(), masked[m0..m1].to_vec()));
+            }
+            for t in &fixed {
+                if !(elem_ok(t.elem) && t.f.is_finite() && t.f >= 0.0) {
+                    return Err(bad(
+                        place("fixed term"),
+                        "an element of the shared part and a finite factor >= 0",
+                        format!("element {}, factor {}", t.elem, t.f),
+                    ));
+                }
+            }
+            for t in &masked {
+                if !(elem_ok(t.elem)
+                    && t.f.is_finite()
+                    && t.f >= 0.0
+                    && (0.0..=1.0).contains(&t.vis_static))
+                {
+                    return Err(bad(
+                        place("masked term"),
+                        "an element of the shared part, a finite factor >= 0 and a visibility in [0, 1]",
+                        format!(
+                            "element {}, factor {}, visibility {}",
+                            t.elem, t.f, t.vis_static
+                        ),
+                    ));
+                }
+            }
+            out.push_carried(pk, &sources);
+            last = Some(pk);
+            n_points += 1;
+        }
+        out.release_resident();
+        Ok(out)
+    }
 }
+
+/// Bytes of a point's head in [`PointCache::encode`]'s format.
+const POINT_HEAD: usize = 24;
 
 #[cfg(test)]
 mod tests {

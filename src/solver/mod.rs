@@ -506,6 +506,9 @@ pub struct Solver<'a> {
     links_at: f64,
     /// Most bytes a window keeps in final-gather terms (`None`: no bound).
     kept_budget: Option<usize>,
+    /// The final-gather terms the last window kept on the shared part's elements,
+    /// handed to the next window ([`Solver::release_window`], [`Solver::begin_window`]).
+    carried: Option<PointCache>,
     /// The solved frames around a frame solved between them, whose row entries
     /// with a moving end this frame may take ([`TimeRange`]).
     time_range: Option<TimeRange>,
@@ -748,6 +751,21 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
     let k = g.n as usize;
     let corners: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(g.corners[i.min(k - 1)]));
     crate::shafts::clear_of_boxes(&[x], n, &corners[..k], DVec3::from_array(g.normal), swept)
+}
+
+/// The box around element `g`: its corners, or a cluster's box.
+fn geom_box(g: &Geom) -> (DVec3, DVec3) {
+    if g.patch == u32::MAX {
+        return (
+            DVec3::from_array(g.corners[0]),
+            DVec3::from_array(g.corners[1]),
+        );
+    }
+    let k = (g.n as usize).clamp(1, 4);
+    g.corners[..k].iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), c| (lo.min(DVec3::from_array(*c)), hi.max(DVec3::from_array(*c))),
+    )
 }
 
 /// Points gathered in parallel at a time by the reconstruction: enough to keep the
@@ -1105,6 +1123,7 @@ impl<'a> Solver<'a> {
             now: t,
             links_at: t,
             kept_budget: None,
+            carried: None,
             time_range: None,
             frame_rows: FrameRows::default(),
             rows_between: 0,
@@ -1731,14 +1750,19 @@ impl<'a> Solver<'a> {
     /// Links that are constant in the window but were varying over the whole
     /// animation were left coarse by the shared part: they are refined here, against
     /// `eps · b_ref`, once for all the window's frames.
+    ///
+    /// The final-gather terms the last window handed on ([`Solver::release_window`])
+    /// are the window's to start with, those that hold against `swept`
+    /// (`Solver::revalidated`).
     pub fn begin_window(&mut self, swept: Vec<(DVec3, DVec3)>, b_ref: f64) -> Result<()> {
+        let points = match self.carried.take() {
+            Some(c) => self.revalidated(&c, &swept)?,
+            None => PointCache::new(&self.opts.storage, self.kept_budget)?,
+        };
         self.window = Some(Window {
             swept,
             base: Snapshot::of(&self.elems, &self.links),
-            points: std::sync::Mutex::new(Some(PointCache::new(
-                &self.opts.storage,
-                self.kept_budget,
-            )?)),
+            points: std::sync::Mutex::new(Some(points)),
             ..Window::default()
         });
         let active = self.active_links(false);
@@ -1799,7 +1823,8 @@ impl<'a> Solver<'a> {
             self.frame(t, b_ref)?;
             let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
             let b = self.elems.radiosities.as_slice()[..shared].to_vec();
-            self.release_window();
+            self.release_window()?;
+            self.carried = None;
             self.elems.radiosities.as_mut_slice().copy_from_slice(&b);
             self.index_links();
             let b_ref = self.b_ref();
@@ -1823,15 +1848,127 @@ impl<'a> Solver<'a> {
     }
 
     /// Drops what the current window added to the pools and restores the shared part
-    /// as it was when the window began.
-    pub fn release_window(&mut self) {
+    /// as it was when the window began. The final-gather terms the window kept on
+    /// the shared part's elements are kept for the next window
+    /// ([`Solver::begin_window`] keeps those that still hold there); an error is
+    /// one of the storage they are copied to.
+    pub fn release_window(&mut self) -> Result<()> {
         self.reset_frame();
+        let mut kept = None;
+        let mut shared = 0;
         if let Some(mut w) = self.window.take() {
+            shared = w.base.elems_len as u32;
+            kept = w.points.get_mut().unwrap_or_else(|e| e.into_inner()).take();
             self.restore(&mut w.base);
             drop(w);
             release_free_memory();
         }
         self.pull_pool();
+        // What the window kept on the shared part's elements goes to the next
+        // (terms on the window's own elements go with them).
+        self.carried = match kept {
+            Some(c) => Some(c.carried(&self.opts.storage, self.kept_budget, |_, src| {
+                src.0 >> 1 < shared
+                    && src.1.iter().all(|t| t.elem < shared)
+                    && src.2.iter().all(|t| t.elem < shared)
+            })?),
+            None => None,
+        };
+        Ok(())
+    }
+
+    /// Writes the final-gather terms the last window handed on (nothing if none)
+    /// in `PointCache::encode`'s format: what `solve --resume` needs to continue
+    /// with the next window exactly as an uninterrupted solve does.
+    pub fn encode_carried(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        self.carried.as_ref().map_or(Ok(()), |c| c.encode(w))
+    }
+
+    /// Takes the terms [`Solver::encode_carried`] wrote (`len` bytes from `path`)
+    /// as the ones the last window handed on, checking that every point lies on a
+    /// static patch and every element is one of the shared part (which is all the
+    /// pools hold between windows).
+    pub fn decode_carried(
+        &mut self,
+        r: &mut dyn std::io::Read,
+        len: u64,
+        path: &std::path::Path,
+    ) -> Result<()> {
+        let shared = self.elems.len();
+        let moving = &self.moving_patch;
+        let c = PointCache::decode(
+            r,
+            len,
+            path,
+            &self.opts.storage,
+            self.kept_budget,
+            |e| (e as usize) < shared,
+            |p| moving.get(p as usize) == Some(&false),
+        )?;
+        self.carried = Some(c);
+        Ok(())
+    }
+
+    /// The terms `carried` from the last window that hold in a window whose moving
+    /// objects sweep the boxes `swept`. A source's masked terms hold in any window
+    /// (their static rays are kept and the moving objects are cast against at each
+    /// frame), and so do the terms of a source keyed clear (the point's shaft to it
+    /// is empty and constant in this window too, or the key would differ). Its
+    /// fixed terms hold, visibility included, where the box around the point and
+    /// the source (which holds every ray they were computed from) meets no swept
+    /// box, as no moving object can come between then; otherwise the source is
+    /// dropped and gathered afresh. A masked term whose own box meets no swept box
+    /// becomes the fixed term a fresh gather would make (factor times the static
+    /// visibility), which costs no shaft test at each frame.
+    fn revalidated(&self, carried: &PointCache, swept: &[(DVec3, DVec3)]) -> Result<PointCache> {
+        let geoms = self.elems.geoms.as_slice();
+        let nodes = self.elems.nodes.as_slice();
+        // A point is gathered a hair inside its cell (`CORNER_INSET`).
+        let pad = DVec3::splat(CORNER_INSET * self.patches.diameter);
+        let q = 1.0 / (1u64 << 24) as f64;
+        carried.carried(&self.opts.storage, self.kept_budget, |pk, src| {
+            if src.0 & 1 == 1 {
+                return true;
+            }
+            let x = self
+                .patches
+                .point(pk.0 as usize, f64::from(pk.1) * q, f64::from(pk.2) * q);
+            let clear_of_swept = |e: u32| {
+                let (lo, hi) = geom_box(&geoms[e as usize]);
+                let (lo, hi) = (lo.min(x - pad), hi.max(x + pad));
+                swept
+                    .iter()
+                    .all(|&(a, b)| (0..3).any(|k| b[k] < lo[k] || a[k] > hi[k]))
+            };
+            let (key, fixed, masked) = src;
+            if !fixed.is_empty() && !clear_of_swept(*key >> 1) {
+                return false;
+            }
+            // A cluster's term weighs its contents by their radiosity when it was
+            // gathered (`cluster_kernel`), and a source with children gathered
+            // whole was not opened for the spread of its radiosity then: both are
+            // kept for one window only, as before, and gathered afresh in the next.
+            let s = *key >> 1;
+            let whole = |e: u32| e == s && nodes[s as usize].child_count > 0;
+            if fixed
+                .iter()
+                .any(|t| geoms[t.elem as usize].patch == u32::MAX || whole(t.elem))
+                || masked.iter().any(|t| whole(t.elem))
+            {
+                return false;
+            }
+            masked.retain(|t| {
+                if !clear_of_swept(t.elem) {
+                    return true;
+                }
+                let f = t.f * t.vis_static;
+                if f > 0.0 {
+                    fixed.push(kept::FixedTerm { elem: t.elem, f });
+                }
+                false
+            });
+            true
+        })
     }
 
     /// Restores the pools to `snap` (see [`Snapshot`]).
@@ -4075,6 +4212,117 @@ mod tests {
     }
 
     #[test]
+    fn a_carried_term_holds_unless_a_moving_object_may_come_between() {
+        // A static point on the floor of the Cornell box keeps three sources'
+        // terms: fixed terms (visibility included) from the light, masked terms
+        // from the back wall, and unoccluded terms keyed clear from the ceiling.
+        // A window whose moving object sweeps a box on the segment from the point
+        // to the light drops the light's terms only; one whose object stays out of
+        // the box around the point and the light keeps all three.
+        let scene = crate::scene::cornell_box(true);
+        let s = Solver::new(&scene, SolveOptions::default()).unwrap();
+        let geoms = s.elems.geoms.as_slice();
+        let find = |pred: &dyn Fn(&Geom) -> bool| {
+            (0..geoms.len())
+                .find(|&e| geoms[e].patch != u32::MAX && pred(&geoms[e]))
+                .unwrap()
+        };
+        let normal = |g: &Geom| DVec3::from_array(g.normal);
+        let light = find(&|g| s.patches.emissions[g.patch as usize][0] > 0.0);
+        let floor = find(&|g| normal(g).y > 0.9 && s.patches.emissions[g.patch as usize][0] == 0.0);
+        let ceiling =
+            find(&|g| normal(g).y < -0.9 && s.patches.emissions[g.patch as usize][0] == 0.0);
+        let back = find(&|g| normal(g).z > 0.9);
+        let q = |x: f64| (x * (1u64 << 24) as f64) as u32;
+        let pk = (geoms[floor].patch, q(0.5), q(0.5));
+        let x = s.patches.point(pk.0 as usize, 0.5, 0.5);
+        let masked = |elem: usize| MaskedTerm {
+            mask: 0b1011,
+            key: 7,
+            elem: elem as u32,
+            f: 0.1,
+            vis_static: 0.75,
+        };
+        let mut cache = PointCache::new(&crate::pools::Storage::Ram, None).unwrap();
+        let src = |e: usize| (e as u32) << 1;
+        cache.add(
+            pk,
+            vec![
+                (
+                    src(light),
+                    Terms {
+                        fixed: vec![(light as u32, 0.2)],
+                        masked: vec![],
+                    },
+                ),
+                (
+                    src(back),
+                    Terms {
+                        fixed: vec![],
+                        masked: vec![(masked(back), 0.75)],
+                    },
+                ),
+                (
+                    src(ceiling) | 1,
+                    Terms {
+                        fixed: vec![(ceiling as u32, 0.3)],
+                        masked: vec![],
+                    },
+                ),
+            ],
+        );
+        let (lo, hi) = geom_box(&geoms[light]);
+        let between = x.lerp((lo + hi) * 0.5, 0.5);
+        let kept = |swept: &[(DVec3, DVec3)]| {
+            let c = s.revalidated(&cache, swept).unwrap();
+            let view = c.get(&pk);
+            [src(light), src(back), src(ceiling) | 1]
+                .map(|k| view.is_some_and(|v| v.get(k).is_some()))
+        };
+        let small = DVec3::splat(10.0);
+        assert_eq!(
+            kept(&[(between - small, between + small)]),
+            [false, true, true]
+        );
+        // Beside the point, off the box around it and the light (the box of the
+        // light's corners and the point, padded by a hair).
+        let aside = DVec3::new(hi.x + 50.0, x.y + 20.0, x.z);
+        assert_eq!(kept(&[(aside - small, aside + small)]), [true, true, true]);
+        assert_eq!(kept(&[]), [true, true, true]);
+        // Where no moving object can come between, a masked term becomes the
+        // fixed term a fresh gather makes (factor times the static visibility);
+        // near one it stays masked.
+        let c = s.revalidated(&cache, &[]).unwrap();
+        let view = c.get(&pk).unwrap();
+        assert_eq!(
+            view.get(src(back)).unwrap(),
+            (
+                &[kept::FixedTerm {
+                    elem: back as u32,
+                    f: 0.1 * 0.75
+                }][..],
+                &[][..]
+            )
+        );
+        let (lo, hi) = geom_box(&geoms[back]);
+        let on_back = (lo + hi) * 0.5;
+        let c = s
+            .revalidated(&cache, &[(on_back - small, on_back + small)])
+            .unwrap();
+        assert_eq!(
+            c.get(&pk).unwrap().get(src(back)).unwrap().1,
+            &[masked(back)]
+        );
+        assert_eq!(
+            view.get(src(light)).unwrap().0,
+            &[kept::FixedTerm {
+                elem: light as u32,
+                f: 0.2
+            }]
+        );
+    }
+
+    #[test]
     fn row_terms_kept_over_a_window_are_the_ones_computed_afresh() {
         // LIGHT's first frames: the window keeps the row entries cached
         // coefficients open into, the hidden coefficients of varying links
@@ -4109,13 +4357,8 @@ mod tests {
         // are cleared by the shaft's planes alone (measured 2.0 k).
         let geoms = s.elems.geoms.as_slice();
         let in_box = |a: &Geom, b: &Geom| {
-            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-            for g in [a, b] {
-                for c in &g.corners[..g.n as usize] {
-                    lo = lo.min(DVec3::from_array(*c));
-                    hi = hi.max(DVec3::from_array(*c));
-                }
-            }
+            let ((alo, ahi), (blo, bhi)) = (geom_box(a), geom_box(b));
+            let (lo, hi) = (alo.min(blo), ahi.max(bhi));
             s.moving_now
                 .iter()
                 .any(|(mlo, mhi)| mlo.cmple(hi).all() && mhi.cmpge(lo).all())
