@@ -505,7 +505,11 @@ impl PointCache {
     /// [`TermIndex`], [`FixedTerm`] and [`MaskedTerm`] records as they lie in
     /// memory (little-endian). Read back by [`PointCache::decode`].
     pub fn encode(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
-        for pk in self.keys_sorted() {
+        for (i, pk) in self.keys_sorted().into_iter().enumerate() {
+            // Out of core, the pages read go back as it goes.
+            if i % 1024 == 1023 {
+                self.release_resident();
+            }
             let sp = self.spans[self.slots[&pk] as usize];
             let mut head = [0u8; POINT_HEAD];
             for (i, v) in [pk.0, pk.1, pk.2, sp.n_index, sp.n_fixed, sp.n_masked]
@@ -526,6 +530,7 @@ impl PointCache {
                 &self.masked.as_slice()[at(sp.masked, sp.n_masked)],
             ))?;
         }
+        self.release_resident();
         Ok(())
     }
 
