@@ -512,11 +512,11 @@ impl PointCache {
             }
             let sp = self.spans[self.slots[&pk] as usize];
             let mut head = [0u8; POINT_HEAD];
-            for (i, v) in [pk.0, pk.1, pk.2, sp.n_index, sp.n_fixed, sp.n_masked]
+            for (k, v) in [pk.0, pk.1, pk.2, sp.n_index, sp.n_fixed, sp.n_masked]
                 .into_iter()
                 .enumerate()
             {
-                head[4 * i..4 * i + 4].copy_from_slice(&v.to_le_bytes());
+                head[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
             }
             w.write_all(&head)?;
             let at = |start: u32, n: u32| start as usize..(start + n) as usize;

@@ -78,8 +78,9 @@
 //!    window, which keeps what still holds against the boxes its own objects
 //!    sweep ([`Solver::release_window`], `Solver::revalidated`; the paper's "what
 //!    is constant in time is computed once", across windows as within one): a
-//!    window's first keyframe then gathers like any other instead of from an
-//!    empty cache (ACTOR: 0.9 of its 1.7 s). That is the only state one window
+//!    window's first keyframe no longer gathers from an empty cache (ACTOR's
+//!    took 1.74–1.77 s, now 1.17–1.46 s, other keyframes 0.5–0.8 s, one
+//!    thread; BENCHMARKS.md). That is the only state one window
 //!    hands the next; the journal keeps it beside each finished window, and a
 //!    resumed solve reads it back and produces the same leaves.
 //!
