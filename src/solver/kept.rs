@@ -29,16 +29,16 @@
 //! while over it. Dropping changes the work, never the values: a point gathered
 //! afresh gets the same terms it had.
 //!
-//! **Carried.** A window's terms on the shared part's elements outlive it
-//! ([`PointCache::carried`], called by `Solver::release_window`): the next window
-//! starts from them, keeping a source's masked terms and its terms keyed clear
-//! whatever moves, and its fixed terms (visibility included) only where the box
-//! around the point and the source meets none of the boxes the new window's
-//! objects sweep; a masked term whose own box meets none becomes the fixed term
-//! a fresh gather would make (`Solver::revalidated`). A carried cache is rebuilt in point-key
-//! order, so one read back from a resumed solve's journal
-//! ([`PointCache::encode`], [`PointCache::decode`]) is the same, arena for arena,
-//! as the one the uninterrupted solve carried.
+//! **Carried.** A window's terms outlive it (`Solver::release_window` keeps the
+//! cache as it is): the next window starts from those on the shared part's
+//! elements, rebuilt once ([`PointCache::carried`], `Solver::revalidated`), keeping
+//! a source's masked terms and its terms keyed clear whatever moves, and its fixed
+//! terms (visibility included) only where the box around the point and the source
+//! meets none of the boxes the new window's objects sweep; a masked term whose own
+//! box meets none becomes the fixed term a fresh gather would make. Between windows
+//! the terms on the shared part can be written for a resumed solve's journal
+//! ([`PointCache::encode`], [`PointCache::decode`]); the rebuild goes over points in
+//! key order, so it makes the same cache from those as from the window's own.
 
 use std::collections::HashMap;
 
@@ -271,17 +271,7 @@ impl PointCache {
             }
             return;
         }
-        let mut index = Vec::with_capacity(sources.len());
-        let (mut f, mut m) = (0u16, 0u16);
-        for s in sources {
-            index.push(TermIndex {
-                key: s.0,
-                fixed: f,
-                masked: m,
-            });
-            f += s.1.len() as u16;
-            m += s.2.len() as u16;
-        }
+        let index = Self::index_of(sources);
         let span = PointSpan {
             index: self.index.len() as u32,
             n_index: index.len() as u32,
@@ -319,6 +309,25 @@ impl PointCache {
                 self.spans.push(span);
             }
         }
+    }
+
+    /// The index records of `sources` (sorted by key, at most 65535 fixed and
+    /// masked terms in all): each source's key and where its terms start.
+    fn index_of(sources: &[SourceTerms]) -> Vec<TermIndex> {
+        let (mut f, mut m) = (0u16, 0u16);
+        sources
+            .iter()
+            .map(|s| {
+                let e = TermIndex {
+                    key: s.0,
+                    fixed: f,
+                    masked: m,
+                };
+                f += s.1.len() as u16;
+                m += s.2.len() as u16;
+                e
+            })
+            .collect()
     }
 
     /// Counts slot `s`'s records as dead.
@@ -467,10 +476,10 @@ impl PointCache {
 
     /// A new cache on `storage` (at most `budget` bytes) with the sources of each
     /// point that `keep` accepts, as `keep` leaves them (it may turn masked terms
-    /// into fixed ones): what a window hands the next one (module docs,
-    /// "Carried"). Points go in key order and count as registered by no
-    /// reconstruction yet, so the same content makes the same cache whether it was
-    /// carried or read back from the journal by [`PointCache::decode`].
+    /// into fixed ones): what a window starts from (module docs, "Carried").
+    /// Points go in key order and count as registered by no reconstruction yet, so
+    /// the same accepted content makes the same cache whether it comes from the
+    /// last window's cache or from the journal ([`PointCache::decode`]).
     pub fn carried(
         &self,
         storage: &Storage,
@@ -481,7 +490,9 @@ impl PointCache {
         for (i, pk) in self.keys_sorted().into_iter().enumerate() {
             let mut sources = self.sources(&pk);
             sources.retain_mut(|s| keep(pk, s));
-            out.push_carried(pk, &sources);
+            if !sources.is_empty() && out.admits() {
+                out.append(pk, None, &sources);
+            }
             // Out of core, both caches' pages go back as it goes.
             if i % 1024 == 1023 {
                 self.release_resident();
@@ -492,61 +503,63 @@ impl PointCache {
         Ok(out)
     }
 
-    /// Adds a carried point (see [`PointCache::carried`]) if it has sources and the
-    /// budget admits it.
-    fn push_carried(&mut self, pk: PointKey, sources: &[SourceTerms]) {
-        if !sources.is_empty() && self.admits() {
-            self.append(pk, None, sources);
-        }
-    }
-
-    /// Writes the cache to `w` for the journal: per point in key order, its key
-    /// (3 × u32), its source, fixed-term and masked-term counts (3 × u32), then its
-    /// [`TermIndex`], [`FixedTerm`] and [`MaskedTerm`] records as they lie in
-    /// memory (little-endian). Read back by [`PointCache::decode`].
-    pub fn encode(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+    /// Writes the sources `keep` accepts to `w` for the journal: per point in key
+    /// order that has any, its key (3 × u32), its source, fixed-term and
+    /// masked-term counts (3 × u32), then its [`TermIndex`], [`FixedTerm`] and
+    /// [`MaskedTerm`] records as they lie in memory (little-endian). Read back by
+    /// [`PointCache::decode`].
+    pub fn encode(
+        &self,
+        w: &mut dyn std::io::Write,
+        mut keep: impl FnMut(&SourceTerms) -> bool,
+    ) -> std::io::Result<()> {
         for (i, pk) in self.keys_sorted().into_iter().enumerate() {
             // Out of core, the pages read go back as it goes.
             if i % 1024 == 1023 {
                 self.release_resident();
             }
-            let sp = self.spans[self.slots[&pk] as usize];
+            let mut sources = self.sources(&pk);
+            sources.retain(&mut keep);
+            if sources.is_empty() {
+                continue;
+            }
+            let index = Self::index_of(&sources);
+            let n_fixed: usize = sources.iter().map(|s| s.1.len()).sum();
+            let n_masked: usize = sources.iter().map(|s| s.2.len()).sum();
             let mut head = [0u8; POINT_HEAD];
-            for (k, v) in [pk.0, pk.1, pk.2, sp.n_index, sp.n_fixed, sp.n_masked]
+            let counts = [index.len(), n_fixed, n_masked].map(|n| n as u32);
+            for (k, v) in [pk.0, pk.1, pk.2, counts[0], counts[1], counts[2]]
                 .into_iter()
                 .enumerate()
             {
                 head[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
             }
             w.write_all(&head)?;
-            let at = |start: u32, n: u32| start as usize..(start + n) as usize;
-            w.write_all(bytemuck::cast_slice(
-                &self.index.as_slice()[at(sp.index, sp.n_index)],
-            ))?;
-            w.write_all(bytemuck::cast_slice(
-                &self.fixed.as_slice()[at(sp.fixed, sp.n_fixed)],
-            ))?;
-            w.write_all(bytemuck::cast_slice(
-                &self.masked.as_slice()[at(sp.masked, sp.n_masked)],
-            ))?;
+            w.write_all(bytemuck::cast_slice(&index))?;
+            for s in &sources {
+                w.write_all(bytemuck::cast_slice(&s.1))?;
+            }
+            for s in &sources {
+                w.write_all(bytemuck::cast_slice(&s.2))?;
+            }
         }
         self.release_resident();
         Ok(())
     }
 
     /// Reads [`PointCache::encode`]'s bytes (`len` of them, from `path`) into a cache
-    /// on `storage` as [`PointCache::carried`] builds it, checking every field:
+    /// on `storage` holding every point and source they name (the next window
+    /// applies its budget, as it does to the terms a window hands on in memory),
+    /// checking every field:
     /// points in increasing key order on patches `patch_ok` accepts, sources in
     /// increasing key order whose offsets stay within the point's terms, elements
     /// `elem_ok` accepts, finite factors and visibilities in [0, 1]. A damaged file
     /// is an error that names the place.
-    #[allow(clippy::too_many_arguments)]
     pub fn decode(
         r: &mut dyn std::io::Read,
         len: u64,
         path: &std::path::Path,
         storage: &Storage,
-        budget: Option<usize>,
         elem_ok: impl Fn(u32) -> bool,
         patch_ok: impl Fn(u32) -> bool,
     ) -> Result<PointCache> {
@@ -554,7 +567,7 @@ impl PointCache {
             crate::Error::invalid(path, place, expected, found)
         };
         let io = |e| crate::Error::io(path, e);
-        let mut out = PointCache::new(storage, budget)?;
+        let mut out = PointCache::new(storage, None)?;
         let mut left = len;
         let mut last: Option<PointKey> = None;
         let mut n_points = 0u64;
@@ -669,7 +682,7 @@ impl PointCache {
                     ));
                 }
             }
-            out.push_carried(pk, &sources);
+            out.append(pk, None, &sources);
             last = Some(pk);
             n_points += 1;
         }

@@ -742,15 +742,19 @@ impl Terms {
 /// box around the point and a cluster).
 fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> bool {
     if g.patch == u32::MAX {
-        let lo = x.min(DVec3::from_array(g.corners[0]));
-        let hi = x.max(DVec3::from_array(g.corners[1]));
-        return swept
-            .iter()
-            .all(|&(a, b)| (0..3).any(|k| b[k] < lo[k] || a[k] > hi[k]));
+        let (lo, hi) = geom_box(g);
+        return !meets_any(lo.min(x), hi.max(x), swept);
     }
     let k = g.n as usize;
     let corners: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(g.corners[i.min(k - 1)]));
     crate::shafts::clear_of_boxes(&[x], n, &corners[..k], DVec3::from_array(g.normal), swept)
+}
+
+/// True if the box `[lo, hi]` meets one of `boxes` (closed boxes: touching counts).
+fn meets_any(lo: DVec3, hi: DVec3, boxes: &[(DVec3, DVec3)]) -> bool {
+    boxes
+        .iter()
+        .any(|&(a, b)| a.cmple(hi).all() && lo.cmple(b).all())
 }
 
 /// The box around element `g`: its corners, or a cluster's box.
@@ -1630,18 +1634,8 @@ impl<'a> Solver<'a> {
         let geoms = self.elems.geoms.as_slice();
         let (gr, gs) = (&geoms[r.ix()], &geoms[s.ix()]);
         if gr.patch == u32::MAX || gs.patch == u32::MAX {
-            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-            for g in [gr, gs] {
-                let k = if g.patch == u32::MAX { 2 } else { g.n as usize };
-                for p in &g.corners[..k] {
-                    lo = lo.min(DVec3::from_array(*p));
-                    hi = hi.max(DVec3::from_array(*p));
-                }
-            }
-            return w
-                .swept
-                .iter()
-                .any(|&(a, b)| a.cmple(hi).all() && lo.cmple(b).all());
+            let ((rlo, rhi), (slo, shi)) = (geom_box(gr), geom_box(gs));
+            return meets_any(rlo.min(slo), rhi.max(shi), &w.swept);
         }
         let (pr, ps) = (oracle::poly(gr), oracle::poly(gs));
         let shaft = crate::shafts::Shaft::new(
@@ -1823,7 +1817,7 @@ impl<'a> Solver<'a> {
             self.frame(t, b_ref)?;
             let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
             let b = self.elems.radiosities.as_slice()[..shared].to_vec();
-            self.release_window()?;
+            self.release_window();
             self.carried = None;
             self.elems.radiosities.as_mut_slice().copy_from_slice(&b);
             self.index_links();
@@ -1848,69 +1842,33 @@ impl<'a> Solver<'a> {
     }
 
     /// Drops what the current window added to the pools and restores the shared part
-    /// as it was when the window began. The final-gather terms the window kept on
-    /// the shared part's elements are kept for the next window
-    /// ([`Solver::begin_window`] keeps those that still hold there); an error is
-    /// one of the storage they are copied to.
-    pub fn release_window(&mut self) -> Result<()> {
+    /// as it was when the window began. The final-gather terms the window kept are
+    /// kept for the next window, as they are: [`Solver::begin_window`] keeps those
+    /// on the shared part's elements that still hold there.
+    pub fn release_window(&mut self) {
         self.reset_frame();
-        let mut kept = None;
-        let mut shared = 0;
         if let Some(mut w) = self.window.take() {
-            shared = w.base.elems_len as u32;
-            kept = w.points.get_mut().unwrap_or_else(|e| e.into_inner()).take();
+            self.carried = w.points.get_mut().unwrap_or_else(|e| e.into_inner()).take();
             self.restore(&mut w.base);
             drop(w);
             release_free_memory();
         }
         self.pull_pool();
-        // What the window kept on the shared part's elements goes to the next
-        // (terms on the window's own elements go with them).
-        self.carried = match kept {
-            Some(c) => Some(c.carried(&self.opts.storage, self.kept_budget, |_, src| {
-                src.0 >> 1 < shared
-                    && src.1.iter().all(|t| t.elem < shared)
-                    && src.2.iter().all(|t| t.elem < shared)
-            })?),
-            None => None,
-        };
-        Ok(())
     }
 
-    /// Writes the final-gather terms the last window handed on (nothing if none)
-    /// in `PointCache::encode`'s format: what `solve --resume` needs to continue
-    /// with the next window exactly as an uninterrupted solve does.
-    pub fn encode_carried(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
-        self.carried.as_ref().map_or(Ok(()), |c| c.encode(w))
-    }
-
-    /// Takes the terms [`Solver::encode_carried`] wrote (`len` bytes from `path`)
-    /// as the ones the last window handed on, checking that every point lies on a
-    /// static patch and every element is one of the shared part (which is all the
-    /// pools hold between windows).
-    pub fn decode_carried(
-        &mut self,
-        r: &mut dyn std::io::Read,
-        len: u64,
-        path: &std::path::Path,
-    ) -> Result<()> {
-        let shared = self.elems.len();
-        let moving = &self.moving_patch;
-        let c = PointCache::decode(
-            r,
-            len,
-            path,
-            &self.opts.storage,
-            self.kept_budget,
-            |e| (e as usize) < shared,
-            |p| moving.get(p as usize) == Some(&false),
-        )?;
-        self.carried = Some(c);
-        Ok(())
+    /// True if every element the source terms `src` name is one of the shared
+    /// part's (which, between windows, is all the pools hold): the terms a window
+    /// hands the next. Terms on the window's own elements go with them.
+    fn on_shared_part(&self, src: &kept::SourceTerms) -> bool {
+        let shared = self.elems.len() as u32;
+        src.0 >> 1 < shared
+            && src.1.iter().all(|t| t.elem < shared)
+            && src.2.iter().all(|t| t.elem < shared)
     }
 
     /// The terms `carried` from the last window that hold in a window whose moving
-    /// objects sweep the boxes `swept`. A source's masked terms hold in any window
+    /// objects sweep the boxes `swept`: those on the shared part
+    /// ([`Solver::on_shared_part`]), as follows. A source's masked terms hold in any window
     /// (their static rays are kept and the moving objects are cast against at each
     /// frame), and so do the terms of a source keyed clear (the point's shaft to it
     /// is empty and constant in this window too, or the key would differ). Its
@@ -1927,6 +1885,9 @@ impl<'a> Solver<'a> {
         let pad = DVec3::splat(CORNER_INSET * self.patches.diameter);
         let q = 1.0 / (1u64 << 24) as f64;
         carried.carried(&self.opts.storage, self.kept_budget, |pk, src| {
+            if !self.on_shared_part(src) {
+                return false;
+            }
             if src.0 & 1 == 1 {
                 return true;
             }
@@ -1935,10 +1896,7 @@ impl<'a> Solver<'a> {
                 .point(pk.0 as usize, f64::from(pk.1) * q, f64::from(pk.2) * q);
             let clear_of_swept = |e: u32| {
                 let (lo, hi) = geom_box(&geoms[e as usize]);
-                let (lo, hi) = (lo.min(x - pad), hi.max(x + pad));
-                swept
-                    .iter()
-                    .all(|&(a, b)| (0..3).any(|k| b[k] < lo[k] || a[k] > hi[k]))
+                !meets_any(lo.min(x - pad), hi.max(x + pad), swept)
             };
             let (key, fixed, masked) = src;
             if !fixed.is_empty() && !clear_of_swept(*key >> 1) {
@@ -3258,10 +3216,8 @@ impl<'a> Solver<'a> {
         // surfaces, whose terms keep their static rays as masks).
         let swept_cluster = gs.patch == u32::MAX
             && swept.is_some_and(|sw| {
-                let lo = DVec3::from_array(gs.corners[0]).min(x);
-                let hi = DVec3::from_array(gs.corners[1]).max(x);
-                sw.iter()
-                    .any(|&(a, b)| a.cmple(hi).all() && lo.cmple(b).all())
+                let (lo, hi) = geom_box(gs);
+                meets_any(lo.min(x), hi.max(x), sw)
             });
         // A surface whose radiosity varies is opened too: its average would be off by
         // about `(r/d) ΔB_s` of its factor (module docs, "Sources whose radiosity
@@ -4358,10 +4314,7 @@ mod tests {
         let geoms = s.elems.geoms.as_slice();
         let in_box = |a: &Geom, b: &Geom| {
             let ((alo, ahi), (blo, bhi)) = (geom_box(a), geom_box(b));
-            let (lo, hi) = (alo.min(blo), ahi.max(bhi));
-            s.moving_now
-                .iter()
-                .any(|(mlo, mhi)| mlo.cmple(hi).all() && mhi.cmpge(lo).all())
+            meets_any(alo.min(blo), ahi.max(bhi), &s.moving_now)
         };
         let (steady, by_planes) = s.window.as_ref().map_or((0, 0), |w| {
             let reused: Vec<(&Geom, &Geom)> = w

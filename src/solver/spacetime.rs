@@ -693,21 +693,42 @@ impl<'a> SpaceTime<'a> {
         &self.solver.patches.geometry
     }
 
-    /// Writes what the last solved window hands the next (see
-    /// [`Solver::encode_carried`]): a journal keeps it beside the window.
+    /// Writes the final-gather terms the last solved window hands the next (those
+    /// on the shared part, `Solver::on_shared_part`; nothing before the first) in
+    /// `PointCache::encode`'s format: a journal keeps them beside the window, and
+    /// `solve --resume` continues with the next window exactly as an uninterrupted
+    /// solve does.
     pub fn encode_carried(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
-        self.solver.encode_carried(w)
+        let s = &self.solver;
+        s.carried
+            .as_ref()
+            .map_or(Ok(()), |c| c.encode(w, |src| s.on_shared_part(src)))
     }
 
-    /// Takes what a journaled window handed the next ([`Solver::decode_carried`]),
-    /// before the first window a resumed solve solves.
+    /// Takes the terms [`SpaceTime::encode_carried`] wrote (`len` bytes from
+    /// `path`) as the ones the last window handed on, before the first window a
+    /// resumed solve solves, checking that every point lies on a static patch and
+    /// every element is one of the shared part (all the pools hold between
+    /// windows).
     pub fn decode_carried(
         &mut self,
         r: &mut dyn std::io::Read,
         len: u64,
         path: &std::path::Path,
     ) -> Result<()> {
-        self.solver.decode_carried(r, len, path)
+        let s = &mut self.solver;
+        let shared = s.elems.len();
+        let moving = &s.moving_patch;
+        let c = super::kept::PointCache::decode(
+            r,
+            len,
+            path,
+            &s.opts.storage,
+            |e| (e as usize) < shared,
+            |p| moving.get(p as usize) == Some(&false),
+        )?;
+        s.carried = Some(c);
+        Ok(())
     }
 
     /// The solver (pools, geometry) as it stands.
@@ -889,7 +910,7 @@ impl<'a> SpaceTime<'a> {
             });
         }
         let closed = merge.finish(w1)?;
-        solver.release_window()?;
+        solver.release_window();
         solver
             .links
             .transports
