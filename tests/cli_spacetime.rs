@@ -146,6 +146,8 @@ fn bad_time_settings_are_refused() {
         (vec!["--fps", "many"], 2, "--fps"),
         (vec!["--key-stride", "0"], 1, "--key-stride"),
         (vec!["--key-stride=-1"], 2, "--key-stride"),
+        (vec!["--key-motion", "0"], 1, "--key-motion"),
+        (vec!["--key-motion", "inf"], 1, "--key-motion"),
         (vec!["--interp-tol", "0"], 1, "--interp-tol"),
         (vec!["--interp-tol", "NaN"], 1, "--interp-tol"),
         // Settings of the static solve's last round, which a window never reaches.

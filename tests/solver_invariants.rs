@@ -352,14 +352,21 @@ fn settings_outside_their_domain_are_refused_by_the_solver() {
         (
             "--window",
             SpaceTimeOptions {
-                window: f64::NAN,
+                window: Some(f64::NAN),
                 ..st
             },
         ),
         (
             "--key-stride",
             SpaceTimeOptions {
-                key_stride: 0,
+                key_stride: Some(0),
+                ..st
+            },
+        ),
+        (
+            "--key-motion",
+            SpaceTimeOptions {
+                key_motion: -0.1,
                 ..st
             },
         ),

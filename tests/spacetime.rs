@@ -41,10 +41,13 @@ fn opts() -> SolveOptions {
     SolveOptions::default()
 }
 
+/// Windows of `window` seconds at `fps`, keyframes every 8 frames (the layout these
+/// tests were written for; the default spaces keyframes by motion, tested apart).
 fn st(fps: f64, window: f64) -> SpaceTimeOptions {
     SpaceTimeOptions {
         fps,
-        window,
+        window: Some(window),
+        key_stride: Some(8),
         ..SpaceTimeOptions::default()
     }
 }
@@ -673,7 +676,7 @@ fn static_masks_plus_moving_rays_equal_full_visibility() {
 /// frames: its leaves and every frame's record.
 fn keyed_run(scene: &Scene, stride: u32) -> (Vec<WindowOutput>, Vec<spacetime::FrameRecord>) {
     let o = SpaceTimeOptions {
-        key_stride: stride,
+        key_stride: Some(stride),
         ..st(10.0, 0.8)
     };
     let mut frames = Vec::new();

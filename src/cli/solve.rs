@@ -158,9 +158,10 @@ pub struct Args {
     #[arg(long, default_value_t = 25.0)]
     pub fps: f64,
     /// Seconds of animation per space-time window: frames are solved window by
-    /// window; each finished window is written and its memory released.
-    #[arg(long, default_value_t = 1.0)]
-    pub window: f64,
+    /// window; each finished window is written and its memory released. Default:
+    /// three key intervals (see `--key-motion`), as long in motion as they are.
+    #[arg(long)]
+    pub window: Option<f64>,
     /// A stored cell keeps one value over consecutive frames while its corners stay
     /// within this fraction of the RMS reflected radiosity of their mean.
     #[arg(long, default_value_t = 0.01)]
@@ -169,9 +170,15 @@ pub struct Args {
     /// keyframe gathered at every reconstruction point; the frames between, taken
     /// by bisection, interpolate the points where the two nearest solved frames
     /// agree, or follow a line with the frame as far before, and gather the rest
-    /// (1: gather every frame).
-    #[arg(long, default_value_t = SpaceTimeOptions::default().key_stride)]
-    pub key_stride: u32,
+    /// (1: gather every frame). Default: keyframes spaced by motion (`--key-motion`).
+    #[arg(long)]
+    pub key_stride: Option<u32>,
+    /// Space-time, without `--key-stride`: the next keyframe is the last frame
+    /// before some point of a moving object has moved more than this fraction of the
+    /// scene's diameter since the keyframe before (at most 32 frames on). The same
+    /// motion played over more frames makes as many keyframes.
+    #[arg(long, default_value_t = SpaceTimeOptions::default().key_motion)]
+    pub key_motion: f64,
     /// Space-time: how far (a fraction of the RMS reflected radiosity) a point's
     /// values at the solved frames around may stray from agreeing, or from a line,
     /// for a frame between to interpolate it.

@@ -25,6 +25,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
         merge_tol: args.merge_tol,
         kept_budget: args.budget,
         key_stride: args.key_stride,
+        key_motion: args.key_motion,
         interp_tol: args.interp_tol,
     };
     st.validate()?;
@@ -35,7 +36,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
 /// changes a result (not the storage, thread count being part of determinism).
 fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> String {
     let settings = format!(
-        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {} contact {} fps {} window {} merge {} keys {} interp {} threads {}",
+        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} threads {}",
         opts.eps,
         opts.min_size,
         opts.power_size,
@@ -52,12 +53,13 @@ fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> Str
         st.window,
         st.merge_tol,
         st.key_stride,
+        st.key_motion,
         st.interp_tol,
         rayon::current_num_threads(),
     );
     let scene_text = rhier::scene::to_json_string(scene);
     format!(
-        "rhier space-time journal 2\n{settings}\nscene crc32 {:#010x}, {} bytes\n",
+        "rhier space-time journal 3\n{settings}\nscene crc32 {:#010x}, {} bytes\n",
         crc32fast::hash(scene_text.as_bytes()),
         scene_text.len()
     )

@@ -49,9 +49,12 @@ use crate::Result;
 use crate::pools::{Column, Storage};
 
 /// Reconstructions (frames) after which a point no reconstruction registered is
-/// dropped. Frames are solved keyframe first, then the frames between (see
-/// `spacetime::solve_order`): 8 covers a keyframe interval at the default stride 8,
-/// so a point each keyframe registers survives the frames between.
+/// dropped. A reconstruction registers every point it meshes, gathered or
+/// interpolated, so what goes is the points of cells no frame has meshed for that
+/// long (where a moving shadow was). Frames are solved keyframe first, then the
+/// frames between (see `spacetime::solve_order`): 8 is ACTOR's key interval. 16
+/// (ACTOR played twice as slowly has keyframes 16 frames apart) kept 2.7 MB more
+/// and measured no faster.
 pub const STALE_AFTER: u32 = 8;
 
 /// Bytes a compaction slides before it hands the pages of mapped arenas back

@@ -23,7 +23,7 @@
 //!    This hierarchy and its coefficients are computed once and kept for every
 //!    window ([`Solver::run_shared`]).
 //! 2. *Windows*, earliest first: the animation's frames (`fps`) are grouped into
-//!    windows of `window` seconds. A window re-classifies the links against the boxes
+//!    windows of three key intervals (below), or of `window` seconds. A window re-classifies the links against the boxes
 //!    swept during the window only (a link far from where the objects are *now*
 //!    becomes constant) and refines the links that became constant: the window's
 //!    base. Each frame then starts from that base, places the moving objects,
@@ -49,9 +49,15 @@
 //!    bounded ([`SpaceTimeOptions::kept_budget`]): over the bound, the points the
 //!    last frame did not gather are dropped and new ones are gathered every frame.
 //!
-//!    *Keyframes.* Every [`SpaceTimeOptions::key_stride`]-th frame of a window (and
-//!    its first and last) is solved and reconstructed by a final gather at every
-//!    point; the frames between are solved right after the keyframe that ends
+//!    *Keyframes.* A window's first and last frames, and frames between them
+//!    spaced by motion (the last frame before a moving object has travelled
+//!    [`SpaceTimeOptions::key_motion`] of the scene's diameter since the keyframe
+//!    before, [`time_layout`]; or every `key_stride`-th frame), are solved and
+//!    reconstructed by a final gather at every point. The paper splits in time where
+//!    the light changes, not every so many frames, so the same motion played over
+//!    twice the frames (its length measure, §6) makes as many keyframes and
+//!    windows here; only the frames between, which mostly interpolate, double. The
+//!    frames between are solved right after the keyframe that ends
 //!    their interval, by bisection ([`solve_order`]: the midpoint first, between
 //!    the two keyframes, then each half's midpoint between its ends, as the paper
 //!    splits elements in time at the midpoint, §4.3). A point whose values at the
@@ -139,8 +145,10 @@ use crate::scene::Scene;
 pub struct SpaceTimeOptions {
     /// Frames per second: the times at which radiosity is solved.
     pub fps: f64,
-    /// Window length in seconds (at least one frame).
-    pub window: f64,
+    /// Window length in seconds (at least one frame); `None`: a window spans
+    /// [`WINDOW_KEYS`] key intervals ([`time_layout`]), so it is as long in motion
+    /// as its keyframes are, whatever the frame rate or the speed.
+    pub window: Option<f64>,
     /// A cell keeps one value over consecutive frames while its corners stay within
     /// this fraction of the RMS reflected radiosity of their running mean.
     pub merge_tol: f64,
@@ -152,8 +160,14 @@ pub struct SpaceTimeOptions {
     /// keyframe, reconstructed by final gathers at every point; the frames between
     /// two keyframes, taken by bisection ([`solve_order`]), interpolate the points
     /// where the solved frames around allow it ([`Between`]). 1: every frame is a
-    /// keyframe.
-    pub key_stride: u32,
+    /// keyframe. `None`: keyframes are spaced by motion, `key_motion` apart
+    /// ([`time_layout`]).
+    pub key_stride: Option<u32>,
+    /// With `key_stride: None`, the next keyframe is the last frame no point of a
+    /// moving object has moved more than this fraction of the scene's diameter
+    /// since the keyframe before ([`frame_motion`]), and at most
+    /// [`MAX_KEY_FRAMES`] frames on.
+    pub key_motion: f64,
     /// A point is interpolated between two solved frames when their values differ by
     /// at most this fraction of the RMS reflected radiosity in every channel, or the
     /// earlier lies within it of the line through the frame as far before and the
@@ -163,18 +177,19 @@ pub struct SpaceTimeOptions {
 
 impl SpaceTimeOptions {
     /// Checks the time settings before any work (as [`SolveOptions::validate`]):
-    /// `fps`, `window`, `merge_tol` and `interp_tol` finite and > 0, `key_stride`
-    /// >= 1, each named by its `rhier solve` flag.
+    /// `fps`, `window`, `key_motion`, `merge_tol` and `interp_tol` finite and > 0,
+    /// `key_stride` >= 1, each named by its `rhier solve` flag.
     pub fn validate(&self) -> Result<()> {
         super::check_domains(
             &[
                 ("--fps", Some(self.fps)),
-                ("--window", Some(self.window)),
+                ("--window", self.window),
+                ("--key-motion", Some(self.key_motion)),
                 ("--merge-tol", Some(self.merge_tol)),
                 ("--interp-tol", Some(self.interp_tol)),
             ],
             &[],
-            &[("--key-stride", self.key_stride)],
+            &[("--key-stride", self.key_stride.unwrap_or(1))],
         )
     }
 }
@@ -183,14 +198,24 @@ impl Default for SpaceTimeOptions {
     fn default() -> Self {
         SpaceTimeOptions {
             fps: 25.0,
-            window: 1.0,
+            window: None,
             merge_tol: 0.01,
             kept_budget: None,
-            key_stride: 8,
+            key_stride: None,
+            key_motion: 0.05,
             interp_tol: 0.01,
         }
     }
 }
+
+/// Key intervals per window when `--window` is not given ([`time_layout`]).
+pub const WINDOW_KEYS: usize = 3;
+
+/// Most frames from one keyframe to the next when keyframes are spaced by motion
+/// ([`time_layout`]): where nothing moves, a window still ends every
+/// `WINDOW_KEYS · MAX_KEY_FRAMES + 1` frames, so an interrupted solve loses at most
+/// that many and a bisection looks back over at most five levels.
+pub const MAX_KEY_FRAMES: usize = 32;
 
 /// Frames between two keyframes skip their leaf solve when no moving surface's
 /// power changes by more than this fraction of the moving surfaces' total between
@@ -201,16 +226,6 @@ impl Default for SpaceTimeOptions {
 /// 4) and its error grows from 1.41% to 1.44%; skipping every one, LIGHT's error is
 /// 2.6% (points beside the lamp the panel slides over, off by 20%).
 const MOVING_POWER_TOL: f64 = 0.01;
-
-/// Keyframes of a window of `n` frames: every `stride`-th and the last.
-pub fn key_frames(n: usize, stride: u32) -> Vec<usize> {
-    let stride = stride.max(1) as usize;
-    let mut keys: Vec<usize> = (0..n).step_by(stride).collect();
-    if n > 0 && keys.last() != Some(&(n - 1)) {
-        keys.push(n - 1);
-    }
-    keys
-}
 
 /// One frame of a window's solve order: a keyframe (`brackets: None`), or a frame
 /// between two frames already solved, the nearest on each side.
@@ -384,21 +399,150 @@ pub fn frame_range(i: usize, fps: f64, start: f64, end: f64) -> [f64; 2] {
     [lo.max(start), (start + (i as f64 + 0.5) / fps).min(end)]
 }
 
-/// Frame times grouped into windows of `per_window` frames, earliest first; a last
-/// window shorter than half the others joins the one before it (a window's first
-/// frame gathers every point afresh, so a one-frame tail would cost as much as a
-/// whole window).
-pub fn group_frames(times: &[f64], per_window: usize) -> Vec<Vec<f64>> {
-    let per_window = per_window.max(1);
-    let mut windows: Vec<Vec<f64>> = times.chunks(per_window).map(<[f64]>::to_vec).collect();
-    if windows.len() >= 2 && windows[windows.len() - 1].len() * 2 < per_window {
-        if let Some(tail) = windows.pop() {
-            if let Some(last) = windows.last_mut() {
-                last.extend(tail);
+/// How far the moving objects of `scene` move between consecutive frames, as a
+/// fraction of `diameter`: entry `i` bounds the distance any point of a moving
+/// object travels from `times[i]` to `times[i + 1]` (the straight-line distance
+/// between its two placements). The bound is taken at the corners of each object's
+/// own box, which is exact for the largest: a point's displacement between two affine
+/// placements is an affine function of the point, so its length is convex and
+/// largest at a corner. What [`time_layout`] spaces keyframes by.
+pub fn frame_motion(scene: &Scene, times: &[f64], diameter: f64) -> Vec<f64> {
+    let mut out = vec![0.0; times.len().saturating_sub(1)];
+    let scale = if diameter > 0.0 { 1.0 / diameter } else { 0.0 };
+    for obj in scene.objects.iter().filter(|o| o.is_moving()) {
+        let (lo, hi) = obj
+            .polygons
+            .iter()
+            .flat_map(|p| p.vertices.iter().copied())
+            .fold(
+                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                |(lo, hi), v| (lo.min(v), hi.max(v)),
+            );
+        if !lo.x.is_finite() {
+            continue;
+        }
+        let corners: [DVec3; 8] = std::array::from_fn(|i| {
+            DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            )
+        });
+        let place = |t: f64| corners.map(|c| obj.to_world(t).transform_point3(c));
+        let mut prev = times.first().map(|&t| place(t));
+        for (d, &t) in out.iter_mut().zip(times.iter().skip(1)) {
+            let cur = place(t);
+            if let Some(p) = prev {
+                let step = p
+                    .iter()
+                    .zip(&cur)
+                    .map(|(a, b)| a.distance(*b))
+                    .fold(0.0, f64::max);
+                *d = f64::max(*d, step * scale);
+            }
+            prev = Some(cur);
+        }
+    }
+    out
+}
+
+/// One window's frames and keyframes, as [`time_layout`] plans them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WindowPlan {
+    /// Frame times, earliest first.
+    pub times: Vec<f64>,
+    /// Keyframes: indices into `times`, increasing, from the first to the last.
+    pub keys: Vec<usize>,
+}
+
+/// The animation's frames (`times`, with `motion` from [`frame_motion`]) grouped
+/// into windows, earliest first, each with its keyframes.
+///
+/// Keyframes are every `key_stride`-th frame of a window, or, without one, spaced
+/// by motion: the next keyframe is the last frame before some point of a moving
+/// object has moved more than `key_motion` of the scene's diameter since the one
+/// before (at least one frame on, at most [`MAX_KEY_FRAMES`]). Damez & Sillion split
+/// an element in time where its light changes (§4.3, §5.2), not every so many
+/// frames: the same motion over twice the frames (their length measure, §6) then
+/// makes as many keyframes, and only the cheap frames between them double. A window
+/// is `window` seconds of frames, or, without one, [`WINDOW_KEYS`] key intervals: as
+/// long in motion as its keys are, so its swept boxes (what it classifies links
+/// against) and its start's cost do not depend on how slowly the motion is played.
+/// Either way a last window shorter than half the one before joins it (a window's
+/// start costs more than a frame). ACTOR moves about 0.6% of its diameter a frame at
+/// 25 fps, so the default `key_motion` 0.05 spaces its keyframes 8 frames apart, as the
+/// former default stride did, and its windows last 25 frames.
+pub fn time_layout(times: &[f64], motion: &[f64], st: &SpaceTimeOptions) -> Vec<WindowPlan> {
+    let n = times.len();
+    let mut cum = Vec::with_capacity(n);
+    cum.push(0.0);
+    for (i, &d) in motion.iter().take(n.saturating_sub(1)).enumerate() {
+        cum.push(cum[i] + d);
+    }
+    cum.resize(n.max(1), cum[cum.len() - 1]);
+    // The keyframe after frame `k`, no later than `last`.
+    let next_key = |k: usize, last: usize| -> usize {
+        match st.key_stride {
+            Some(s) => (k + s.max(1) as usize).min(last),
+            None => {
+                let far = (k + MAX_KEY_FRAMES).min(last);
+                let mut j = (k + 1).min(last);
+                while j < far && cum[j + 1] - cum[k] <= st.key_motion {
+                    j += 1;
+                }
+                j
+            }
+        }
+    };
+    let mut ranges: Vec<(usize, usize)> = Vec::new();
+    match st.window {
+        Some(w) => {
+            let per_window = ((w * st.fps).round() as usize).max(1);
+            let mut a = 0;
+            while a < n {
+                let b = (a + per_window).min(n) - 1;
+                ranges.push((a, b));
+                a = b + 1;
+            }
+        }
+        None => {
+            let mut a = 0;
+            while a < n {
+                let mut k = a;
+                for _ in 0..WINDOW_KEYS {
+                    if k + 1 >= n {
+                        break;
+                    }
+                    k = next_key(k, n - 1);
+                }
+                ranges.push((a, k));
+                a = k + 1;
             }
         }
     }
-    windows
+    if let [.., (pa, _), (a, b)] = ranges[..] {
+        if (b + 1 - a) * 2 < a - pa {
+            ranges.pop();
+            if let Some(last) = ranges.last_mut() {
+                last.1 = b;
+            }
+        }
+    }
+    ranges
+        .into_iter()
+        .map(|(a, b)| {
+            let mut keys = vec![0];
+            let mut k = a;
+            while k < b {
+                k = next_key(k, b);
+                keys.push(k - a);
+            }
+            WindowPlan {
+                times: times[a..=b].to_vec(),
+                keys,
+            }
+        })
+        .collect()
 }
 
 /// Boxes swept over `[t0, t1]` by each moving object of `scene`: the union of its
@@ -623,8 +767,8 @@ fn cell_key(l: &Leaf) -> CellKey {
 pub struct SpaceTime<'a> {
     solver: Solver<'a>,
     st: SpaceTimeOptions,
-    /// Frame times of each window.
-    windows: Vec<Vec<f64>>,
+    /// Frame times and keyframes of each window.
+    windows: Vec<WindowPlan>,
     shared_tr: Vec<crate::pools::links::Transport>,
     shared_b: Vec<[f32; 3]>,
     /// The shared part's directional power ([`crate::pools::Emission`]; cluster emission depends on `B`).
@@ -647,9 +791,9 @@ impl<'a> SpaceTime<'a> {
         let start = Instant::now();
         let (t_start, t_end) = (scene.time.start, scene.time.end);
         let times = frame_times(t_start, t_end, st.fps);
-        let per_window = ((st.window * st.fps).round() as usize).max(1);
-        let windows = group_frames(&times, per_window);
         let mut solver = Solver::at_time(scene, opts, t_start, [t_start as f32, t_end as f32])?;
+        let motion = frame_motion(scene, &times, solver.patches.diameter);
+        let windows = time_layout(&times, &motion, &st);
         solver.set_kept_budget(st.kept_budget);
         let rounds = solver.run_shared(swept_boxes(scene, t_start, t_end), on_round)?;
         let b_ref = solver.radiosity_scale().max(f64::MIN_POSITIVE);
@@ -685,7 +829,7 @@ impl<'a> SpaceTime<'a> {
 
     /// Index of the first frame of window `w`.
     fn first_frame(&self, w: usize) -> u32 {
-        self.windows[..w].iter().map(|f| f.len() as u32).sum()
+        self.windows[..w].iter().map(|p| p.times.len() as u32).sum()
     }
 
     /// The patches leaves refer to (for the file's header).
@@ -746,7 +890,10 @@ impl<'a> SpaceTime<'a> {
         let scene = self.solver.scene;
         let (t_start, t_end) = (scene.time.start, scene.time.end);
         let fps = self.st.fps;
-        let frames = self.windows[wi].clone();
+        let WindowPlan {
+            times: frames,
+            keys,
+        } = self.windows[wi].clone();
         let first = self.first_frame(wi);
         let b_ref = self.stats.b_ref;
         let tol = self.st.merge_tol * b_ref;
@@ -761,7 +908,6 @@ impl<'a> SpaceTime<'a> {
             tol,
         };
         let mut frame_cells = 0u64;
-        let keys = key_frames(frames.len(), self.st.key_stride);
         let interp_tol = self.st.interp_tol * b_ref;
         let order = solve_order(&keys);
         // The values of the frames that later frames interpolate (about 0.9 MB each
@@ -1018,23 +1164,145 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 0);
     }
 
+    /// The layout of `n` frames at 25 fps moving `step` of the diameter a frame
+    /// (`window` seconds, `stride`: `None` for the defaults), as window lengths and
+    /// keyframes.
+    fn layout(
+        n: usize,
+        step: f64,
+        window: Option<f64>,
+        stride: Option<u32>,
+    ) -> (Vec<usize>, Vec<Vec<usize>>) {
+        let times: Vec<f64> = (0..n).map(|i| i as f64 / 25.0).collect();
+        let st = SpaceTimeOptions {
+            window,
+            key_stride: stride,
+            ..SpaceTimeOptions::default()
+        };
+        let plans = time_layout(&times, &vec![step; n.saturating_sub(1)], &st);
+        // Every frame once, in order; keys from the first frame to the last.
+        assert_eq!(
+            plans
+                .iter()
+                .flat_map(|p| p.times.clone())
+                .collect::<Vec<_>>(),
+            times
+        );
+        for p in &plans {
+            assert_eq!(p.keys.first(), Some(&0));
+            assert_eq!(p.keys.last(), Some(&(p.times.len() - 1)));
+            assert!(p.keys.windows(2).all(|k| k[0] < k[1]), "{:?}", p.keys);
+        }
+        (
+            plans.iter().map(|p| p.times.len()).collect(),
+            plans.into_iter().map(|p| p.keys).collect(),
+        )
+    }
+
     #[test]
     fn a_short_tail_joins_the_last_window() {
         let times = frame_times(0.0, 3.0, 25.0);
         assert_eq!(times.len(), 76);
-        let w = group_frames(&times, 25);
-        assert_eq!(w.iter().map(Vec::len).collect::<Vec<_>>(), [25, 25, 26]);
-        assert_eq!(w.concat(), times);
+        let sizes = |n, window| layout(n, 0.0, Some(window), Some(8)).0;
+        assert_eq!(sizes(76, 1.0), [25, 25, 26]);
         // A tail of half a window or more stays a window of its own.
-        let w = group_frames(&times[..63], 25);
-        assert_eq!(w.iter().map(Vec::len).collect::<Vec<_>>(), [25, 25, 13]);
-        let w = group_frames(&times[..5], 2);
-        assert_eq!(w.iter().map(Vec::len).collect::<Vec<_>>(), [2, 2, 1]);
-        assert_eq!(group_frames(&times[..3], 25), vec![times[..3].to_vec()]);
+        assert_eq!(sizes(63, 1.0), [25, 25, 13]);
+        assert_eq!(sizes(5, 0.08), [2, 2, 1]);
+        assert_eq!(sizes(3, 1.0), [3]);
+        assert_eq!(sizes(1, 1.0), [1]);
+        // Windows of three key intervals: the same for a stride.
+        assert_eq!(layout(76, 0.0, None, Some(8)).0, [25, 25, 26]);
+    }
+
+    #[test]
+    fn keyframes_follow_motion_not_frames() {
+        // ACTOR's pace (0.6% of the diameter a frame, under 0.05 over 8 frames, over
+        // it at 9): keyframes 8 frames apart, windows of 25 frames, as the stride 8
+        // and 1 s windows gave.
+        let (sizes, keys) = layout(76, 0.006, None, None);
+        assert_eq!(sizes, [25, 25, 26]);
+        assert_eq!(keys[0], [0, 8, 16, 24]);
+        assert_eq!(keys[2], [0, 8, 16, 24, 25]);
+        assert_eq!((sizes, keys), layout(76, 0.006, Some(1.0), Some(8)));
+        // The same motion over twice the frames (the paper's length measure, §6):
+        // as many windows and keyframes, twice as far apart in frames.
+        let (sizes, keys) = layout(151, 0.003, None, None);
+        assert_eq!(sizes, [49, 49, 53]);
+        assert_eq!(keys[0], [0, 16, 32, 48]);
+        assert_eq!(keys[2], [0, 16, 32, 48, 52]);
+        // Nothing moving: keyframes at most MAX_KEY_FRAMES apart.
+        let (sizes, keys) = layout(200, 0.0, None, None);
+        assert_eq!(sizes, [97, 103]);
+        assert_eq!(keys[0], [0, 32, 64, 96]);
+        // Faster than `key_motion` a frame: every frame a keyframe.
+        let (sizes, keys) = layout(10, 0.2, None, None);
+        assert_eq!(sizes, [4, 4, 2]);
+        assert_eq!(keys[1], [0, 1, 2, 3]);
+        // Motion that starts late: sparse keys while still, dense once it moves.
+        let times: Vec<f64> = (0..60).map(|i| i as f64 / 25.0).collect();
+        let motion: Vec<f64> = (0..59).map(|i| if i < 40 { 0.0 } else { 0.02 }).collect();
+        let plans = time_layout(&times, &motion, &SpaceTimeOptions::default());
+        let starts: Vec<usize> = plans
+            .iter()
+            .scan(0, |at, p| {
+                let s = *at;
+                *at += p.times.len();
+                Some(p.keys.iter().map(move |k| s + k))
+            })
+            .flatten()
+            .collect();
+        assert_eq!(starts, [0, 32, 42, 44, 45, 47, 49, 51, 52, 54, 56, 58, 59]);
+    }
+
+    #[test]
+    fn frame_motion_bounds_what_a_moving_point_travels() {
+        use crate::scene::actor_scene;
+        let scene = actor_scene(75);
+        let times = frame_times(0.0, 3.0, 25.0);
+        let diameter = crate::geometry::Patches::at_time(&scene, 0.0).diameter;
+        let motion = frame_motion(&scene, &times, diameter);
+        assert_eq!(motion.len(), 75);
+        // Actor A walks 1 m/s, swaying: a frame moves its corners 4 cm and a little.
+        for (i, &m) in motion.iter().enumerate() {
+            assert!((0.040..0.045).contains(&(m * diameter)), "frame {i}: {m}");
+        }
+        // No vertex of a moving object travels further than the bound.
+        for obj in scene.objects.iter().filter(|o| o.is_moving()) {
+            for (i, w) in times.windows(2).enumerate() {
+                let (a, b) = (obj.to_world(w[0]), obj.to_world(w[1]));
+                for v in obj.polygons.iter().flat_map(|p| &p.vertices) {
+                    let d = a.transform_point3(*v).distance(b.transform_point3(*v));
+                    assert!(d <= motion[i] * diameter * (1.0 + 1e-12), "frame {i}: {d}");
+                }
+            }
+        }
+        // The same motion played twice as slowly: half the motion a frame, so the
+        // same keyframes in motion, twice as far apart in frames.
+        let mut slow = scene.clone();
+        slow.time.end *= 2.0;
+        for obj in &mut slow.objects {
+            for k in obj.motion.iter_mut().flat_map(|m| m.keys.iter_mut()) {
+                k.t *= 2.0;
+            }
+        }
+        let slow_times = frame_times(0.0, 6.0, 25.0);
+        let slow_motion = frame_motion(&slow, &slow_times, diameter);
+        let st = SpaceTimeOptions::default();
+        let fast = time_layout(&times, &motion, &st);
+        let slow = time_layout(&slow_times, &slow_motion, &st);
+        let count = |p: &[WindowPlan]| (p.len(), p.iter().map(|w| w.keys.len()).sum::<usize>());
+        assert_eq!(count(&fast), (3, 13));
+        assert_eq!(count(&slow), count(&fast));
+        assert_eq!(fast[0].keys, [0, 8, 16, 24]);
+        assert_eq!(slow[0].keys, [0, 16, 32, 48]);
     }
 
     #[test]
     fn keyframes_come_before_the_frames_between_them() {
+        let key_frames = |n: usize, stride: u32| {
+            let (_, mut keys) = layout(n, 0.0, Some(n as f64 / 25.0), Some(stride));
+            keys.pop().unwrap_or_default()
+        };
         assert_eq!(key_frames(26, 4), [0, 4, 8, 12, 16, 20, 24, 25]);
         assert_eq!(key_frames(25, 4), [0, 4, 8, 12, 16, 20, 24]);
         assert_eq!(key_frames(3, 1), [0, 1, 2]);
