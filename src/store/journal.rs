@@ -143,28 +143,21 @@ impl Journal {
         leaves: &[Leaf],
         after_block: impl FnMut(),
     ) -> Result<()> {
-        let name = window_name(index);
-        let path = self.dir.join(&name);
-        let tmp = self.dir.join(format!("{name}.tmp"));
-        let io = |e| Error::io(&tmp, e);
-        let mut f = std::io::BufWriter::new(File::create(&tmp).map_err(io)?);
-        // The header goes last, when the CRC is known.
-        f.write_all(&[0u8; HEADER]).map_err(io)?;
-        let crc = super::writer::leaf_blocks(leaves, |b| f.write_all(b).map_err(io), after_block)?;
-        let mut head = Vec::with_capacity(HEADER);
-        head.extend_from_slice(MAGIC);
-        head.extend_from_slice(&VERSION.to_le_bytes());
-        head.extend_from_slice(&index.to_le_bytes());
-        head.extend_from_slice(&time[0].to_le_bytes());
-        head.extend_from_slice(&time[1].to_le_bytes());
-        head.extend_from_slice(&(leaves.len() as u64).to_le_bytes());
-        head.extend_from_slice(&frame_cells.to_le_bytes());
-        head.extend_from_slice(&crc.finalize().to_le_bytes());
-        head.extend_from_slice(&0u32.to_le_bytes());
-        let mut f = f.into_inner().map_err(|e| io(e.into_error()))?;
-        f.seek(SeekFrom::Start(0)).map_err(io)?;
-        f.write_all(&head).map_err(io)?;
-        self.commit(f, &tmp, &path)
+        self.write_headed(&window_name(index), HEADER, |f, io| {
+            let crc =
+                super::writer::leaf_blocks(leaves, |b| f.write_all(b).map_err(io), after_block)?;
+            let mut head = Vec::with_capacity(HEADER);
+            head.extend_from_slice(MAGIC);
+            head.extend_from_slice(&VERSION.to_le_bytes());
+            head.extend_from_slice(&index.to_le_bytes());
+            head.extend_from_slice(&time[0].to_le_bytes());
+            head.extend_from_slice(&time[1].to_le_bytes());
+            head.extend_from_slice(&(leaves.len() as u64).to_le_bytes());
+            head.extend_from_slice(&frame_cells.to_le_bytes());
+            head.extend_from_slice(&crc.finalize().to_le_bytes());
+            head.extend_from_slice(&0u32.to_le_bytes());
+            Ok(head)
+        })
     }
 
     /// Records the final-gather terms window `index` hands the next one, written
@@ -178,30 +171,23 @@ impl Journal {
         index: u32,
         payload: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
     ) -> Result<()> {
-        let name = kept_name(index);
-        let path = self.dir.join(&name);
-        let tmp = self.dir.join(format!("{name}.tmp"));
-        let io = |e| Error::io(&tmp, e);
-        let mut f = std::io::BufWriter::new(File::create(&tmp).map_err(io)?);
-        f.write_all(&[0u8; KEPT_HEADER]).map_err(io)?;
-        let mut w = CountingWriter {
-            inner: &mut f,
-            crc: crc32fast::Hasher::new(),
-            len: 0,
-        };
-        payload(&mut w).map_err(io)?;
-        let (crc, len) = (w.crc.finalize(), w.len);
-        let mut head = Vec::with_capacity(KEPT_HEADER);
-        head.extend_from_slice(KEPT_MAGIC);
-        head.extend_from_slice(&VERSION.to_le_bytes());
-        head.extend_from_slice(&index.to_le_bytes());
-        head.extend_from_slice(&len.to_le_bytes());
-        head.extend_from_slice(&crc.to_le_bytes());
-        head.extend_from_slice(&0u32.to_le_bytes());
-        let mut f = f.into_inner().map_err(|e| io(e.into_error()))?;
-        f.seek(SeekFrom::Start(0)).map_err(io)?;
-        f.write_all(&head).map_err(io)?;
-        self.commit(f, &tmp, &path)
+        self.write_headed(&kept_name(index), KEPT_HEADER, |f, io| {
+            let mut w = CountingWriter {
+                inner: f,
+                crc: crc32fast::Hasher::new(),
+                len: 0,
+            };
+            payload(&mut w).map_err(io)?;
+            let (crc, len) = (w.crc.finalize(), w.len);
+            let mut head = Vec::with_capacity(KEPT_HEADER);
+            head.extend_from_slice(KEPT_MAGIC);
+            head.extend_from_slice(&VERSION.to_le_bytes());
+            head.extend_from_slice(&index.to_le_bytes());
+            head.extend_from_slice(&len.to_le_bytes());
+            head.extend_from_slice(&crc.to_le_bytes());
+            head.extend_from_slice(&0u32.to_le_bytes());
+            Ok(head)
+        })
     }
 
     /// Reads the terms window `index` handed the next one: checks the header and
@@ -301,6 +287,32 @@ impl Journal {
         let tmp = self.dir.join(format!("{name}.tmp"));
         let mut f = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
         f.write_all(bytes).map_err(|e| Error::io(&tmp, e))?;
+        self.commit(f, &tmp, &path)
+    }
+
+    /// Writes `name` through a temporary file whose first `header` bytes are left
+    /// zero while `body` writes what follows and returns the header (which holds
+    /// the body's length and CRC), then written in place before the commit: a crash
+    /// leaves no file by that name, or a whole one.
+    fn write_headed(
+        &self,
+        name: &str,
+        header: usize,
+        body: impl FnOnce(
+            &mut std::io::BufWriter<File>,
+            &dyn Fn(std::io::Error) -> Error,
+        ) -> Result<Vec<u8>>,
+    ) -> Result<()> {
+        let path = self.dir.join(name);
+        let tmp = self.dir.join(format!("{name}.tmp"));
+        let io = |e| Error::io(&tmp, e);
+        let mut f = std::io::BufWriter::new(File::create(&tmp).map_err(io)?);
+        f.write_all(&vec![0u8; header]).map_err(io)?;
+        let head = body(&mut f, &io)?;
+        debug_assert_eq!(head.len(), header);
+        let mut f = f.into_inner().map_err(|e| io(e.into_error()))?;
+        f.seek(SeekFrom::Start(0)).map_err(io)?;
+        f.write_all(&head).map_err(io)?;
         self.commit(f, &tmp, &path)
     }
 
