@@ -1254,6 +1254,57 @@ mod tests {
         assert_eq!(starts, [0, 32, 42, 44, 45, 47, 49, 51, 52, 54, 56, 58, 59]);
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, .. Default::default() })]
+        /// Whatever the motion: every frame in one window, in order; each key
+        /// interval at most `MAX_KEY_FRAMES` frames and, unless it is one frame, no
+        /// more than `key_motion` of travel; a key interval ends only where the next
+        /// frame would exceed that (or at the cap, or at the window's end); a window
+        /// of at most `WINDOW_KEYS` intervals but the last (which may have taken the
+        /// tail).
+        #[test]
+        fn a_motion_layout_keeps_its_promises(
+            motion in proptest::collection::vec(
+                proptest::prop_oneof![proptest::strategy::Just(0.0), 0.0..0.08f64],
+                0..300,
+            ),
+            key_motion in 0.01..0.2f64,
+        ) {
+            let n = motion.len() + 1;
+            let times: Vec<f64> = (0..n).map(|i| i as f64 / 25.0).collect();
+            let st = SpaceTimeOptions { key_motion, ..SpaceTimeOptions::default() };
+            let plans = time_layout(&times, &motion, &st);
+            let flat: Vec<f64> = plans.iter().flat_map(|p| p.times.clone()).collect();
+            proptest::prop_assert_eq!(flat, times);
+            let mut first = 0;
+            for (w, p) in plans.iter().enumerate() {
+                let len = p.times.len();
+                proptest::prop_assert_eq!(p.keys.first(), Some(&0));
+                proptest::prop_assert_eq!(p.keys.last(), Some(&(len - 1)));
+                let intervals = p.keys.len() - 1;
+                if w + 1 < plans.len() {
+                    proptest::prop_assert!(intervals <= WINDOW_KEYS, "window {w}: {:?}", p.keys);
+                }
+                for k in p.keys.windows(2) {
+                    let (a, b) = (first + k[0], first + k[1]);
+                    let travel: f64 = motion[a..b].iter().sum();
+                    proptest::prop_assert!(b - a <= MAX_KEY_FRAMES);
+                    proptest::prop_assert!(
+                        b - a == 1 || travel <= key_motion + 1e-12,
+                        "{a}..{b}: {travel}"
+                    );
+                    // Not cut short: the next frame would be too far, or the cap or
+                    // the window's end is reached.
+                    let end = first + len - 1;
+                    if b < end && b - a < MAX_KEY_FRAMES && k[1] != p.keys[p.keys.len() - 1] {
+                        proptest::prop_assert!(travel + motion[b] > key_motion - 1e-12, "{a}..{b}");
+                    }
+                }
+                first += len;
+            }
+        }
+    }
+
     #[test]
     fn frame_motion_bounds_what_a_moving_point_travels() {
         use crate::scene::actor_scene;
