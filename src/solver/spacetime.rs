@@ -1255,7 +1255,13 @@ mod tests {
     }
 
     proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, .. Default::default() })]
+        // No regression file: it would sit in a `proptest-regressions/` at the top
+        // of the repository, where only the crate's own directories belong.
+        #![proptest_config(proptest::prelude::ProptestConfig {
+            cases: 256,
+            failure_persistence: None,
+            .. Default::default()
+        })]
         /// Whatever the motion: every frame in one window, in order; each key
         /// interval at most `MAX_KEY_FRAMES` frames and, unless it is one frame, no
         /// more than `key_motion` of travel; a key interval ends only where the next
