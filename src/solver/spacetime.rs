@@ -23,10 +23,10 @@
 //!    This hierarchy and its coefficients are computed once and kept for every
 //!    window ([`Solver::run_shared`]).
 //! 2. *Windows*, earliest first: the animation's frames (`fps`) are grouped into
-//!    windows of three key intervals (below), or of `window` seconds. A window re-classifies the links against the boxes
-//!    swept during the window only (a link far from where the objects are *now*
-//!    becomes constant) and refines the links that became constant: the window's
-//!    base. Each frame then starts from that base, places the moving objects,
+//!    windows of three key intervals (below), or of `window` seconds. A window
+//!    re-classifies the links against the boxes swept during the window only (a
+//!    link far from where the objects are *now* becomes constant) and refines the
+//!    links that became constant: the window's base. Each frame then starts from that base, places the moving objects,
 //!    re-evaluates and refines the varying links only (so the hierarchy near a moving
 //!    object is as fine as this frame needs, not the union over the window), and
 //!    solves the leaf system warm-started from the previous frame. Constant links
@@ -428,7 +428,10 @@ pub fn frame_motion(scene: &Scene, times: &[f64], diameter: f64) -> Vec<f64> {
                 if i & 4 == 0 { lo.z } else { hi.z },
             )
         });
-        let place = |t: f64| corners.map(|c| obj.to_world(t).transform_point3(c));
+        let place = |t: f64| {
+            let m = obj.to_world(t);
+            corners.map(|c| m.transform_point3(c))
+        };
         let mut prev = times.first().map(|&t| place(t));
         for (d, &t) in out.iter_mut().zip(times.iter().skip(1)) {
             let cur = place(t);
