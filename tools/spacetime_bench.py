@@ -19,7 +19,11 @@ For one scene it
      peak RSS of the whole process (/usr/bin/time, else getrusage of the children),
      probes the result at the same times and computes the relative RMS error
          sqrt( sum (B - Bref)^2 / sum Bref^2 )  over points, channels and times;
-  4. appends rows (method, scene, eps, seconds, peak_rss_mb, error, ...) to a CSV and
+  4. does the same on the moving objects' surfaces (--moving-points points, drawn in
+     each object's own space and placed by its motion at every reference time, so a
+     probe follows the surface it sits on): `error_moving`, the error a viewer sees
+     on the actors and the board, which the static grid does not (0: not measured);
+  5. appends rows (method, scene, eps, seconds, peak_rss_mb, error, ...) to a CSV and
      redraws an SVG plot of error against run time for every (method, scene) in it.
 
 The method command is a template; placeholders: {rhier} (the binary), {scene} (the
@@ -62,7 +66,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_METHOD = "{rhier} solve {scene} --per-frame --fps {fps} --eps {eps} -o {out} -q"
 CSV_FIELDS = ["method", "scene", "eps", "seconds", "peak_rss_mb", "error", "frames_compared",
-              "ref", "command", "runs"]
+              "ref", "command", "runs", "error_moving"]
 
 
 def scene_path(name):
@@ -106,22 +110,29 @@ def probe_grid(scene, n, seed=1):
         for p in o["polygons"]:
             if any(e > 0 for e in mats[p["material"]].get("emission", [0, 0, 0])):
                 continue
-            v = p["vertices"]
-            a = cross(sub(v[1], v[0]), sub(v[2], v[0]))
-            if len(v) == 4:
-                b = cross(sub(v[2], v[0]), sub(v[3], v[0]))
-                a = [a[k] + b[k] for k in range(3)]
-            area = 0.5 * norm(a)
+            area, nrm = polygon_area_normal(p["vertices"])
             if area > 0:
-                polys.append((o["name"], v, [x / (2 * area) for x in a], area))
-    rng = random.Random(seed)
-    total = sum(p[3] for p in polys)
+                polys.append((o["name"], p["vertices"], nrm, area))
+    draws = surface_points(polys, random.Random(seed))
     points = []
     tries = 0
-    while len(points) < n and tries < 100 * n:
+    while polys and len(points) < n and tries < 100 * n:
         tries += 1
+        name, p, nrm = next(draws)
+        inside = any(nm != name and all(lo[k] - 1e-9 <= p[k] <= hi[k] + 1e-9 for k in range(3))
+                     for nm, (lo, hi) in solids)
+        if not inside:
+            points.append({"p": p, "n": nrm})
+    return points
+
+
+def surface_points(polys, rng):
+    """Endless draws on polygons [(tag, vertices, unit normal, area)] (at least one),
+    area-weighted, inset 5% from the edges: (tag, point, normal)."""
+    total = sum(p[3] for p in polys)
+    while True:
         r = rng.random() * total
-        for name, v, nrm, area in polys:
+        for tag, v, nrm, area in polys:
             r -= area
             if r <= 0:
                 break
@@ -133,11 +144,82 @@ def probe_grid(scene, n, seed=1):
             if u + w > 1:
                 u, w = 1 - u, 1 - w
             p = [v[0][k] + u * (v[1][k] - v[0][k]) + w * (v[2][k] - v[0][k]) for k in range(3)]
-        inside = any(nm != name and all(lo[k] - 1e-9 <= p[k] <= hi[k] + 1e-9 for k in range(3))
-                     for nm, (lo, hi) in solids)
-        if not inside:
-            points.append({"p": p, "n": nrm})
-    return points
+        yield tag, p, nrm
+
+
+def polygon_area_normal(v):
+    a = cross(sub(v[1], v[0]), sub(v[2], v[0]))
+    if len(v) == 4:
+        b = cross(sub(v[2], v[0]), sub(v[3], v[0]))
+        a = [a[k] + b[k] for k in range(3)]
+    area = 0.5 * norm(a)
+    return area, ([x / (2 * area) for x in a] if area > 0 else None)
+
+
+def moving_grid(scene, n, seed=3):
+    """n points on the moving objects' non-emitting polygons, in each object's own
+    space: [(object index, point, normal)]."""
+    mats = scene["materials"]
+    polys = []
+    for i, o in enumerate(scene["objects"]):
+        if not o.get("motion") or len(o["motion"]) < 2:
+            continue
+        for p in o["polygons"]:
+            if any(e > 0 for e in mats[p["material"]].get("emission", [0, 0, 0])):
+                continue
+            area, nrm = polygon_area_normal(p["vertices"])
+            if area > 0:
+                polys.append((i, p["vertices"], nrm, area))
+    draws = surface_points(polys, random.Random(seed))
+    return [next(draws) for _ in range(n)] if polys else []
+
+
+def quat_rotate(q, v):
+    x, y, z, w = q
+    u = [x, y, z]
+    t = [2 * c for c in cross(u, v)]
+    return [v[k] + w * t[k] + cross(u, t)[k] for k in range(3)]
+
+
+def key_at(keys, t):
+    """The object's placement at t as the solver interpolates its keys (translation and
+    scale linear, rotation slerp, held before the first key and after the last)."""
+    if len(keys) == 1 or t <= keys[0]["t"]:
+        k = keys[0]
+        return k["translation"], k["rotation"], k.get("scale", [1, 1, 1])
+    if t >= keys[-1]["t"]:
+        k = keys[-1]
+        return k["translation"], k["rotation"], k.get("scale", [1, 1, 1])
+    i = max(1, sum(1 for k in keys if k["t"] <= t))
+    k0, k1 = keys[i - 1], keys[i]
+    s = (t - k0["t"]) / (k1["t"] - k0["t"])
+    lerp = lambda a, b: [a[j] + s * (b[j] - a[j]) for j in range(3)]
+    a, b = list(k0["rotation"]), list(k1["rotation"])
+    dot = sum(a[j] * b[j] for j in range(4))
+    if dot < 0:
+        b, dot = [-x for x in b], -dot
+    if dot > 1 - 1e-12:
+        q = [a[j] + s * (b[j] - a[j]) for j in range(4)]
+    else:
+        th = math.acos(dot)
+        s0, s1 = math.sin(th * (1 - s)) / math.sin(th), math.sin(th * s) / math.sin(th)
+        q = [s0 * a[j] + s1 * b[j] for j in range(4)]
+    ql = math.sqrt(sum(x * x for x in q))
+    return (lerp(k0["translation"], k1["translation"]), [x / ql for x in q],
+            lerp(k0.get("scale", [1, 1, 1]), k1.get("scale", [1, 1, 1])))
+
+
+def placed(scene, grid, t):
+    """The moving grid's points in the world at time t (normals by the inverse
+    transpose of the scale, then the rotation)."""
+    out = []
+    for i, p, n in grid:
+        tr, q, sc = key_at(scene["objects"][i]["motion"], t)
+        wp = quat_rotate(q, [p[k] * sc[k] for k in range(3)])
+        wn = quat_rotate(q, [n[k] / sc[k] for k in range(3)])
+        ln = norm(wn)
+        out.append({"p": [wp[k] + tr[k] for k in range(3)], "n": [x / ln for x in wn]})
+    return out
 
 
 def frame_times(start, end, fps):
@@ -166,9 +248,11 @@ def run_measured(cmd, log):
 
 
 def probe_all(rhier, rhier_file, points_file, times):
+    """Probes at every time; `points_file` is one file, or one per time."""
     out = []
-    for t in times:
-        res = subprocess.run([rhier, "probe", rhier_file, "--points", points_file,
+    for i, t in enumerate(times):
+        pf = points_file[i] if isinstance(points_file, list) else points_file
+        res = subprocess.run([rhier, "probe", rhier_file, "--points", pf,
                               "--time", repr(t)], capture_output=True, text=True)
         if res.returncode != 0:
             sys.exit(f"spacetime_bench: probe of {rhier_file} at t = {t} failed: {res.stderr}")
@@ -349,6 +433,8 @@ def main():
     ap.add_argument("--ref-seeds", default="1,2",
                     help="comma-separated seeds of the averaged reference (not the methods' seed)")
     ap.add_argument("--points", type=int, default=200)
+    ap.add_argument("--moving-points", type=int, default=100,
+                    help="probes on the moving objects' surfaces (0: none)")
     ap.add_argument("--threads", type=int, default=2, help="appended as --threads N (0: not)")
     ap.add_argument("--repeat", type=int, default=1,
                     help="runs per eps, interleaved across the eps values; the median time is kept")
@@ -374,11 +460,18 @@ def main():
     with open(points_file, "w") as f:
         json.dump(probe_grid(scene, args.points), f)
     times = frame_times(start, end, args.ref_fps)
+    grid = moving_grid(scene, args.moving_points)
+    moving_files = []
+    for i, t in enumerate(times if grid else []):
+        mf = os.path.join(args.out_dir, f"{label}_moving_points_t{i}.json")
+        with open(mf, "w") as f:
+            json.dump(placed(scene, grid, t), f)
+        moving_files.append(mf)
 
     seeds = [int(x) for x in args.ref_seeds.split(",") if x.strip()]
     if not seeds:
         ap.error("--ref-seeds needs at least one seed")
-    refs = []
+    refs, refs_moving = [], []
     for seed in seeds:
         ref_file = os.path.join(
             args.out_dir, f"{label}_ref_fps{args.ref_fps:g}_eps{args.ref_eps:g}_seed{seed}.rhier")
@@ -388,13 +481,19 @@ def main():
             s, m = run_measured(cmd, ref_file + ".log")
             print(f"reference: {shlex.join(cmd)}: {s:.1f} s, {m:.0f} MiB", flush=True)
         refs.append(probe_all(args.rhier, ref_file, points_file, times))
+        if moving_files:
+            refs_moving.append(probe_all(args.rhier, ref_file, moving_files, times))
     ref = average(refs)
+    ref_moving = average(refs_moving) if refs_moving else None
     ref_desc = (f"per-frame fps {args.ref_fps:g} eps {args.ref_eps:g} "
                 f"seeds {'+'.join(str(x) for x in seeds)}")
     if len(refs) >= 2:
         # Two independent draws differ by sqrt(2) sigma; their mean's noise is sigma / sqrt(2).
         noise = relative_rms(refs[0], refs[1]) / 2.0
-        ref_desc += f" (own noise {100 * noise:.2f}%)"
+        ref_desc += f" (own noise {100 * noise:.2f}%"
+        if len(refs_moving) >= 2:
+            ref_desc += f", moving {100 * relative_rms(refs_moving[0], refs_moving[1]) / 2.0:.2f}%"
+        ref_desc += ")"
         print(f"reference: {ref_desc}", flush=True)
 
     # Each eps is run --repeat times, the eps values in turn (a, b, a, b, ...), so
@@ -411,20 +510,24 @@ def main():
                          out=out) + threads
             seconds, rss = run_measured(cmd, out + ".log")
             err = relative_rms(probe_all(args.rhier, out, points_file, times), ref)
+            err_moving = (relative_rms(probe_all(args.rhier, out, moving_files, times), ref_moving)
+                          if ref_moving else None)
             if runs[eps] and abs(err - runs[eps][-1][2]) > 1e-9:
                 print(f"spacetime_bench: eps {eps:g}: error {err:.5f} differs from an "
                       f"earlier run's {runs[eps][-1][2]:.5f}", file=sys.stderr)
-            runs[eps].append((seconds, rss, err, cmd))
+            runs[eps].append((seconds, rss, err, cmd, err_moving))
     new_rows = []
     for eps in eps_list:
         median = statistics.median(r[0] for r in runs[eps])
         rss = max(r[1] for r in runs[eps])
-        _, _, err, cmd = runs[eps][-1]
+        _, _, err, cmd, err_moving = runs[eps][-1]
         row = {"method": args.name, "scene": label, "eps": f"{eps:g}", "seconds": f"{median:.2f}",
                "peak_rss_mb": f"{rss:.1f}", "error": f"{err:.5f}",
                "frames_compared": len(times), "ref": ref_desc, "command": shlex.join(cmd),
-               "runs": " ".join(f"{r[0]:.2f}" for r in runs[eps])}
-        print(",".join(str(row[k]) for k in CSV_FIELDS[:7]) + f",runs {row['runs']}", flush=True)
+               "runs": " ".join(f"{r[0]:.2f}" for r in runs[eps]),
+               "error_moving": "" if err_moving is None else f"{err_moving:.5f}"}
+        print(",".join(str(row[k]) for k in CSV_FIELDS[:7]) + f",runs {row['runs']}"
+              + f",moving {row['error_moving'] or '-'}", flush=True)
         new_rows.append(row)
 
     rows = read_rows(args.csv) + new_rows
