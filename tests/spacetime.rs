@@ -110,6 +110,56 @@ fn cornell_points() -> Vec<ProbePoint> {
 }
 
 #[test]
+fn a_finer_tolerance_on_moving_surfaces_refines_them_only() {
+    // `recon_tol_moving` below `recon_tol` splits more cells on the sliding block and
+    // not one more anywhere else: the room's cells and values are the same bit for
+    // bit (the reconstruction does not feed back into the solve).
+    let scene = sliding_block(-60.0, 0.8);
+    let run = |moving: Option<f64>| {
+        let o = SolveOptions {
+            recon_tol_moving: moving,
+            ..opts()
+        };
+        let mut out = Vec::new();
+        spacetime::solve(
+            &scene,
+            o.clone(),
+            &st(5.0, 0.4),
+            |_| {},
+            |w| {
+                out.push(w);
+                Ok(())
+            },
+        )
+        .unwrap();
+        // The solve's patches (cut at contacts), for their objects.
+        let t = SpaceTime::new(&scene, o, st(5.0, 0.4), |_, _| {}).unwrap();
+        let moving: Vec<bool> = t
+            .patches()
+            .iter()
+            .map(|p| scene.objects[p.object as usize].is_moving())
+            .collect();
+        let split = |on: bool| -> Vec<Leaf> {
+            out.iter()
+                .flat_map(|w| w.leaves.to_vec())
+                .filter(|l| moving[l.patch as usize] == on)
+                .collect()
+        };
+        (split(false), split(true))
+    };
+    let (room, block) = run(None);
+    let (room_fine, block_fine) = run(Some(SolveOptions::default().recon_tol / 4.0));
+    assert!(!block.is_empty() && !room.is_empty());
+    assert_eq!(room_fine, room, "the room's cells do not change");
+    assert!(
+        block_fine.len() > block.len() * 3 / 2,
+        "the block's cells: {} -> {}",
+        block.len(),
+        block_fine.len()
+    );
+}
+
+#[test]
 fn each_frame_is_as_accurate_as_the_static_solve_of_that_frame() {
     // The tolerance is the per-frame solve's own discretisation error: against a fine
     // static solve (eps 0.1) of the same frame, space-time must be as close as the

@@ -90,6 +90,11 @@ pub struct Args {
     /// Reconstruction tolerance, relative to the RMS reflected radiosity.
     #[arg(long, default_value_t = SolveOptions::default().recon_tol)]
     pub recon_tol: f64,
+    /// Reconstruction tolerance on the surfaces of moving objects (default:
+    /// `--recon-tol`). The actors of a space-time solve at the tolerance best for the
+    /// room come out coarser than the room; half of it there costs little.
+    #[arg(long)]
+    pub recon_tol_moving: Option<f64>,
     /// Receivers smaller than the square of this fraction of the scene's diameter
     /// are refined on the power their links may get wrong, not on their radiosity
     /// (0: never). Smaller is slower and, in cluttered scenes, more accurate
@@ -306,6 +311,7 @@ pub(super) fn solve_options(args: &Args) -> anyhow::Result<SolveOptions> {
         eps: args.eps,
         min_size: args.min_size,
         recon_tol: args.recon_tol,
+        recon_tol_moving: args.recon_tol_moving,
         power_size: args.power_size,
         split_spread: args.split_spread,
         leaf_shapes: args.leaf_shapes,

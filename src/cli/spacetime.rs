@@ -36,7 +36,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
 /// changes a result (not the storage, thread count being part of determinism).
 fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> String {
     let settings = format!(
-        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} threads {}",
+        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {:?} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} threads {}",
         opts.eps,
         opts.min_size,
         opts.power_size,
@@ -47,6 +47,7 @@ fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> Str
         opts.tolerance,
         opts.seed,
         opts.recon_tol,
+        opts.recon_tol_moving,
         opts.recon_min_size,
         opts.contact_meshing,
         st.fps,

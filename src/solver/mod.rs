@@ -298,6 +298,13 @@ pub struct SolveOptions {
     /// Reconstruction tolerance: a cell splits while the gather at its centre
     /// differs from its corners' interpolant by more than this times the RMS radiosity.
     pub recon_tol: f64,
+    /// Reconstruction tolerance on the surfaces of moving objects (`None`:
+    /// `recon_tol`). On ACTOR the tolerance that is best for the room's error in a
+    /// space-time solve (0.16) left the actors' own faces at 3.1% against
+    /// per-frame's 2.3% (at its best, 0.08); 0.08 on the actors alone takes them to
+    /// 2.1% for 8% more time, the room unchanged (BENCHMARKS.md, "Keyframes and
+    /// windows spaced by motion").
+    pub recon_tol_moving: Option<f64>,
     /// Smallest reconstruction cell edge, as a fraction of the scene's diameter.
     pub recon_min_size: f64,
     /// Cut patches along contact lines before solving ([`split_at_contacts`]). On
@@ -359,6 +366,7 @@ impl Default for SolveOptions {
             tolerance: 1e-6,
             seed: 0x5eed,
             recon_tol: 0.02,
+            recon_tol_moving: None,
             recon_min_size: 1.0 / 512.0,
             contact_meshing: true,
             power_size: 1.0 / 64.0,
@@ -384,6 +392,7 @@ impl SolveOptions {
                 ("--eps", Some(self.eps)),
                 ("--min-size", Some(self.min_size)),
                 ("--recon-tol", Some(self.recon_tol)),
+                ("--recon-tol-moving", self.recon_tol_moving),
                 ("--target-error", self.target_error),
                 ("recon_min_size", Some(self.recon_min_size)),
                 ("tolerance", Some(self.tolerance)),
@@ -3627,7 +3636,8 @@ impl<'a> Solver<'a> {
     ///
     /// Cells start as the hierarchy's leaves and split (in parameter space, like
     /// elements) while the gather at a cell's centre differs from the interpolant of
-    /// its corners by more than `recon_tol · B_ref`, across each direction in which
+    /// its corners by more than `recon_tol · B_ref` (`recon_tol_moving` on a moving
+    /// object's surface), across each direction in which
     /// it is at least twice the reconstruction's smallest size (both: four children;
     /// one: two halves, see `Cell::split_dirs`); a split cell keeps the links of its
     /// leaf. This meshes the stored answer to where `B(x)` bends (room edges, contact
@@ -3682,6 +3692,7 @@ impl<'a> Solver<'a> {
             None => self.rms_radiosity(),
         };
         let tol = self.opts.recon_tol * b_ref;
+        let tol_moving = self.opts.recon_tol_moving.map_or(tol, |t| t * b_ref);
         let limits = self.gather_limits(b_ref, true);
         let min_len = self.opts.recon_min_size * self.patches.diameter;
         let mut cache = VertexCache::default();
@@ -3753,7 +3764,12 @@ impl<'a> Solver<'a> {
                 let off = (0..3)
                     .map(|k| (cv[k] - interp[k]).abs())
                     .fold(0.0, f64::max);
-                let split = if ok && off > tol {
+                let cell_tol = if self.moving_patch.get(c.patch as usize) == Some(&true) {
+                    tol_moving
+                } else {
+                    tol
+                };
+                let split = if ok && off > cell_tol {
                     c.split_dirs(min_len, &self.patches)
                 } else {
                     (false, false)
