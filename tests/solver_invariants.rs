@@ -290,7 +290,7 @@ fn settings_outside_their_domain_are_refused_by_the_solver() {
     let scene = lit_box();
     let base = SolveOptions::default();
     assert!(base.validate().is_ok());
-    let cases: [(&str, SolveOptions); 6] = [
+    let cases: [(&str, SolveOptions); 7] = [
         (
             "--eps",
             SolveOptions {
@@ -309,6 +309,13 @@ fn settings_outside_their_domain_are_refused_by_the_solver() {
             "--recon-tol",
             SolveOptions {
                 recon_tol: f64::NAN,
+                ..base.clone()
+            },
+        ),
+        (
+            "--recon-tol-moving",
+            SolveOptions {
+                recon_tol_moving: Some(0.0),
                 ..base.clone()
             },
         ),
