@@ -53,10 +53,14 @@ fn st(fps: f64, window: f64) -> SpaceTimeOptions {
 }
 
 fn solve_all(scene: &Scene, st: &SpaceTimeOptions) -> Vec<WindowOutput> {
+    solve_all_with(scene, opts(), st)
+}
+
+fn solve_all_with(scene: &Scene, o: SolveOptions, st: &SpaceTimeOptions) -> Vec<WindowOutput> {
     let mut out = Vec::new();
     spacetime::solve(
         scene,
-        opts(),
+        o,
         st,
         |_| {},
         |w| {
@@ -120,18 +124,7 @@ fn a_finer_tolerance_on_moving_surfaces_refines_them_only() {
             recon_tol_moving: moving,
             ..opts()
         };
-        let mut out = Vec::new();
-        spacetime::solve(
-            &scene,
-            o.clone(),
-            &st(5.0, 0.4),
-            |_| {},
-            |w| {
-                out.push(w);
-                Ok(())
-            },
-        )
-        .unwrap();
+        let out = solve_all_with(&scene, o.clone(), &st(5.0, 0.4));
         // The solve's patches (cut at contacts), for their objects.
         let t = SpaceTime::new(&scene, o, st(5.0, 0.4), |_, _| {}).unwrap();
         let moving: Vec<bool> = t
