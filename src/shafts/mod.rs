@@ -159,6 +159,13 @@ impl Shaft {
 /// shaft's own tolerance, so the answer is the shaft's.
 const SHORTCUT_MARGIN: f64 = 1e-6;
 
+/// True if the box `[lo, hi]` meets one of `boxes` (closed boxes: touching counts).
+pub fn meets_any(lo: DVec3, hi: DVec3, boxes: &[(DVec3, DVec3)]) -> bool {
+    boxes
+        .iter()
+        .any(|&(a, b)| a.cmple(hi).all() && lo.cmple(b).all())
+}
+
 /// True if no box of `boxes` can lie on a segment between the polygons `a` and `b`
 /// (corners in order, unit normals `na`, `nb`; `a` may be a single point, seen
 /// from the side `na` faces). Decided as cheaply as it can be: boxes that miss the
@@ -179,8 +186,7 @@ pub fn clear_of_boxes(
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &c| {
             (lo.min(c), hi.max(c))
         });
-    let overlaps = |&(l, h): &(DVec3, DVec3)| (0..3).all(|k| h[k] >= lo[k] && l[k] <= hi[k]);
-    if !boxes.iter().any(overlaps) {
+    if !meets_any(lo, hi, boxes) {
         return true;
     }
     let centre = |p: &[DVec3]| p.iter().sum::<DVec3>() / p.len() as f64;

@@ -140,6 +140,7 @@ use crate::pools::{
     ElementId, ElementKind, ElementPool, Emission, LinkId, LinkPool, LinkState, Storage,
 };
 use crate::scene::Scene;
+use crate::shafts::meets_any;
 use kept::{MaskedTerm, PointCache};
 
 pub use report::RoundRecord;
@@ -757,13 +758,6 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
     let k = g.n as usize;
     let corners: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(g.corners[i.min(k - 1)]));
     crate::shafts::clear_of_boxes(&[x], n, &corners[..k], DVec3::from_array(g.normal), swept)
-}
-
-/// True if the box `[lo, hi]` meets one of `boxes` (closed boxes: touching counts).
-fn meets_any(lo: DVec3, hi: DVec3, boxes: &[(DVec3, DVec3)]) -> bool {
-    boxes
-        .iter()
-        .any(|&(a, b)| a.cmple(hi).all() && lo.cmple(b).all())
 }
 
 /// The box around element `g`: its corners, or a cluster's box.

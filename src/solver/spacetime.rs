@@ -26,9 +26,10 @@
 //!    windows of three key intervals (below), or of `window` seconds. A window
 //!    re-classifies the links against the boxes swept during the window only (a
 //!    link far from where the objects are *now* becomes constant) and refines the
-//!    links that became constant: the window's base. Each frame then starts from that base, places the moving objects,
-//!    re-evaluates and refines the varying links only (so the hierarchy near a moving
-//!    object is as fine as this frame needs, not the union over the window), and
+//!    links that became constant: the window's base. Each frame then starts from
+//!    that base, places the moving objects, re-evaluates and refines the varying
+//!    links only (so the hierarchy near a moving object is as fine as this frame
+//!    needs, not the union over the window), and
 //!    solves the leaf system warm-started from the previous frame. Constant links
 //!    keep their coefficients, leaf-row coefficients (with the entries they open
 //!    into) and final-gather terms for the whole window; a varying link between
