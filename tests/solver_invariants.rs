@@ -354,6 +354,12 @@ fn settings_outside_their_domain_are_refused_by_the_solver() {
     use rhier::solver::spacetime::SpaceTimeOptions;
     let st = SpaceTimeOptions::default();
     assert!(st.validate().is_ok());
+    // 0 turns `--interp-motion` off; it is not refused.
+    let off = SpaceTimeOptions {
+        interp_motion: 0.0,
+        ..st
+    };
+    assert!(off.validate().is_ok());
     for (name, bad) in [
         ("--fps", SpaceTimeOptions { fps: 0.0, ..st }),
         (
@@ -374,6 +380,20 @@ fn settings_outside_their_domain_are_refused_by_the_solver() {
             "--key-motion",
             SpaceTimeOptions {
                 key_motion: -0.1,
+                ..st
+            },
+        ),
+        (
+            "--interp-motion",
+            SpaceTimeOptions {
+                interp_motion: f64::INFINITY,
+                ..st
+            },
+        ),
+        (
+            "--interp-motion",
+            SpaceTimeOptions {
+                interp_motion: -0.01,
                 ..st
             },
         ),

@@ -27,6 +27,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
         key_stride: args.key_stride,
         key_motion: args.key_motion,
         interp_tol: args.interp_tol,
+        interp_motion: args.interp_motion,
     };
     st.validate()?;
     Ok(st)
@@ -36,7 +37,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
 /// changes a result (not the storage, thread count being part of determinism).
 fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> String {
     let settings = format!(
-        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {:?} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} threads {}",
+        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {:?} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} interp motion {} threads {}",
         opts.eps,
         opts.min_size,
         opts.power_size,
@@ -56,6 +57,7 @@ fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> Str
         st.key_stride,
         st.key_motion,
         st.interp_tol,
+        st.interp_motion,
         rayon::current_num_threads(),
     );
     let scene_text = rhier::scene::to_json_string(scene);

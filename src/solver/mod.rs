@@ -986,8 +986,23 @@ pub type Keyframe<'k> = (f64, &'k KeyValues);
 /// frames, saw no shadow edge pass in between; a shadow edge that passes within
 /// the interval puts `a` off the line through `before` and `b` by about half the
 /// edge's contrast, and the point is gathered.
+///
+/// Where the brackets are close in motion (`free`), the line is taken without the
+/// test: a shadow edge passing in between is then placed by the line to within
+/// the distance the objects travel over the interval (at most `interp_motion` of
+/// the scene's diameter), finer than the reconstruction resolves an edge at the
+/// settings measured, where a gather would only resolve the steps its rays make
+/// as the blocker crosses them. The paper splits a time range only while the
+/// light over it varies by more than its threshold (§5.2, criterion 2), so its
+/// time elements do not shorten with the frame interval; here that floor is set
+/// in motion. What it costs is the paper's "stains" (§5.2): a moving shadow's
+/// edge fades over the distance of one free interval instead of stepping.
 #[derive(Clone, Copy, Debug)]
 pub struct Between<'k> {
+    /// The moving objects travel less than [`spacetime::SpaceTimeOptions::interp_motion`]
+    /// between `a` and `b`: a point both know (with the same validity) takes the
+    /// line between them whatever its values.
+    pub free: bool,
     /// The frame as far before `a` as `b` is after, if any.
     pub before: Option<Keyframe<'k>>,
     /// The solved frame that starts the interval.
@@ -1033,7 +1048,7 @@ impl Between<'_> {
                     .is_some_and(|vp| close(&va, &line(tp, &vp, tb, &vb, ta)))
             })
         };
-        if !(close(&va, &vb) || linear()) {
+        if !(self.free || close(&va, &vb) || linear()) {
             return None;
         }
         Some((line(ta, &va, tb, &vb, self.t), valid))
@@ -4824,6 +4839,7 @@ mod tests {
             (5, grey(0.9), true),
         ]);
         let between = Between {
+            free: false,
             before: Some((0.0, &p)),
             a: (4.0, &a),
             b: (8.0, &b),
@@ -4848,10 +4864,20 @@ mod tests {
         };
         assert!(bare.value(&(0, 0, 0), || true).is_some());
         assert_eq!(bare.value(&(0, 1, 0), || true), None);
+        // Brackets closer in motion than `interp_motion`: a point both hold takes
+        // the line whatever its values (the shadow edge of point 2 fades over the
+        // interval); one they do not both hold, or with another validity, does not.
+        let free = Between { free: true, ..bare };
+        let (v2, ok2) = free.value(&(0, 2, 0), || true).expect("free: the line");
+        assert!(ok2);
+        assert!((v2[2] - (1.0 + 0.25 * (0.4 - 1.0))).abs() < 1e-7, "{v2:?}");
+        assert_eq!(free.value(&(0, 3, 0), || true), None);
+        assert_eq!(free.value(&(0, 4, 0), || true), None);
         // Equal values come back bit for bit (where nothing changes, consecutive
         // frames are equal and the store merges them).
         let same = values(&[(0, [0.1, 0.2, 0.3], true)]);
         let flat = Between {
+            free: false,
             before: None,
             a: (0.0, &same),
             b: (3.0, &same),
@@ -4904,6 +4930,7 @@ mod tests {
         let a = KeyValues::default().with_cells([cell(0.0)].into());
         let b = KeyValues::default().with_cells([cell(0.005)].into());
         let between = Between {
+            free: false,
             before: None,
             a: (0.0, &a),
             b: (2.0, &b),
