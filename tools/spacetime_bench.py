@@ -360,7 +360,7 @@ def write_png(rows, path):
     if not data:
         return
     scenes = sorted(data)
-    fig, axes = plt.subplots(2, len(scenes), figsize=(5.2 * len(scenes), 7.5), squeeze=False)
+    fig, axes = plt.subplots(2, len(scenes), figsize=(5.6 * len(scenes), 10), squeeze=False)
     # A family per method ("per-frame", "space-time"), its variants ("space-time,
     # recon-tol 0.04") in lighter shades of its colour and other line styles.
     families = {"per-frame": (["#1f77b4", "#3b8fd0", "#6aaee0", "#9fcbed"], "o"),
@@ -401,7 +401,9 @@ def write_png(rows, path):
             for axis in (ax.xaxis, ax.yaxis):
                 axis.set_major_formatter(plain)
                 axis.set_minor_formatter(plain)
-            ax.legend(fontsize=8)
+        bottom.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2)
+    fig.suptitle("untagged curves: earlier builds (BENCHMARKS.md); tagged points: the last build",
+                 fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -414,7 +416,17 @@ def read_rows(path):
         return list(csv.DictReader(f))
 
 
+def latest_build(rows):
+    """Rows of curves (methods without a build tag) and of the last build measured
+    (methods ending in "(<hash>)"): older snapshots stay in the CSV, not the plot."""
+    tag = lambda m: m[m.rfind("(") + 1:-1] if m.endswith(")") and "(" in m else None
+    tags = [tag(r["method"]) for r in rows if tag(r["method"])]
+    last = tags[-1] if tags else None
+    return [r for r in rows if tag(r["method"]) in (None, last)]
+
+
 def plot(rows, csv_path):
+    rows = latest_build(rows)
     stem = os.path.splitext(csv_path)[0]
     write_svg(rows, stem + ".svg")
     write_png(rows, stem + ".png")
