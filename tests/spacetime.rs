@@ -756,6 +756,21 @@ fn sliding_base(scene: &Scene) -> Solution {
     s.solution()
 }
 
+/// The Cornell probe points and the floor around the block, where its shadow moves.
+fn sliding_points() -> Vec<ProbePoint> {
+    let mut pts = cornell_points();
+    pts.extend(floor_around_block(16));
+    pts
+}
+
+/// A fine static solve (`eps` 0.1) of a sliding-block scene at `t`, probed at `pts`.
+fn fine_probe(scene: &Scene, pts: &[ProbePoint], t: f64) -> Vec<[f64; 3]> {
+    let o = SolveOptions { eps: 0.1, ..opts() };
+    let mut s = Solver::at_time(scene, o, t, [0.0, 0.8]).unwrap();
+    s.run(|_, _| {}).unwrap();
+    probe(&s.solution(), pts, t).unwrap()
+}
+
 #[test]
 fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
     // One window of 9 frames (fps 10 over 0.8 s), keyframes 0, 4 and 8: the frames
@@ -810,16 +825,9 @@ fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
         as_solution(&scene, &base, &every),
         as_solution(&scene, &base, &keyed),
     );
-    let mut pts = cornell_points();
-    // The floor around the block, where its shadow moves.
-    pts.extend(floor_around_block(16));
+    let pts = sliding_points();
     for t in [0.1, 0.3, 0.5, 0.6] {
-        let fine = {
-            let o = SolveOptions { eps: 0.1, ..opts() };
-            let mut s = Solver::at_time(&scene, o, t, [0.0, 0.8]).unwrap();
-            s.run(|_, _| {}).unwrap();
-            probe(&s.solution(), &pts, t).unwrap()
-        };
+        let fine = fine_probe(&scene, &pts, t);
         let a = probe(&every, &pts, t).unwrap();
         let b = probe(&keyed, &pts, t).unwrap();
         let (e_every, e_keyed) = (relative_rms(&a, &fine), relative_rms(&b, &fine));
@@ -937,15 +945,9 @@ fn frames_closer_in_motion_than_interp_motion_take_the_line() {
         as_solution(&scene, &base, &tested),
         as_solution(&scene, &base, &free),
     );
-    let mut pts = cornell_points();
-    pts.extend(floor_around_block(16));
+    let pts = sliding_points();
     for t in [0.1, 0.3, 0.5, 0.7] {
-        let fine = {
-            let o = SolveOptions { eps: 0.1, ..opts() };
-            let mut s = Solver::at_time(&scene, o, t, [0.0, 0.8]).unwrap();
-            s.run(|_, _| {}).unwrap();
-            probe(&s.solution(), &pts, t).unwrap()
-        };
+        let fine = fine_probe(&scene, &pts, t);
         let a = probe(&every, &pts, t).unwrap();
         let b = probe(&tested, &pts, t).unwrap();
         let c = probe(&free, &pts, t).unwrap();

@@ -191,8 +191,8 @@ pub struct Args {
     pub interp_tol: f64,
     /// Space-time: a frame between two solved frames over which no moving object
     /// travels more than this fraction of the scene's diameter takes the line
-    /// between them at every point, and skips its leaf solve (0: never). The same
-    /// motion played over more frames then costs little more.
+    /// between them at every point both hold, and skips its leaf solve (0: never).
+    /// The same motion played over more frames then costs little more.
     #[arg(long, default_value_t = SpaceTimeOptions::default().interp_motion)]
     pub interp_motion: f64,
     /// Continue an interrupted space-time solve from its last finished window (kept
