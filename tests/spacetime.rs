@@ -53,23 +53,29 @@ fn st(fps: f64, window: f64) -> SpaceTimeOptions {
 }
 
 fn solve_all(scene: &Scene, st: &SpaceTimeOptions) -> Vec<WindowOutput> {
-    solve_all_with(scene, opts(), st)
+    run_frames(scene, opts(), st).0
 }
 
-fn solve_all_with(scene: &Scene, o: SolveOptions, st: &SpaceTimeOptions) -> Vec<WindowOutput> {
-    let mut out = Vec::new();
+/// The windows and frame records of a space-time solve.
+fn run_frames(
+    scene: &Scene,
+    o: SolveOptions,
+    st: &SpaceTimeOptions,
+) -> (Vec<WindowOutput>, Vec<spacetime::FrameRecord>) {
+    let mut frames = Vec::new();
+    let mut windows = Vec::new();
     spacetime::solve(
         scene,
         o,
         st,
-        |_| {},
+        |f| frames.push(*f),
         |w| {
-            out.push(w);
+            windows.push(w);
             Ok(())
         },
     )
     .unwrap();
-    out
+    (windows, frames)
 }
 
 fn as_solution(scene: &Scene, patches: &Solution, windows: &[WindowOutput]) -> Solution {
@@ -124,7 +130,7 @@ fn a_finer_tolerance_on_moving_surfaces_refines_them_only() {
             recon_tol_moving: moving,
             ..opts()
         };
-        let out = solve_all_with(&scene, o.clone(), &st(5.0, 0.4));
+        let (out, _) = run_frames(&scene, o.clone(), &st(5.0, 0.4));
         // The solve's patches (cut at contacts), for their objects.
         let t = SpaceTime::new(&scene, o, st(5.0, 0.4), |_, _| {}).unwrap();
         let moving: Vec<bool> = t
@@ -716,37 +722,15 @@ fn static_masks_plus_moving_rays_equal_full_visibility() {
 }
 
 /// One window of 9 frames (fps 10 over 0.8 s) solved with keyframes every `stride`
-/// frames: its leaves and every frame's record.
-/// Keyframes every `stride` frames, every frame between tested by `interp_tol`
-/// (`interp_motion` 0; the tests of `interp_motion` set it).
+/// frames, every frame between tested by `interp_tol` (`interp_motion` 0; the tests
+/// of `interp_motion` set it): its leaves and every frame's record.
 fn keyed_run(scene: &Scene, stride: u32) -> (Vec<WindowOutput>, Vec<spacetime::FrameRecord>) {
     let o = SpaceTimeOptions {
         key_stride: Some(stride),
         interp_motion: 0.0,
         ..st(10.0, 0.8)
     };
-    run_frames(scene, &o)
-}
-
-/// The windows and frame records of a space-time solve.
-fn run_frames(
-    scene: &Scene,
-    o: &SpaceTimeOptions,
-) -> (Vec<WindowOutput>, Vec<spacetime::FrameRecord>) {
-    let mut frames = Vec::new();
-    let mut windows = Vec::new();
-    spacetime::solve(
-        scene,
-        opts(),
-        o,
-        |f| frames.push(*f),
-        |w| {
-            windows.push(w);
-            Ok(())
-        },
-    )
-    .unwrap();
-    (windows, frames)
+    run_frames(scene, opts(), &o)
 }
 
 /// A static solve of a sliding-block scene at its start (for its patches).
@@ -915,11 +899,11 @@ fn frames_closer_in_motion_than_interp_motion_take_the_line() {
             interp_motion,
             ..st(fps, 0.8)
         };
-        run_frames(&scene, &o)
+        run_frames(&scene, opts(), &o)
     };
     // Just above two frames' travel: the quarter frames are free.
     let (every, _) = keyed_run(&scene, 1);
-    let (tested, tested_frames) = keyed(10.0, 4, 0.0);
+    let (tested, tested_frames) = keyed_run(&scene, 4);
     let (free, free_frames) = keyed(10.0, 4, two * 1.01);
     for (a, b) in tested_frames.iter().zip(&free_frames) {
         assert_eq!(a.frame, b.frame);
@@ -973,12 +957,12 @@ fn frames_closer_in_motion_than_interp_motion_take_the_line() {
     // the default, the frames it adds lie between brackets 0.78% apart and take
     // the line, and it gathers as many points as at 10 fps (measured 18 555
     // against 18 529); tested, it gathers 18% more.
-    let gathered = |fps: f64, stride: u32, im: f64| -> u64 {
-        keyed(fps, stride, im).1.iter().map(|f| f.gathered).sum()
-    };
+    let sum =
+        |frames: &[spacetime::FrameRecord]| -> u64 { frames.iter().map(|f| f.gathered).sum() };
+    let gathered = |fps: f64, stride: u32, im: f64| sum(&keyed(fps, stride, im).1);
     let im = SpaceTimeOptions::default().interp_motion;
     let (g10, g20) = (gathered(10.0, 4, im), gathered(20.0, 8, im));
-    let (t10, t20) = (gathered(10.0, 4, 0.0), gathered(20.0, 8, 0.0));
+    let (t10, t20) = (sum(&tested_frames), gathered(20.0, 8, 0.0));
     eprintln!("points gathered at 10 and 20 fps: {g10} and {g20} (tested: {t10} and {t20})");
     assert!(g20 * 100 < g10 * 105, "{g20} against {g10}");
     assert!(t20 * 100 > t10 * 110, "{t20} against {t10}");
