@@ -24,7 +24,9 @@ For one scene it
      probe follows the surface it sits on): `error_moving`, the error a viewer sees
      on the actors and the board, which the static grid does not (0: not measured);
   5. appends rows (method, scene, eps, seconds, peak_rss_mb, error, ...) to a CSV and
-     redraws an SVG plot of error against run time for every (method, scene) in it.
+     redraws the plots of error (and peak RSS) against run time for every (method,
+     scene) in it: the untagged methods, and of the methods tagged with a build
+     ("name (hash)") those of the last build in the CSV (`latest_build`).
 
 The method command is a template; placeholders: {rhier} (the binary), {scene} (the
 scene file), {eps}, {fps}, {out} (the .rhier file the command must write). Default:
