@@ -570,6 +570,20 @@ struct RowRayIds {
     source: u64,
 }
 
+/// How the rays of a row entry at a leaf's quadrature points treat static
+/// geometry ([`Solver::hidden_row_coef`], [`Window::masks`]).
+#[derive(Clone, Copy, Debug)]
+enum RowMasks {
+    /// Every ray is cast at everything.
+    None,
+    /// Cast at the static part first, the masks handed back, then the rays it leaves
+    /// clear at the moving objects.
+    Make,
+    /// The static part's answers, as [`Window::masks`] keeps them: only the rays
+    /// they leave clear are cast, at the moving objects.
+    Known(u64),
+}
+
 /// What one leaf's row computation hands back ([`Solver::compute_leaf_rows`]): the
 /// row, and what the caches are to keep of it.
 struct LeafRow {
@@ -583,6 +597,8 @@ struct LeafRow {
     opened: Vec<((u32, u32), RowEntries)>,
     /// New hidden coefficients for [`Window::hidden`].
     hidden: Vec<((u32, u32), (f64, f64))>,
+    /// New static masks for [`Window::masks`].
+    masks: Vec<((u32, u32), u64)>,
     /// New factors for [`Window::factors`].
     factors: Vec<((u32, u32), f64)>,
     /// Its entries with a moving end ([`FrameRows`]).
@@ -631,6 +647,17 @@ struct Window {
     /// ([`Solver::clear_of_moving`]): at any such frame their rays meet static
     /// geometry only, with the same keys, so the value is the same bit for bit.
     hidden: HashMap<(u32, u32), (f64, f64)>,
+    /// The static part of the rays at a static leaf's quadrature points for row
+    /// entries of varying links between static ends, keyed as [`Window::hidden`],
+    /// at frames with a moving object's box in the shaft between the ends (which
+    /// [`Window::hidden`] cannot keep): bit `i·m + j` is set where nothing static
+    /// blocks ray `j` of point `i` (`m` rays a point, [`RowMasks`]). The static
+    /// geometry and the rays' keys hold over the window, so a later frame casts
+    /// only the rays a mask leaves clear, at the moving objects only, and gets the
+    /// value casting every ray would give, bit for bit (the final gather's
+    /// [`kept::MaskedTerm`] for rows; paper 001 §5.2: what a moving object cannot
+    /// change is computed once).
+    masks: HashMap<(u32, u32), u64>,
     /// Exact factors `Σ_q w_q F(x_q → e)` from a static leaf (keyed by
     /// [`Solver::stable_id`]) to a static element `e` of the window's base that a
     /// source of its row opens into ([`Solver::push_opened`]): the geometry of both
@@ -668,6 +695,7 @@ impl Window {
             + self.opened.capacity() * (std::mem::size_of::<((u32, u32), RowEntries)>() + 1)
             + self.opened_entries * std::mem::size_of::<(u32, f64)>()
             + self.hidden.capacity() * (std::mem::size_of::<((u32, u32), (f64, f64))>() + 1)
+            + self.masks.capacity() * (std::mem::size_of::<((u32, u32), u64)>() + 1)
             + self.factors.capacity() * (std::mem::size_of::<((u32, u32), f64)>() + 1)
             + self.stable.capacity() * (std::mem::size_of::<((u32, u64), u32)>() + 1)
     }
@@ -2276,6 +2304,11 @@ impl<'a> Solver<'a> {
     /// the floor, though a third of each sees it; the floor's light sent there was
     /// lost, 3.8% of the emitted power at eps 0.1 (and every surface 3% too dark
     /// against the path tracer).
+    ///
+    /// `masks` says how the quadrature points' rays treat static geometry
+    /// ([`RowMasks`]); the masks made are returned (`RowMasks::Make`), and the value
+    /// is the same whichever it is.
+    #[allow(clippy::too_many_arguments)]
     fn hidden_row_coef(
         &self,
         leaf: ElementId,
@@ -2283,13 +2316,29 @@ impl<'a> Solver<'a> {
         s: u32,
         q: &oracle::Samples,
         n: DVec3,
-    ) -> (f64, f64) {
+        masks: RowMasks,
+    ) -> ((f64, f64), u64) {
         let gs = &self.elems.geoms.as_slice()[s as usize];
         let g = &self.elems.geoms.as_slice()[leaf.ix()];
         let ps = oracle::poly(gs);
         let ns = DVec3::from_array(gs.normal);
         let ids = self.row_ray_ids(leaf, l, s);
-        let vis_at = |x: DVec3, i: u64| self.row_point_visibility(ids, g, gs, &ps, ns, x, n, i);
+        let m = self.opts.rays_per_point;
+        let made = std::cell::Cell::new(0u64);
+        let vis_at = |x: DVec3, i: u64| {
+            let key = self.row_ray_key(ids, i);
+            let skip = [g.patch, gs.patch];
+            let mask = match masks {
+                RowMasks::Make if i < 4 => {
+                    let mask = oracle::static_clear_mask(&self.bvh, x, gs, &ps, m, key, skip);
+                    made.set(made.get() | mask << (i as u32 * m));
+                    mask
+                }
+                RowMasks::Known(bits) if i < 4 => bits >> (i as u32 * m) & ((1 << m) - 1),
+                _ => return self.row_point_visibility(ids, g, gs, &ps, ns, x, n, i),
+            };
+            oracle::visible_fraction_masked(Some(&self.bvh), x, n, gs, &ps, ns, m, key, skip, mask)
+        };
         let integrate = |pts: &mut dyn Iterator<Item = (DVec3, f64, u64)>| {
             let (mut f, mut unoccluded) = (0.0, 0.0);
             let (mut vmin, mut vmax) = (1.0f64, 0.0f64);
@@ -2331,7 +2380,7 @@ impl<'a> Solver<'a> {
         } else {
             0.0
         };
-        (f, vis)
+        ((f, vis), made.get())
     }
 
     /// The spread over leaf `leaf`'s quadrature points of its reflected radiosity
@@ -2494,14 +2543,19 @@ impl<'a> Solver<'a> {
         n: DVec3,
         i: u64,
     ) -> f64 {
-        let key = if i < 4 {
-            oracle::hash3(self.opts.seed ^ 0x1eaf, ids.link, ids.leaf << 3 | i)
-        } else {
-            oracle::hash3(self.opts.seed ^ 0x1eb0, ids.source, ids.leaf << 5 | (i - 4))
-        };
+        let key = self.row_ray_key(ids, i);
         let skip = [g.patch, gs.patch];
         let m = self.opts.rays_per_point;
         oracle::visible_fraction(&self.bvh, x, n, gs, ps, ns, m, key, skip)
+    }
+
+    /// The jitter key of the rays of [`Solver::row_point_visibility`] at point `i`.
+    fn row_ray_key(&self, ids: RowRayIds, i: u64) -> u64 {
+        if i < 4 {
+            oracle::hash3(self.opts.seed ^ 0x1eaf, ids.link, ids.leaf << 3 | i)
+        } else {
+            oracle::hash3(self.opts.seed ^ 0x1eb0, ids.source, ids.leaf << 5 | (i - 4))
+        }
     }
 
     /// Pushes a leaf's row entry for source `s` (coefficient `coef`, visible
@@ -2756,6 +2810,8 @@ impl<'a> Solver<'a> {
         let cache = self.window.as_ref().map(|w| &w.rows);
         let opened = self.window.as_ref().map(|w| &w.opened);
         let hidden = self.window.as_ref().map(|w| &w.hidden);
+        let masks = self.window.as_ref().map(|w| &w.masks);
+        let rays_per_point = self.opts.rays_per_point;
         let factors = self
             .window
             .as_ref()
@@ -2782,6 +2838,7 @@ impl<'a> Solver<'a> {
                 let mut kept = Vec::new();
                 let mut fresh_opened = Vec::new();
                 let mut fresh_hidden = Vec::new();
+                let mut fresh_masks = Vec::new();
                 let mut time_entries = Vec::new();
                 let mut between = 0u64;
                 let mut fresh_pass = Vec::new();
@@ -2889,10 +2946,26 @@ impl<'a> Solver<'a> {
                             && static_base
                             && !self.elem_moving(ElementId(s))
                             && self.clear_of_moving(&geoms[leaf.ix()], gs);
+                        // Not steady: the static part of the rays at the leaf's
+                        // points holds over the window ([`Window::masks`]).
+                        let maskable = !steady
+                            && masks.is_some()
+                            && static_base
+                            && !self.elem_moving(ElementId(s))
+                            && rays_per_point * q.count as u32 <= 64;
                         match hidden.filter(|_| steady).and_then(|h| h.get(&key)) {
                             Some(&cv) => cv,
                             None => {
-                                let cv = self.hidden_row_coef(leaf, l, s, &q, n);
+                                let known = masks.filter(|_| maskable).and_then(|m| m.get(&key));
+                                let how = match known {
+                                    Some(&bits) => RowMasks::Known(bits),
+                                    None if maskable => RowMasks::Make,
+                                    None => RowMasks::None,
+                                };
+                                let (cv, made) = self.hidden_row_coef(leaf, l, s, &q, n, how);
+                                if matches!(how, RowMasks::Make) {
+                                    fresh_masks.push((key, made));
+                                }
                                 if steady {
                                     fresh_hidden.push((key, cv));
                                 }
@@ -2929,6 +3002,7 @@ impl<'a> Solver<'a> {
                     kept,
                     opened: fresh_opened,
                     hidden: fresh_hidden,
+                    masks: fresh_masks,
                     factors: memo.map(|m| m.fresh).unwrap_or_default(),
                     timed: time_entries,
                     between,
@@ -2948,6 +3022,7 @@ impl<'a> Solver<'a> {
                 kept,
                 opened: fresh_opened,
                 hidden: fresh_hidden,
+                masks: fresh_masks,
                 factors: fresh_factors,
                 timed,
                 between,
@@ -2960,6 +3035,7 @@ impl<'a> Solver<'a> {
                 && !(fresh.is_empty()
                     && fresh_opened.is_empty()
                     && fresh_hidden.is_empty()
+                    && fresh_masks.is_empty()
                     && fresh_factors.is_empty())
             {
                 let rows_bytes = w.rows_bytes();
@@ -2970,6 +3046,7 @@ impl<'a> Solver<'a> {
                 if points.as_ref().is_none_or(PointCache::admits) {
                     w.rows.extend(fresh);
                     w.hidden.extend(fresh_hidden);
+                    w.masks.extend(fresh_masks);
                     w.factors.extend(fresh_factors);
                     for (key, entries) in fresh_opened {
                         let n = entries.len();
@@ -4374,6 +4451,38 @@ mod tests {
         });
         eprintln!("this frame's own leaves: {own}, with {own_hit} kept coefficients");
         assert!(own_hit > 300, "{own_hit} kept coefficients of frame leaves");
+        // Static masks of the entries with the board's box in the shaft now (which
+        // `hidden` cannot keep), on the window's base leaves and links: the
+        // coefficient from them is the one casting every ray gives, bit for bit,
+        // and the masks made again are the ones kept.
+        let mut masked_now = 0;
+        if let Some(w) = s.window.as_ref() {
+            for (&(leaf, l), &bits) in &w.masks {
+                if leaf >= FRAME_SID || l as usize >= w.frame.links_len {
+                    continue;
+                }
+                let src = s.links.ends.as_slice()[l as usize].source;
+                let (g, gs) = (&geoms[leaf as usize], &geoms[src as usize]);
+                assert!(gs.patch != u32::MAX && !s.elem_moving(ElementId(src)));
+                if s.clear_of_moving(g, gs) {
+                    continue;
+                }
+                masked_now += 1;
+                let q = oracle::samples(g);
+                let n = DVec3::from_array(g.normal);
+                let coef = |how| s.hidden_row_coef(ElementId(leaf), l, src, &q, n, how);
+                let (all, _) = coef(RowMasks::None);
+                let (known, _) = coef(RowMasks::Known(bits));
+                let (made, again) = coef(RowMasks::Make);
+                assert_eq!(again, bits, "leaf {leaf} link {l}");
+                for (a, b) in [(all, known), (all, made)] {
+                    assert_eq!(a.0.to_bits(), b.0.to_bits(), "leaf {leaf} link {l}");
+                    assert_eq!(a.1.to_bits(), b.1.to_bits(), "leaf {leaf} link {l}");
+                }
+            }
+        }
+        eprintln!("{masked_now} masked entries with the board in the shaft now");
+        assert!(masked_now > 100, "{masked_now} masked entries");
         // At one state (the rows a frame solved with are one step behind its end:
         // cluster sources' coefficients follow the radiosity the solve gave).
         s.compute_leaf_rows();
@@ -4382,6 +4491,7 @@ mod tests {
             w.opened.clear();
             w.opened_entries = 0;
             w.hidden.clear();
+            w.masks.clear();
             w.factors.clear();
         }
         s.compute_leaf_rows();

@@ -35,7 +35,9 @@
 //!    into) and final-gather terms for the whole window; a varying link between
 //!    static ends keeps its leaf-row coefficient for the frames where no moving
 //!    object's box meets the shaft between the ends (its rays then meet the same
-//!    static geometry with the same keys), and a static leaf keeps its factors to
+//!    static geometry with the same keys) and, for the others, the static part of
+//!    its rays as masks (re-cast at the moving objects only, as the final gather
+//!    below does), and a static leaf keeps its factors to
 //!    the static elements its sources open into. The leaves and links a frame's
 //!    refinement makes are made again by the next frame under other ids; their
 //!    rays are keyed by their place under the shared part (the path of child
