@@ -41,6 +41,7 @@
 //! key order, so it makes the same cache from those as from the window's own.
 
 use std::collections::HashMap;
+use std::ops::Range;
 
 use bytemuck::{Pod, Zeroable};
 
@@ -156,6 +157,14 @@ impl<'a> PointView<'a> {
 /// and its masked terms.
 pub type SourceTerms = (u32, Vec<FixedTerm>, Vec<MaskedTerm>);
 
+/// [`SourceTerms`] borrowed: a source's key, fixed and masked terms.
+type SourceSlices<'s> = (u32, &'s [FixedTerm], &'s [MaskedTerm]);
+
+/// `sources` as [`SourceSlices`].
+fn as_slices(sources: &[SourceTerms]) -> Vec<SourceSlices<'_>> {
+    sources.iter().map(|s| (s.0, &s.1[..], &s.2[..])).collect()
+}
+
 /// The kept final-gather terms of a window (module docs).
 pub struct PointCache {
     slots: HashMap<PointKey, u32>,
@@ -230,13 +239,20 @@ impl PointCache {
         if !self.healthy || (slot.is_none() && !self.admits()) {
             return;
         }
-        // The point's sources, old and new, by key; each source's terms.
-        let mut sources: Vec<SourceTerms> = Vec::new();
+        // The point's sources, old and new: each one's key and the ranges of its
+        // terms in two flat buffers, not two vectors a source (a point has up to
+        // a few hundred sources, and this runs on one thread between the batches
+        // of parallel gathers).
+        let (mut fixed, mut masked) = (Vec::new(), Vec::new());
+        let mut sources: Vec<(u32, Range<usize>, Range<usize>)> = Vec::new();
         if let Some(view) = slot.and_then(|_| self.get(&pk)) {
-            for e in view.index {
-                if let Some((f, m)) = view.get(e.key) {
-                    sources.push((e.key, f.to_vec(), m.to_vec()));
-                }
+            fixed.extend_from_slice(view.fixed);
+            masked.extend_from_slice(view.masked);
+            for (i, e) in view.index.iter().enumerate() {
+                let next = view.index.get(i + 1);
+                let f1 = next.map_or(fixed.len(), |n| n.fixed as usize);
+                let m1 = next.map_or(masked.len(), |n| n.masked as usize);
+                sources.push((e.key, e.fixed as usize..f1, e.masked as usize..m1));
             }
         }
         let known = sources.len();
@@ -246,25 +262,31 @@ impl PointCache {
             {
                 continue;
             }
-            let fixed = terms
-                .fixed
-                .iter()
-                .map(|&(elem, f)| FixedTerm { elem, f: f as f32 })
-                .collect();
-            let masked = terms.masked.iter().map(|(m, _)| *m).collect();
-            sources.push((key, fixed, masked));
+            let (f0, m0) = (fixed.len(), masked.len());
+            fixed.extend(
+                terms
+                    .fixed
+                    .iter()
+                    .map(|&(elem, f)| FixedTerm { elem, f: f as f32 }),
+            );
+            masked.extend(terms.masked.iter().map(|(m, _)| *m));
+            sources.push((key, f0..fixed.len(), m0..masked.len()));
         }
         if sources.len() == known {
             return;
         }
         sources.sort_by_key(|s| s.0);
-        self.append(pk, slot, &sources);
+        let slices: Vec<SourceSlices> = sources
+            .iter()
+            .map(|(key, f, m)| (*key, &fixed[f.clone()], &masked[m.clone()]))
+            .collect();
+        self.append(pk, slot, &slices);
     }
 
     /// Writes point `pk`'s `sources` (sorted by key) at the arenas' ends, in place
     /// of slot `slot`'s records if it has one. A point whose terms would not fit
     /// the 16-bit offsets is not kept.
-    fn append(&mut self, pk: PointKey, slot: Option<u32>, sources: &[SourceTerms]) {
+    fn append(&mut self, pk: PointKey, slot: Option<u32>, sources: &[SourceSlices]) {
         let n_fixed: usize = sources.iter().map(|s| s.1.len()).sum();
         let n_masked: usize = sources.iter().map(|s| s.2.len()).sum();
         if n_fixed > usize::from(u16::MAX) || n_masked > usize::from(u16::MAX) {
@@ -286,8 +308,8 @@ impl PointCache {
         };
         let appended = self.index.extend_from_slice(&index).and_then(|()| {
             for s in sources {
-                self.fixed.extend_from_slice(&s.1)?;
-                self.masked.extend_from_slice(&s.2)?;
+                self.fixed.extend_from_slice(s.1)?;
+                self.masked.extend_from_slice(s.2)?;
             }
             Ok(())
         });
@@ -316,7 +338,7 @@ impl PointCache {
 
     /// The index records of `sources` (sorted by key, at most 65535 fixed and
     /// masked terms in all): each source's key and where its terms start.
-    fn index_of(sources: &[SourceTerms]) -> Vec<TermIndex> {
+    fn index_of(sources: &[SourceSlices]) -> Vec<TermIndex> {
         let (mut f, mut m) = (0u16, 0u16);
         sources
             .iter()
@@ -494,7 +516,7 @@ impl PointCache {
             let mut sources = self.sources(&pk);
             sources.retain_mut(|s| keep(pk, s));
             if !sources.is_empty() && out.admits() {
-                out.append(pk, None, &sources);
+                out.append(pk, None, &as_slices(&sources));
             }
             // Out of core, both caches' pages go back as it goes.
             if i % 1024 == 1023 {
@@ -526,7 +548,7 @@ impl PointCache {
             if sources.is_empty() {
                 continue;
             }
-            let index = Self::index_of(&sources);
+            let index = Self::index_of(&as_slices(&sources));
             let n_fixed: usize = sources.iter().map(|s| s.1.len()).sum();
             let n_masked: usize = sources.iter().map(|s| s.2.len()).sum();
             let mut head = [0u8; POINT_HEAD];
@@ -685,7 +707,7 @@ impl PointCache {
                     ));
                 }
             }
-            out.append(pk, None, &sources);
+            out.append(pk, None, &as_slices(&sources));
             last = Some(pk);
             n_points += 1;
         }
