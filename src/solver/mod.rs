@@ -2326,15 +2326,18 @@ impl<'a> Solver<'a> {
         let m = self.opts.rays_per_point;
         let made = std::cell::Cell::new(0u64);
         let vis_at = |x: DVec3, i: u64| {
-            let key = self.row_ray_key(ids, i);
             let skip = [g.patch, gs.patch];
-            let mask = match masks {
+            let (key, mask) = match masks {
                 RowMasks::Make if i < 4 => {
+                    let key = self.row_ray_key(ids, i);
                     let mask = oracle::static_clear_mask(&self.bvh, x, gs, &ps, m, key, skip);
                     made.set(made.get() | mask << (i as u32 * m));
-                    mask
+                    (key, mask)
                 }
-                RowMasks::Known(bits) if i < 4 => bits >> (i as u32 * m) & ((1 << m) - 1),
+                RowMasks::Known(bits) if i < 4 => (
+                    self.row_ray_key(ids, i),
+                    bits >> (i as u32 * m) & ((1 << m) - 1),
+                ),
                 _ => return self.row_point_visibility(ids, g, gs, &ps, ns, x, n, i),
             };
             oracle::visible_fraction_masked(Some(&self.bvh), x, n, gs, &ps, ns, m, key, skip, mask)
@@ -2942,17 +2945,13 @@ impl<'a> Solver<'a> {
                         // ends, with no moving object's box in the shaft between
                         // the ends now, casts only at static geometry with the same
                         // keys as at any other such frame (`ray_id`).
-                        let steady = hidden.is_some()
-                            && static_base
-                            && !self.elem_moving(ElementId(s))
-                            && self.clear_of_moving(&geoms[leaf.ix()], gs);
+                        let static_ends =
+                            hidden.is_some() && static_base && !self.elem_moving(ElementId(s));
+                        let steady = static_ends && self.clear_of_moving(&geoms[leaf.ix()], gs);
                         // Not steady: the static part of the rays at the leaf's
                         // points holds over the window ([`Window::masks`]).
-                        let maskable = !steady
-                            && masks.is_some()
-                            && static_base
-                            && !self.elem_moving(ElementId(s))
-                            && rays_per_point * q.count as u32 <= 64;
+                        let maskable =
+                            static_ends && !steady && rays_per_point * q.count as u32 <= 64;
                         match hidden.filter(|_| steady).and_then(|h| h.get(&key)) {
                             Some(&cv) => cv,
                             None => {
