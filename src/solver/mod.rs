@@ -116,6 +116,7 @@
 //! Results are deterministic for a given seed and thread count (ray jitter is hashed
 //! from link ids; parallel loops write disjoint outputs).
 
+mod between;
 pub mod gmres;
 pub mod hierarchy;
 mod kept;
@@ -124,8 +125,10 @@ pub mod report;
 pub mod solution;
 pub mod spacetime;
 
+use between::TimedEntry;
+pub use between::{Between, FrameRows, KeyValues, Keyframe, SharedRadiosity, TimeRange};
+
 use std::collections::HashMap;
-use std::sync::Arc;
 use std::time::Instant;
 
 use glam::DVec3;
@@ -811,74 +814,6 @@ fn geom_box(g: &Geom) -> (DVec3, DVec3) {
 /// both scenes at the same time (BENCHMARKS.md).
 const GATHER_BATCH: usize = 128;
 
-/// The leaf-row entries with a moving end (a moving leaf, or a moving source) of
-/// one solved frame of a space-time window, keyed by what they stand for (the
-/// leaf's `Solver::ray_id` and the link's `Solver::row_link_id`, the same at
-/// every frame that makes them): `(F, visible fraction)`. The ends of the time
-/// range of the frames solved between ([`TimeRange`]). Sorted by key, 24 bytes an
-/// entry.
-#[derive(Clone, Debug, Default)]
-pub struct FrameRows(Vec<TimedEntry>);
-
-/// One entry of [`FrameRows`]: `((leaf, link), (F, visible fraction))`.
-type TimedEntry = ((u64, u64), (f32, f32));
-
-impl FrameRows {
-    /// Number of entries.
-    pub fn len(&self) -> usize {
-        self.0.len()
-    }
-
-    /// True if there is none.
-    pub fn is_empty(&self) -> bool {
-        self.0.is_empty()
-    }
-
-    /// Entry `key`, widened.
-    fn get(&self, key: &(u64, u64)) -> Option<(f64, f64)> {
-        let i = self.0.binary_search_by_key(key, |e| e.0).ok()?;
-        let (f, v) = self.0[i].1;
-        Some((f64::from(f), f64::from(v)))
-    }
-}
-
-/// A frame solved between two solved frames `a` and `b` of a window (Damez &
-/// Sillion §4.3, eq. 8–9: an interaction that is not split in time holds one
-/// coefficient over its time range). A leaf-row entry with a moving end whose
-/// coefficient at `a` and at `b` differs by at most `tol` in the light it carries
-/// (`ρ_leaf · max B_s · |F_a − F_b|`, radiosity units) is not split in time over
-/// `[a, b]`: the frame takes it on the line between the two (`alpha` of the way
-/// from `a`), instead of its exact factors and rays; any other entry is split in
-/// time at this frame and computed here, and the frame's entries become an end
-/// for the frames between it and `a` or `b` ([`spacetime::solve_order`] bisects).
-/// Linear rather than the paper's constant-in-time basis, as the frames between
-/// keyframes are ([`Between`]). Entries between two static ends are never taken:
-/// a moving object in the shaft between them (they are computed per frame only
-/// then) may block it at this frame and at neither end, the transient blocker the
-/// paper's shaft test forces a time split for (§5.2).
-#[derive(Clone, Debug)]
-pub struct TimeRange {
-    /// Row entries of the solved frame before.
-    pub a: Arc<FrameRows>,
-    /// Row entries of the solved frame after.
-    pub b: Arc<FrameRows>,
-    /// Where the frame lies, `(t − t_a) / (t_b − t_a)`.
-    pub alpha: f64,
-    /// Largest change of an entry's light over `[a, b]` (radiosity units).
-    pub tol: f64,
-}
-
-impl TimeRange {
-    /// Entry `key` on the line between `a` and `b`, if both have it and its light
-    /// (`weight · F`) changes by at most `tol` between them.
-    fn value(&self, key: &(u64, u64), weight: f64) -> Option<(f64, f64)> {
-        let (fa, va) = self.a.get(key)?;
-        let (fb, vb) = self.b.get(key)?;
-        ((fa - fb).abs() * weight <= self.tol)
-            .then_some((fa + self.alpha * (fb - fa), va + self.alpha * (vb - va)))
-    }
-}
-
 /// What one space-time frame cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameCost {
@@ -896,192 +831,8 @@ pub struct FrameCost {
     pub rows_moving: u64,
 }
 
-/// Radiosity of the elements a window's frames share, at one frame
-/// ([`Solver::shared_radiosity`]).
-#[derive(Clone, Debug, Default)]
-pub struct SharedRadiosity {
-    b: Vec<[f32; 3]>,
-    dir: Vec<Emission>,
-    /// Power (area × max channel) of each moving surface element, in id order.
-    moving_power: Vec<f64>,
-}
-
-impl SharedRadiosity {
-    /// True if the moving surfaces hand on the same light at `a` and `b`: the power
-    /// each emits changes by at most `tol` times their total power.
-    pub fn moving_power_holds(a: &SharedRadiosity, b: &SharedRadiosity, tol: f64) -> bool {
-        let total: f64 = b.moving_power.iter().sum();
-        a.moving_power.len() == b.moving_power.len()
-            && a.moving_power
-                .iter()
-                .zip(&b.moving_power)
-                .all(|(x, y)| (x - y).abs() <= tol * total)
-    }
-}
-
 /// A reconstruction point: patch and quantised parameters.
 type PointKey = (u32, u32, u32);
-
-/// The values a frame's reconstruction gave its points, gathered or interpolated
-/// (radiosity, and whether the point lies outside every solid), by point key: what
-/// the frames between two solved frames interpolate ([`Between`]).
-///
-/// With [`KeyValues::with_cells`], a point the keyframe did not gather takes the
-/// value of the keyframe's cell that holds it (the stored interpolant), so a frame
-/// that meshes a cell differently can still interpolate its new points.
-///
-/// The points are a sorted array of 28-byte records with `f32` radiosity, what the
-/// leaves store (a window keeps those of about six frames: a hash map of `f64`s
-/// held 2.4 MB of ACTOR's out-of-core peak for four).
-#[derive(Clone, Debug, Default)]
-pub struct KeyValues {
-    /// (point, radiosity, outside every solid), sorted by point.
-    points: Vec<(PointKey, [f32; 3], bool)>,
-    /// The keyframe's cells, sorted by patch (as [`Solver::reconstruct`] returns
-    /// them), shared with the window's time merge until it has taken them.
-    cells: std::sync::Arc<[Leaf]>,
-}
-
-impl KeyValues {
-    /// The values gathered at `points` (in any order).
-    fn from_points(points: impl Iterator<Item = (PointKey, [f64; 3], bool)>) -> Self {
-        let mut points: Vec<_> = points
-            .map(|(pk, b, ok)| (pk, b.map(|x| x as f32), ok))
-            .collect();
-        points.sort_unstable_by_key(|p| p.0);
-        KeyValues {
-            points,
-            cells: Default::default(),
-        }
-    }
-
-    /// The value the frame gave point `pk` (gathered or interpolated) and whether it
-    /// lay outside every solid.
-    fn known(&self, pk: &PointKey) -> Option<([f64; 3], bool)> {
-        let i = self.points.binary_search_by_key(pk, |p| p.0).ok()?;
-        let (_, b, ok) = self.points[i];
-        Some((b.map(f64::from), ok))
-    }
-
-    /// Adds the keyframe's cells (sorted by patch) for the points it did not gather.
-    pub fn with_cells(mut self, cells: std::sync::Arc<[Leaf]>) -> Self {
-        self.cells = cells;
-        self
-    }
-
-    /// The value at point `pk` outside every solid: the frame's own if it had the
-    /// point (and it lay outside the solids then), else the frame's cell holding it.
-    fn at(&self, pk: &PointKey) -> Option<[f64; 3]> {
-        if let Some((v, true)) = self.known(pk) {
-            return Some(v);
-        }
-        let lo = self.cells.partition_point(|l| l.patch < pk.0);
-        let hi = self.cells.partition_point(|l| l.patch <= pk.0);
-        let (u, v) = (point_param(pk.1), point_param(pk.2));
-        crate::playback::probe::leaf_at(&self.cells[lo..hi], u, v).map(|l| l.eval(u, v))
-    }
-}
-
-/// The parameter a point key's coordinate stands for ([`VertexCache::register`]).
-fn point_param(q: u32) -> f64 {
-    q as f64 / (1u64 << 24) as f64
-}
-
-/// A solved frame of a space-time window: its position (frame index, or any time
-/// unit shared by the frames of a [`Between`]) and the values it gave its points.
-pub type Keyframe<'k> = (f64, &'k KeyValues);
-
-/// A frame at `t` between two solved frames `a` and `b` of a space-time window (two
-/// keyframes, or a keyframe and the midpoint of a bisection, see
-/// [`crate::solver::spacetime::solve_order`]), with the frame `before` as far
-/// before `a` as `b` is after, when there is one. A reconstruction point known at
-/// both with the same validity takes the linear interpolation of their values
-/// instead of a final gather when
-/// - their values differ by at most `tol` in every channel, or
-/// - the point's values are linear in time over the three frames: `a` lies
-///   within `tol` of the line through `before` and `b`.
-///
-/// Every other point is gathered at the frame. A frame's values hold its
-/// interpolated points as well as its gathered ones, so a bisection step
-/// interpolates what the step above it interpolated (the same line) and gathers
-/// only within the half a change was found in.
-///
-/// Why this holds: a point's value changes between two frames through the
-/// radiosity of its sources, which varies smoothly, and through moving objects
-/// crossing its view of them. A moving blocker larger than the distance it travels
-/// between the two frames cannot cover and uncover a point's view within that time,
-/// so a point whose values agree at both ends, or follow one line over three
-/// frames, saw no shadow edge pass in between; a shadow edge that passes within
-/// the interval puts `a` off the line through `before` and `b` by about half the
-/// edge's contrast, and the point is gathered.
-///
-/// Where the brackets are close in motion (`free`), the line is taken without the
-/// test: a shadow edge passing in between is then placed by the line to within
-/// the distance the objects travel over the interval (at most `interp_motion` of
-/// the scene's diameter), finer than the reconstruction resolves an edge at the
-/// settings measured, where a gather would only resolve the steps its rays make
-/// as the blocker crosses them. The paper splits a time range only while the
-/// light over it varies by more than its threshold (§5.2, criterion 2), so its
-/// time elements do not shorten with the frame interval; here that floor is set
-/// in motion. What it costs is the paper's "stains" (§5.2): a moving shadow's
-/// edge fades over the distance of one free interval instead of stepping.
-#[derive(Clone, Copy, Debug)]
-pub struct Between<'k> {
-    /// The moving objects travel less than [`spacetime::SpaceTimeOptions::interp_motion`]
-    /// between `a` and `b`: a point both know (with the same validity) takes the
-    /// line between them whatever its values.
-    pub free: bool,
-    /// The frame as far before `a` as `b` is after, if any.
-    pub before: Option<Keyframe<'k>>,
-    /// The solved frame that starts the interval.
-    pub a: Keyframe<'k>,
-    /// The solved frame that ends the interval.
-    pub b: Keyframe<'k>,
-    /// Position of the frame, strictly between `a` and `b`.
-    pub t: f64,
-    /// Largest deviation (radiosity units) of a point's values at the solved
-    /// frames from agreement or from a line for the point to be interpolated.
-    pub tol: f64,
-}
-
-impl Between<'_> {
-    /// The interpolated value of point `pk` and whether it lies outside every
-    /// solid, if the solved frames allow it. A point both frames had keeps their
-    /// validity (they must agree on it); any other point asks `outside_now` (one
-    /// ray, no gather) and, if outside the solids, interpolates the frames' cells
-    /// ([`KeyValues::with_cells`]).
-    fn value(&self, pk: &PointKey, outside_now: impl FnOnce() -> bool) -> Option<([f64; 3], bool)> {
-        let (va, vb, valid) = match (self.a.1.known(pk), self.b.1.known(pk)) {
-            (Some((va, oka)), Some((vb, okb))) if oka == okb => (va, vb, oka),
-            (Some(_), Some(_)) => return None,
-            _ => {
-                if !outside_now() {
-                    // Inside a solid: the cell takes its other corners' values.
-                    return Some(([0.0; 3], false));
-                }
-                (self.a.1.at(pk)?, self.b.1.at(pk)?, true)
-            }
-        };
-        let (ta, tb) = (self.a.0, self.b.0);
-        let close = |x: &[f64; 3], y: &[f64; 3]| (0..3).all(|k| (x[k] - y[k]).abs() <= self.tol);
-        // Value at `t` of the line through `(t0, v0)` and `(t1, v1)`; `v0 + α (v1 − v0)`,
-        // so equal values give back exactly the same value.
-        let line = |t0: f64, v0: &[f64; 3], t1: f64, v1: &[f64; 3], t: f64| -> [f64; 3] {
-            let alpha = (t - t0) / (t1 - t0);
-            std::array::from_fn(|k| v0[k] + alpha * (v1[k] - v0[k]))
-        };
-        let linear = || {
-            self.before.is_some_and(|(tp, p)| {
-                p.at(pk)
-                    .is_some_and(|vp| close(&va, &line(tp, &vp, tb, &vb, ta)))
-            })
-        };
-        if !(self.free || close(&va, &vb) || linear()) {
-            return None;
-        }
-        Some((line(ta, &va, tb, &vb, self.t), valid))
-    }
-}
 
 /// What [`Solver::reconstruct_between`] did.
 #[derive(Clone, Debug, Default)]
@@ -2111,76 +1862,12 @@ impl<'a> Solver<'a> {
         })
     }
 
-    /// The solved frames around the next frames solved, whose row entries with a
-    /// moving end those frames take where they hold ([`TimeRange`]); `None`: every
-    /// entry is computed (a keyframe).
-    pub fn set_time_range(&mut self, range: Option<TimeRange>) {
-        self.time_range = range;
-    }
-
-    /// The row entries with a moving end of the frame solved last (computed, or
-    /// taken from its [`TimeRange`]), for the frames to be solved between it and
-    /// another.
-    pub fn take_frame_rows(&mut self) -> FrameRows {
-        let mut rows = std::mem::take(&mut self.frame_rows);
-        rows.0.sort_unstable_by_key(|e| e.0);
-        rows.0.shrink_to_fit();
-        rows
-    }
-
     /// Bounds the final-gather terms a time window keeps to `bytes` (see
     /// [`spacetime`]): over it, the points the last frame did not use are dropped
     /// and new points are gathered afresh at every frame instead of kept. `None`
     /// keeps everything that holds over the window. Applies from the next window.
     pub fn set_kept_budget(&mut self, bytes: Option<u64>) {
         self.kept_budget = bytes.map(|b| usize::try_from(b).unwrap_or(usize::MAX));
-    }
-
-    /// Places the moving objects at `t` (inside the current window) without solving:
-    /// the hierarchy of the last frame solved stays, and the radiosity of the
-    /// window's own elements (those every frame of the window shares) is set to
-    /// `B_a + alpha · (B_b − B_a)` between two solved frames' values `a` and `b`
-    /// ([`Solver::shared_radiosity`]; the solved frames nearest `t` on either
-    /// side). The elements the last frame solved refined keep its values. For the
-    /// gathers of a frame between two keyframes ([`spacetime`]).
-    pub fn place_between(&mut self, t: f64, a: &SharedRadiosity, b: &SharedRadiosity, alpha: f64) {
-        let n = a.b.len().min(b.b.len()).min(self.elems.len());
-        let lerp =
-            |x: [f32; 3], y: [f32; 3]| std::array::from_fn(|k| x[k] + alpha as f32 * (y[k] - x[k]));
-        for (i, out) in self.elems.radiosities.as_mut_slice()[..n]
-            .iter_mut()
-            .enumerate()
-        {
-            *out = lerp(a.b[i], b.b[i]);
-        }
-        for (i, out) in self.elems.directions.as_mut_slice()[..n]
-            .iter_mut()
-            .enumerate()
-        {
-            *out = a.dir[i].lerp(&b.dir[i], alpha as f32);
-        }
-        self.set_time(t);
-    }
-
-    /// The radiosity (and power-weighted directions) of the elements every frame of
-    /// the current window shares, as solved now.
-    pub fn shared_radiosity(&self) -> SharedRadiosity {
-        let n = self
-            .window
-            .as_ref()
-            .map_or(self.elems.len(), |w| w.frame.elems_len);
-        let b = self.elems.radiosities.as_slice()[..n].to_vec();
-        // Power of the moving surfaces (what they hand the rest of the scene).
-        let geoms = self.elems.geoms.as_slice();
-        let moving_power = (0..n)
-            .filter(|&e| geoms[e].patch != u32::MAX && self.elem_moving(ElementId(e as u32)))
-            .map(|e| geoms[e].area * b[e].iter().copied().fold(0.0f32, f32::max) as f64)
-            .collect();
-        SharedRadiosity {
-            b,
-            dir: self.elems.directions.as_slice()[..n].to_vec(),
-            moving_power,
-        }
     }
 
     /// Bytes of what the current window keeps: final-gather terms and leaf-row
@@ -4249,6 +3936,8 @@ fn corner_values(
 
 #[cfg(test)]
 mod tests {
+    use std::sync::Arc;
+
     use super::*;
 
     /// LIGHT's shared part solved at `eps`, and a window over `[start, end]` begun:
@@ -4640,32 +4329,6 @@ mod tests {
     }
 
     #[test]
-    fn an_entry_is_taken_between_its_ends_only_if_its_light_holds() {
-        let rows = |e: &[TimedEntry]| Arc::new(FrameRows(e.to_vec()));
-        let range = TimeRange {
-            a: rows(&[
-                ((1, 1), (0.25, 0.5)),
-                ((1, 2), (0.5, 1.0)),
-                ((2, 1), (0.1, 1.0)),
-            ]),
-            b: rows(&[
-                ((1, 1), (0.75, 1.0)),
-                ((1, 2), (0.5, 1.0)),
-                ((3, 1), (0.1, 1.0)),
-            ]),
-            alpha: 0.25,
-            tol: 0.1,
-        };
-        // Light `weight · |F_a − F_b|`: 0.5 · 0.5 = 0.25 > 0.1, 0.1 · 0.5 = 0.05.
-        assert_eq!(range.value(&(1, 1), 0.5), None);
-        assert_eq!(range.value(&(1, 1), 0.1), Some((0.375, 0.625)));
-        assert_eq!(range.value(&(1, 2), 1e9), Some((0.5, 1.0)));
-        // Both ends must have the entry.
-        assert_eq!(range.value(&(2, 1), 0.0), None);
-        assert_eq!(range.value(&(3, 1), 0.0), None);
-    }
-
-    #[test]
     fn parameter_points_fall_in_the_domains_that_hold_them() {
         let quad = [[0.0, 0.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5]];
         assert!(uv_inside(&quad, 4, [0.25, 0.25]));
@@ -4916,144 +4579,5 @@ mod tests {
         let b = [Some([1.1, 1.1, 1.1]), Some([5.0; 3]), None];
         assert!((relative_change(&a, &b) - 0.1).abs() < 1e-12);
         assert!(relative_change(&[None], &[None]).is_nan());
-    }
-
-    fn values(points: &[(u32, [f64; 3], bool)]) -> KeyValues {
-        KeyValues::from_points(points.iter().map(|&(i, v, ok)| ((0, i, 0), v, ok)))
-    }
-
-    fn grey(v: f64) -> [f64; 3] {
-        [v, v, v]
-    }
-
-    #[test]
-    fn frames_between_keyframes_interpolate_only_what_the_keyframes_allow() {
-        // Point 0 holds its value, point 1 drifts along a line, point 2 sees a shadow
-        // edge pass between a and b, point 3 is missing at b, point 4 is inside a
-        // solid at a only, point 5 drifts too fast and the keyframe before lacks it.
-        let p = values(&[(1, grey(0.8), true), (2, grey(1.0), true)]);
-        let a = values(&[
-            (0, grey(0.5), true),
-            (1, grey(1.0), true),
-            (2, grey(1.0), true),
-            (3, grey(0.5), true),
-            (4, grey(0.5), false),
-            (5, grey(0.5), true),
-        ]);
-        let b = values(&[
-            (0, grey(0.505), true),
-            (1, grey(1.2), true),
-            (2, grey(0.4), true),
-            (4, grey(0.5), true),
-            (5, grey(0.9), true),
-        ]);
-        let between = Between {
-            free: false,
-            before: Some((0.0, &p)),
-            a: (4.0, &a),
-            b: (8.0, &b),
-            t: 5.0,
-            tol: 0.01,
-        };
-        let at = |i: u32| between.value(&(0, i, 0), || true);
-        let (v0, ok0) = at(0).expect("agreeing keyframes interpolate");
-        assert!(ok0);
-        // Keyframe values are kept in f32, as the leaves store them.
-        assert!((v0[0] - 0.50125).abs() < 1e-7, "{v0:?}");
-        let (v1, _) = at(1).expect("a value on one line over three keyframes");
-        assert!((v1[1] - 1.05).abs() < 1e-7, "{v1:?}");
-        assert_eq!(at(2), None, "a shadow edge passed between a and b");
-        assert_eq!(at(3), None, "not gathered at b");
-        assert_eq!(at(4), None, "inside a solid at a only");
-        assert_eq!(at(5), None, "the keyframe before does not hold point 5");
-        // Without a keyframe before the interval only agreement counts.
-        let bare = Between {
-            before: None,
-            ..between
-        };
-        assert!(bare.value(&(0, 0, 0), || true).is_some());
-        assert_eq!(bare.value(&(0, 1, 0), || true), None);
-        // Brackets closer in motion than `interp_motion`: a point both hold takes
-        // the line whatever its values (the shadow edge of point 2 fades over the
-        // interval); one they do not both hold, or with another validity, does not.
-        let free = Between { free: true, ..bare };
-        let (v2, ok2) = free.value(&(0, 2, 0), || true).expect("free: the line");
-        assert!(ok2);
-        assert!((v2[2] - (1.0 + 0.25 * (0.4 - 1.0))).abs() < 1e-7, "{v2:?}");
-        assert_eq!(free.value(&(0, 3, 0), || true), None);
-        assert_eq!(free.value(&(0, 4, 0), || true), None);
-        // Equal values come back bit for bit (where nothing changes, consecutive
-        // frames are equal and the store merges them).
-        let same = values(&[(0, [0.1, 0.2, 0.3], true)]);
-        let flat = Between {
-            free: false,
-            before: None,
-            a: (0.0, &same),
-            b: (3.0, &same),
-            t: 1.0,
-            tol: 0.0,
-        };
-        let kept = [0.1f32, 0.2, 0.3].map(f64::from);
-        assert_eq!(flat.value(&(0, 0, 0), || true), Some((kept, true)));
-    }
-
-    #[test]
-    fn moving_power_holds_within_a_share_of_the_moving_total() {
-        let at = |p: &[f64]| SharedRadiosity {
-            moving_power: p.to_vec(),
-            ..SharedRadiosity::default()
-        };
-        let a = at(&[10.0, 90.0]);
-        // 1 of a total of 100 moves: within 1%, not within 0.5%.
-        assert!(SharedRadiosity::moving_power_holds(
-            &a,
-            &at(&[11.0, 89.0]),
-            0.01
-        ));
-        assert!(!SharedRadiosity::moving_power_holds(
-            &a,
-            &at(&[11.0, 89.0]),
-            0.005
-        ));
-        // A panel sliding over a lamp: one surface's light doubles.
-        assert!(!SharedRadiosity::moving_power_holds(
-            &a,
-            &at(&[20.0, 90.0]),
-            0.01
-        ));
-        // Different surfaces (never within one window): not comparable.
-        assert!(!SharedRadiosity::moving_power_holds(&a, &at(&[10.0]), 0.5));
-    }
-
-    #[test]
-    fn a_point_no_keyframe_gathered_interpolates_their_cells() {
-        // Patch 7 is one quad cell at each keyframe, corners 1, 2, 2, 1 at `a` (a
-        // ramp in u) and 0.005 brighter at `b`; the frame asks for (0.25, 0.5).
-        let cell = |lift: f32| Leaf {
-            patch: 7,
-            corners: 4,
-            time: [0.0, 0.0],
-            uv: [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
-            b: [1.0, 2.0, 2.0, 1.0].map(|v| [v + lift; 3]),
-        };
-        let a = KeyValues::default().with_cells([cell(0.0)].into());
-        let b = KeyValues::default().with_cells([cell(0.005)].into());
-        let between = Between {
-            free: false,
-            before: None,
-            a: (0.0, &a),
-            b: (2.0, &b),
-            t: 1.0,
-            tol: 0.01,
-        };
-        let q = |x: f64| (x * (1u64 << 24) as f64) as u32;
-        let pk = (7, q(0.25), q(0.5));
-        let (v, valid) = between.value(&pk, || true).expect("the cells agree");
-        assert!(valid);
-        assert!((v[0] - 1.2525).abs() < 1e-6, "{v:?}");
-        // Inside a solid now: no value is needed, no gather is made.
-        assert_eq!(between.value(&pk, || false), Some(([0.0; 3], false)));
-        // A patch neither keyframe has cells on is gathered.
-        assert_eq!(between.value(&(8, q(0.25), q(0.5)), || true), None);
     }
 }
