@@ -45,7 +45,8 @@ use std::ops::Range;
 
 use bytemuck::{Pod, Zeroable};
 
-use super::{PointKey, Terms};
+use super::PointKey;
+use super::gather::Terms;
 use crate::Result;
 use crate::pools::{Column, Storage};
 

@@ -1,0 +1,551 @@
+//! The final gather at one reconstruction point: `B(x) = E + ρ Σ_links F(x, s) V(x, s)
+//! B_s` over the links of the point's leaf and its ancestors (the chain), each
+//! source's factor and visibility evaluated at the point ([`Solver::point_terms`]),
+//! a source whose radiosity varies opened into its children.
+//!
+//! In a space-time window a static point keeps what holds of its terms from static
+//! sources ([`super::kept`]; paper 001 §5.2's shortcut applied to the final
+//! gather): terms no moving object can come between are kept with their
+//! visibility, the others with the static part of each ray as a mask, cast again at
+//! the moving objects only when one is between the point and the source
+//! ([`Solver::gather_point`]).
+
+use glam::DVec3;
+
+use super::*;
+
+/// What one reconstruction's final gathers measure their sources against
+/// ([`Solver::gather_point`], [`Solver::point_terms`]).
+pub(super) struct GatherLimits {
+    /// A non-emitting surface source bounded below this (absolute radiosity) takes
+    /// its link's visibility instead of rays ([`SolveOptions::faint_source`]).
+    faint: f64,
+    /// A surface source with `r/d · ΔB_s` above this (absolute) is opened
+    /// ([`SolveOptions::open_spread`]); infinite: never.
+    open_spread: f64,
+    /// Per element: `ΔB_s`, the largest channel's spread (max − min) of the leaf
+    /// radiosities under it (0 for a leaf). 4 bytes per element.
+    spread: Vec<f32>,
+    /// Per element: [`oracle::sphere`], centre and bounding radius, computed once
+    /// per reconstruction instead of at every term of every point (9% of a
+    /// cluttered scene's run; `gen_cubes 50` 69.4 → 62.5 s). 32 bytes per element
+    /// (a space-time frame's 2 000 elements: 64 KB); empty where each term computes
+    /// its own (the error samples).
+    spheres: Vec<(DVec3, f64)>,
+}
+
+impl GatherLimits {
+    /// Centre and bounding radius of element `s` (geometry `g`).
+    fn sphere(&self, s: usize, g: &Geom) -> (DVec3, f64) {
+        self.spheres
+            .get(s)
+            .copied()
+            .unwrap_or_else(|| oracle::sphere(g))
+    }
+}
+
+/// The transfer terms of one link at one point.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Terms {
+    /// `(element, factor)` with visibility included.
+    pub(super) fixed: Vec<(u32, f64)>,
+    /// Masked terms with their visibility now.
+    pub(super) masked: Vec<(MaskedTerm, f64)>,
+}
+
+impl Terms {
+    fn clear(&mut self) {
+        self.fixed.clear();
+        self.masked.clear();
+    }
+
+    /// `Σ factor · visibility · B_element`, with the factors rounded as
+    /// [`PointCache`] keeps them, so that a point gathers the same value whether its
+    /// terms were kept or computed afresh.
+    fn gather(&self, b: &[[f32; 3]], h: &mut [f64; 3]) {
+        for &(e, f) in &self.fixed {
+            let f = f64::from(f as f32);
+            for k in 0..3 {
+                h[k] += f * b[e as usize][k] as f64;
+            }
+        }
+        for &(t, v) in &self.masked {
+            for k in 0..3 {
+                h[k] += t.f as f64 * v * b[t.elem as usize][k] as f64;
+            }
+        }
+    }
+}
+
+/// Terms a point gathers that hold over the window, computed now: `(source << 1 |
+/// clear, terms)`.
+pub(super) type FreshTerms = Vec<(u32, Terms)>;
+
+/// True if nothing inside the boxes `swept` can lie between the point `x` (normal
+/// `n`) and element `g` (the convex hull of the point and a surface element, or the
+/// box around the point and a cluster).
+fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> bool {
+    if g.patch == u32::MAX {
+        let (lo, hi) = geom_box(g);
+        return !meets_any(lo.min(x), hi.max(x), swept);
+    }
+    let k = g.n as usize;
+    let corners: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(g.corners[i.min(k - 1)]));
+    crate::shafts::clear_of_boxes(&[x], n, &corners[..k], DVec3::from_array(g.normal), swept)
+}
+
+impl Solver<'_> {
+    /// Rays from a reconstruction point to the surface element `gs` (4× to emitters).
+    fn corner_rays_to(&self, gs: &Geom) -> u32 {
+        let emitter = self.patches.emissions[gs.patch as usize]
+            .iter()
+            .any(|&e| e > 0.0);
+        if emitter {
+            self.opts.corner_rays * 4
+        } else {
+            self.opts.corner_rays
+        }
+    }
+
+    /// Transfer terms from source `s` to the point `x` (normal `n`): `Σ factor ·
+    /// visibility · B_element` over `out` is the radiosity the point gathers from `s`;
+    /// exact point-to-polygon factors, visibility by rays unless `clear`, sources
+    /// that look large from `x` opened into their children. A cluster source gets
+    /// the estimate of its links: [`oracle::cluster_emission`], visibility by
+    /// [`oracle::point_cluster_visibility`] from `x`.
+    ///
+    /// With `swept` (a static point and a static source in a time window), a term
+    /// whose shaft from `x` meets a box swept by a moving object becomes a
+    /// [`MaskedTerm`] (its rays' static visibility kept); the others are fixed. A
+    /// cluster whose box, with `x`, meets a swept box is opened (its rays could be
+    /// crossed), so a fixed cluster term holds over the window.
+    #[allow(clippy::too_many_arguments)]
+    fn point_terms(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        receiver_patch: u32,
+        s: usize,
+        clear: bool,
+        key: u64,
+        swept: Option<&[(DVec3, DVec3)]>,
+        limits: &GatherLimits,
+        out: &mut Terms,
+    ) {
+        let geoms = self.elems.geoms.as_slice();
+        let nodes = self.elems.nodes.as_slice();
+        let gs = &geoms[s];
+        let node = nodes[s];
+        let (c, rad) = limits.sphere(s, gs);
+        let d = c.distance(x).max(f64::MIN_POSITIVE);
+        // A cluster whose rays from `x` a moving object may cross is opened (down to
+        // surfaces, whose terms keep their static rays as masks).
+        let swept_cluster = gs.patch == u32::MAX
+            && swept.is_some_and(|sw| {
+                let (lo, hi) = geom_box(gs);
+                meets_any(lo.min(x), hi.max(x), sw)
+            });
+        // A surface whose radiosity varies is opened too: its average would be off by
+        // about `(r/d) ΔB_s` of its factor (module docs, "Sources whose radiosity
+        // varies").
+        let varies = gs.patch != u32::MAX && rad / d * limits.spread[s] as f64 > limits.open_spread;
+        let large = rad / d > self.opts.open_ratio || swept_cluster;
+        // Not where a moving object may cross the rays: the children would need rays
+        // of their own every frame.
+        let still = || swept.is_none_or(|sw| point_shaft_clear(x, n, gs, sw));
+        if node.child_count > 0 && !large && varies && still() {
+            // Opened for its radiosity only: the children share the source's visible
+            // fraction, from the rays the source would have had unopened.
+            let v = if clear {
+                1.0
+            } else {
+                let ps = oracle::poly(gs);
+                let ns = DVec3::from_array(gs.normal);
+                let skip = [receiver_patch, gs.patch];
+                let m = self.corner_rays_to(gs);
+                oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key, skip)
+            };
+            if v <= 0.0 {
+                return;
+            }
+            let first = out.fixed.len();
+            for ch in node.first_child..node.first_child + node.child_count {
+                self.point_terms(
+                    x,
+                    n,
+                    receiver_patch,
+                    ch as usize,
+                    true,
+                    key,
+                    None,
+                    limits,
+                    out,
+                );
+            }
+            for t in &mut out.fixed[first..] {
+                t.1 *= v;
+            }
+            return;
+        }
+        if node.child_count > 0 && large {
+            for ch in node.first_child..node.first_child + node.child_count {
+                self.point_terms(
+                    x,
+                    n,
+                    receiver_patch,
+                    ch as usize,
+                    clear,
+                    oracle::hash3(key, self.ray_id(ch), 1),
+                    swept,
+                    limits,
+                    out,
+                );
+            }
+            return;
+        }
+        if gs.patch == u32::MAX {
+            // Visibility from the point itself, as the link's from its receiver
+            // (oracle module docs): an opened cluster's children do not inherit it.
+            // The rays' targets depend on the source and the receiving patch only, so
+            // neighbouring points aim at the same surface points and the estimate is
+            // smooth across the patch (independent jitter per point is noise the
+            // reconstruction would mesh).
+            let key = oracle::hash3(self.opts.seed ^ 0xc105, s as u64, receiver_patch as u64);
+            // Visibility by power, emission by axes: the model of the links.
+            // `clear`: the caller supplies the visibility.
+            let (vis, _) = if clear {
+                (1.0, 0)
+            } else {
+                oracle::point_cluster_visibility(
+                    &self.elems,
+                    &self.bvh,
+                    x,
+                    n,
+                    receiver_patch,
+                    ElementId(s as u32),
+                    self.opts.cluster_rays,
+                    key,
+                    SOURCES_BY_POWER,
+                )
+            };
+            // The estimate the leaf rows take.
+            let dir = &self.elems.directions.as_slice()[s];
+            let f = cluster_kernel(gs, c, rad, dir, b_of(&self.elems, s), x, n) * vis;
+            if f > 0.0 {
+                out.fixed.push((s as u32, f));
+            }
+            return;
+        }
+        let ps = oracle::poly(gs);
+        let f = match self.shapes.get(&(s as u32)) {
+            Some(r) => shaped_factor(x, n, gs, r),
+            None => point_to_polygon(x, n, &ps),
+        };
+        if f <= 0.0 {
+            return;
+        }
+        if clear {
+            out.fixed.push((s as u32, f));
+            return;
+        }
+        let m = self.corner_rays_to(gs);
+        let ns = DVec3::from_array(gs.normal);
+        let skip = [receiver_patch, gs.patch];
+        // The rays' jitter key, as a masked term keeps it.
+        let key = key & u64::from(u32::MAX);
+        match swept {
+            Some(sw) if m <= 64 && !point_shaft_clear(x, n, gs, sw) => {
+                let mask = oracle::static_clear_mask(&self.bvh, x, gs, &ps, m, key, skip);
+                if mask == 0 {
+                    // Hidden by static geometry whatever moves.
+                    return;
+                }
+                let masked = |bvh| {
+                    oracle::visible_fraction_masked(bvh, x, n, gs, &ps, ns, m, key, skip, mask)
+                };
+                let vis_static = masked(None) as f32;
+                let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                let v = if near {
+                    masked(Some(&self.bvh))
+                } else {
+                    f64::from(vis_static)
+                };
+                let t = MaskedTerm {
+                    mask,
+                    key: key as u32,
+                    elem: s as u32,
+                    f: f as f32,
+                    vis_static,
+                };
+                out.masked.push((t, v));
+            }
+            _ => {
+                let v = oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key, skip);
+                if v > 0.0 {
+                    out.fixed.push((s as u32, f * v));
+                }
+            }
+        }
+    }
+
+    /// Final gather at point `x` of leaf `leaf`: `(B(x), valid, fresh)`.
+    ///
+    /// In a time window, the terms that stay constant over the window at a static
+    /// point are kept in `known` (one merged linear form per point, with the links it
+    /// covers): constant links, and varying links whose shaft from the point to the
+    /// source misses every box the moving objects sweep. `fresh` returns the terms of
+    /// such links computed now, to be merged into `known` by the caller.
+    ///
+    /// `limits.faint`: a non-emitting surface source whose light at `x` is bounded
+    /// below this (`ρ B_s A_s / (π d²)`, `d` the distance to its bounding sphere) is
+    /// gathered with its link's visibility instead of rays (0: rays always).
+    pub(super) fn gather_point(
+        &self,
+        leaf: ElementId,
+        x: DVec3,
+        known: Option<&PointCache>,
+        pk: PointKey,
+        admit: bool,
+        limits: &GatherLimits,
+    ) -> ([f64; 3], bool, FreshTerms) {
+        let faint = limits.faint;
+        // Ray jitter from the point's place, so that a point gathered again (another
+        // frame, another cell) casts the same rays.
+        let point_key = oracle::hash3(
+            u64::from(pk.0),
+            u64::from(pk.1) << 32 | u64::from(pk.2),
+            0x9017,
+        );
+        let geoms = self.elems.geoms.as_slice();
+        let ends = self.links.ends.as_slice();
+        let tr = self.links.transports.as_slice();
+        let g = &geoms[leaf.ix()];
+        let n = DVec3::from_array(g.normal);
+        let p = g.patch as usize;
+        let valid = self.outside_solids(x, n);
+        let b = self.elems.radiosities.as_slice();
+        let window = self.window.as_ref().filter(|_| !self.elem_moving(leaf));
+        let cached = known.and_then(|m| m.get(&pk));
+        let mut h = [0.0; 3];
+        let mut fresh = Vec::new();
+        let mut terms = Terms::default();
+        // A leaf smaller than the power area takes the visibility of non-emitting
+        // surface sources from its row (seen from its quadrature points), and of
+        // clusters with no emitter from their link, not from rays.
+        let small_leaf = self
+            .row_cache
+            .get(&leaf.0)
+            .filter(|_| !self.has_motion() && g.area < self.power_area);
+        // A varying link's visibility and shaft test hold at the time it was
+        // evaluated; a frame between keyframes that skips its solve gathers from
+        // links evaluated at another time.
+        let links_now = self.links_at == self.now;
+        for l in self.chain_links(leaf) {
+            let t = &tr[l as usize];
+            let s = ends[l as usize].source as usize;
+            // A static source seen from a static point: what does not change in
+            // the window is kept (fixed terms, and the static part of the rays of
+            // the others).
+            // Kept per source (the link may be this frame's: a varying link
+            // refined at the receiver's end keeps the older source).
+            let keep =
+                window.filter(|w| !self.elem_moving(ElementId(s as u32)) && s < w.frame.elems_len);
+            // A varying link's shaft test holds for one frame only.
+            let clear = t.shaft_clear() && !t.varying();
+            let ck = (s as u32) << 1 | clear as u32;
+            if let Some((fixed, masked)) = keep.and(cached).and_then(|c| c.get(ck)) {
+                for t in fixed {
+                    for c in 0..3 {
+                        h[c] += t.f as f64 * b[t.elem as usize][c] as f64;
+                    }
+                }
+                for t in masked {
+                    let gs = &geoms[t.elem as usize];
+                    // Rays are only cast where a moving object is now.
+                    let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                    let v = if near {
+                        oracle::visible_fraction_masked(
+                            Some(&self.bvh),
+                            x,
+                            n,
+                            gs,
+                            &oracle::poly(gs),
+                            DVec3::from_array(gs.normal),
+                            self.corner_rays_to(gs),
+                            u64::from(t.key),
+                            [p as u32, gs.patch],
+                            t.mask,
+                        )
+                    } else {
+                        f64::from(t.vis_static)
+                    };
+                    for c in 0..3 {
+                        h[c] += t.f as f64 * v * b[t.elem as usize][c] as f64;
+                    }
+                }
+                continue;
+            }
+            terms.clear();
+            let key = oracle::hash3(self.opts.seed, self.ray_id(s as u32), point_key);
+            // A static source that can hand this point little light takes the
+            // link's visibility instead of rays (see `faint`).
+            let cheap = if self.has_motion() || clear || t.shaft_clear() {
+                None
+            } else if let Some(v) = small_leaf.and_then(|row| self.leaf_visibility(row, l, s)) {
+                Some(v)
+            } else if small_leaf.is_some()
+                && geoms[s].patch == u32::MAX
+                && !self.emits_under.get(s).copied().unwrap_or(true)
+            {
+                // A cluster with no emitter under it, seen from a small leaf: the
+                // link's visibility, as the leaf row takes it.
+                Some(t.visibility as f64)
+            } else if faint > 0.0 && self.faint_source(x, s, b, limits) {
+                Some(t.visibility as f64)
+            } else {
+                None
+            };
+            self.point_terms(
+                x,
+                n,
+                p as u32,
+                s,
+                cheap.is_some()
+                    || clear
+                    || (keep.is_none() && t.shaft_clear() && (!t.varying() || links_now)),
+                key,
+                keep.map(|w| &w.swept[..]),
+                limits,
+                &mut terms,
+            );
+            if let Some(v) = cheap {
+                for term in &mut terms.fixed {
+                    term.1 *= v;
+                }
+            }
+            terms.gather(b, &mut h);
+            // Terms on elements of this frame's refinement are not kept: the
+            // next frame drops those elements.
+            if let Some(w) = keep.filter(|_| admit || cached.is_some()) {
+                let shared = |e: u32| (e as usize) < w.frame.elems_len;
+                if terms.fixed.iter().all(|t| shared(t.0))
+                    && terms.masked.iter().all(|t| shared(t.0.elem))
+                {
+                    fresh.push((ck, terms.clone()));
+                }
+            }
+        }
+        let rho = self.patches.rhos[p];
+        let em = self.patches.emissions[p];
+        (
+            [
+                em[0] + rho[0] * h[0],
+                em[1] + rho[1] * h[1],
+                em[2] + rho[2] * h[2],
+            ],
+            valid,
+            fresh,
+        )
+    }
+
+    /// False if the point `x` of a surface facing `n` lies inside a solid: the first
+    /// thing straight above it is a back face (a floor point under a block resting
+    /// on it).
+    pub(super) fn outside_solids(&self, x: DVec3, n: DVec3) -> bool {
+        let diam = self.patches.diameter;
+        match self.bvh.intersect(x, n * diam, 1e-7, 1.0) {
+            Some(h) => self.patches.normals[h.patch as usize].dot(n) <= 0.0,
+            None => true,
+        }
+    }
+
+    /// True if element `s` is a surface (not a cluster) of a patch that emits nothing:
+    /// the sources whose rays the final gather may take from elsewhere.
+    fn non_emitting_surface(&self, s: usize) -> bool {
+        let p = self.elems.geoms.as_slice()[s].patch;
+        p != u32::MAX && !self.patches.emissions[p as usize].iter().any(|&e| e > 0.0)
+    }
+
+    /// The visible fraction of non-emitting surface source `s` (chain link `l`) seen
+    /// from the leaf whose kept row is `row`, if every ray the row cast agrees (the
+    /// source fully visible or fully hidden from all the leaf's points): a source
+    /// partly hidden from the leaf is partly hidden from its points in different
+    /// measure, and a point takes its own rays.
+    ///
+    /// Why: in `tools/gen_cubes.py 20` the floor between two boxes, in full shadow
+    /// and lit only by the faces around it, came out 10% too dark at four of the 20
+    /// gap probes with the leaf's fraction for every source (the boxes' sides and
+    /// the room beyond them are half hidden from a gap leaf, in other measure from
+    /// each of its points); with partial fractions cast again, 3.40% → 2.72% over the
+    /// 100 probes (BENCHMARKS.md, "Floor gaps in full shadow").
+    pub(super) fn leaf_visibility(&self, row: &[KeptCoef], l: u32, s: usize) -> Option<f64> {
+        if !self.non_emitting_surface(s) {
+            return None;
+        }
+        let i = row.binary_search_by_key(&l, |k| k.link).ok()?;
+        let v = row[i].vis;
+        (v <= 0.0 || v >= 1.0).then_some(v as f64)
+    }
+
+    /// The limits of a reconstruction at radiosity scale `b_ref`: the options
+    /// scaled, and each element's radiosity spread from the pool's radiosities as
+    /// they are now (leaves up, children after their parent in the pool); with
+    /// `spheres`, every element's bounding sphere (worth it where many points are
+    /// gathered, see [`GatherLimits::spheres`]).
+    pub(super) fn gather_limits(&self, b_ref: f64, spheres: bool) -> GatherLimits {
+        let nodes = self.elems.nodes.as_slice();
+        let b = self.elems.radiosities.as_slice();
+        let mut lo = b.to_vec();
+        let mut hi = b.to_vec();
+        for i in (0..nodes.len()).rev() {
+            let nd = nodes[i];
+            for c in nd.first_child..nd.first_child + nd.child_count {
+                for k in 0..3 {
+                    lo[i][k] = lo[i][k].min(lo[c as usize][k]);
+                    hi[i][k] = hi[i][k].max(hi[c as usize][k]);
+                }
+            }
+        }
+        let spread = lo
+            .iter()
+            .zip(&hi)
+            .map(|(l, h)| (0..3).map(|k| h[k] - l[k]).fold(0.0f32, f32::max))
+            .collect();
+        GatherLimits {
+            faint: self.opts.faint_source * b_ref,
+            open_spread: if self.opts.open_spread > 0.0 {
+                self.opts.open_spread * b_ref
+            } else {
+                f64::INFINITY
+            },
+            spread,
+            spheres: if spheres {
+                self.elems
+                    .geoms
+                    .as_slice()
+                    .par_iter()
+                    .map(oracle::sphere)
+                    .collect()
+            } else {
+                Vec::new()
+            },
+        }
+    }
+
+    /// True if surface source `s` is no emitter and can hand the point `x` less
+    /// than `limits.faint` (bound `ρ_max B_s A_s / (π d²)`, `d` from `x` to the source's
+    /// bounding sphere): the final gather then skips its rays.
+    fn faint_source(&self, x: DVec3, s: usize, b: &[[f32; 3]], limits: &GatherLimits) -> bool {
+        if !self.non_emitting_surface(s) {
+            return false;
+        }
+        let gs = &self.elems.geoms.as_slice()[s];
+        let (c, rad) = limits.sphere(s, gs);
+        let d = c.distance(x) - rad;
+        if d <= 0.0 {
+            return false;
+        }
+        let bs = b[s].iter().copied().fold(0.0f32, f32::max) as f64;
+        self.rho_max * bs * gs.area / (std::f64::consts::PI * d * d) < limits.faint
+    }
+}

@@ -1,0 +1,508 @@
+//! Reconstruction: the stored answer of a solve, meshed where `B(x)` bends.
+//!
+//! Each leaf of the hierarchy is a root cell. A cell's corners and centre are
+//! final-gathered ([`Solver::gather_point`], in parallel batches of
+//! [`GATHER_BATCH`] points, each point once however many cells share it:
+//! [`VertexCache`]); a cell whose centre differs from the mean of its corners by more
+//! than the reconstruction tolerance splits along the directions in which it is
+//! long enough ([`Cell::split_dirs`]), and the cells that stop are stored with
+//! their corner values (bilinear within the cell). In a space-time window the
+//! points a frame between two solved frames may take on the line between theirs
+//! are not gathered ([`super::Between`]), and every point's value comes back for
+//! later frames to interpolate ([`super::KeyValues`]).
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::gather::FreshTerms;
+
+use super::{
+    Between, CORNER_INSET, ElementId, KeyValues, Leaf, Patches, PointKey, Solution, SolveStats,
+    Solver, hierarchy,
+};
+
+/// Points gathered in parallel at a time by the reconstruction: enough to keep the
+/// threads busy, few enough that the terms they return to keep stay small and, out
+/// of core, that the kept terms' pages a batch reads stay few (each point touches
+/// up to three pages). ACTOR out of core peaked at 40.9 MB with 512 and 37.7 MB
+/// with 256; with its leaves out of core too, 128 takes another 0.6–1.8 MiB off
+/// both scenes at the same time (BENCHMARKS.md).
+const GATHER_BATCH: usize = 128;
+
+/// What [`Solver::reconstruct_between`] did.
+#[derive(Clone, Debug, Default)]
+pub struct Reconstruction {
+    /// The cells, as [`Solver::reconstruct`] returns them.
+    pub leaves: Vec<Leaf>,
+    /// The value at every point, gathered or interpolated, for later frames of a
+    /// space-time window to interpolate (empty outside a window).
+    pub values: KeyValues,
+    /// Points gathered by a final gather.
+    pub gathered: u64,
+    /// Points interpolated between keyframes.
+    pub interpolated: u64,
+    /// Estimated relative RMS error of the bilinear interpolation between gathered
+    /// corners: `0.53 ·` the area-weighted RMS, over the cells, of the gather at a
+    /// cell's centre minus its corners' mean, relative to the RMS reflected
+    /// radiosity at the centres (0.53 = RMS over a cell of the bubble
+    /// `16 u(1−u) v(1−v)` whose peak is that difference).
+    pub interpolation_error: f64,
+}
+
+/// A point to gather: the leaf whose links gather, the patch, the parameter point,
+/// the parameter point it is inset towards, and its key.
+type GatherPoint = (ElementId, u32, [f32; 2], [f32; 2], PointKey);
+
+/// RMS over the unit square of the bubble `16 u(1−u) v(1−v)` (peak 1): `16/30`.
+const BUBBLE_RMS: f64 = 16.0 / 30.0;
+
+/// A reconstruction cell: a parameter sub-domain of a leaf's patch.
+#[derive(Clone, Copy, Debug)]
+struct Cell {
+    leaf: ElementId,
+    patch: u32,
+    n: u32,
+    uv: [[f32; 2]; 4],
+    area: f64,
+}
+
+impl Cell {
+    fn centre_uv(&self) -> [f32; 2] {
+        let n = self.n as usize;
+        let (mut u, mut v) = (0.0, 0.0);
+        for c in &self.uv[..n] {
+            u += c[0] / n as f32;
+            v += c[1] / n as f32;
+        }
+        [u, v]
+    }
+
+    fn split(&self) -> [Cell; 4] {
+        let kids = hierarchy::child_domains(self.n as usize, &self.uv);
+        kids.map(|uv| Cell {
+            uv,
+            area: self.area / 4.0,
+            ..*self
+        })
+    }
+
+    /// Which parameter directions `(u, v)` the cell may split along: a direction
+    /// whose world edge is at least twice `min_len` (so no child is thinner than
+    /// the reconstruction's smallest size), both for a triangle above four times
+    /// the smallest area. A thin quad (a strip between two contact lines) keeps
+    /// halving along its length; an area bound stopped it while it was long, or
+    /// cut it thinner than the smallest size while it was short.
+    fn split_dirs(&self, min_len: f64, patches: &Patches) -> (bool, bool) {
+        if self.n == 3 {
+            let ok = self.area >= 4.0 * min_len * min_len;
+            return (ok, ok);
+        }
+        let p = |i: usize| {
+            patches.point(
+                self.patch as usize,
+                self.uv[i][0] as f64,
+                self.uv[i][1] as f64,
+            )
+        };
+        let len_u = p(0).distance(p(1)).max(p(3).distance(p(2)));
+        let len_v = p(0).distance(p(3)).max(p(1).distance(p(2)));
+        (len_u >= 2.0 * min_len, len_v >= 2.0 * min_len)
+    }
+
+    /// The children of a split along `(u, v)`: four ([`Cell::split`]) along both,
+    /// two halves of a quad along one.
+    fn split_along(&self, (su, sv): (bool, bool)) -> Vec<Cell> {
+        if su && sv {
+            return self.split().to_vec();
+        }
+        let (u0, v0, u1, v1) = (self.uv[0][0], self.uv[0][1], self.uv[2][0], self.uv[2][1]);
+        let r = |a: f32, b: f32, c: f32, d: f32| [[a, b], [c, b], [c, d], [a, d]];
+        let kids = if su {
+            let um = (u0 + u1) * 0.5;
+            [r(u0, v0, um, v1), r(um, v0, u1, v1)]
+        } else {
+            let vm = (v0 + v1) * 0.5;
+            [r(u0, v0, u1, vm), r(u0, vm, u1, v1)]
+        };
+        kids.iter()
+            .map(|&uv| Cell {
+                uv,
+                area: self.area / 2.0,
+                ..*self
+            })
+            .collect()
+    }
+}
+
+/// Final-gather values at distinct parameter points of each patch.
+#[derive(Default)]
+struct VertexCache {
+    index: HashMap<(u32, u32, u32), usize>,
+    /// (leaf whose links gather, patch, parameter point, point inset towards this
+    /// uv, the point's key).
+    points: Vec<GatherPoint>,
+    values: Vec<([f64; 3], bool)>,
+}
+
+impl VertexCache {
+    fn register(&mut self, c: &Cell, uv: [f32; 2], toward: [f32; 2]) -> usize {
+        let q = |x: f32| (x as f64 * (1u64 << 24) as f64).round() as u32;
+        let key = (c.patch, q(uv[0]), q(uv[1]));
+        *self.index.entry(key).or_insert_with(|| {
+            self.points.push((c.leaf, c.patch, uv, toward, key));
+            self.points.len() - 1
+        })
+    }
+
+    /// Gathers up to `batch` of the points registered and not gathered yet; returns
+    /// the terms to keep (see [`Solver::gather_point`]).
+    #[allow(clippy::type_complexity)]
+    fn evaluate(
+        &mut self,
+        batch: usize,
+        gather: impl Fn(ElementId, DVec3, PointKey) -> ([f64; 3], bool, FreshTerms) + Sync,
+        patches: &Patches,
+    ) -> Vec<(PointKey, FreshTerms)> {
+        let from = self.values.len();
+        let to = self.points.len().min(from + batch);
+        let new: Vec<_> = self.points[from..to]
+            .par_iter()
+            .map(|&(leaf, patch, uv, toward, pk)| {
+                let x = patches.point(patch as usize, uv[0] as f64, uv[1] as f64);
+                let c = patches.point(patch as usize, toward[0] as f64, toward[1] as f64);
+                // Evaluate a hair inside the cell: on an edge shared with a
+                // perpendicular wall the factor jumps (the wall is seen edge-on), and
+                // the interpolant wants the limit from inside.
+                let (b, valid, fresh) = gather(leaf, x + CORNER_INSET * (c - x), pk);
+                ((b, valid), (pk, fresh))
+            })
+            .collect();
+        let mut keep = Vec::new();
+        for (v, (pk, fresh)) in new {
+            self.values.push(v);
+            if !fresh.is_empty() {
+                keep.push((pk, fresh));
+            }
+        }
+        keep
+    }
+}
+
+fn mean3(v: &[[f64; 3]]) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for x in v {
+        for k in 0..3 {
+            m[k] += x[k] / v.len().max(1) as f64;
+        }
+    }
+    m
+}
+
+/// Corner values of a cell; a corner inside a solid takes the mean of the valid ones
+/// (or the leaf's element average when none is valid).
+fn corner_values(
+    cache: &VertexCache,
+    corners: &[usize; 4],
+    n: usize,
+    element_b: [f32; 3],
+) -> [[f64; 3]; 4] {
+    let valid: Vec<[f64; 3]> = corners[..n]
+        .iter()
+        .filter(|&&v| cache.values[v].1)
+        .map(|&v| cache.values[v].0)
+        .collect();
+    let fallback = if valid.is_empty() {
+        [
+            element_b[0] as f64,
+            element_b[1] as f64,
+            element_b[2] as f64,
+        ]
+    } else {
+        mean3(&valid)
+    };
+    let mut out = [[0.0; 3]; 4];
+    for i in 0..n {
+        let (v, ok) = cache.values[corners[i]];
+        out[i] = if ok { v } else { fallback };
+    }
+    out
+}
+
+impl Solver<'_> {
+    /// The solution: reconstruction cells with corner radiosity from the final gather.
+    ///
+    /// Cells start as the hierarchy's leaves and split (in parameter space, like
+    /// elements) while the gather at a cell's centre differs from the interpolant of
+    /// its corners by more than `recon_tol · B_ref` (`recon_tol_moving` on a moving
+    /// object's surface), across each direction in which
+    /// it is at least twice the reconstruction's smallest size (both: four children;
+    /// one: two halves, see `Cell::split_dirs`); a split cell keeps the links of its
+    /// leaf. This meshes the stored answer to where `B(x)` bends (room edges, contact
+    /// lines, shadow boundaries) without refining the link hierarchy there.
+    ///
+    /// Its estimated error combines the last round's (the hierarchy's) with the
+    /// reconstruction's interpolation error, `sqrt(e_h² + e_i²)` (`NaN` if the
+    /// rounds gave none).
+    pub fn solution(&self) -> Solution {
+        let recon = self.reconstruct_between(None);
+        let leaves = recon.leaves;
+        let (active, passive) = self.links.counts();
+        Solution {
+            scene: self.scene.clone(),
+            patches: self.patches.geometry.clone(),
+            leaves,
+            stats: SolveStats {
+                seconds: 0.0,
+                iterations: 0,
+                elements: self.elems.len() as u64,
+                links_active: active,
+                links_passive: passive,
+                estimated_error: self.estimate.hypot(recon.interpolation_error),
+                residual: 0.0,
+            },
+        }
+    }
+
+    /// The reconstruction cells of [`Solver::solution`] as stored leaves (time range
+    /// the solver's), sorted by patch and parameters.
+    pub fn reconstruct(&self) -> Vec<Leaf> {
+        self.reconstruct_between(None).leaves
+    }
+
+    /// [`Solver::reconstruct`], with the points of a frame between two solved
+    /// frames interpolated where those agree (see [`Between`]); `None` gathers
+    /// every point (a keyframe). In a space-time window the values of every point
+    /// come back too.
+    pub fn reconstruct_between(&self, between: Option<&Between>) -> Reconstruction {
+        let geoms = self.elems.geoms.as_slice();
+        let interpolated = std::sync::atomic::AtomicU64::new(0);
+        // The window's kept terms, locked for the whole reconstruction: the
+        // parallel gathers read them, the batches' fresh terms are added between.
+        let mut guard = self
+            .window
+            .as_ref()
+            .map(|w| w.points.lock().unwrap_or_else(|e| e.into_inner()));
+        let mut known = guard.as_mut().and_then(|g| g.as_mut());
+        // A window's frames share one scale (see `Window::b_ref`).
+        let b_ref = match self.window.as_ref().and_then(|w| w.b_ref) {
+            Some(b) => b,
+            None => self.rms_radiosity(),
+        };
+        let tol = self.opts.recon_tol * b_ref;
+        let tol_moving = self.opts.recon_tol_moving.map_or(tol, |t| t * b_ref);
+        let limits = self.gather_limits(b_ref, true);
+        let min_len = self.opts.recon_min_size * self.patches.diameter;
+        let mut cache = VertexCache::default();
+        let mut cells: Vec<Cell> = self
+            .leaves
+            .iter()
+            .map(|&l| {
+                let g = &geoms[l.ix()];
+                Cell {
+                    leaf: l,
+                    patch: g.patch,
+                    n: g.n,
+                    uv: g.uv,
+                    area: g.area,
+                }
+            })
+            .collect();
+        let mut done: Vec<(Cell, [usize; 4])> = Vec::with_capacity(cells.len());
+        let (mut interp_num, mut interp_den) = (0.0, 0.0);
+        while !cells.is_empty() {
+            // Register every corner and centre, gather the new ones in parallel.
+            let mut ids = Vec::with_capacity(cells.len());
+            for c in &cells {
+                let centre = c.centre_uv();
+                let mut corners = [usize::MAX; 4];
+                for (i, slot) in corners.iter_mut().enumerate().take(c.n as usize) {
+                    *slot = cache.register(c, c.uv[i], centre);
+                }
+                ids.push((corners, cache.register(c, centre, centre)));
+            }
+            // In batches, so that the terms to keep are merged as they come (and
+            // not computed at all for new points once the budget is spent).
+            while cache.values.len() < cache.points.len() {
+                let admit = known.as_ref().is_some_and(|c| c.admits());
+                let view = known.as_deref();
+                let fresh = cache.evaluate(
+                    GATHER_BATCH,
+                    |leaf, x, pk| {
+                        let outside = || {
+                            let n = DVec3::from_array(geoms[leaf.ix()].normal);
+                            self.outside_solids(x, n)
+                        };
+                        if let Some((b, valid)) = between.and_then(|bw| bw.value(&pk, outside)) {
+                            interpolated.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                            return (b, valid, Vec::new());
+                        }
+                        self.gather_point(leaf, x, view, pk, admit, &limits)
+                    },
+                    &self.patches,
+                );
+                if let Some(m) = known.as_mut() {
+                    for (pk, links) in fresh {
+                        m.add(pk, links);
+                    }
+                    // Out of core: the batch's pages go back to the scratch file.
+                    m.release_resident();
+                }
+            }
+            let mut next = Vec::new();
+            for (c, (corners, centre)) in cells.into_iter().zip(ids) {
+                let vals = corner_values(
+                    &cache,
+                    &corners,
+                    c.n as usize,
+                    self.elems.radiosities.as_slice()[c.leaf.ix()],
+                );
+                let interp = mean3(&vals[..c.n as usize]);
+                let (cv, ok) = cache.values[centre];
+                let off = (0..3)
+                    .map(|k| (cv[k] - interp[k]).abs())
+                    .fold(0.0, f64::max);
+                let cell_tol = if self.moving_patch.get(c.patch as usize) == Some(&true) {
+                    tol_moving
+                } else {
+                    tol
+                };
+                let split = if ok && off > cell_tol {
+                    c.split_dirs(min_len, &self.patches)
+                } else {
+                    (false, false)
+                };
+                if split != (false, false) {
+                    next.extend(c.split_along(split));
+                } else {
+                    if ok {
+                        let e = self.patches.emissions[c.patch as usize];
+                        for k in 0..3 {
+                            interp_num += c.area * (cv[k] - interp[k]).powi(2);
+                            interp_den += c.area * (cv[k] - e[k]).powi(2);
+                        }
+                    }
+                    done.push((c, corners));
+                }
+            }
+            cells = next;
+        }
+        let mut leaves = Vec::with_capacity(done.len());
+        for (c, corners) in &done {
+            let vals = corner_values(
+                &cache,
+                corners,
+                c.n as usize,
+                self.elems.radiosities.as_slice()[c.leaf.ix()],
+            );
+            let mut b = [[0.0f32; 3]; 4];
+            for i in 0..c.n as usize {
+                b[i] = [
+                    vals[i][0].max(0.0) as f32,
+                    vals[i][1].max(0.0) as f32,
+                    vals[i][2].max(0.0) as f32,
+                ];
+            }
+            leaves.push(Leaf {
+                patch: c.patch,
+                corners: c.n,
+                time: self.time,
+                uv: c.uv,
+                b,
+            });
+        }
+        leaves.sort_by(|a, b| {
+            a.patch
+                .cmp(&b.patch)
+                .then(a.uv[0][0].total_cmp(&b.uv[0][0]))
+                .then(a.uv[0][1].total_cmp(&b.uv[0][1]))
+        });
+        if let Some(m) = known {
+            m.collect(&cache.index);
+        }
+        drop(guard);
+        let interpolated = interpolated.into_inner();
+        // Later frames of a window interpolate this one's values; a solve
+        // outside a window has no use for them.
+        let values = if self.window.is_some() {
+            KeyValues::from_points(cache.index.iter().map(|(&pk, &i)| {
+                let (b, ok) = cache.values[i];
+                (pk, b, ok)
+            }))
+        } else {
+            KeyValues::default()
+        };
+        Reconstruction {
+            leaves,
+            values,
+            gathered: cache.values.len() as u64 - interpolated,
+            interpolated,
+            interpolation_error: if interp_den > 0.0 {
+                BUBBLE_RMS * (interp_num / interp_den).sqrt()
+            } else {
+                0.0
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_thin_cell_splits_along_its_length_and_no_thinner_than_the_smallest_size() {
+        let scene = crate::scene::cornell_box(false);
+        let patches = Patches::at_time(&scene, 0.0);
+        let quad = (0..patches.len())
+            .find(|&i| patches.polys[i].n == 4)
+            .expect("the Cornell box has quads");
+        let world = |uv: [f32; 2]| patches.point(quad, uv[0] as f64, uv[1] as f64);
+        let cell = |u1: f32, v1: f32| {
+            let uv = [[0.0, 0.0], [u1, 0.0], [u1, v1], [0.0, v1]];
+            let e = |a: usize, b: usize| world(uv[a]).distance(world(uv[b]));
+            Cell {
+                leaf: ElementId(0),
+                patch: quad as u32,
+                n: 4,
+                uv,
+                area: e(0, 1) * e(0, 3),
+            }
+        };
+        let strip = cell(1.0, 0.02);
+        let long = world([0.0, 0.0]).distance(world([1.0, 0.0]));
+        let thin = world([0.0, 0.0]).distance(world([0.0, 0.02]));
+        assert!(long > 0.3 && thin > 0.005, "{long} {thin}");
+        // Thinner than twice the smallest size, far larger than four times its area:
+        // halved along its length only.
+        let min_len = 0.6 * thin;
+        assert!(strip.area >= 4.0 * min_len * min_len);
+        assert_eq!(strip.split_dirs(min_len, &patches), (true, false));
+        let halves = strip.split_along((true, false));
+        assert_eq!(halves.len(), 2);
+        assert_eq!(
+            halves[0].uv,
+            [[0.0, 0.0], [0.5, 0.0], [0.5, 0.02], [0.0, 0.02]]
+        );
+        assert_eq!(
+            halves[1].uv,
+            [[0.5, 0.0], [1.0, 0.0], [1.0, 0.02], [0.5, 0.02]]
+        );
+        assert!((halves[0].area + halves[1].area - strip.area).abs() < 1e-12);
+        // Wide enough both ways: the four children of an element split.
+        assert_eq!(strip.split_dirs(0.4 * thin, &patches), (true, true));
+        let quarters = strip.split_along((true, true));
+        assert_eq!(quarters.len(), 4);
+        assert_eq!(
+            quarters[0].uv,
+            [[0.0, 0.0], [0.5, 0.0], [0.5, 0.01], [0.0, 0.01]]
+        );
+        // Short both ways: not split.
+        assert_eq!(
+            cell(0.02, 0.02).split_dirs(min_len, &patches),
+            (false, false)
+        );
+        assert_eq!(strip.split_dirs(0.6 * long, &patches), (false, false));
+    }
+}
