@@ -1,0 +1,598 @@
+//! A space-time window on the solver's pools: what it adds to the shared part and
+//! how it gives it back, and one frame's refine-and-solve inside it (the solver
+//! side of [`super::spacetime`]; Damez & Sillion, paper 001, §5.2–5.3).
+//!
+//! **Pools.** [`Solver::begin_window`] re-classifies the shared part's links
+//! against the boxes the moving objects sweep during the window and refines those
+//! that became constant (the window's base, a [`Snapshot`]); each
+//! [`Solver::frame`] places the objects, re-evaluates and refines the varying links
+//! and solves the leaf system warm-started from the previous frame;
+//! [`Solver::release_window`] truncates the pools back to the shared part and
+//! restores what the window changed in older records (links made passive, elements
+//! subdivided), so memory does not grow with the animation's length.
+//!
+//! **Keys by place.** The leaves and links a frame's refinement makes are made
+//! again by the next frame under other ids. Their rays, and the window's caches,
+//! are keyed by their place under the shared part (the path of child indices,
+//! `Solver::ray_id`), so a frame's element keeps its key and its jitter from frame
+//! to frame.
+//!
+//! **What a window keeps** ([`Window`]): the final-gather terms of its static
+//! points ([`super::kept`]), and the leaf-row coefficients, opened entries, hidden
+//! coefficients and masks that hold over the window ([`super::rows`]). What holds of
+//! the final-gather terms is handed to the next window (`Solver::revalidated`).
+
+use super::*;
+
+/// Pool lengths at some moment, and what was done since to older records (links
+/// made passive, elements subdivided): enough to restore the pools to that moment.
+#[derive(Default)]
+pub(super) struct Snapshot {
+    pub(super) elems_len: usize,
+    pub(super) links_len: usize,
+    pub(super) passivated: Vec<LinkId>,
+    pub(super) subdivided: Vec<ElementId>,
+}
+
+impl Snapshot {
+    pub(super) fn of(elems: &ElementPool, links: &LinkPool) -> Self {
+        Snapshot {
+            elems_len: elems.len(),
+            links_len: links.len(),
+            ..Snapshot::default()
+        }
+    }
+}
+
+/// What a time window needs beyond the static solver (see [`spacetime`]).
+#[derive(Default)]
+pub(super) struct Window {
+    /// Boxes swept by the moving objects over the window.
+    pub(super) swept: Vec<(DVec3, DVec3)>,
+    /// The shared part, as the window found it (restored when it is released).
+    pub(super) base: Snapshot,
+    /// The window's own base: the shared part plus the refinement of the links
+    /// that are constant in this window (restored before each frame).
+    pub(super) frame: Snapshot,
+    /// True once the window's base is built: refinement now belongs to a frame.
+    pub(super) in_frame: bool,
+    /// Leaf-row coefficients of constant links on static leaves: `(leaf, link) →
+    /// (F, visible fraction)`, keyed as [`Solver::row_key`] keys them (the leaves
+    /// and links a frame makes by what they stand for).
+    pub(super) rows: HashMap<(u32, u32), (f32, f32)>,
+    /// The row entries a cached coefficient of [`Window::rows`] opens into when its
+    /// source is opened ([`Solver::push_opened`]): the same children and factors at
+    /// every frame while none of them has children the frame refined, so they are
+    /// computed once (the same values, bit for bit; LIGHT spent a fifth of its time
+    /// on these factors, frame after frame).
+    pub(super) opened: HashMap<(u32, u32), RowEntries>,
+    /// Entries held by [`Window::opened`].
+    pub(super) opened_entries: usize,
+    /// Leaf-row `(F, visible fraction)` of varying links between static ends (a
+    /// static leaf or source a frame made too, [`Solver::row_key`]), computed at a
+    /// frame with no moving object's box in the shaft between the ends
+    /// ([`Solver::clear_of_moving`]): at any such frame their rays meet static
+    /// geometry only, with the same keys, so the value is the same bit for bit.
+    pub(super) hidden: HashMap<(u32, u32), (f64, f64)>,
+    /// The static part of the rays at a static leaf's quadrature points for row
+    /// entries of varying links between static ends, keyed as [`Window::hidden`],
+    /// at frames with a moving object's box in the shaft between the ends (which
+    /// [`Window::hidden`] cannot keep): bit `i·m + j` is set where nothing static
+    /// blocks ray `j` of point `i` (`m` rays a point, [`RowMasks`]). The static
+    /// geometry and the rays' keys hold over the window, so a later frame casts
+    /// only the rays a mask leaves clear, at the moving objects only, and gets the
+    /// value casting every ray would give, bit for bit (the final gather's
+    /// [`kept::MaskedTerm`] for rows; paper 001 §5.2: what a moving object cannot
+    /// change is computed once).
+    pub(super) masks: HashMap<(u32, u32), u64>,
+    /// Exact factors `Σ_q w_q F(x_q → e)` from a static leaf (keyed by
+    /// [`Solver::stable_id`]) to a static element `e` of the window's base that a
+    /// source of its row opens into ([`Solver::push_opened`]): the geometry of both
+    /// holds over the window, so the factor is the same bit for bit at every frame.
+    /// Those of a varying link's source were computed again at every solved frame
+    /// (LIGHT: 5.0 M of them over its 76 frames), where [`Window::opened`] keeps
+    /// only a constant link's entries.
+    pub(super) factors: HashMap<(u32, u32), f64>,
+    /// Ids that the caches above key a frame's own elements by, which the next frame
+    /// makes again with other ids: `(element of the window's base, path of child
+    /// indices below it) → id` from [`FRAME_SID`] up ([`Solver::intern_frame_elements`]).
+    /// A static leaf a frame's refinement makes has the same geometry and casts the
+    /// same rays ([`Solver::ray_id`]) at every frame that makes it, so what the
+    /// caches hold for it holds at all of them.
+    pub(super) stable: HashMap<(u32, u64), u32>,
+    /// This frame's elements past the window's base: their ids in [`Window::stable`]
+    /// (`u32::MAX`: too deep to key).
+    pub(super) sids: Vec<u32>,
+    /// Final-gather terms that hold over the window at static reconstruction points.
+    /// `None` in the shared part's rounds (nothing is reconstructed there).
+    pub(super) points: std::sync::Mutex<Option<PointCache>>,
+    /// The radiosity scale every frame of the window reconstructs against (cell
+    /// tolerance, gather limits): the RMS reflected radiosity of the window's first
+    /// solved frame. Each frame's own would move with the moving objects and change
+    /// the decisions, hence the values, at static points; the shared part's (solved
+    /// with the varying links coarse) is lower on LIGHT and made it 36% slower.
+    pub(super) b_ref: Option<f64>,
+}
+
+impl Window {
+    /// Bytes of the leaf-row cache: per entry the key, the value and the hash
+    /// table's control byte, over its capacity.
+    pub(super) fn rows_bytes(&self) -> usize {
+        self.rows.capacity() * (std::mem::size_of::<((u32, u32), (f32, f32))>() + 1)
+            + self.opened.capacity() * (std::mem::size_of::<((u32, u32), RowEntries)>() + 1)
+            + self.opened_entries * std::mem::size_of::<(u32, f64)>()
+            + self.hidden.capacity() * (std::mem::size_of::<((u32, u32), (f64, f64))>() + 1)
+            + self.masks.capacity() * (std::mem::size_of::<((u32, u32), u64)>() + 1)
+            + self.factors.capacity() * (std::mem::size_of::<((u32, u32), f64)>() + 1)
+            + self.stable.capacity() * (std::mem::size_of::<((u32, u64), u32)>() + 1)
+    }
+}
+
+/// First id [`Window::stable`] gives a frame's own elements: above every element id
+/// of a window's base (the pools hold far fewer), below the link keys' tag bit
+/// ([`Solver::row_key`]).
+pub(super) const FRAME_SID: u32 = 1 << 30;
+
+/// Levels below the window's base a frame's element may lie and still get an id
+/// in [`Window::stable`] (3 bits a level under a sentinel bit, in 64).
+pub(super) const MAX_FRAME_DEPTH: u32 = 20;
+
+/// What one space-time frame cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameCost {
+    /// Varying links re-evaluated.
+    pub varying_links: u64,
+    /// Rays cast in the frame (link evaluation and leaf rows; not reconstruction).
+    pub rays: u64,
+    /// GMRES relative residual.
+    pub residual: f64,
+    /// Leaf-row entries with a moving end the frame's last rows took between the
+    /// solved frames around ([`TimeRange`]) rather than computed.
+    pub rows_between: u64,
+    /// Leaf-row entries with a moving end in the frame's last rows (taken between
+    /// or computed).
+    pub rows_moving: u64,
+}
+
+impl Solver<'_> {
+    /// Starts a time window whose moving objects sweep the boxes `swept`: what the
+    /// pools hold now is the shared part, kept for every window; what the window adds
+    /// is released by [`Solver::release_window`]. Every active link is classified as
+    /// constant or varying over the window; a link that was varying and is now
+    /// constant is re-evaluated once (it may have been evaluated with a moving object
+    /// in its shaft).
+    ///
+    /// Links that are constant in the window but were varying over the whole
+    /// animation were left coarse by the shared part: they are refined here, against
+    /// `eps · b_ref`, once for all the window's frames.
+    ///
+    /// The final-gather terms the last window handed on ([`Solver::release_window`])
+    /// are the window's to start with, those that hold against `swept`
+    /// (`Solver::revalidated`).
+    pub fn begin_window(&mut self, swept: Vec<(DVec3, DVec3)>, b_ref: f64) -> Result<()> {
+        let points = match self.carried.take() {
+            Some(c) => self.revalidated(&c, &swept)?,
+            None => PointCache::new(&self.opts.storage, self.kept_budget)?,
+        };
+        self.window = Some(Window {
+            swept,
+            base: Snapshot::of(&self.elems, &self.links),
+            points: std::sync::Mutex::new(Some(points)),
+            ..Window::default()
+        });
+        let active = self.active_links(false);
+        let classes: Vec<bool> = active
+            .par_iter()
+            .map(|l| {
+                let e = self.links.ends.as_slice()[l.ix()];
+                self.varying(ElementId(e.receiver), ElementId(e.source))
+            })
+            .collect();
+        let mut stale = Vec::new();
+        for (&l, v) in active.iter().zip(classes) {
+            let t = &mut self.links.transports.as_mut_slice()[l.ix()];
+            if t.varying() && !v {
+                stale.push(l);
+            }
+            t.flags[2] = v as u8;
+        }
+        self.reevaluate(&stale);
+        self.shared_phase = true;
+        let refined = self.refine(stale, self.opts.eps * b_ref);
+        self.shared_phase = false;
+        refined?;
+        let frame = Snapshot::of(&self.elems, &self.links);
+        if let Some(w) = self.window.as_mut() {
+            w.frame = frame;
+            w.in_frame = true;
+        }
+        Ok(())
+    }
+
+    /// Solves the part of a space-time solve that all windows share: the usual
+    /// rounds at the current time, with links classified against the boxes `swept`
+    /// over the whole animation and only constant links refined (a varying link stays
+    /// as coarse as it was created; each window refines it for its own frames).
+    pub fn run_shared(
+        &mut self,
+        swept: Vec<(DVec3, DVec3)>,
+        on_round: impl FnMut(&mut RoundRecord, &Solver),
+    ) -> Result<Vec<RoundRecord>> {
+        self.window = Some(Window {
+            swept: swept.clone(),
+            ..Window::default()
+        });
+        self.shared_phase = true;
+        let records = self.run(on_round);
+        self.shared_phase = false;
+        self.window = None;
+        let records = records?;
+        // The rounds' radiosity misses what the unrefined varying links carry, so the
+        // constant links were refined against too little light. Solve the start time
+        // with its varying links refined (in a window, released at once), take that
+        // radiosity, and refine the constant links against it.
+        let t = self.now;
+        for _ in 0..SHARED_PASSES {
+            let b_ref = self.b_ref();
+            self.begin_window(swept.clone(), b_ref)?;
+            self.frame(t, b_ref)?;
+            let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
+            let b = self.elems.radiosities.as_slice()[..shared].to_vec();
+            self.release_window();
+            self.carried = None;
+            self.elems.radiosities.as_mut_slice().copy_from_slice(&b);
+            self.index_links();
+            let b_ref = self.b_ref();
+            self.window = Some(Window {
+                swept: swept.clone(),
+                ..Window::default()
+            });
+            self.shared_phase = true;
+            let active = self.active_links(false);
+            let changed = self.refine(active, self.opts.eps * b_ref);
+            self.shared_phase = false;
+            self.window = None;
+            if !changed? {
+                break;
+            }
+            self.index_links();
+            self.solve_rows()?;
+        }
+        self.index_links();
+        Ok(records)
+    }
+
+    /// Drops what the current window added to the pools and restores the shared part
+    /// as it was when the window began. The final-gather terms the window kept are
+    /// kept for the next window, as they are: [`Solver::begin_window`] keeps those
+    /// on the shared part's elements that still hold there.
+    pub fn release_window(&mut self) {
+        self.reset_frame();
+        if let Some(mut w) = self.window.take() {
+            self.carried = w.points.get_mut().unwrap_or_else(|e| e.into_inner()).take();
+            self.restore(&mut w.base);
+            drop(w);
+            release_free_memory();
+        }
+        self.pull_pool();
+    }
+
+    /// True if every element the source terms `src` name is one of the shared
+    /// part's (which, between windows, is all the pools hold): the terms a window
+    /// hands the next. Terms on the window's own elements go with them.
+    pub(super) fn on_shared_part(&self, src: &kept::SourceTerms) -> bool {
+        let shared = self.elems.len() as u32;
+        src.0 >> 1 < shared
+            && src.1.iter().all(|t| t.elem < shared)
+            && src.2.iter().all(|t| t.elem < shared)
+    }
+
+    /// The terms `carried` from the last window that hold in a window whose moving
+    /// objects sweep the boxes `swept`: those on the shared part
+    /// ([`Solver::on_shared_part`]), as follows. A source's masked terms hold in any window
+    /// (their static rays are kept and the moving objects are cast against at each
+    /// frame), and so do the terms of a source keyed clear (the point's shaft to it
+    /// is empty and constant in this window too, or the key would differ). Its
+    /// fixed terms hold, visibility included, where the box around the point and
+    /// the source (which holds every ray they were computed from) meets no swept
+    /// box, as no moving object can come between then; otherwise the source is
+    /// dropped and gathered afresh. A masked term whose own box meets no swept box
+    /// becomes the fixed term a fresh gather would make (factor times the static
+    /// visibility), which costs no shaft test at each frame.
+    pub(super) fn revalidated(
+        &self,
+        carried: &PointCache,
+        swept: &[(DVec3, DVec3)],
+    ) -> Result<PointCache> {
+        let geoms = self.elems.geoms.as_slice();
+        let nodes = self.elems.nodes.as_slice();
+        // A point is gathered a hair inside its cell (`CORNER_INSET`).
+        let pad = DVec3::splat(CORNER_INSET * self.patches.diameter);
+        let q = 1.0 / (1u64 << 24) as f64;
+        carried.carried(&self.opts.storage, self.kept_budget, |pk, src| {
+            if !self.on_shared_part(src) {
+                return false;
+            }
+            if src.0 & 1 == 1 {
+                return true;
+            }
+            let x = self
+                .patches
+                .point(pk.0 as usize, f64::from(pk.1) * q, f64::from(pk.2) * q);
+            let clear_of_swept = |e: u32| {
+                let (lo, hi) = geom_box(&geoms[e as usize]);
+                !meets_any(lo.min(x - pad), hi.max(x + pad), swept)
+            };
+            let (key, fixed, masked) = src;
+            if !fixed.is_empty() && !clear_of_swept(*key >> 1) {
+                return false;
+            }
+            // A cluster's term weighs its contents by their radiosity when it was
+            // gathered (`cluster_kernel`), and a source with children gathered
+            // whole was not opened for the spread of its radiosity then: both are
+            // kept for one window only, as before, and gathered afresh in the next.
+            let s = *key >> 1;
+            let whole = |e: u32| e == s && nodes[s as usize].child_count > 0;
+            if fixed
+                .iter()
+                .any(|t| geoms[t.elem as usize].patch == u32::MAX || whole(t.elem))
+                || masked.iter().any(|t| whole(t.elem))
+            {
+                return false;
+            }
+            masked.retain(|t| {
+                if !clear_of_swept(t.elem) {
+                    return true;
+                }
+                let f = t.f * t.vis_static;
+                if f > 0.0 {
+                    fixed.push(kept::FixedTerm { elem: t.elem, f });
+                }
+                false
+            });
+            true
+        })
+    }
+
+    /// Restores the pools to `snap` (see [`Snapshot`]).
+    fn restore(&mut self, snap: &mut Snapshot) {
+        // Element and link ids past the snapshot will be reused.
+        self.row_cache.clear();
+        self.elems.truncate(snap.elems_len);
+        self.links.truncate(snap.links_len);
+        for l in snap.passivated.drain(..) {
+            self.links.set_active(l);
+        }
+        for e in snap.subdivided.drain(..) {
+            let node = &mut self.elems.nodes.as_mut_slice()[e.ix()];
+            node.first_child = 0;
+            node.child_count = 0;
+        }
+    }
+
+    /// Drops the refinement of the previous frame: elements and links beyond the
+    /// window's start, and the passive state and children they gave to older ones.
+    /// A frame refines its varying links from the window's start again, so the
+    /// hierarchy near a moving object is as fine as this frame needs, not the union
+    /// over the window.
+    fn reset_frame(&mut self) {
+        self.pass_rows = Vec::new();
+        if let Some(mut w) = self.window.take() {
+            if w.in_frame {
+                self.restore(&mut w.frame);
+            }
+            self.window = Some(w);
+        }
+    }
+
+    /// Re-evaluates the links `ids` where the geometry stands now (state and time
+    /// class kept).
+    fn reevaluate(&mut self, ids: &[LinkId]) {
+        if ids.is_empty() {
+            return;
+        }
+        let set = self.settings();
+        let this = &*self;
+        let evals: Vec<_> = ids
+            .par_iter()
+            .map(|&l| {
+                let e = this.links.ends.as_slice()[l.ix()];
+                oracle::evaluate(
+                    &this.elems,
+                    &this.bvh,
+                    ElementId(e.receiver),
+                    ElementId(e.source),
+                    [this.ray_id(e.receiver), this.ray_id(e.source)],
+                    &set,
+                    this.eps_len,
+                )
+            })
+            .collect();
+        for (&l, ev) in ids.iter().zip(evals) {
+            self.rays += ev.rays as u64;
+            let tr = &mut self.links.transports.as_mut_slice()[l.ix()];
+            let flags = tr.flags;
+            *tr = ev.transport;
+            tr.flags[0] = flags[0];
+            tr.flags[2] = flags[2];
+        }
+    }
+
+    /// Evaluates again the links of `ids` whose source is a cluster. A cluster
+    /// source's coefficient depends on its radiosity: the directional emission of
+    /// [`oracle::cluster_emission`] and the visibility, whose source points are drawn
+    /// by power ([`oracle::cluster_visibility`]). The links of the first round were
+    /// made when only the emitters had any, so their clusters radiated isotropically
+    /// and were seen by area; after the first solve they are evaluated once more
+    /// with the radiosity known (links made later are evaluated with it already).
+    /// Why: boxes on a floor are seen from above by their (black or lit) tops while
+    /// the floor between them hands on the light; by area, a room of black boxes
+    /// (`tools/gen_cubes.py 20`, boxes ρ = 0) came out with its ceiling 7.2% and its
+    /// walls 3.3% too bright against the path tracer, by power 1.1% and 0.7%. A
+    /// space-time solve does the same, though its constant links keep their
+    /// visibility while `B` changes: by area, a cluster holding a small lamp is
+    /// seen from its other surfaces, and LIGHT's panel hid the wall lamp from no
+    /// coarse link (14% too bright at eps 0.5 while it covers the lamp; 8.4%
+    /// against its reference over the shot, by power 3.6%).
+    pub(super) fn reevaluate_cluster_sources(&mut self, ids: &[LinkId]) {
+        let geoms = self.elems.geoms.as_slice();
+        let ends = self.links.ends.as_slice();
+        let clusters: Vec<LinkId> = ids
+            .iter()
+            .copied()
+            .filter(|l| geoms[ends[l.ix()].source as usize].patch == u32::MAX)
+            .collect();
+        self.reevaluate(&clusters);
+    }
+
+    /// One frame of a space-time solve at time `t` (inside the current window): the
+    /// moving objects are placed at `t`, the window's varying links re-evaluated and
+    /// refined against `eps · b_ref`, and the leaf system solved again, warm-started
+    /// from the previous frame. Constant links keep their coefficients, leaf rows
+    /// and final-gather terms from earlier frames of the window.
+    pub fn frame(&mut self, t: f64, b_ref: f64) -> Result<FrameCost> {
+        let rays0 = self.rays;
+        self.reset_frame();
+        self.set_time(t);
+        let varying = self.active_links(true);
+        self.reevaluate(&varying);
+        self.links_at = t;
+        let n_varying = varying.len() as u64;
+        let mut residual = 0.0;
+        // Refine and solve again while refining changes something (radiosity moved
+        // by the new links can push others over the threshold), as the rounds of a
+        // static solve do.
+        let mut wave = varying;
+        for pass in 0..FRAME_PASSES {
+            let changed = self.refine(wave, self.opts.eps * b_ref)?;
+            if pass > 0 && !changed {
+                break;
+            }
+            self.index_links();
+            residual = self.solve_rows()?;
+            wave = self.active_links(true);
+        }
+        // Only the passes share them; the frame's gathers need the memory.
+        self.pass_rows = Vec::new();
+        // The window's reconstruction scale: the first solved frame's.
+        if self.window.as_ref().is_some_and(|w| w.b_ref.is_none()) {
+            let scale = self.rms_radiosity();
+            if let Some(w) = self.window.as_mut() {
+                w.b_ref = Some(scale);
+            }
+        }
+        Ok(FrameCost {
+            varying_links: n_varying,
+            rays: self.rays - rays0,
+            residual,
+            rows_between: self.rows_between,
+            rows_moving: self.frame_rows.len() as u64,
+        })
+    }
+
+    /// Bounds the final-gather terms a time window keeps to `bytes` (see
+    /// [`spacetime`]): over it, the points the last frame did not use are dropped
+    /// and new points are gathered afresh at every frame instead of kept. `None`
+    /// keeps everything that holds over the window. Applies from the next window.
+    pub fn set_kept_budget(&mut self, bytes: Option<u64>) {
+        self.kept_budget = bytes.map(|b| usize::try_from(b).unwrap_or(usize::MAX));
+    }
+
+    /// Bytes of what the current window keeps: final-gather terms and leaf-row
+    /// coefficients (0 outside a window).
+    pub fn kept_bytes(&self) -> u64 {
+        self.window.as_ref().map_or(0, |w| {
+            let points = w
+                .points
+                .lock()
+                .map_or(0, |p| p.as_ref().map_or(0, PointCache::bytes));
+            (points + w.rows_bytes()) as u64
+        })
+    }
+
+    /// Element `e` as the path down to it from the nearest ancestor below `base`
+    /// (ids below `base` are their own ancestor): `(ancestor, path)`, the path a 1
+    /// followed by 3 bits per level (the child's index under its parent), and the
+    /// number of levels.
+    fn path_below(&self, e: u32, base: usize) -> (u32, u64, u32) {
+        let nodes = self.elems.nodes.as_slice();
+        let (mut x, mut path, mut depth) = (e, 1u64, 0u32);
+        while x as usize >= base {
+            let parent = nodes[x as usize].parent;
+            let index = x.wrapping_sub(nodes[parent as usize].first_child);
+            path = path.wrapping_shl(3) | u64::from(index.min(7));
+            depth += if index < 8 { 1 } else { MAX_FRAME_DEPTH + 1 };
+            x = parent;
+        }
+        (x, path, depth)
+    }
+
+    /// What the rays' jitter of element `e` is hashed from: its id outside a
+    /// space-time window and for the part all windows share, else its shared
+    /// ancestor and the path of child indices down to it. A window's and a frame's
+    /// refinement make elements again with other ids (each frame starts from the
+    /// window's base, each window from the shared part), with the same geometry
+    /// when they split the same element: keyed by the path, such an element casts
+    /// the same rays at every frame and in every window, so a static one gets the
+    /// same coefficients wherever nothing moves between it and its sources (the
+    /// caches of [`Window`] can then keep them), and its jitter does not flicker
+    /// from frame to frame.
+    pub(super) fn ray_id(&self, e: u32) -> u64 {
+        let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
+        if shared == 0 || (e as usize) < shared {
+            return u64::from(e);
+        }
+        let (ancestor, path, _) = self.path_below(e, shared);
+        oracle::hash3(u64::from(ancestor), path, 0x5ab1e) | 1 << 63
+    }
+
+    /// Gives the elements a frame's refinement made (past the window's base) their
+    /// ids in [`Window::stable`], for the caches of the leaf rows.
+    pub(super) fn intern_frame_elements(&mut self) {
+        let Some(base) = self
+            .window
+            .as_ref()
+            .filter(|w| w.in_frame)
+            .map(|w| w.frame.elems_len)
+        else {
+            return;
+        };
+        let keys: Vec<Option<(u32, u64)>> = (base..self.elems.len())
+            .map(|e| {
+                let (ancestor, path, depth) = self.path_below(e as u32, base);
+                (depth <= MAX_FRAME_DEPTH).then_some((ancestor, path))
+            })
+            .collect();
+        if let Some(w) = self.window.as_mut() {
+            // Over the kept budget no new id is given: nothing new would be kept
+            // under it.
+            let admits = w
+                .points
+                .get_mut()
+                .map_or(true, |p| p.as_ref().is_none_or(PointCache::admits));
+            w.sids.clear();
+            for key in keys {
+                let next = FRAME_SID.saturating_add(w.stable.len() as u32);
+                let sid = match key {
+                    Some(k) if admits && next < 2 * FRAME_SID => *w.stable.entry(k).or_insert(next),
+                    Some(k) => w.stable.get(&k).copied().unwrap_or(u32::MAX),
+                    None => u32::MAX,
+                };
+                w.sids.push(sid);
+            }
+        }
+    }
+
+    /// The id the caches of a window key element `e` by: its own in the window's
+    /// base, [`Window::stable`]'s for a frame's element (`u32::MAX`: none).
+    pub(super) fn stable_id(&self, e: u32) -> u32 {
+        match &self.window {
+            Some(w) if w.in_frame && (e as usize) >= w.frame.elems_len => w
+                .sids
+                .get(e as usize - w.frame.elems_len)
+                .copied()
+                .unwrap_or(u32::MAX),
+            _ => e,
+        }
+    }
+}
