@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+"""Paired timing of space-time against per-frame (issue 4's speed and memory ratios).
+
+On a shared VM the wall time of one command moves by 10-20% from one minute to the
+next, for both methods alike. A ratio taken from runs made at different times then
+measures the minutes as much as the methods. This script runs the two commands in
+alternation, per-frame first, `--pairs` times, and reports each pair's time ratio
+and peak-RSS ratio. It measures time and memory only. The error of each setting
+comes from `tools/spacetime_bench.py`, which runs the probes; the outputs are
+deterministic, so the error of a setting does not change from run to run.
+
+Usage:
+    python3 tools/spacetime_pairs.py --rhier target/release/rhier --scene actor \\
+        --per-frame "--eps 0.35 --recon-tol 0.16" \\
+        --space-time "--eps 1 --recon-tol 0.10 --recon-tol-moving 0.08" \\
+        [--pairs 3] [--threads 2] [--fps 25] [--out-dir /tmp/pairs]
+
+--scene takes a builtin name with a JSON example (actor, light, ...:
+formats/examples/NAME.json) or a scene path. The per-frame command is
+    rhier solve SCENE --per-frame --fps FPS PER_FRAME_ARGS -o OUT -q --threads T
+and the space-time command
+    rhier solve SCENE SPACE_TIME_ARGS -o OUT -q --threads T
+Each run's wall time and peak RSS come from /usr/bin/time. The script prints one
+line per run and, at the end, the ratios per pair and their range.
+"""
+
+import argparse
+import os
+import shlex
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+EXAMPLES = os.path.normpath(os.path.join(HERE, "..", "formats", "examples"))
+
+
+def scene_path(name):
+    if os.path.exists(name):
+        return name
+    path = os.path.join(EXAMPLES, name + ".json")
+    if not os.path.exists(path):
+        sys.exit(f"spacetime_pairs: no scene {name!r} (neither a file nor {path})")
+    return path
+
+
+def measured(cmd, log):
+    """Runs cmd; returns (wall seconds, peak RSS in MiB). Exits if it fails."""
+    timer = "/usr/bin/time"
+    if not os.path.exists(timer):
+        sys.exit("spacetime_pairs: needs /usr/bin/time for the peak RSS")
+    rss = log + ".rss"
+    t0 = time.monotonic()
+    with open(log, "w") as f:
+        proc = subprocess.run([timer, "-f", "%M", "-o", rss] + cmd, stdout=f,
+                              stderr=subprocess.STDOUT)
+    seconds = time.monotonic() - t0
+    if proc.returncode != 0:
+        sys.exit(f"spacetime_pairs: command failed ({proc.returncode}): "
+                 f"{shlex.join(cmd)}; see {log}")
+    with open(rss) as f:
+        return seconds, int(f.read().split()[-1]) / 1024.0
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rhier", required=True)
+    ap.add_argument("--scene", required=True)
+    ap.add_argument("--per-frame", required=True, help="solve arguments of per-frame")
+    ap.add_argument("--space-time", required=True, help="solve arguments of space-time")
+    ap.add_argument("--pairs", type=int, default=3)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--fps", type=float, default=25.0)
+    ap.add_argument("--out-dir", default="/tmp/spacetime_pairs")
+    a = ap.parse_args()
+    if a.pairs < 1:
+        sys.exit("spacetime_pairs: --pairs must be at least 1")
+    os.makedirs(a.out_dir, exist_ok=True)
+    scene = scene_path(a.scene)
+    common = ["-q", "--threads", str(a.threads)]
+    pf_out = os.path.join(a.out_dir, "per_frame.rhier")
+    st_out = os.path.join(a.out_dir, "space_time.rhier")
+    pf_cmd = ([a.rhier, "solve", scene, "--per-frame", "--fps", repr(a.fps)]
+              + shlex.split(a.per_frame) + ["-o", pf_out] + common)
+    st_cmd = ([a.rhier, "solve", scene] + shlex.split(a.space_time)
+              + ["-o", st_out] + common)
+    print(f"per-frame:  {shlex.join(pf_cmd)}")
+    print(f"space-time: {shlex.join(st_cmd)}")
+    print(f"started {time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime())}")
+    ratios = []
+    for i in range(a.pairs):
+        pf = measured(pf_cmd, os.path.join(a.out_dir, f"pf{i}.log"))
+        print(f"pair {i + 1}: per-frame  {pf[0]:7.2f} s  {pf[1]:6.1f} MiB", flush=True)
+        st = measured(st_cmd, os.path.join(a.out_dir, f"st{i}.log"))
+        print(f"pair {i + 1}: space-time {st[0]:7.2f} s  {st[1]:6.1f} MiB", flush=True)
+        ratios.append((pf[0] / st[0], st[1] / pf[1]))
+    print(f"ended {time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime())}")
+    print("speed-up per pair: " + " / ".join(f"{r[0]:.2f}x" for r in ratios))
+    print("peak RSS, space-time / per-frame: " + " / ".join(f"{r[1]:.2f}x" for r in ratios))
+    lo, hi = min(r[0] for r in ratios), max(r[0] for r in ratios)
+    print(f"speed-up range {lo:.2f}-{hi:.2f}x over {a.pairs} pairs")
+
+
+if __name__ == "__main__":
+    main()
