@@ -143,14 +143,18 @@ impl<'a> PointView<'a> {
     /// The fixed and masked terms of source key `key`, if the point keeps them.
     pub fn get(&self, key: u32) -> Option<(&'a [FixedTerm], &'a [MaskedTerm])> {
         let i = self.index.binary_search_by_key(&key, |e| e.key).ok()?;
+        let (f, m) = self.ranges(i);
+        Some((&self.fixed[f], &self.masked[m]))
+    }
+
+    /// Where the terms of the point's `i`-th source lie in its fixed and masked
+    /// terms: from its index record's offsets to the next record's (or the end).
+    fn ranges(&self, i: usize) -> (Range<usize>, Range<usize>) {
         let e = self.index[i];
         let next = self.index.get(i + 1);
         let f1 = next.map_or(self.fixed.len(), |n| n.fixed as usize);
         let m1 = next.map_or(self.masked.len(), |n| n.masked as usize);
-        Some((
-            &self.fixed[e.fixed as usize..f1],
-            &self.masked[e.masked as usize..m1],
-        ))
+        (e.fixed as usize..f1, e.masked as usize..m1)
     }
 }
 
@@ -247,13 +251,12 @@ impl PointCache {
         let (mut fixed, mut masked) = (Vec::new(), Vec::new());
         let mut sources: Vec<(u32, Range<usize>, Range<usize>)> = Vec::new();
         if let Some(view) = slot.and_then(|_| self.get(&pk)) {
+            // The buffers start with the point's own terms, so its ranges hold.
             fixed.extend_from_slice(view.fixed);
             masked.extend_from_slice(view.masked);
             for (i, e) in view.index.iter().enumerate() {
-                let next = view.index.get(i + 1);
-                let f1 = next.map_or(fixed.len(), |n| n.fixed as usize);
-                let m1 = next.map_or(masked.len(), |n| n.masked as usize);
-                sources.push((e.key, e.fixed as usize..f1, e.masked as usize..m1));
+                let (f, m) = view.ranges(i);
+                sources.push((e.key, f, m));
             }
         }
         let known = sources.len();
@@ -493,9 +496,10 @@ impl PointCache {
         };
         view.index
             .iter()
-            .filter_map(|e| {
-                view.get(e.key)
-                    .map(|(f, m)| (e.key, f.to_vec(), m.to_vec()))
+            .enumerate()
+            .map(|(i, e)| {
+                let (f, m) = view.ranges(i);
+                (e.key, view.fixed[f].to_vec(), view.masked[m].to_vec())
             })
             .collect()
     }
