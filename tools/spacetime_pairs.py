@@ -27,39 +27,11 @@ line per run and, at the end, the ratios per pair and their range.
 import argparse
 import os
 import shlex
-import subprocess
+import shutil
 import sys
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-EXAMPLES = os.path.normpath(os.path.join(HERE, "..", "formats", "examples"))
-
-
-def scene_path(name):
-    if os.path.exists(name):
-        return name
-    path = os.path.join(EXAMPLES, name + ".json")
-    if not os.path.exists(path):
-        sys.exit(f"spacetime_pairs: no scene {name!r} (neither a file nor {path})")
-    return path
-
-
-def measured(cmd, log):
-    """Runs cmd; returns (wall seconds, peak RSS in MiB). Exits if it fails."""
-    timer = "/usr/bin/time"
-    if not os.path.exists(timer):
-        sys.exit("spacetime_pairs: needs /usr/bin/time for the peak RSS")
-    rss = log + ".rss"
-    t0 = time.monotonic()
-    with open(log, "w") as f:
-        proc = subprocess.run([timer, "-f", "%M", "-o", rss] + cmd, stdout=f,
-                              stderr=subprocess.STDOUT)
-    seconds = time.monotonic() - t0
-    if proc.returncode != 0:
-        sys.exit(f"spacetime_pairs: command failed ({proc.returncode}): "
-                 f"{shlex.join(cmd)}; see {log}")
-    with open(rss) as f:
-        return seconds, int(f.read().split()[-1]) / 1024.0
+from spacetime_bench import run_measured, scene_path
 
 
 def main():
@@ -75,6 +47,9 @@ def main():
     a = ap.parse_args()
     if a.pairs < 1:
         sys.exit("spacetime_pairs: --pairs must be at least 1")
+    # Without it run_measured falls back to the largest child so far, not each run's.
+    if not (shutil.which("time") or os.path.exists("/usr/bin/time")):
+        sys.exit("spacetime_pairs: needs /usr/bin/time for each run's peak RSS")
     os.makedirs(a.out_dir, exist_ok=True)
     scene = scene_path(a.scene)
     common = ["-q", "--threads", str(a.threads)]
@@ -89,9 +64,9 @@ def main():
     print(f"started {time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime())}")
     ratios = []
     for i in range(a.pairs):
-        pf = measured(pf_cmd, os.path.join(a.out_dir, f"pf{i}.log"))
+        pf = run_measured(pf_cmd, os.path.join(a.out_dir, f"pf{i}.log"))
         print(f"pair {i + 1}: per-frame  {pf[0]:7.2f} s  {pf[1]:6.1f} MiB", flush=True)
-        st = measured(st_cmd, os.path.join(a.out_dir, f"st{i}.log"))
+        st = run_measured(st_cmd, os.path.join(a.out_dir, f"st{i}.log"))
         print(f"pair {i + 1}: space-time {st[0]:7.2f} s  {st[1]:6.1f} MiB", flush=True)
         ratios.append((pf[0] / st[0], st[1] / pf[1]))
     print(f"ended {time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime())}")
