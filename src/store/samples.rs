@@ -160,21 +160,14 @@ fn stats() -> SolveStats {
     }
 }
 
-/// The static box: walls only, leaves `n × n` per wall, time domain `[0, 0]`.
-pub fn box_solution(n: u32) -> Solution {
-    let polygons = walls()
-        .into_iter()
-        .enumerate()
-        .map(|(k, vertices)| Polygon {
-            vertices,
-            material: MaterialId(u32::from(k == 3)),
-        })
-        .collect();
+/// A static one-object scene of `polygons` (time domain `[0, 0]`) with `n × n`
+/// leaves per patch at [`wall_radiosity`].
+fn static_solution(name: &str, polygons: Vec<Polygon>, n: u32) -> Solution {
     let scene = Scene {
         time: TimeDomain::default(),
         materials: materials(),
         objects: vec![Object {
-            name: "box".into(),
+            name: name.into(),
             polygons,
             motion: None,
         }],
@@ -192,6 +185,19 @@ pub fn box_solution(n: u32) -> Solution {
         leaves,
         stats: stats(),
     }
+}
+
+/// The static box: walls only, leaves `n × n` per wall, time domain `[0, 0]`.
+pub fn box_solution(n: u32) -> Solution {
+    let polygons = walls()
+        .into_iter()
+        .enumerate()
+        .map(|(k, vertices)| Polygon {
+            vertices,
+            material: MaterialId(u32::from(k == 3)),
+        })
+        .collect();
+    static_solution("box", polygons, n)
 }
 
 /// A space-time sample: the whole solution in memory and the same leaves cut into
@@ -316,26 +322,5 @@ pub fn tiled_box(m: u32, n: u32) -> Solution {
             }
         }
     }
-    let scene = Scene {
-        time: TimeDomain::default(),
-        materials: materials(),
-        objects: vec![Object {
-            name: "tiled box".into(),
-            polygons,
-            motion: None,
-        }],
-        camera: None,
-        warnings: Vec::new(),
-    };
-    let patches = patches_of(&scene);
-    let mut leaves = Vec::new();
-    for (i, p) in patches.iter().enumerate() {
-        leaves.extend(uniform_leaves(i as u32, p, n, [0.0, 0.0], wall_radiosity));
-    }
-    Solution {
-        scene,
-        patches,
-        leaves,
-        stats: stats(),
-    }
+    static_solution("tiled box", polygons, n)
 }
