@@ -195,6 +195,33 @@ fn dir(c: [f64; 2], w: [f64; 2]) -> f64 {
     (w[1] - c[1]).atan2(w[0] - c[0]).rem_euclid(TAU)
 }
 
+/// The nearest point among the point events (kind 1) of one sweep `group` of
+/// events `(direction, kind, id)` seen from `c`, and whether `c` sees it: no
+/// element of `tree` (those the ray crosses, nearest first) lies between them.
+fn nearest_seen(
+    group: &[(f64, u8, u32)],
+    pts: &[[f64; 2]],
+    c: [f64; 2],
+    tree: &BTreeSet<Act>,
+) -> (Option<u32>, bool) {
+    let d2 = |w: u32| {
+        let q = pts[w as usize];
+        (q[0] - c[0]).powi(2) + (q[1] - c[1]).powi(2)
+    };
+    let nearest = group
+        .iter()
+        .filter(|g| g.1 == 1)
+        .map(|g| g.2)
+        .min_by(|&x, &y| d2(x).total_cmp(&d2(y)));
+    let visible = nearest.is_some_and(|w| {
+        tree.first().is_none_or(|m| {
+            let q = pts[w as usize];
+            orient(m.a, m.b, q) * orient(m.a, m.b, c) >= 0.0
+        })
+    });
+    (nearest, visible)
+}
+
 /// The view of point `v` (module header), and the number of event groups swept.
 pub fn view_of(geom: &FlatGeometry, topo: &Topology, v: u32) -> (View, usize) {
     let pts = &geom.points;
@@ -277,21 +304,7 @@ pub fn view_of(geom: &FlatGeometry, topo: &Topology, v: u32) -> (View, usize) {
             }
         }
         // The nearest point of the group, and whether v sees it.
-        let d2 = |w: u32| {
-            let q = pts[w as usize];
-            (q[0] - c[0]).powi(2) + (q[1] - c[1]).powi(2)
-        };
-        let nearest = group
-            .iter()
-            .filter(|g| g.1 == 1)
-            .map(|g| g.2)
-            .min_by(|&x, &y| d2(x).total_cmp(&d2(y)));
-        let visible = nearest.is_some_and(|w| {
-            tree.first().is_none_or(|m| {
-                let q = pts[w as usize];
-                orient(m.a, m.b, q) * orient(m.a, m.b, c) >= 0.0
-            })
-        });
+        let (nearest, visible) = nearest_seen(group, pts, c, &tree);
         for &(_, kind, id) in group {
             if kind == 2
                 && let Some(act) = acts[id as usize]
@@ -690,21 +703,7 @@ pub fn splice_event(
                 tree.retain(|x| x.elem != id);
             }
         }
-        let d2 = |w: u32| {
-            let q = pts[w as usize];
-            (q[0] - c[0]).powi(2) + (q[1] - c[1]).powi(2)
-        };
-        let nearest = group
-            .iter()
-            .filter(|g| g.1 == 1)
-            .map(|g| g.2)
-            .min_by(|&x, &y| d2(x).total_cmp(&d2(y)));
-        let visible = nearest.is_some_and(|w| {
-            tree.first().is_none_or(|m| {
-                let q = pts[w as usize];
-                orient(m.a, m.b, q) * orient(m.a, m.b, c) >= 0.0
-            })
-        });
+        let (nearest, visible) = nearest_seen(group, pts, c, &tree);
         for &(_, kind, id) in group {
             if kind == 2
                 && let Some(act) = acts.get(&id)
