@@ -8,27 +8,10 @@ use std::f64::consts::PI;
 use rhier::flatland::complex::{Complex, sweep};
 use rhier::flatland::geometry::{FlatGeometry, Hit};
 use rhier::flatland::radiosity::form_factors;
-use rhier::flatland::scene::{PosedSegment, first_crossing, orient};
+use rhier::flatland::scene::{PosedSegment, orient};
 
 mod common;
-use common::Lcg;
-
-fn random_geometry(seed: u64, n: usize) -> FlatGeometry {
-    let mut rng = Lcg(seed);
-    let mut segs: Vec<PosedSegment> = Vec::new();
-    while segs.len() < n {
-        let a = [rng.next(), rng.next()];
-        let ang = rng.next() * std::f64::consts::TAU;
-        let len = 0.15 + 0.3 * rng.next();
-        let s = PosedSegment::new(a, [a[0] + len * ang.cos(), a[1] + len * ang.sin()], 0);
-        let mut all = segs.clone();
-        all.push(s);
-        if first_crossing(&all).is_none() {
-            segs.push(s);
-        }
-    }
-    FlatGeometry::new(segs, &vec![Vec::new(); n])
-}
+use common::{Lcg, random_flat_geometry};
 
 /// Labels (unordered segment pairs) of the free segments of a line, by brute force.
 fn brute_labels(g: &FlatGeometry, theta: f64, p: f64) -> Vec<(u32, u32)> {
@@ -62,7 +45,7 @@ fn complex_labels(g: &FlatGeometry, c: &Complex, theta: f64, p: f64) -> Vec<((u3
 #[test]
 fn sampled_lines_have_the_labels_of_their_cells() {
     for seed in 1..6u64 {
-        let g = random_geometry(seed, 6);
+        let g = random_flat_geometry(seed, 6, 1);
         let c = sweep(&g, None, true).complex.unwrap();
         let mut rng = Lcg(seed + 100);
         for _ in 0..2000 {
@@ -85,7 +68,7 @@ fn sampled_lines_have_the_labels_of_their_cells() {
 )]
 fn faces_are_the_connected_components_of_each_label() {
     for seed in 1..4u64 {
-        let g = random_geometry(seed, 5);
+        let g = random_flat_geometry(seed, 5, 1);
         let c = sweep(&g, None, true).complex.unwrap();
         let (nt, np) = (220usize, 220usize);
         let pr = 1.5;
@@ -187,7 +170,7 @@ fn faces_are_the_connected_components_of_each_label() {
 #[test]
 fn chains_give_the_face_measure_by_eq_3_and_faces_sum_to_form_factors() {
     for seed in 1..6u64 {
-        let g = random_geometry(seed, 7);
+        let g = random_flat_geometry(seed, 7, 1);
         let c = sweep(&g, None, true).complex.unwrap();
         let mut checked = 0;
         for (fi, f) in c.faces.iter().enumerate() {
@@ -221,7 +204,7 @@ fn chains_give_the_face_measure_by_eq_3_and_faces_sum_to_form_factors() {
 #[test]
 fn vertices_are_the_visibility_graph_edges() {
     for seed in 1..6u64 {
-        let g = random_geometry(seed, 8);
+        let g = random_flat_geometry(seed, 8, 1);
         let c = sweep(&g, None, true).complex.unwrap();
         c.validate(&g).unwrap();
         let got: HashSet<(u32, u32)> = c
@@ -301,7 +284,7 @@ fn complex_of_degenerate_rooms_validates() {
 fn window_sweep_over_everything_finds_the_complex_faces() {
     use rhier::flatland::window::window_sweep;
     for seed in 1..8u64 {
-        let g = random_geometry(seed, 6);
+        let g = random_flat_geometry(seed, 6, 1);
         let c = sweep(&g, None, true).complex.unwrap();
         let front = c.faces.iter().filter(|f| f.front).count();
         let w = window_sweep(&g, &[[-5.0, -5.0], [6.0, -5.0], [6.0, 6.0], [-5.0, 6.0]]);

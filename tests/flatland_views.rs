@@ -4,31 +4,13 @@
 use std::path::Path;
 
 use rhier::flatland::complex::sweep;
-use rhier::flatland::geometry::{FlatGeometry, PairMap};
+use rhier::flatland::geometry::PairMap;
 use rhier::flatland::mesh::Mesh;
-use rhier::flatland::scene::{PosedSegment, first_crossing, load};
+use rhier::flatland::scene::load;
 use rhier::flatland::views::{Topology, all_views, form_factors_mu, visibility_graph};
 
 mod common;
-use common::Lcg;
-
-fn random_geometry(seed: u64, n: usize, splits: usize) -> FlatGeometry {
-    let mut rng = Lcg(seed);
-    let mut segs: Vec<PosedSegment> = Vec::new();
-    while segs.len() < n {
-        let a = [rng.next(), rng.next()];
-        let ang = rng.next() * std::f64::consts::TAU;
-        let len = 0.15 + 0.3 * rng.next();
-        let s = PosedSegment::new(a, [a[0] + len * ang.cos(), a[1] + len * ang.sin()], 0);
-        let mut all = segs.clone();
-        all.push(s);
-        if first_crossing(&all).is_none() {
-            segs.push(s);
-        }
-    }
-    let ts: Vec<f64> = (1..splits).map(|k| k as f64 / splits as f64).collect();
-    FlatGeometry::new(segs, &vec![ts; n])
-}
+use common::random_flat_geometry;
 
 fn assert_same_mu(a: &PairMap, b: &PairMap, tol: f64, what: &str) {
     for (k, x) in a {
@@ -45,7 +27,7 @@ fn assert_same_mu(a: &PairMap, b: &PairMap, tol: f64, what: &str) {
 fn views_give_the_dual_sweep_measures_on_random_scenes() {
     for seed in 1..25u64 {
         for splits in [1usize, 3] {
-            let g = random_geometry(seed, 4 + (seed as usize % 9), splits);
+            let g = random_flat_geometry(seed, 4 + (seed as usize % 9), splits);
             let (mu, stats) = form_factors_mu(&g);
             let old = sweep(&g, None, false).mu;
             assert!(!old.is_empty());
@@ -77,7 +59,7 @@ fn views_give_the_dual_sweep_measures_in_degenerate_rooms() {
 fn visibility_graph_from_views_equals_brute_force() {
     for seed in 1..20u64 {
         // Unsplit segments: brute-force `sees` is not robust for split points.
-        let g = random_geometry(seed, 3 + (seed as usize % 8), 1);
+        let g = random_flat_geometry(seed, 3 + (seed as usize % 8), 1);
         let topo = Topology::new(&g);
         let (views, _) = all_views(&g, &topo);
         let graph = visibility_graph(&topo, &views);

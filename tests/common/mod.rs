@@ -89,3 +89,29 @@ impl Lcg {
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
+
+/// `n` random segments in the unit square (lengths 0.15–0.45), none crossing
+/// another, each split at `splits - 1` evenly spaced parameters (1: whole), from
+/// seed `seed`: the flatland tests' scenes in general position.
+pub fn random_flat_geometry(
+    seed: u64,
+    n: usize,
+    splits: usize,
+) -> rhier::flatland::geometry::FlatGeometry {
+    use rhier::flatland::scene::{PosedSegment, first_crossing};
+    let mut rng = Lcg(seed);
+    let mut segs: Vec<PosedSegment> = Vec::new();
+    while segs.len() < n {
+        let a = [rng.next(), rng.next()];
+        let ang = rng.next() * std::f64::consts::TAU;
+        let len = 0.15 + 0.3 * rng.next();
+        let s = PosedSegment::new(a, [a[0] + len * ang.cos(), a[1] + len * ang.sin()], 0);
+        let mut all = segs.clone();
+        all.push(s);
+        if first_crossing(&all).is_none() {
+            segs.push(s);
+        }
+    }
+    let ts: Vec<f64> = (1..splits).map(|k| k as f64 / splits as f64).collect();
+    rhier::flatland::geometry::FlatGeometry::new(segs, &vec![ts; n])
+}
