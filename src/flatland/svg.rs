@@ -20,11 +20,12 @@ use super::geometry::proj;
 
 const W: f64 = 600.0;
 
-/// The scene of `sol` (and, when given, the complex with some faces highlighted).
-pub fn draw(sol: &FlatSolution, complex: Option<(&Complex, &[FaceId])>) -> String {
-    let g = &sol.geom;
+/// The box of `sol`'s segments: its lower corner `[x0, y0]`, its height, and the
+/// scale that fits its longer side into the picture's width less its 20-unit
+/// margins.
+fn frame_of(sol: &FlatSolution) -> ([f64; 2], f64, f64) {
     let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
-    for s in &g.segments {
+    for s in &sol.geom.segments {
         for p in [s.a, s.b] {
             x0 = x0.min(p[0]);
             y0 = y0.min(p[1]);
@@ -33,8 +34,14 @@ pub fn draw(sol: &FlatSolution, complex: Option<(&Complex, &[FaceId])>) -> Strin
         }
     }
     let span = (x1 - x0).max(y1 - y0).max(1e-300);
-    let scale = (W - 40.0) / span;
-    let h = (y1 - y0) * scale + 40.0;
+    ([x0, y0], y1 - y0, (W - 40.0) / span)
+}
+
+/// The scene of `sol` (and, when given, the complex with some faces highlighted).
+pub fn draw(sol: &FlatSolution, complex: Option<(&Complex, &[FaceId])>) -> String {
+    let g = &sol.geom;
+    let ([x0, y0], height, scale) = frame_of(sol);
+    let h = height * scale + 40.0;
     let tx = |p: [f64; 2]| (20.0 + (p[0] - x0) * scale, h - 20.0 - (p[1] - y0) * scale);
     let total_w = if complex.is_some() { 2.0 * W + 20.0 } else { W };
     let total_h = h.max(if complex.is_some() { W } else { 0.0 });
@@ -147,18 +154,8 @@ fn draw_dual(s: &mut String, sol: &FlatSolution, cx: &Complex, hl: &[FaceId], le
 /// The same picture as [`draw`], rasterised (for `--svg FILE.png`).
 pub fn raster(sol: &FlatSolution, complex: Option<(&Complex, &[FaceId])>) -> image::RgbImage {
     let g = &sol.geom;
-    let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
-    for s in &g.segments {
-        for p in [s.a, s.b] {
-            x0 = x0.min(p[0]);
-            y0 = y0.min(p[1]);
-            x1 = x1.max(p[0]);
-            y1 = y1.max(p[1]);
-        }
-    }
-    let span = (x1 - x0).max(y1 - y0).max(1e-300);
-    let scale = (W - 40.0) / span;
-    let h = ((y1 - y0) * scale + 40.0).ceil();
+    let ([x0, y0], height, scale) = frame_of(sol);
+    let h = (height * scale + 40.0).ceil();
     let total_w = if complex.is_some() { 2.0 * W + 20.0 } else { W };
     let total_h = h.max(if complex.is_some() { W } else { 0.0 });
     let mut img =
