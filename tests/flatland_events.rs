@@ -13,51 +13,7 @@ use rhier::flatland::scene::{FlatScene, first_crossing, load, parse};
 use rhier::flatland::views::{Topology, all_views};
 
 mod common;
-use common::Lcg;
-
-/// `k` random static segments and a moving triangle (translation and rotation); None
-/// if any two segments cross anywhere along the path.
-fn random_moving_scene(seed: u64, k: usize) -> Option<FlatScene> {
-    let mut rng = Lcg(seed);
-    let mut segs = String::new();
-    for i in 0..k {
-        let a = [3.0 * rng.next(), 3.0 * rng.next()];
-        let ang = rng.next() * std::f64::consts::TAU;
-        let b = [a[0] + 0.6 * ang.cos(), a[1] + 0.6 * ang.sin()];
-        if i > 0 {
-            segs.push(',');
-        }
-        segs.push_str(&format!(
-            r#"{{"a": [{}, {}], "b": [{}, {}], "reflectance": 0.5, "emission": {}}}"#,
-            a[0],
-            a[1],
-            b[0],
-            b[1],
-            if i == 0 { 1.0 } else { 0.0 }
-        ));
-    }
-    let (x, y) = (3.0 * rng.next(), 3.0 * rng.next());
-    let (dx, dy, rot) = (
-        2.0 * rng.next() - 1.0,
-        2.0 * rng.next() - 1.0,
-        3.0 * rng.next() - 1.5,
-    );
-    let text = format!(
-        r#"{{"rhier_flatland": 1, "objects": [{{"name": "static", "segments": [{segs}]}},
-        {{"name": "tri", "segments": [
-          {{"a": [{x}, {y}], "b": [{x1}, {y}], "reflectance": 0.3}},
-          {{"a": [{x1}, {y}], "b": [{x}, {y1}], "reflectance": 0.3}},
-          {{"a": [{x}, {y1}], "b": [{x}, {y}], "reflectance": 0.3}}],
-         "motion": [{{"t": 0}}, {{"t": 1, "translation": [{dx}, {dy}], "rotation": {rot}}}]}}]}}"#,
-        x1 = x + 0.3,
-        y1 = y + 0.3
-    );
-    let scene = parse(Path::new("random"), &text).ok()?;
-    if (0..=400).any(|k| first_crossing(&scene.posed(k as f64 / 400.0)).is_some()) {
-        return None;
-    }
-    Some(scene)
-}
+use common::{Lcg, random_moving_flat_scene};
 
 /// Brute-force visibility graph (all point pairs, `sees`).
 fn brute_graph(scene: &FlatScene, t: f64) -> Vec<(u32, u32)> {
@@ -94,7 +50,7 @@ fn queue_pops_events_in_time_order() {
 fn event_times_match_brute_force_sampling_of_the_visibility_graph() {
     let (mut scenes, mut changes) = (0, 0);
     for seed in 1..60u64 {
-        let Some(scene) = random_moving_scene(seed, 5) else {
+        let Some(scene) = random_moving_flat_scene(seed, 5, -1.5) else {
             continue;
         };
         scenes += 1;
@@ -172,7 +128,7 @@ fn check_path(scene: &FlatScene, times: &[f64], mesh: Mesh) -> (usize, usize, us
 fn event_by_event_update_equals_from_scratch_on_random_paths() {
     let (mut tested, mut events, mut spliced) = (0, 0, 0);
     for seed in 100..140u64 {
-        let Some(scene) = random_moving_scene(seed, 6) else {
+        let Some(scene) = random_moving_flat_scene(seed, 6, -1.5) else {
             continue;
         };
         tested += 1;
@@ -279,7 +235,7 @@ fn every_local_splice_equals_a_full_resweep_of_the_view() {
     use rhier::flatland::views::{Splice, splice_event, view_of};
     let (mut spliced, mut unchanged) = (0, 0);
     for seed in 300..330u64 {
-        let Some(scene) = random_moving_scene(seed, 6) else {
+        let Some(scene) = random_moving_flat_scene(seed, 6, -1.5) else {
             continue;
         };
         let g0 = geometry_at(&scene, 0.0, Mesh::None);

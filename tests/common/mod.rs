@@ -115,3 +115,54 @@ pub fn random_flat_geometry(
     let ts: Vec<f64> = (1..splits).map(|k| k as f64 / splits as f64).collect();
     rhier::flatland::geometry::FlatGeometry::new(segs, &vec![ts; n])
 }
+
+/// `k` random static segments of length 0.6 in `[0, 3]²` (the first one emits) and
+/// a triangle moving over `t ∈ [0, 1]` (a translation in `[-1, 1]²`, a rotation in
+/// `[rot_min, rot_min + 3]` radians), from seed `seed`; None if two segments cross
+/// anywhere along the path (401 times sampled): the flatland motion tests' scenes.
+pub fn random_moving_flat_scene(
+    seed: u64,
+    k: usize,
+    rot_min: f64,
+) -> Option<rhier::flatland::scene::FlatScene> {
+    use rhier::flatland::scene::{first_crossing, parse};
+    let mut rng = Lcg(seed);
+    let mut segs = String::new();
+    for i in 0..k {
+        let a = [3.0 * rng.next(), 3.0 * rng.next()];
+        let ang = rng.next() * std::f64::consts::TAU;
+        let b = [a[0] + 0.6 * ang.cos(), a[1] + 0.6 * ang.sin()];
+        if i > 0 {
+            segs.push(',');
+        }
+        segs.push_str(&format!(
+            r#"{{"a": [{}, {}], "b": [{}, {}], "reflectance": 0.5, "emission": {}}}"#,
+            a[0],
+            a[1],
+            b[0],
+            b[1],
+            if i == 0 { 1.0 } else { 0.0 }
+        ));
+    }
+    let (x, y) = (3.0 * rng.next(), 3.0 * rng.next());
+    let (dx, dy, rot) = (
+        2.0 * rng.next() - 1.0,
+        2.0 * rng.next() - 1.0,
+        rot_min + 3.0 * rng.next(),
+    );
+    let text = format!(
+        r#"{{"rhier_flatland": 1, "objects": [{{"name": "static", "segments": [{segs}]}},
+        {{"name": "tri", "segments": [
+          {{"a": [{x}, {y}], "b": [{x1}, {y}], "reflectance": 0.3}},
+          {{"a": [{x1}, {y}], "b": [{x}, {y1}], "reflectance": 0.3}},
+          {{"a": [{x}, {y1}], "b": [{x}, {y}], "reflectance": 0.3}}],
+         "motion": [{{"t": 0}}, {{"t": 1, "translation": [{dx}, {dy}], "rotation": {rot}}}]}}]}}"#,
+        x1 = x + 0.3,
+        y1 = y + 0.3
+    );
+    let scene = parse(std::path::Path::new("random"), &text).ok()?;
+    if (0..=400).any(|k| first_crossing(&scene.posed(k as f64 / 400.0)).is_some()) {
+        return None;
+    }
+    Some(scene)
+}
