@@ -36,14 +36,24 @@ from spacetime_bench import run_measured, scene_path
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--rhier", required=True)
-    ap.add_argument("--scene", required=True)
-    ap.add_argument("--per-frame", required=True, help="solve arguments of per-frame")
-    ap.add_argument("--space-time", required=True, help="solve arguments of space-time")
-    ap.add_argument("--pairs", type=int, default=3)
-    ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--fps", type=float, default=25.0)
-    ap.add_argument("--out-dir", default="/tmp/spacetime_pairs")
+    ap.add_argument("--rhier", required=True, help="the rhier binary to time")
+    ap.add_argument("--scene", required=True, help="a scene of formats/examples by name (actor, light, ...) or a file")
+    ap.add_argument(
+        "--per-frame",
+        required=True,
+        help='per-frame\'s settings, e.g. "--eps 0.35 --recon-tol 0.16" '
+        "(the tool adds the scene, --per-frame --fps, -o, -q and --threads)",
+    )
+    ap.add_argument(
+        "--space-time",
+        required=True,
+        help='space-time\'s settings, e.g. "--eps 1 --recon-tol 0.10" '
+        "(the tool adds the scene, -o, -q and --threads)",
+    )
+    ap.add_argument("--pairs", type=int, default=3, help="pairs of runs, alternated")
+    ap.add_argument("--threads", type=int, default=2, help="--threads of both methods")
+    ap.add_argument("--fps", type=float, default=25.0, help="per-frame's --fps")
+    ap.add_argument("--out-dir", default="/tmp/spacetime_pairs", help="the runs' files and logs")
     a = ap.parse_args()
     if a.pairs < 1:
         sys.exit("spacetime_pairs: --pairs must be at least 1")
