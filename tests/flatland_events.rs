@@ -13,7 +13,7 @@ use rhier::flatland::scene::{FlatScene, first_crossing, load, parse};
 use rhier::flatland::views::{Topology, all_views};
 
 mod common;
-use common::{Lcg, random_moving_flat_scene};
+use common::{Lcg, random_moving_flat_scene, random_segments_json};
 
 /// Brute-force visibility graph (all point pairs, `sees`).
 fn brute_graph(scene: &FlatScene, t: f64) -> Vec<(u32, u32)> {
@@ -173,19 +173,7 @@ fn event_by_event_update_on_the_example_path_with_splits() {
 /// rotating), among random static segments.
 fn two_movers(seed: u64) -> Option<FlatScene> {
     let mut rng = Lcg(seed);
-    let mut segs = String::new();
-    for i in 0..5 {
-        let a = [3.0 * rng.next(), 3.0 * rng.next()];
-        let ang = rng.next() * std::f64::consts::TAU;
-        let b = [a[0] + 0.6 * ang.cos(), a[1] + 0.6 * ang.sin()];
-        if i > 0 {
-            segs.push(',');
-        }
-        segs.push_str(&format!(
-            r#"{{"a": [{}, {}], "b": [{}, {}], "reflectance": 0.5, "emission": 1.0}}"#,
-            a[0], a[1], b[0], b[1]
-        ));
-    }
+    let segs = random_segments_json(&mut rng, 5, |_| 1.0);
     let mut tri = |name: &str| {
         let (x, y) = (3.0 * rng.next(), 3.0 * rng.next());
         let (dx, dy, rot) = (

@@ -6,7 +6,7 @@ use rhier::flatland::radiosity::form_factors;
 use rhier::flatland::scene::PosedSegment;
 
 mod common;
-use common::Lcg;
+use common::random_segments;
 
 fn seg(a: [f64; 2], b: [f64; 2]) -> PosedSegment {
     PosedSegment::new(a, b, 0)
@@ -100,25 +100,6 @@ fn closure_and_reciprocity_in_a_closed_room() {
     }
 }
 
-/// `n` random non-crossing segments in the unit square.
-pub fn random_segments(seed: u64, n: usize) -> Vec<PosedSegment> {
-    let mut rng = Lcg(seed);
-    let mut out: Vec<PosedSegment> = Vec::new();
-    while out.len() < n {
-        let a = [rng.next(), rng.next()];
-        let ang = rng.next() * std::f64::consts::TAU;
-        let len = 0.1 + 0.3 * rng.next();
-        let b = [a[0] + len * ang.cos(), a[1] + len * ang.sin()];
-        let s = seg(a, b);
-        let mut all = out.clone();
-        all.push(s);
-        if rhier::flatland::scene::first_crossing(&all).is_none() {
-            out.push(s);
-        }
-    }
-    out
-}
-
 fn blocked(segs: &[PosedSegment], x: [f64; 2], y: [f64; 2], skip: [usize; 2]) -> bool {
     use rhier::flatland::scene::orient;
     segs.iter().enumerate().any(|(k, s)| {
@@ -155,7 +136,7 @@ fn quadrature(segs: &[PosedSegment], i: usize, j: usize, m: usize) -> f64 {
 fn string_rule_matches_quadrature_on_random_scenes() {
     let mut checked_hidden = 0;
     for seed in 1..4u64 {
-        let segs = random_segments(seed, 7);
+        let segs = random_segments(seed, 7, 0.1);
         let g = geom(segs.clone());
         let (ff, _) = form_factors(&g);
         for i in 0..segs.len() {

@@ -90,21 +90,20 @@ impl Lcg {
     }
 }
 
-/// `n` random segments in the unit square (lengths 0.15–0.45), none crossing
-/// another, each split at `splits - 1` evenly spaced parameters (1: whole), from
-/// seed `seed`: the flatland tests' scenes in general position.
-pub fn random_flat_geometry(
+/// `n` random segments in the unit square, of lengths `min_len` to `min_len + 0.3`,
+/// none crossing another, from seed `seed`.
+pub fn random_segments(
     seed: u64,
     n: usize,
-    splits: usize,
-) -> rhier::flatland::geometry::FlatGeometry {
+    min_len: f64,
+) -> Vec<rhier::flatland::scene::PosedSegment> {
     use rhier::flatland::scene::{PosedSegment, first_crossing};
     let mut rng = Lcg(seed);
     let mut segs: Vec<PosedSegment> = Vec::new();
     while segs.len() < n {
         let a = [rng.next(), rng.next()];
         let ang = rng.next() * std::f64::consts::TAU;
-        let len = 0.15 + 0.3 * rng.next();
+        let len = min_len + 0.3 * rng.next();
         let s = PosedSegment::new(a, [a[0] + len * ang.cos(), a[1] + len * ang.sin()], 0);
         let mut all = segs.clone();
         all.push(s);
@@ -112,21 +111,23 @@ pub fn random_flat_geometry(
             segs.push(s);
         }
     }
-    let ts: Vec<f64> = (1..splits).map(|k| k as f64 / splits as f64).collect();
-    rhier::flatland::geometry::FlatGeometry::new(segs, &vec![ts; n])
+    segs
 }
 
-/// `k` random static segments of length 0.6 in `[0, 3]²` (the first one emits) and
-/// a triangle moving over `t ∈ [0, 1]` (a translation in `[-1, 1]²`, a rotation in
-/// `[rot_min, rot_min + 3]` radians), from seed `seed`; None if two segments cross
-/// anywhere along the path (401 times sampled): the flatland motion tests' scenes.
-pub fn random_moving_flat_scene(
+/// [`random_segments`] of lengths 0.15–0.45, each split at `splits - 1` evenly
+/// spaced parameters (1: whole): the flatland tests' scenes in general position.
+pub fn random_flat_geometry(
     seed: u64,
-    k: usize,
-    rot_min: f64,
-) -> Option<rhier::flatland::scene::FlatScene> {
-    use rhier::flatland::scene::{first_crossing, parse};
-    let mut rng = Lcg(seed);
+    n: usize,
+    splits: usize,
+) -> rhier::flatland::geometry::FlatGeometry {
+    let ts: Vec<f64> = (1..splits).map(|k| k as f64 / splits as f64).collect();
+    rhier::flatland::geometry::FlatGeometry::new(random_segments(seed, n, 0.15), &vec![ts; n])
+}
+
+/// `k` random static segments of length 0.6 in `[0, 3]²` as the JSON of a flatland
+/// object's segment list, segment `i` emitting `emission(i)`, drawn from `rng`.
+pub fn random_segments_json(rng: &mut Lcg, k: usize, emission: impl Fn(usize) -> f64) -> String {
     let mut segs = String::new();
     for i in 0..k {
         let a = [3.0 * rng.next(), 3.0 * rng.next()];
@@ -141,9 +142,24 @@ pub fn random_moving_flat_scene(
             a[1],
             b[0],
             b[1],
-            if i == 0 { 1.0 } else { 0.0 }
+            emission(i)
         ));
     }
+    segs
+}
+
+/// `k` random static segments of length 0.6 in `[0, 3]²` (the first one emits) and
+/// a triangle moving over `t ∈ [0, 1]` (a translation in `[-1, 1]²`, a rotation in
+/// `[rot_min, rot_min + 3]` radians), from seed `seed`; None if two segments cross
+/// anywhere along the path (401 times sampled): the flatland motion tests' scenes.
+pub fn random_moving_flat_scene(
+    seed: u64,
+    k: usize,
+    rot_min: f64,
+) -> Option<rhier::flatland::scene::FlatScene> {
+    use rhier::flatland::scene::{first_crossing, parse};
+    let mut rng = Lcg(seed);
+    let segs = random_segments_json(&mut rng, k, |i| if i == 0 { 1.0 } else { 0.0 });
     let (x, y) = (3.0 * rng.next(), 3.0 * rng.next());
     let (dx, dy, rot) = (
         2.0 * rng.next() - 1.0,
