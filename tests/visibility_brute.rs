@@ -98,3 +98,91 @@ fn clear_shafts_are_never_crossed_by_rays() {
         "clear {clear} checked {checked}"
     );
 }
+
+/// Closest hit of `o + s·d`, `s ∈ (smin, 1]`, over every triangle (f64 Möller &
+/// Trumbore): `(patch, s)`.
+fn brute_closest(patches: &Patches, o: DVec3, d: DVec3, smin: f64) -> Option<(u32, f64)> {
+    let mut best: Option<(u32, f64)> = None;
+    for i in 0..patches.len() {
+        let c = patches.polys[i].corners();
+        for k in 1..c.len() - 1 {
+            let (v0, v1, v2) = (c[0], c[k], c[k + 1]);
+            let (e1, e2) = (v1 - v0, v2 - v0);
+            let p = d.cross(e2);
+            let det = e1.dot(p);
+            if det.abs() < 1e-300 {
+                continue;
+            }
+            let tv = o - v0;
+            let a = tv.dot(p) / det;
+            let q = tv.cross(e1);
+            let b = d.dot(q) / det;
+            let s = e2.dot(q) / det;
+            if a >= 0.0
+                && b >= 0.0
+                && a + b <= 1.0
+                && s > smin
+                && s <= 1.0
+                && best.is_none_or(|h| s < h.1)
+            {
+                best = Some((i as u32, s));
+            }
+        }
+    }
+    best
+}
+
+/// `SceneBvh::intersect` from points within a few 10⁻⁵ of the box's diameter of an
+/// edge, into the face across it: obvhs' traversal drops nodes the ray leaves before
+/// `t = 10⁻⁴`, and before the fix most of these rays went through the face they were
+/// heading into (the path tracer's bounces leaked out of closed rooms).
+#[test]
+fn closest_hits_near_the_rays_origin_are_found() {
+    let scene = rhier::scene::cornell_box(false);
+    let patches = Patches::at_time(&scene, 0.0);
+    let bvh = SceneBvh::build(&scene, &patches, 0.0);
+    let diam = patches.diameter;
+    let (mut near, mut wrong) = (0, 0);
+    for k in 0..2000u64 {
+        let i = (hash3(k, 7, 0) % patches.len() as u64) as usize;
+        // A point a hair from one of the patch's edges, a direction into its
+        // hemisphere.
+        let edge = u(hash3(k, 8, 0)) * 4e-5;
+        let along = u(hash3(k, 9, 0));
+        let (s, t) = match hash3(k, 10, 0) % 4 {
+            0 => (edge, along),
+            1 => (1.0 - edge, along),
+            2 => (along, edge),
+            _ => (along, 1.0 - edge),
+        };
+        let o = patches.point(i, s, t);
+        let n = patches.normals[i];
+        let r = DVec3::new(
+            u(hash3(k, 11, 0)) - 0.5,
+            u(hash3(k, 12, 0)) - 0.5,
+            u(hash3(k, 13, 0)) - 0.5,
+        );
+        let dir = (r.normalize() + n * 0.3).normalize();
+        if dir.dot(n) <= 0.05 {
+            continue;
+        }
+        let d = dir * diam * 2.0;
+        let want = brute_closest(&patches, o, d, 1e-6);
+        let got = bvh.intersect(o, d, 1e-6, 1.0);
+        if want.is_some_and(|w| w.1 < 1e-4) {
+            near += 1;
+        }
+        let agree = match (want, got) {
+            (None, None) => true,
+            (Some(w), Some(g)) => w.0 == g.patch || (w.1 - g.t).abs() < 1e-6,
+            _ => false,
+        };
+        if !agree {
+            wrong += 1;
+            eprintln!("ray {k}: brute force {want:?}, BVH {got:?}");
+        }
+    }
+    eprintln!("{near} rays hit within 1e-4 of their origin");
+    assert!(near > 100, "too few rays test the near range: {near}");
+    assert_eq!(wrong, 0);
+}
