@@ -9,7 +9,11 @@
 //! continues in a cosine-distributed direction, its throughput multiplied by the
 //! reflectance of the surface it reaches (emission found by such a bounce is not
 //! counted: next-event estimation already did), with Russian roulette after three
-//! bounces. The estimate is unbiased; its standard error is reported per point.
+//! bounces: a path goes on with probability its throughput's largest channel (then
+//! divided by it), so no path weighs more than 1 and a path lasts about
+//! `1/(1 − ρ)` bounces (a hundred at ρ = 0.99; `MAX_BOUNCES` is far beyond).
+//! The estimate is unbiased; its standard error is reported per point
+//! (`tests/reference_known.rs`: a closed box at ρ = 0.99 within 1% of `E/(1 − ρ)`).
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -139,6 +143,11 @@ pub fn radiosity_at(
         .collect()
 }
 
+/// Most bounces of a path. A path on surfaces of reflectance ρ reaches it with
+/// probability `ρ^(2^20)`: 10⁻⁴⁵⁵ at 0.999, 5·10⁻⁵ at 0.99999 (scenes allow any
+/// ρ < 1). 256 cut 8% of the paths at ρ = 0.99.
+const MAX_BOUNCES: u64 = 1 << 20;
+
 /// One path's irradiance estimate at `x` on `patch`.
 #[allow(clippy::too_many_arguments)]
 fn path_irradiance(
@@ -153,7 +162,7 @@ fn path_irradiance(
     let mut h = [0.0; 3];
     let mut thr = [1.0f64; 3];
     let (mut x, mut patch) = (x, patch);
-    for bounce in 0..256u64 {
+    for bounce in 0..MAX_BOUNCES {
         let n = patches.normals[patch];
         // Next-event estimation.
         if em.total > 0.0 {
@@ -204,7 +213,10 @@ fn path_irradiance(
             thr[c] *= rho[c];
         }
         if bounce >= 3 {
-            let q = thr.iter().copied().fold(0.0, f64::max).min(0.95);
+            // Not capped below 1: at 0.95 a path on surfaces of ρ = 0.99 gained
+            // (0.99/0.95)^k in weight, and the variance was unbounded (a closed box
+            // at ρ = 0.99 read 81.5 for 100).
+            let q = thr.iter().copied().fold(0.0, f64::max).min(1.0);
             if q <= 0.0 || uniform(hash3(key, bounce, 6)) >= q {
                 break;
             }
