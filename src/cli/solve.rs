@@ -15,6 +15,12 @@ use rhier::store::{
     LinkRecord, MemoryReport, SolutionHeader, WriteOptions, Writer, write_solution,
 };
 
+/// A static solve warns when its leaves absorb more than this fraction beyond the
+/// power the scene emits ([`Solver::power_balance`]): ACTOR's room reads 1.011 at
+/// its own reflectances (a 0.9% bias against the path tracer), 1.029 with every
+/// reflectance 0.9 (+5.5%) and 1.40 at 0.99 (+46%).
+const POWER_EXCESS_WARNING: f64 = 0.02;
+
 /// Storage backend of the pools.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum StorageKind {
@@ -430,9 +436,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         write_solution(&out, &solution, write_opts)
             .with_context(|| format!("writing {}", out.display()))?;
     }
+    let balance = solver.power_balance();
+    if balance > 1.0 + POWER_EXCESS_WARNING {
+        eprintln!(
+            "rhier: warning: the solution absorbs {:.1}% more power than the scene emits: its form factors sum above 1 somewhere (cluster estimates, quadrature), and the answer is too bright by about as much; reflectance near 1 amplifies this (a finer --eps may help; BENCHMARKS.md, \"Stiff scenes\")",
+            100.0 * (balance - 1.0)
+        );
+    }
     if !args.quiet {
         eprintln!(
-            "solved {} patches in {:.3} s: {} stored cells, {} elements, {} active / {} passive links, estimated error {}; wrote {}",
+            "solved {} patches in {:.3} s: {} stored cells, {} elements, {} active / {} passive links, estimated error {}, absorbs {} of the emitted power; wrote {}",
             solution.patches.len(),
             solution.stats.seconds,
             solution.leaves.len(),
@@ -440,6 +453,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             solution.stats.links_active,
             solution.stats.links_passive,
             report::estimate_text(solution.stats.estimated_error),
+            if balance.is_nan() {
+                "n/a".to_string()
+            } else {
+                format!("{balance:.3}")
+            },
             out.display()
         );
     }

@@ -113,6 +113,17 @@
 //! ([`Reconstruction::interpolation_error`]). With a target, eps keeps halving until
 //! the estimate reaches it.
 //!
+//! **Light the factors make.** No answer absorbs more power than the scene emits,
+//! so a leaf system that does ([`Solver::power_balance`] above 1) has factors that
+//! sum above 1 somewhere (cluster estimates, quadrature), and its answer is too
+//! bright on average by about that excess (in a closed room of one reflectance `ρ`,
+//! by exactly `ρ` times it). A level change does not see it, and reflectance
+//! amplifies it: factors 0.3% high made ACTOR's room at `ρ = 0.99` 46% too bright
+//! against the path tracer, while the change between levels read 1.9%
+//! (BENCHMARKS.md, "Stiff scenes"). A round's estimate is therefore at least the
+//! excess. A deficit proves nothing (light escapes an open scene), though in a
+//! closed scene it is the same error with the other sign.
+//!
 //! Results are deterministic for a given seed and thread count (ray jitter is hashed
 //! from link ids; parallel loops write disjoint outputs).
 //!
@@ -773,9 +784,10 @@ impl<'a> Solver<'a> {
             }
             if !samples.is_empty() {
                 let values = self.sample_values(&samples);
-                estimate = coarser
+                let change = coarser
                     .as_deref()
                     .map_or(f64::NAN, |c| relative_change(&values, c));
+                estimate = with_power_excess(change, self.power_balance());
                 self.estimate = estimate;
                 current = Some(values);
             }
@@ -1618,6 +1630,17 @@ fn pull(nodes: &[Node], geoms: &[Geom], b: &mut [[f64; 3]]) {
     }
 }
 
+/// A round's error estimate: the change between levels `change` (`NaN` in the first
+/// level), at least the power the leaf system absorbs beyond what the scene emits,
+/// `balance − 1` (module docs, "Light the factors make"; a `NaN` balance, a scene
+/// that emits nothing, adds nothing).
+fn with_power_excess(change: f64, balance: f64) -> f64 {
+    if change.is_nan() {
+        return change;
+    }
+    change.max(balance - 1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use std::sync::Arc;
@@ -2203,6 +2226,14 @@ mod tests {
         let lit = shaped_factor(x, -DVec3::Z, &g, &[1.9, 0.7, 0.7, 0.7]);
         assert!(dark < 0.5 * whole, "{dark} vs {whole}");
         assert!(lit > 1.5 * whole, "{lit} vs {whole}");
+    }
+
+    #[test]
+    fn the_estimate_is_at_least_the_power_excess() {
+        assert!((with_power_excess(0.01, 1.4) - 0.4).abs() < 1e-12);
+        assert_eq!(with_power_excess(0.05, 0.7), 0.05); // light escapes: no bound
+        assert_eq!(with_power_excess(0.05, f64::NAN), 0.05); // nothing emits
+        assert!(with_power_excess(f64::NAN, 2.0).is_nan()); // first level: none
     }
 
     #[test]

@@ -786,6 +786,47 @@ impl Solver<'_> {
         }
     }
 
+    /// The power the leaves absorb over the power the scene emits (`NaN` with no
+    /// emission or no leaf system yet), from the leaf system as last solved:
+    /// `Σ_i A_i (1 − ρ_i) H_i` over `Σ_i A_i E_i`, summed over the channels,
+    /// `H_i = Σ_j K_ij B_j` the leaf's row. At most 1 for any exact answer, 1 in a
+    /// closed scene; above 1, the factors make light (module docs, "Light the
+    /// factors make").
+    pub fn power_balance(&self) -> f64 {
+        let geoms = self.elems.geoms.as_slice();
+        let b = self.elems.radiosities.as_slice();
+        let (mut absorbed, mut emitted) = (0.0, 0.0);
+        for (li, &leaf) in self.leaves.iter().enumerate() {
+            let Some(r0) = self.row_start.get(li).map(|&r| r as usize) else {
+                return f64::NAN;
+            };
+            let Some(r1) = self.row_start.get(li + 1).map(|&r| r as usize) else {
+                return f64::NAN;
+            };
+            let g = &geoms[leaf.ix()];
+            let p = g.patch as usize;
+            let mut h = [0.0; 3];
+            for (s, c) in self.row_sources[r0..r1].iter().zip(&self.row_coefs[r0..r1]) {
+                for k in 0..3 {
+                    h[k] += c * b[*s as usize][k] as f64;
+                }
+            }
+            for ((hk, rho), e) in h
+                .iter()
+                .zip(self.patches.rhos[p])
+                .zip(self.patches.emissions[p])
+            {
+                absorbed += g.area * (1.0 - rho) * hk;
+                emitted += g.area * e;
+            }
+        }
+        if emitted > 0.0 {
+            absorbed / emitted
+        } else {
+            f64::NAN
+        }
+    }
+
     /// True if some leaf row gathers from a cluster.
     fn rows_have_clusters(&self) -> bool {
         let geoms = self.elems.geoms.as_slice();
