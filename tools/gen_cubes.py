@@ -69,6 +69,11 @@ def block(args, n):
 
 
 def main():
+    if len(sys.argv) > 1 and sys.argv[1] in ("-h", "--help"):
+        print(__doc__)
+        return
+    if len(sys.argv) < 3 or not sys.argv[1].isdigit():
+        sys.exit(__doc__)
     n, out = int(sys.argv[1]), sys.argv[2]
     lo, hi = block(sys.argv[3:], n)
     size, h = 10.0, 4.0
