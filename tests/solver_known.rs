@@ -160,8 +160,9 @@ fn a_lamp_hung_just_under_the_ceiling_loses_no_light() {
 }
 
 /// A stiff room: ACTOR's frame 0 solved as a static scene with every reflectance
-/// 0.99. Its factors sum about 0.3% above 1 (cluster estimates); reflectance
-/// amplifies that about ρ/(1 − ρ) = 99-fold, and the answer came out 46% too bright
+/// 0.99. Its rows sum a fraction of a percent above the hemisphere each leaf sees
+/// (cluster estimates, quadrature); reflectance amplifies that about ρ/(1 − ρ) =
+/// 99-fold, and the answer came out 45% too bright
 /// against the path tracer while the change between levels, the estimate until
 /// then, read 1.9%. The estimate now holds the power the leaf system absorbs beyond
 /// what the scene emits, and must be within a factor 2 of the true error of the

@@ -17,8 +17,8 @@ use rhier::store::{
 
 /// A static solve warns when its leaves absorb more than this fraction beyond the
 /// power the scene emits ([`Solver::power_balance`]): ACTOR's room reads 1.011 at
-/// its own reflectances (a 0.9% bias against the path tracer), 1.029 with every
-/// reflectance 0.9 (+5.5%) and 1.40 at 0.99 (+46%).
+/// its own reflectances (0.9% too bright against the path tracer), 1.029 with every
+/// reflectance 0.9 (4–5%) and 1.40 at 0.99 (45%; BENCHMARKS.md, "Stiff scenes").
 const POWER_EXCESS_WARNING: f64 = 0.02;
 
 /// Storage backend of the pools.

@@ -118,8 +118,9 @@
 //! sum above 1 somewhere (cluster estimates, quadrature), and its answer is too
 //! bright on average by about that excess (in a closed room of one reflectance `ρ`,
 //! by exactly `ρ` times it). A level change does not see it, and reflectance
-//! amplifies it: factors 0.3% high made ACTOR's room at `ρ = 0.99` 46% too bright
-//! against the path tracer, while the change between levels read 1.9%
+//! amplifies it: rows summing a fraction of a percent above the hemisphere each
+//! leaf sees made ACTOR's room at `ρ = 0.99` 45% too bright against the path
+//! tracer, while the change between levels read 1.9%
 //! (BENCHMARKS.md, "Stiff scenes"). A round's estimate is therefore at least the
 //! excess. A deficit proves nothing (light escapes an open scene), though in a
 //! closed scene it is the same error with the other sign.
