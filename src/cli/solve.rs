@@ -16,10 +16,11 @@ use rhier::store::{
 };
 
 /// A static solve warns when its leaves absorb more than this fraction beyond the
-/// power the scene emits ([`Solver::power_balance`]): ACTOR's room reads 1.011 at
+/// power the scene emits ([`Solver::power_balance`]), or, in a closed scene
+/// ([`Solver::is_closed`]), less than it by as much: ACTOR's room reads 1.011 at
 /// its own reflectances (0.9% too bright against the path tracer), 1.029 with every
 /// reflectance 0.9 (4–5%) and 1.40 at 0.99 (45%; BENCHMARKS.md, "Stiff scenes").
-const POWER_EXCESS_WARNING: f64 = 0.02;
+const POWER_ERROR_WARNING: f64 = 0.02;
 
 /// Storage backend of the pools.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -437,10 +438,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .with_context(|| format!("writing {}", out.display()))?;
     }
     let balance = solver.power_balance();
-    if balance > 1.0 + POWER_EXCESS_WARNING {
+    if balance > 1.0 + POWER_ERROR_WARNING {
         eprintln!(
             "rhier: warning: the solution absorbs {:.1}% more power than the scene emits: its form factors sum above 1 somewhere (cluster estimates, quadrature), and the answer is too bright by about as much; reflectance near 1 amplifies this (a finer --eps may help; BENCHMARKS.md, \"Stiff scenes\")",
             100.0 * (balance - 1.0)
+        );
+    } else if balance < 1.0 - POWER_ERROR_WARNING && solver.is_closed() == Some(true) {
+        eprintln!(
+            "rhier: warning: the scene is closed (no ray from the error samples escapes) but the solution absorbs {:.1}% less power than it emits: its form factors sum below 1 somewhere, and the answer is too dark by about as much; reflectance near 1 amplifies this (BENCHMARKS.md, \"Stiff scenes\")",
+            100.0 * (1.0 - balance)
         );
     }
     if !args.quiet {
