@@ -44,7 +44,7 @@ fn closed_enclosure_reaches_e_over_one_minus_rho() {
 #[test]
 fn the_leaf_system_conserves_energy() {
     use glam::DVec3;
-    use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
+    use rhier::scene::{Material, Object, Scene};
     let mut polys = common::closed_box(DVec3::ZERO, DVec3::new(10.0, 4.0, 10.0), 1, |f| {
         // Two coloured walls, as in a Cornell-like room.
         match f {
@@ -53,24 +53,9 @@ fn the_leaf_system_conserves_energy() {
             _ => 0,
         }
     });
-    // Face 5 is the ceiling (y = 4, facing −y): split at x, z ∈ {4, 6}, the middle
-    // quad emits.
+    // Face 5 is the ceiling: cut around the lamp.
     polys.truncate(5);
-    let cuts = [0.0, 4.0, 6.0, 10.0];
-    for i in 0..3 {
-        for j in 0..3 {
-            let (x0, x1, z0, z1) = (cuts[i], cuts[i + 1], cuts[j], cuts[j + 1]);
-            polys.push(Polygon {
-                vertices: vec![
-                    DVec3::new(x0, 4.0, z0),
-                    DVec3::new(x1, 4.0, z0),
-                    DVec3::new(x1, 4.0, z1),
-                    DVec3::new(x0, 4.0, z1),
-                ],
-                material: MaterialId(if (i, j) == (1, 1) { 3 } else { 0 }),
-            });
-        }
-    }
+    polys.extend(ceiling_with_lamp(0, 3));
     let mat = |name: &str, rho: [f64; 3], e: f64| Material {
         name: name.into(),
         rho,
@@ -99,6 +84,31 @@ fn the_leaf_system_conserves_energy() {
             );
         }
     }
+}
+
+/// The ceiling of the 10 × 4 × 10 room of [`common::closed_box`] (y = 4, facing −y)
+/// in 3 × 3 quads cut at x, z ∈ {4, 6}: the middle one, 2 × 2, of material `lamp`,
+/// the others of `rest`.
+fn ceiling_with_lamp(rest: u32, lamp: u32) -> Vec<rhier::scene::Polygon> {
+    use glam::DVec3;
+    use rhier::scene::{MaterialId, Polygon};
+    let cuts = [0.0, 4.0, 6.0, 10.0];
+    let mut out = Vec::new();
+    for i in 0..3 {
+        for j in 0..3 {
+            let (x0, x1, z0, z1) = (cuts[i], cuts[i + 1], cuts[j], cuts[j + 1]);
+            out.push(Polygon {
+                vertices: vec![
+                    DVec3::new(x0, 4.0, z0),
+                    DVec3::new(x1, 4.0, z0),
+                    DVec3::new(x1, 4.0, z1),
+                    DVec3::new(x0, 4.0, z1),
+                ],
+                material: MaterialId(if (i, j) == (1, 1) { lamp } else { rest }),
+            });
+        }
+    }
+    out
 }
 
 /// Per channel, the power the leaves of a solve at `eps` absorb,
@@ -217,24 +227,10 @@ fn the_estimate_sees_the_light_a_stiff_rooms_factors_make() {
 /// floating in it, every surface of reflectance `rho`.
 fn closed_room_with_a_box(rho: f64) -> rhier::scene::Scene {
     use glam::DVec3;
-    use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
+    use rhier::scene::{Material, Object, Scene};
     let mut room = common::closed_box(DVec3::ZERO, DVec3::new(10.0, 4.0, 10.0), 1, |_| 0);
-    room.truncate(5); // the ceiling, cut around the lamp below
-    let cuts = [0.0, 4.0, 6.0, 10.0];
-    for i in 0..3 {
-        for j in 0..3 {
-            let (x0, x1, z0, z1) = (cuts[i], cuts[i + 1], cuts[j], cuts[j + 1]);
-            room.push(Polygon {
-                vertices: vec![
-                    DVec3::new(x0, 4.0, z0),
-                    DVec3::new(x1, 4.0, z0),
-                    DVec3::new(x1, 4.0, z1),
-                    DVec3::new(x0, 4.0, z1),
-                ],
-                material: MaterialId(u32::from((i, j) == (1, 1))),
-            });
-        }
-    }
+    room.truncate(5); // face 5, the ceiling, cut around the lamp
+    room.extend(ceiling_with_lamp(0, 1));
     // Outward faces: the room's inward ones reversed.
     let mut cube = common::closed_box(
         DVec3::new(3.0, 0.5, 4.0),
