@@ -190,6 +190,36 @@ fn native_reflectance_outside_0_1_is_refused() {
 }
 
 #[test]
+fn emission_whose_radiosity_overflows_32_bit_floats_is_refused() {
+    // 1e33 / (1 - 0.5) fits under 1e36; with a reflectance of 0.9999 it would not.
+    assert!(load_native(&native("[0.5,0.5,0.5]", "[1e33,0,0]", &[TRI], None)).is_ok());
+    let err = load_native(&native("[0.5,0.9999,0.5]", "[1e33,0,0]", &[TRI], None)).unwrap_err();
+    assert_invalid(
+        err,
+        "bad.json",
+        "material \"m\"",
+        "emission / (1 - largest reflectance, 0.9999) <= 1e36",
+        "[1e33, 0, 0]",
+    );
+    let err = load_native(&native("[0.5,0.5,0.5]", "[1,1e39,1]", &[TRI], None)).unwrap_err();
+    assert_invalid(err, "bad.json", "material \"m\"", "32-bit floats", "1e39");
+}
+
+#[test]
+fn vanishing_emission_loads_with_a_warning() {
+    let s = load_native(&native("[0.5,0.5,0.5]", "[1e-42,0,0]", &[TRI], None)).unwrap();
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("largest emission") && w.contains("is below 1e-30")),
+        "{:?}",
+        s.warnings
+    );
+    let s = load_native(&native("[0.5,0.5,0.5]", "[1e-20,0,0]", &[TRI], None)).unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+}
+
+#[test]
 fn negative_emission_is_refused() {
     let err = load_native(&native("[0.5,0.5,0.5]", "[1,-2,1]", &[TRI], None)).unwrap_err();
     assert_invalid(
