@@ -236,6 +236,14 @@ fn writer_refuses_bad_chunks_and_leaves_no_file_when_dropped() {
     let mut bad = l2.clone();
     bad[0].patch = 99;
     assert!(w.write_chunk(*c0, *c1, &bad).is_err());
+    // A radiosity that overflowed (what the reader would refuse at playback).
+    let mut bad = l2.clone();
+    bad[0].b[2][0] = f32::INFINITY;
+    let err = w.write_chunk(*c0, *c1, &bad).unwrap_err().to_string();
+    assert!(
+        err.contains("leaf 0") && err.contains("a value not finite"),
+        "{err}"
+    );
     drop(w);
     assert!(!path.exists());
     assert!(!dir.path().join("bad.rhier.tmp").exists());

@@ -582,17 +582,23 @@ impl Writer {
             let patch_corners = self.patch_corners.get(l.patch as usize).copied();
             let (lt0, lt1) = (l.time[0], l.time[1]);
             let starts_here = lt0 >= t0 as f32 && lt0 <= t1 as f32 && lt1 >= lt0;
-            if patch_corners != Some(l.corners) || !starts_here {
+            // What the reader refuses (`Reader::chunk_leaves`) is never written: a
+            // solve whose radiosity overflowed fails here, not at playback.
+            let finite = l.uv.iter().flatten().all(|x| x.is_finite())
+                && l.b.iter().flatten().all(|x| x.is_finite());
+            if patch_corners != Some(l.corners) || !starts_here || !finite {
                 return Err(Error::invalid(
                     &self.path,
                     format!("chunk {index}, leaf {}", first + k),
                     format!(
-                        "a leaf of one of {} patches, with its corner count, starting in [{t0}, {t1}]",
+                        "a leaf of one of {} patches, with its corner count, finite values, starting in [{t0}, {t1}]",
                         self.patch_corners.len()
                     ),
                     format!(
-                        "patch {}, {} corners, time [{lt0}, {lt1}]",
-                        l.patch, l.corners
+                        "patch {}, {} corners, time [{lt0}, {lt1}]{}",
+                        l.patch,
+                        l.corners,
+                        if finite { "" } else { ", a value not finite" }
                     ),
                 ));
             }
