@@ -220,6 +220,53 @@ fn vanishing_emission_loads_with_a_warning() {
 }
 
 #[test]
+fn repeated_polygons_are_dropped_with_a_warning() {
+    // The same quad twice, the second from another corner (same cycle, same facing),
+    // then reversed (a thin panel's back face, kept).
+    let again = "[[1,1,0],[0,1,0],[0,0,0],[1,0,0]]";
+    let back = "[[0,0,0],[0,1,0],[1,1,0],[1,0,0]]";
+    let s = load_native(&native(
+        "[0.5,0.5,0.5]",
+        "[1,1,1]",
+        &[QUAD, again, back],
+        None,
+    ))
+    .unwrap();
+    assert_eq!(s.objects[0].polygons.len(), 2);
+    assert_eq!(
+        s.objects[0].polygons[1].vertices[1],
+        DVec3::new(0.0, 1.0, 0.0)
+    );
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("dropped 1 polygon(s) repeating")
+                && w.contains("object \"obj\" polygon 1")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+/// The solve's side: the Cornell box with its floor given twice solves as the box
+/// (the copy came out 22–73% too bright off the floor before it was dropped).
+#[test]
+fn a_repeated_floor_does_not_double_its_light() {
+    let mut twice = scene::cornell_box(false);
+    let floor = twice.objects[0].polygons[0].clone();
+    twice.objects.push(Object {
+        name: "floor again".into(),
+        polygons: vec![floor],
+        motion: None,
+    });
+    let twice = rhier::scene::validate::validate(twice, Path::new("twice.json")).unwrap();
+    assert_eq!(twice, {
+        let mut once = scene::cornell_box(false);
+        once.warnings = twice.warnings.clone();
+        once
+    });
+}
+
+#[test]
 fn negative_emission_is_refused() {
     let err = load_native(&native("[0.5,0.5,0.5]", "[1,-2,1]", &[TRI], None)).unwrap_err();
     assert_invalid(
