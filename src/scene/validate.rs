@@ -434,6 +434,12 @@ fn cyclic_key(vertices: &[DVec3]) -> Vec<[u64; 3]> {
     key
 }
 
+/// The first five of `places`, comma-separated, then `, ...` if there are more.
+fn first_places(places: &[String]) -> String {
+    let more = if places.len() > 5 { ", ..." } else { "" };
+    format!("{}{more}", places[..places.len().min(5)].join(", "))
+}
+
 fn drop_degenerate(scene: &mut Scene, path: &Path) -> Result<()> {
     let d = scene_diameter(scene);
     let min_area = ZERO_AREA_TOLERANCE * d * d;
@@ -464,29 +470,17 @@ fn drop_degenerate(scene: &mut Scene, path: &Path) -> Result<()> {
         o.polygons = kept;
     }
     if !dropped.is_empty() {
-        let shown: Vec<_> = dropped.iter().take(5).cloned().collect();
-        let more = if dropped.len() > shown.len() {
-            ", ..."
-        } else {
-            ""
-        };
         scene.warnings.push(format!(
-            "dropped {} zero-area polygon(s) (area <= {ZERO_AREA_TOLERANCE} x scene diameter^2): {}{more}",
+            "dropped {} zero-area polygon(s) (area <= {ZERO_AREA_TOLERANCE} x scene diameter^2): {}",
             dropped.len(),
-            shown.join(", ")
+            first_places(&dropped)
         ));
     }
     if !duplicates.is_empty() {
-        let shown: Vec<_> = duplicates.iter().take(5).cloned().collect();
-        let more = if duplicates.len() > shown.len() {
-            ", ..."
-        } else {
-            ""
-        };
         scene.warnings.push(format!(
-            "dropped {} polygon(s) repeating an earlier one (same vertices, same order and facing, moving together): {}{more}",
+            "dropped {} polygon(s) repeating an earlier one (same vertices, same order and facing, moving together): {}",
             duplicates.len(),
-            shown.join(", ")
+            first_places(&duplicates)
         ));
     }
     let empty: Vec<String> = scene
