@@ -37,6 +37,19 @@ pub fn point_to_point_kernel(x: DVec3, nx: DVec3, y: DVec3, ny: DVec3) -> f64 {
     cx * cy / (std::f64::consts::PI * r2 * r2)
 }
 
+/// The direction about unit normal `n` for unit-square numbers `(u1, u2)`, cosine
+/// distributed (density `cos θ / π`: the point kernel's, so the fraction of such
+/// directions that meet a surface is that surface's form factor). `rhier
+/// reference` continues its paths along these, and a solve's closure test casts
+/// them from its error samples.
+pub fn cosine_direction(n: DVec3, u1: f64, u2: f64) -> DVec3 {
+    let a = if n.x.abs() > 0.9 { DVec3::Y } else { DVec3::X };
+    let t = n.cross(a).normalize();
+    let b = n.cross(t);
+    let (r, phi) = (u1.sqrt(), std::f64::consts::TAU * u2);
+    t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()
+}
+
 /// Exact unoccluded form factor from the differential area at `x` with unit normal
 /// `n` to the one-sided polygon `src` (counter-clockwise seen from its front).
 pub fn point_to_polygon(x: DVec3, n: DVec3, src: &Poly) -> f64 {

@@ -22,7 +22,8 @@ mod visibility;
 
 pub use contact::{ContactStats, split_at_contacts};
 pub use formfactor::{
-    contour_integral as formfactor_contour, point_to_point_kernel, point_to_polygon,
+    contour_integral as formfactor_contour, cosine_direction, point_to_point_kernel,
+    point_to_polygon,
 };
 pub use nearest::{closest_point_on_polygon, nearest_facing};
 pub use patches::{PatchId, Patches};

@@ -18,7 +18,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::geometry::{Patches, SceneBvh, nearest_facing};
+use crate::geometry::{Patches, SceneBvh, cosine_direction, nearest_facing};
 use crate::oracle::hash3;
 use crate::scene::Scene;
 
@@ -65,12 +65,6 @@ fn sample_patch(patches: &Patches, i: usize, u1: f64, u2: f64) -> DVec3 {
             u2,
         )
     }
-}
-
-fn onb(n: DVec3) -> (DVec3, DVec3) {
-    let a = if n.x.abs() > 0.9 { DVec3::Y } else { DVec3::X };
-    let t = n.cross(a).normalize();
-    (t, n.cross(t))
 }
 
 /// Radiosity at each `(p, n)` by path tracing with `paths` paths per point; points
@@ -197,9 +191,7 @@ fn path_irradiance(
             uniform(hash3(key, bounce, 4)),
             uniform(hash3(key, bounce, 5)),
         );
-        let (t, b) = onb(n);
-        let (r, phi) = (u1.sqrt(), 2.0 * std::f64::consts::PI * u2);
-        let dir = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+        let dir = cosine_direction(n, u1, u2);
         let Some(hit) = bvh.intersect(x, dir * diam * 2.0, 1e-6, 1.0) else {
             break;
         };

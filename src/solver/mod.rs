@@ -169,7 +169,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::Result;
-use crate::geometry::{Patches, SceneBvh, point_to_polygon, split_at_contacts};
+use crate::geometry::{Patches, SceneBvh, cosine_direction, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
 use crate::pools::elements::{Geom, Node};
 use crate::pools::links::{Ends, Transport};
@@ -941,15 +941,11 @@ impl<'a> Solver<'a> {
         let diam = self.patches.diameter;
         samples.par_iter().enumerate().all(|(i, smp)| {
             let n = self.patches.normals[smp.patch as usize];
-            let a = if n.x.abs() > 0.9 { DVec3::Y } else { DVec3::X };
-            let t = n.cross(a).normalize();
-            let b = n.cross(t);
             (0..CLOSURE_RAYS).all(|j| {
                 let h = oracle::hash3(self.opts.seed ^ 0xc105ed, i as u64, j);
                 let u1 = (h & 0xffff_ffff) as f64 / 4294967296.0;
                 let u2 = (h >> 32) as f64 / 4294967296.0;
-                let (r, phi) = (u1.sqrt(), std::f64::consts::TAU * u2);
-                let dir = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).sqrt();
+                let dir = cosine_direction(n, u1, u2);
                 self.bvh
                     .intersect(smp.x, dir * diam * 2.0, 1e-6, 1.0)
                     .is_some_and(|hit| self.patches.normals[hit.patch as usize].dot(dir) < 0.0)
