@@ -50,6 +50,13 @@ pub struct Leaf {
 const _: () = assert!(std::mem::size_of::<Leaf>() == 96);
 
 impl Leaf {
+    /// True if every corner parameter and radiosity is finite: what the store's
+    /// writer and reader demand of a leaf.
+    pub fn values_finite(&self) -> bool {
+        self.uv.iter().flatten().all(|x| x.is_finite())
+            && self.b.iter().flatten().all(|x| x.is_finite())
+    }
+
     /// Radiosity at parameter point `(u, v)` of the patch, assumed inside this leaf.
     pub fn eval(&self, u: f64, v: f64) -> [f64; 3] {
         let w = self.weights(u, v);

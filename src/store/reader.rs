@@ -469,8 +469,7 @@ impl Reader {
         for (n, l) in v.iter().enumerate() {
             let l = Leaf::from(l);
             let corners = self.patches.get(l.patch as usize).map(|p| p.corners);
-            let finite = l.uv.iter().flatten().all(|x| x.is_finite())
-                && l.b.iter().flatten().all(|x| x.is_finite());
+            let finite = l.values_finite();
             let timely = l.time[0] >= t0 && l.time[0] <= t1 && l.time[1] >= l.time[0];
             if corners != Some(l.corners) || !finite || !timely || l.time[1] as f64 > c.reach {
                 return Err(Error::invalid(

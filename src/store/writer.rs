@@ -584,8 +584,7 @@ impl Writer {
             let starts_here = lt0 >= t0 as f32 && lt0 <= t1 as f32 && lt1 >= lt0;
             // What the reader refuses (`Reader::chunk_leaves`) is never written: a
             // solve whose radiosity overflowed fails here, not at playback.
-            let finite = l.uv.iter().flatten().all(|x| x.is_finite())
-                && l.b.iter().flatten().all(|x| x.is_finite());
+            let finite = l.values_finite();
             if patch_corners != Some(l.corners) || !starts_here || !finite {
                 return Err(Error::invalid(
                     &self.path,
