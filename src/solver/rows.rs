@@ -793,16 +793,14 @@ impl Solver<'_> {
     /// closed scene; above 1, the factors make light (module docs, "Light the
     /// factors make").
     pub fn power_balance(&self) -> f64 {
+        if self.row_start.len() != self.leaves.len() + 1 {
+            return f64::NAN;
+        }
         let geoms = self.elems.geoms.as_slice();
         let b = self.elems.radiosities.as_slice();
         let (mut absorbed, mut emitted) = (0.0, 0.0);
         for (li, &leaf) in self.leaves.iter().enumerate() {
-            let Some(r0) = self.row_start.get(li).map(|&r| r as usize) else {
-                return f64::NAN;
-            };
-            let Some(r1) = self.row_start.get(li + 1).map(|&r| r as usize) else {
-                return f64::NAN;
-            };
+            let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
             let g = &geoms[leaf.ix()];
             let p = g.patch as usize;
             let mut h = [0.0; 3];
