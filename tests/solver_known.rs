@@ -111,6 +111,15 @@ fn ceiling_with_lamp(rest: u32, lamp: u32) -> Vec<rhier::scene::Polygon> {
     out
 }
 
+/// The element ids of a solver's surface leaves (surfaces without children).
+fn surface_leaves(s: &rhier::solver::Solver) -> Vec<usize> {
+    let geoms = s.elems.geoms.as_slice();
+    let nodes = s.elems.nodes.as_slice();
+    (0..s.elems.len())
+        .filter(|&e| geoms[e].patch != u32::MAX && nodes[e].child_count == 0)
+        .collect()
+}
+
 /// Per channel, the power the leaves of a solve at `eps` absorb,
 /// `Σ A (1 − ρ) (B − E) / ρ`, over the power emitted.
 fn absorbed_over_emitted(scene: &rhier::scene::Scene, eps: f64) -> [f64; 3] {
@@ -122,15 +131,11 @@ fn absorbed_over_emitted(scene: &rhier::scene::Scene, eps: f64) -> [f64; 3] {
     let mut s = Solver::new(scene, opts).unwrap();
     s.run(|_, _| {}).unwrap();
     let geoms = s.elems.geoms.as_slice();
-    let nodes = s.elems.nodes.as_slice();
     let b = s.elems.radiosities.as_slice();
     let (mut absorbed, mut emitted) = ([0.0f64; 3], [0.0f64; 3]);
     let mut leaves = 0;
-    for e in 0..s.elems.len() {
+    for e in surface_leaves(&s) {
         let g = &geoms[e];
-        if g.patch == u32::MAX || nodes[e].child_count > 0 {
-            continue;
-        }
         leaves += 1;
         let p = g.patch as usize;
         let (rho, em) = (s.patches.rhos[p], s.patches.emissions[p]);
@@ -280,14 +285,10 @@ fn in_a_closed_room_the_estimate_sees_the_light_the_leaves_lose() {
         s.run(|_, _| {}).unwrap();
         assert_eq!(s.is_closed(), Some(true), "rho {rho}");
         let geoms = s.elems.geoms.as_slice();
-        let nodes = s.elems.nodes.as_slice();
         let b = s.elems.radiosities.as_slice();
         let (mut ab, mut ae) = (0.0, 0.0);
-        for e in 0..s.elems.len() {
+        for e in surface_leaves(&s) {
             let g = &geoms[e];
-            if g.patch == u32::MAX || nodes[e].child_count > 0 {
-                continue;
-            }
             ab += g.area * b[e][1] as f64;
             ae += g.area * s.patches.emissions[g.patch as usize][1];
         }
