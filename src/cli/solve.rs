@@ -17,10 +17,13 @@ use rhier::store::{
 
 /// A static solve warns when its leaves absorb more than this fraction beyond the
 /// power the scene emits ([`Solver::power_balance`]), or, in a closed scene
-/// ([`Solver::is_closed`]), less than it by as much: ACTOR's room reads 1.011 at
+/// ([`Solver::is_closed`]), less than it by as much. ACTOR's room reads 1.011 at
 /// its own reflectances (0.9% too bright against the path tracer), 1.029 with every
 /// reflectance 0.9 (4–5%) and 1.40 at 0.99 (45%; BENCHMARKS.md, "Stiff scenes").
-const POWER_ERROR_WARNING: f64 = 0.02;
+/// A closed scene past it is balanced ([`Solver::rows_balanced`]) and then absorbs
+/// 0.94–1.0 of the power, so the warning is left for open scenes and for what
+/// balancing leaves; it is the level that turns balancing on.
+const POWER_ERROR_WARNING: f64 = rhier::solver::BALANCE_TRIGGER;
 
 /// Storage backend of the pools.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -451,7 +454,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if !args.quiet {
         eprintln!(
-            "solved {} patches in {:.3} s: {} stored cells, {} elements, {} active / {} passive links, estimated error {}, absorbs {} of the emitted power; wrote {}",
+            "solved {} patches in {:.3} s: {} stored cells, {} elements, {} active / {} passive links, estimated error {}, absorbs {} of the emitted power{}; wrote {}",
             solution.patches.len(),
             solution.stats.seconds,
             solution.leaves.len(),
@@ -463,6 +466,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 "n/a".to_string()
             } else {
                 format!("{balance:.3}")
+            },
+            if solver.rows_balanced() {
+                " (leaf system balanced)"
+            } else {
+                ""
             },
             out.display()
         );

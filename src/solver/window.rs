@@ -227,6 +227,8 @@ impl Solver<'_> {
         self.shared_phase = false;
         self.window = None;
         let records = records?;
+        // Every frame balances its leaf system as the shared part's last round did.
+        self.balance_fixed = true;
         // The rounds' radiosity misses what the unrefined varying links carry, so the
         // constant links were refined against too little light. Solve the start time
         // with its varying links refined (in a window, released at once), take that
