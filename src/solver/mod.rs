@@ -131,11 +131,14 @@
 //! **A closed scene's leaf system balanced.** In a closed scene exact factors make
 //! every row gather a whole hemisphere and every leaf's light arrive somewhere in
 //! full. Where a solve finds its leaf system absorbing more or less than the power
-//! emitted by over 2% ([`BALANCE_TRIGGER`]), the rows are scaled and the leaves
-//! given gains as sources so that both hold (Sinkhorn's alternating scaling,
-//! `Solver::balance_rows`), and it is solved again. That took ACTOR's room at
-//! `ρ = 0.99` from 40–73% too bright to within 0–4.5% of the path tracer, and the
-//! closed room above to its exact mean. A leaf system within 2% is solved as it
+//! emitted by over 2% ([`BALANCE_TRIGGER`]), the rows are scaled to gather their
+//! hemisphere and the leaves given gains as sources so that each sends what it
+//! gathers (Sinkhorn's alternating scaling, `Solver::balance_rows`), and it is
+//! solved again. That took ACTOR's room at `ρ = 0.99` from 40–73% too bright to
+//! within 1.3–1.9% of the path tracer, and the closed room above to its exact
+//! mean. Rows that miss a fifth of their hemisphere are not scaled, and what they
+//! miss is lost: ACTOR's room at eps 0.25 absorbs 0.967 at `ρ = 0.99` and 0.74 at
+//! 0.999, and the estimate and the warning say so. A leaf system within 2% is solved as it
 //! stands: balancing ACTOR's room at its own reflectances (0.99–1.01) moved its
 //! points by ±1–2% both ways and took them no closer to the path tracer. Its
 //! first, coarse rounds are off by 2–3% and balanced, which changes what the later
@@ -2158,9 +2161,9 @@ mod tests {
     }
 
     /// A balanced leaf system ([`Solver::balance_rows`]) of a stiff closed room:
-    /// every row that takes part gathers exactly its hemisphere, and every leaf
-    /// that takes part sends its area's worth (up to the flow's common factor κ)
-    /// within what the passes' tolerance leaves; nearly all the area takes part.
+    /// every row that is scaled gathers exactly its hemisphere, every leaf sends
+    /// what it gathers (to what the passes' tolerance leaves), so the leaves absorb
+    /// the power emitted; nearly all the area is scaled.
     #[test]
     fn a_balanced_leaf_system_gathers_and_sends_whole_hemispheres() {
         let path = std::path::Path::new("tests/data/hung_lamp_room.json");
@@ -2182,50 +2185,45 @@ mod tests {
         }
         pull(nodes, geoms, &mut pulled);
         let mut mass = vec![0.0; geoms.len()];
-        let (mut area, mut rows_in, mut cols_in) = (0.0, 0.0, 0.0);
+        let mut gathers = vec![0.0; nl];
+        let (mut area, mut scaled) = (0.0, 0.0);
         let mut worst_row: f64 = 0.0;
         for li in 0..nl {
             let (r0, r1) = (s.row_start[li] as usize, s.row_start[li + 1] as usize);
             let a = geoms[s.leaves[li].ix()].area;
-            let mut lam = 0.0;
             for k in r0..r1 {
                 let src = s.row_sources[k] as usize;
-                lam += s.row_scale[li] * s.row_coefs[k] * pulled[src][0];
+                gathers[li] += s.row_scale[li] * s.row_coefs[k] * pulled[src][0];
                 mass[src] += a * s.row_scale[li] * s.row_coefs[k];
             }
             area += a;
             if s.row_scale[li] != 1.0 {
-                rows_in += a;
-                worst_row = worst_row.max((lam - 1.0).abs());
+                scaled += a;
+                worst_row = worst_row.max((gathers[li] - 1.0).abs());
             }
         }
         push_down(nodes, geoms, &mut mass);
-        let sends: Vec<f64> = (0..nl)
-            .map(|li| {
-                let l = s.leaves[li].ix();
-                s.leaf_gain[li] * mass[l] / geoms[l].area
-            })
-            .collect();
-        let taking: Vec<f64> = (0..nl)
-            .filter(|&li| s.leaf_gain[li] != 1.0)
-            .map(|li| {
-                cols_in += geoms[s.leaves[li].ix()].area;
-                sends[li]
-            })
-            .collect();
-        let kappa = taking.iter().sum::<f64>() / taking.len() as f64;
-        let worst_col = taking
-            .iter()
-            .fold(0.0f64, |w, x| w.max((x / kappa - 1.0).abs()));
+        let mut worst_col: f64 = 0.0;
+        for ((leaf, gain), gathered) in s.leaves.iter().zip(&s.leaf_gain).zip(&gathers) {
+            let l = leaf.ix();
+            let sends = gain * mass[l];
+            let target = geoms[l].area * gathered;
+            if target > 0.0 {
+                worst_col = worst_col.max((sends / target - 1.0).abs());
+            }
+        }
         eprintln!(
-            "{nl} leaves: rows in {:.4} (worst {worst_row:.2e}), columns in {:.4} (worst {worst_col:.2e}, kappa {kappa:.4})",
-            rows_in / area,
-            cols_in / area
+            "{nl} leaves: scaled {:.4} of the area (worst row {worst_row:.2e}), worst column {worst_col:.2e}, balance {:.5}",
+            scaled / area,
+            s.power_balance()
         );
         assert!(worst_row < 1e-9, "a row sums to 1 ± {worst_row}");
-        assert!(worst_col < 5e-3, "a leaf sends κ A ± {worst_col}");
-        assert!((kappa - 1.0).abs() < 0.02, "kappa {kappa}");
-        assert!(rows_in > 0.98 * area && cols_in > 0.98 * area);
+        assert!(
+            worst_col < 1e-4,
+            "a leaf sends what it gathers ± {worst_col}"
+        );
+        assert!(scaled > 0.98 * area, "scaled {scaled} of {area}");
+        assert!((s.power_balance() - 1.0).abs() < 1e-3);
     }
 
     #[test]
