@@ -5,12 +5,13 @@
 The scene is formats/examples/actor.json placed as it stands at t = 0 (the actors
 moved and turned there, no motion left), so it is a static scene. For each
 reflectance and eps it prints the solver's mean over probe points against the path
-tracer's (per channel; points inside a solid left out), the
-relative RMS error over points and channels with the
-path tracer's own share of it (its standard errors, same measure), the mean and the
-RMS of the point-by-point relative error (each point weighs the same), the solver's
-estimated error and the power the solution absorbs over the power the scene emits
-(the solve's summary line). `--rho scene` keeps the scene's own reflectances.
+tracer's (per channel; points inside a solid left out), the relative RMS error over
+points and channels with the path tracer's own share of it (its standard errors, same
+measure), the mean and the RMS of the point-by-point relative error (each point
+weighs the same), the solver's estimated error and the power the solution absorbs
+over the power the scene emits (the solve's summary line). `--rho scene` keeps the
+scene's own reflectances. References are kept in --out by a hash of the scene, the
+points and the paths, and made again only when one of those changes.
 
 Probe points: `--points` points drawn by area over the room's static polygons
 (seeded), the same for every run.

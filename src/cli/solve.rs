@@ -21,8 +21,9 @@ use rhier::store::{
 /// its own reflectances (0.9% too bright against the path tracer), 1.029 with every
 /// reflectance 0.9 (4–5%) and 1.40 at 0.99 (45%; BENCHMARKS.md, "Stiff scenes").
 /// A closed scene past it is balanced ([`Solver::rows_balanced`]) and then absorbs
-/// 0.94–1.0 of the power, so the warning is left for open scenes and for what
-/// balancing leaves; it is the level that turns balancing on.
+/// what it emits but for what the rows balancing leaves unscaled miss (0.97–1.0
+/// in ACTOR's room up to `ρ = 0.99`), so the warning is left for open scenes and
+/// for what balancing leaves; it is the level that turns balancing on.
 const POWER_ERROR_WARNING: f64 = rhier::solver::BALANCE_TRIGGER;
 
 /// Storage backend of the pools.

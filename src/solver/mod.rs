@@ -138,11 +138,11 @@
 //! within 1.3–1.9% of the path tracer, and the closed room above to its exact
 //! mean. Rows that miss a fifth of their hemisphere are not scaled, and what they
 //! miss is lost: ACTOR's room at eps 0.25 absorbs 0.967 at `ρ = 0.99` and 0.74 at
-//! 0.999, and the estimate and the warning say so. A leaf system within 2% is solved as it
-//! stands: balancing ACTOR's room at its own reflectances (0.99–1.01) moved its
-//! points by ±1–2% both ways and took them no closer to the path tracer. Its
-//! first, coarse rounds are off by 2–3% and balanced, which changes what the later
-//! rounds refine by a fraction of a percent of the answer.
+//! 0.999, and the estimate and the warning say so. A leaf system within 2% is
+//! solved as it stands: balancing ACTOR's room at its own reflectances
+//! (0.99–1.01) moved its points by ±1–2% both ways and took them no closer to the
+//! path tracer. Its first, coarse rounds are off by 2–3% and balanced, which
+//! changes what the later rounds refine by a fraction of a percent of the answer.
 //!
 //! Results are deterministic for a given seed and thread count (ray jitter is hashed
 //! from link ids; parallel loops write disjoint outputs).

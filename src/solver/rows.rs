@@ -81,8 +81,8 @@ struct FactorMemo<'m> {
 /// power emitted by this fraction (`Solver::solve_balanced`; the solver module
 /// docs): the factors' few percent then show. ACTOR's room at its own reflectances
 /// absorbs 0.99–1.01 at its last rounds (1.02–1.03 at the first, coarse ones, which
-/// are balanced); with every reflectance 0.9 1.03, at 0.99 1.4–1.7. The CLI warns
-/// at the same level.
+/// are balanced); with every reflectance 0.9 it absorbs 1.03, at 0.99 1.4–1.7.
+/// The CLI warns at the same level.
 pub const BALANCE_TRIGGER: f64 = 0.02;
 /// Most passes of [`Solver::balance_rows`] (a column pass, then a row pass).
 const BALANCE_PASSES: usize = 200;
