@@ -138,7 +138,8 @@
 //! within 1.3–1.9% of the path tracer, and the closed room above to its exact
 //! mean. Rows that miss a fifth of their hemisphere are not scaled, and what they
 //! miss is lost: ACTOR's room at eps 0.25 absorbs 0.967 at `ρ = 0.99` and 0.74 at
-//! 0.999, and the estimate and the warning say so. A leaf system within 2% is
+//! 0.999, and the estimate and the warning say so; where such rows hold over 0.5%
+//! of the area the system is not balanced at all. A leaf system within 2% is
 //! solved as it stands: balancing ACTOR's room at its own reflectances
 //! (0.99–1.01) moved its points by ±1–2% both ways and took them no closer to the
 //! path tracer. Its first, coarse rounds are off by 2–3% and balanced, which
