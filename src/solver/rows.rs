@@ -812,9 +812,11 @@ impl Solver<'_> {
 
     /// Whether the last leaf solve was balanced (`Solver::balance_rows`; the solver
     /// module docs): the scene is closed, and its factors made or lost more than
-    /// [`BALANCE_TRIGGER`] of the emitted power.
+    /// [`BALANCE_TRIGGER`] of the emitted power. Read from the scales that solve
+    /// used, so a space-time frame that keeps the decision to balance but whose
+    /// rows could not be (too many left unscaled) reads false.
     pub fn rows_balanced(&self) -> bool {
-        self.balancing
+        !self.row_scale.is_empty()
     }
 
     /// Balances the leaf system so that it conserves energy, once
