@@ -667,8 +667,12 @@ fn swept_shafts_catch_every_transient_blocker_that_time_sampling_sees() {
 fn static_masks_plus_moving_rays_equal_full_visibility() {
     // What lets a window keep the static half of every ray: for any point, source and
     // time, the visible fraction from a static mask and rays against the moving
-    // objects only is exactly the fraction from full rays.
-    use rhier::oracle::{static_clear_mask, visible_fraction, visible_fraction_masked};
+    // objects only is exactly the fraction from full rays; so is the one-pass
+    // `masked_rays`, and `visible_fraction_moving` from a kept static visibility.
+    use rhier::oracle::{
+        masked_rays, static_clear_mask, visible_fraction, visible_fraction_masked,
+        visible_fraction_moving,
+    };
     use rhier::pools::elements::Geom;
     let scene = sliding_block(-200.0, 1.0);
     let patches = Patches::at_time(&scene, 0.0);
@@ -691,7 +695,7 @@ fn static_masks_plus_moving_rays_equal_full_visibility() {
             n: p.corners().len() as u32,
         }
     };
-    let (mut compared, mut partial) = (0, 0);
+    let (mut compared, mut partial, mut blocked) = (0, 0, 0);
     for (k, t) in [0.0, 0.3, 0.7, 1.0].into_iter().enumerate() {
         bvh.place(&scene, t);
         for &a in &stat {
@@ -710,14 +714,26 @@ fn static_masks_plus_moving_rays_equal_full_visibility() {
                 let split =
                     visible_fraction_masked(Some(&bvh), x, na, &gb, &pb, nb, 32, key, skip, mask);
                 assert_eq!(full.to_bits(), split.to_bits(), "t {t}, patches {a} → {b}");
+                // The same in one pass, and from a kept static visibility.
+                let rays = masked_rays(&bvh, x, na, &gb, &pb, nb, 32, key, skip, None, true);
+                assert_eq!(rays.mask, mask, "t {t}, patches {a} → {b}");
+                assert_eq!(rays.vis_now.to_bits(), full.to_bits());
+                let alone = visible_fraction_masked(None, x, na, &gb, &pb, nb, 32, key, skip, mask);
+                assert_eq!(rays.vis_static.to_bits(), alone.to_bits());
+                let known = masked_rays(&bvh, x, na, &gb, &pb, nb, 32, key, skip, Some(mask), true);
+                assert_eq!(known, rays);
+                let kept =
+                    visible_fraction_moving(&bvh, x, na, &gb, &pb, nb, 32, key, skip, mask, alone);
+                assert_eq!(kept.to_bits(), full.to_bits());
+                blocked += (rays.blocked != 0) as u32;
                 compared += 1;
                 partial += (full > 0.0 && full < 1.0) as u32;
             }
         }
     }
     assert!(
-        compared > 500 && partial > 20,
-        "{compared} pairs, {partial} partly visible"
+        compared > 500 && partial > 20 && blocked > 20,
+        "{compared} pairs, {partial} partly visible, {blocked} with rays the block stops"
     );
 }
 

@@ -756,6 +756,106 @@ pub fn visible_fraction_masked(
     })
 }
 
+/// The rays of [`visible_fraction`] split by what blocks them, in one pass over
+/// the rays (their targets and kernel weights computed once): [`MaskedRays`].
+/// `mask`: the rays nothing static blocks, if known (else cast against the static
+/// part, as [`static_clear_mask`] does); `moving`: cast the rays `mask` leaves
+/// clear against the moving objects too. `m <= 64`.
+#[allow(clippy::too_many_arguments)]
+pub fn masked_rays(
+    bvh: &SceneBvh,
+    x: DVec3,
+    n: DVec3,
+    gs: &Geom,
+    pols: &Poly,
+    ns: DVec3,
+    m: u32,
+    key: u64,
+    skip: [u32; 2],
+    mask: Option<u64>,
+    moving: bool,
+) -> MaskedRays {
+    let m = m.min(64);
+    let (mut wsum, mut vs, mut vn, mut ps, mut pn) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    let (mut clear, mut blocked) = (0u64, 0u64);
+    for (j, y) in ray_targets(gs, pols, m, key) {
+        let bit = 1u64 << j;
+        let open = match mask {
+            Some(mask) => mask & bit != 0,
+            None => !bvh.occluded_by(x, y, skip, Parts::Static),
+        };
+        let k = point_to_point_kernel(x, n, y, ns);
+        wsum += k;
+        if !open {
+            continue;
+        }
+        clear |= bit;
+        // The same sums, in the same order, as `weighted_fraction`'s.
+        vs += k;
+        ps += 1.0;
+        if moving && bvh.occluded_by(x, y, skip, Parts::Moving) {
+            blocked |= bit;
+        } else {
+            vn += k;
+            pn += 1.0;
+        }
+    }
+    let frac = |v: f64, p: f64| if wsum > 0.0 { v / wsum } else { p / m as f64 };
+    MaskedRays {
+        mask: clear,
+        vis_static: frac(vs, ps),
+        vis_now: frac(vn, pn),
+        blocked,
+    }
+}
+
+/// What [`masked_rays`] found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MaskedRays {
+    /// Rays nothing static blocks ([`static_clear_mask`]).
+    pub mask: u64,
+    /// Kernel-weighted fraction of the rays `mask` leaves clear
+    /// ([`visible_fraction_masked`] with no moving object).
+    pub vis_static: f64,
+    /// The same with the moving objects where they are: [`visible_fraction`]
+    /// (`vis_static` unless the moving objects were asked).
+    pub vis_now: f64,
+    /// Rays of `mask` a moving object blocks.
+    pub blocked: u64,
+}
+
+/// [`visible_fraction_masked`] against the moving objects, for a term whose static
+/// visibility `vis_static` ([`MaskedRays::vis_static`], as kept) is known: the rays
+/// of `mask` are cast at the moving objects first, and only if one is blocked are
+/// the kernel weights computed. With no ray blocked the answer is `vis_static`.
+#[allow(clippy::too_many_arguments)]
+pub fn visible_fraction_moving(
+    bvh: &SceneBvh,
+    x: DVec3,
+    n: DVec3,
+    gs: &Geom,
+    pols: &Poly,
+    ns: DVec3,
+    m: u32,
+    key: u64,
+    skip: [u32; 2],
+    mask: u64,
+    vis_static: f64,
+) -> f64 {
+    let m = m.min(64);
+    let mut blocked = 0u64;
+    for (j, y) in ray_targets(gs, pols, m, key) {
+        if mask & (1 << j) != 0 && bvh.occluded_by(x, y, skip, Parts::Moving) {
+            blocked |= 1 << j;
+        }
+    }
+    if blocked == 0 {
+        return vis_static;
+    }
+    let open = mask & !blocked;
+    weighted_fraction(x, n, gs, pols, ns, m, key, |j, _| open & (1 << j) != 0)
+}
+
 /// The `m` jittered stratified target points on `gs` for the rays of sample `key`.
 fn ray_targets(gs: &Geom, pols: &Poly, m: u32, key: u64) -> impl Iterator<Item = (u32, DVec3)> {
     let side = (m as f64).sqrt().ceil() as u32;

@@ -255,23 +255,25 @@ impl Solver<'_> {
         let key = key & u64::from(u32::MAX);
         match swept {
             Some(sw) if m <= 64 && !point_shaft_clear(x, n, gs, sw) => {
-                let mask = oracle::static_clear_mask(&self.bvh, x, gs, &ps, m, key, skip);
-                if mask == 0 {
+                // The static mask, its visibility and, where a moving object is now
+                // between the point and the source, the visibility now: one pass.
+                let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                let rays =
+                    oracle::masked_rays(&self.bvh, x, n, gs, &ps, ns, m, key, skip, None, near);
+                if rays.mask == 0 {
                     // Hidden by static geometry whatever moves.
                     return;
                 }
-                let masked = |bvh| {
-                    oracle::visible_fraction_masked(bvh, x, n, gs, &ps, ns, m, key, skip, mask)
-                };
-                let vis_static = masked(None) as f32;
-                let near = !point_shaft_clear(x, n, gs, &self.moving_now);
-                let v = if near {
-                    masked(Some(&self.bvh))
-                } else {
+                let vis_static = rays.vis_static as f32;
+                // No ray blocked by a moving object: the kept visibility, as a
+                // kept term takes it (`oracle::visible_fraction_moving`).
+                let v = if rays.blocked == 0 {
                     f64::from(vis_static)
+                } else {
+                    rays.vis_now
                 };
                 let t = MaskedTerm {
-                    mask,
+                    mask: rays.mask,
                     key: key as u32,
                     elem: s as u32,
                     f: f as f32,
@@ -364,8 +366,8 @@ impl Solver<'_> {
                     // Rays are only cast where a moving object is now.
                     let near = !point_shaft_clear(x, n, gs, &self.moving_now);
                     let v = if near {
-                        oracle::visible_fraction_masked(
-                            Some(&self.bvh),
+                        oracle::visible_fraction_moving(
+                            &self.bvh,
                             x,
                             n,
                             gs,
@@ -375,6 +377,7 @@ impl Solver<'_> {
                             u64::from(t.key),
                             [p as u32, gs.patch],
                             t.mask,
+                            f64::from(t.vis_static),
                         )
                     } else {
                         f64::from(t.vis_static)

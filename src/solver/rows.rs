@@ -200,19 +200,18 @@ impl Solver<'_> {
         let vis_at = |x: DVec3, i: u64| {
             let skip = [g.patch, gs.patch];
             let (key, mask) = match masks {
-                RowMasks::Make if i < 4 => {
-                    let key = self.row_ray_key(ids, i);
-                    let mask = oracle::static_clear_mask(&self.bvh, x, gs, &ps, m, key, skip);
-                    made.set(made.get() | mask << (i as u32 * m));
-                    (key, mask)
-                }
+                RowMasks::Make if i < 4 => (self.row_ray_key(ids, i), None),
                 RowMasks::Known(bits) if i < 4 => (
                     self.row_ray_key(ids, i),
-                    bits >> (i as u32 * m) & ((1 << m) - 1),
+                    Some(bits >> (i as u32 * m) & ((1 << m) - 1)),
                 ),
                 _ => return self.row_point_visibility(ids, g, gs, &ps, ns, x, n, i),
             };
-            oracle::visible_fraction_masked(Some(&self.bvh), x, n, gs, &ps, ns, m, key, skip, mask)
+            let rays = oracle::masked_rays(&self.bvh, x, n, gs, &ps, ns, m, key, skip, mask, true);
+            if mask.is_none() {
+                made.set(made.get() | rays.mask << (i as u32 * m));
+            }
+            rays.vis_now
         };
         let integrate = |pts: &mut dyn Iterator<Item = (DVec3, f64, u64)>| {
             let (mut f, mut unoccluded) = (0.0, 0.0);
