@@ -715,6 +715,8 @@ pub fn visible_fraction(
 
 /// The rays of [`visible_fraction`] that nothing static blocks, as a bit mask (ray
 /// `j` → bit `j`; `m <= 64`).
+/// The solver makes its masks with the one-pass [`masked_rays`]; this and
+/// [`visible_fraction_masked`] are the plain definitions its test holds it to.
 #[allow(clippy::too_many_arguments)]
 pub fn static_clear_mask(
     bvh: &SceneBvh,
