@@ -220,7 +220,8 @@ fn changes(
     counts
 }
 
-/// One row of the table; `truth`: milliseconds each pair-window is blocked.
+/// One row of the table; `truth`: for each pair-window, the milliseconds its
+/// visibility differs from what it is at the window's start (0: constant).
 fn row(name: &str, flags: &[bool], truth: &[f64], secs: f64) {
     let flagged = flags.iter().filter(|&&f| f).count();
     let missed: Vec<f64> = flags
@@ -347,7 +348,7 @@ fn main() {
                 truth_all.len()
             );
             println!(
-                "| method | flagged | truth missed (holes) | longest missed blocking (ms) | flagged, visibility constant | µs per pair-window |"
+                "| method | flagged | truth missed (holes) | longest missed change (ms) | flagged, visibility constant | µs per pair-window |"
             );
             println!("|---|---|---|---|---|---|");
             for (name, flags, secs) in &sums {
