@@ -41,6 +41,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use rhier::geometry::{Parts, Patches, SceneBvh};
+use rhier::oracle::point_at;
 use rhier::scene::Scene;
 use rhier::scene::builtin;
 use rhier::shafts::Shaft;
@@ -65,20 +66,7 @@ struct Cell {
 impl Cell {
     /// Point at `(u, v)` of the cell (bilinear over a quad, affine over a triangle).
     fn point(&self, u: f64, v: f64) -> DVec3 {
-        let c = &self.corners;
-        if c.len() == 3 {
-            let (u, v) = if u + v > 1.0 {
-                (1.0 - u, 1.0 - v)
-            } else {
-                (u, v)
-            };
-            c[0] + u * (c[1] - c[0]) + v * (c[2] - c[0])
-        } else {
-            (1.0 - u) * (1.0 - v) * c[0]
-                + u * (1.0 - v) * c[1]
-                + u * v * c[2]
-                + (1.0 - u) * v * c[3]
-        }
+        point_at(&self.corners, self.corners.len() == 3, u, v)
     }
 }
 
@@ -126,6 +114,13 @@ struct Pair {
     shaft: Shaft,
     skip: [u32; 2],
     rays: Vec<(DVec3, DVec3)>,
+}
+
+impl Pair {
+    /// True if the pair's shaft may meet one of `boxes`.
+    fn meets(&self, boxes: &[(DVec3, DVec3)]) -> bool {
+        boxes.iter().any(|&(lo, hi)| !self.shaft.misses_box(lo, hi))
+    }
 }
 
 /// The pairs of `cells`, and the seconds spent building their shafts.
@@ -180,7 +175,7 @@ fn box_flags(scene: &Scene, bvh: &mut SceneBvh, pairs: &[Pair], ts: &[f64]) -> V
         bvh.place(scene, t);
         let boxes = bvh.moving_boxes();
         for (f, p) in flags.iter_mut().zip(pairs) {
-            *f = *f || boxes.iter().any(|&(lo, hi)| !p.shaft.misses_box(lo, hi));
+            *f = *f || p.meets(&boxes);
         }
     }
     flags
@@ -288,10 +283,7 @@ fn main() {
                 let mut results: Vec<(String, Vec<bool>, f64)> = Vec::new();
                 let t = Instant::now();
                 let swept = swept_boxes(&scene, t0, t1);
-                let flags: Vec<bool> = pairs
-                    .iter()
-                    .map(|p| swept.iter().any(|&(lo, hi)| !p.shaft.misses_box(lo, hi)))
-                    .collect();
+                let flags: Vec<bool> = pairs.iter().map(|p| p.meets(&swept)).collect();
                 results.push(("swept box (rhier)".into(), flags, t.elapsed().as_secs_f64()));
                 // The same, the window cut in 4: tighter boxes, 4 tests.
                 let t = Instant::now();
@@ -301,10 +293,7 @@ fn main() {
                         swept_boxes(&scene, at(q as f64), at(q as f64 + 1.0))
                     })
                     .collect();
-                let flags: Vec<bool> = pairs
-                    .iter()
-                    .map(|p| quarters.iter().any(|&(lo, hi)| !p.shaft.misses_box(lo, hi)))
-                    .collect();
+                let flags: Vec<bool> = pairs.iter().map(|p| p.meets(&quarters)).collect();
                 results.push((
                     "swept box, 4 sub-windows".into(),
                     flags,

@@ -904,8 +904,14 @@ fn weighted_fraction(
 /// Point of a surface element at unit-square coordinates `(s, t)` (folded into the
 /// triangle for triangles).
 pub fn point_in(g: &Geom, p: &Poly, s: f64, t: f64) -> DVec3 {
-    let c = p.corners();
-    if g.n == 3 {
+    point_at(p.corners(), g.n == 3, s, t)
+}
+
+/// Point at unit-square coordinates `(s, t)` of the polygon with corners `c`:
+/// bilinear over a quad, or, for a `triangle`, affine with `(s, t)` folded into it.
+#[inline]
+pub fn point_at(c: &[DVec3], triangle: bool, s: f64, t: f64) -> DVec3 {
+    if triangle {
         let (s, t) = if s + t > 1.0 {
             (1.0 - s, 1.0 - t)
         } else {
