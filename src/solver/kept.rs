@@ -170,6 +170,19 @@ fn as_slices(sources: &[SourceTerms]) -> Vec<SourceSlices<'_>> {
     sources.iter().map(|s| (s.0, &s.1[..], &s.2[..])).collect()
 }
 
+/// One point's records as the arenas will hold them, made off the cache by
+/// [`PointCache::prepare`] and written by [`PointCache::commit`].
+pub struct Prepared {
+    pk: PointKey,
+    /// The point's slot when prepared (`None`: a new point).
+    slot: Option<u32>,
+    /// Where that slot's records lay then (index, fixed and masked starts).
+    from: [u32; 3],
+    index: Vec<TermIndex>,
+    fixed: Vec<FixedTerm>,
+    masked: Vec<MaskedTerm>,
+}
+
 /// The kept final-gather terms of a window (module docs).
 pub struct PointCache {
     slots: HashMap<PointKey, u32>,
@@ -238,61 +251,114 @@ impl PointCache {
 
     /// Adds the terms gathered afresh at point `pk` (sources it keeps already are
     /// left as they are). A point whose terms would not fit the 16-bit offsets is
-    /// not kept.
+    /// not kept. [`PointCache::prepare`] then [`PointCache::commit`] (which the
+    /// reconstruction calls apart).
+    #[cfg(test)]
     pub fn add(&mut self, pk: PointKey, links: Vec<(u32, Terms)>) {
+        if let Some(p) = self.prepare(pk, links) {
+            self.commit(p);
+        }
+    }
+
+    /// Lays out point `pk`'s kept sources and the new ones among `links` (the
+    /// first of each key; those it keeps already are left as they are) as the
+    /// arenas hold them, in key order: `None` if nothing is new or nothing new may
+    /// be kept. Reads the cache only, so the parallel gathers of a batch make
+    /// their points' records themselves and the thread between batches only
+    /// copies them in ([`PointCache::commit`]; on ACTOR this was a quarter of
+    /// the serial time between batches).
+    pub fn prepare(&self, pk: PointKey, links: Vec<(u32, Terms)>) -> Option<Prepared> {
         let slot = self.slots.get(&pk).copied();
         if !self.healthy || (slot.is_none() && !self.admits()) {
-            return;
+            return None;
         }
-        // The point's sources, old and new: each one's key and the ranges of its
-        // terms in two flat buffers, not two vectors a source (a point has up to
-        // a few hundred sources, and this runs on one thread between the batches
-        // of parallel gathers).
-        let (mut fixed, mut masked) = (Vec::new(), Vec::new());
-        let mut sources: Vec<(u32, Range<usize>, Range<usize>)> = Vec::new();
-        if let Some(view) = slot.and_then(|_| self.get(&pk)) {
-            // The buffers start with the point's own terms, so its ranges hold.
-            fixed.extend_from_slice(view.fixed);
-            masked.extend_from_slice(view.masked);
-            for (i, e) in view.index.iter().enumerate() {
-                let (f, m) = view.ranges(i);
-                sources.push((e.key, f, m));
-            }
-        }
-        let known = sources.len();
-        for (key, terms) in links {
-            if sources[..known].binary_search_by_key(&key, |s| s.0).is_ok()
-                || sources[known..].iter().any(|s| s.0 == key)
-            {
-                continue;
-            }
-            let (f0, m0) = (fixed.len(), masked.len());
-            fixed.extend(
-                terms
-                    .fixed
-                    .iter()
-                    .map(|&(elem, f)| FixedTerm { elem, f: f as f32 }),
-            );
-            masked.extend(terms.masked.iter().map(|(m, _)| *m));
-            sources.push((key, f0..fixed.len(), m0..masked.len()));
-        }
-        if sources.len() == known {
-            return;
-        }
-        sources.sort_by_key(|s| s.0);
-        let slices: Vec<SourceSlices> = sources
-            .iter()
-            .map(|(key, f, m)| (*key, &fixed[f.clone()], &masked[m.clone()]))
+        let from = slot.map_or([u32::MAX; 3], |s| self.starts(s));
+        let old = slot.and_then(|_| self.get(&pk));
+        let old_index = old.map_or(&[][..], |v| v.index);
+        let mut new: Vec<(u32, Terms)> = links
+            .into_iter()
+            .filter(|(key, _)| old_index.binary_search_by_key(key, |e| e.key).is_err())
             .collect();
-        self.append(pk, slot, &slices);
+        // Stable, so the first of each key comes first and stays.
+        new.sort_by_key(|s| s.0);
+        new.dedup_by_key(|s| s.0);
+        if new.is_empty() {
+            return None;
+        }
+        let n = old_index.len() + new.len();
+        let mut p = Prepared {
+            pk,
+            slot,
+            from,
+            index: Vec::with_capacity(n),
+            fixed: Vec::new(),
+            masked: Vec::new(),
+        };
+        // Merges the two key-ordered lists (their keys are disjoint).
+        let (mut i, mut j) = (0, 0);
+        while i < old_index.len() || j < new.len() {
+            let take_old = j == new.len() || (i < old_index.len() && old_index[i].key < new[j].0);
+            let key = if take_old { old_index[i].key } else { new[j].0 };
+            p.index.push(TermIndex {
+                key,
+                fixed: p.fixed.len() as u16,
+                masked: p.masked.len() as u16,
+            });
+            if take_old {
+                let v = old.expect("old keys come from a kept point");
+                let (f, m) = v.ranges(i);
+                p.fixed.extend_from_slice(&v.fixed[f]);
+                p.masked.extend_from_slice(&v.masked[m]);
+                i += 1;
+            } else {
+                let t = &new[j].1;
+                p.fixed.extend(
+                    t.fixed
+                        .iter()
+                        .map(|&(elem, f)| FixedTerm { elem, f: f as f32 }),
+                );
+                p.masked.extend(t.masked.iter().map(|(m, _)| *m));
+                j += 1;
+            }
+        }
+        Some(p)
+    }
+
+    /// Writes what [`PointCache::prepare`] made, if the point's records are still
+    /// the ones it was made from and it may still be kept (a batch's points are
+    /// distinct and the cache changes between batches only, so they are; if not,
+    /// nothing is written and the terms are gathered again when next needed).
+    pub fn commit(&mut self, p: Prepared) {
+        let slot = self.slots.get(&p.pk).copied();
+        let same = slot == p.slot && slot.is_none_or(|s| self.starts(s) == p.from);
+        if !same || !self.healthy || (slot.is_none() && !self.admits()) {
+            return;
+        }
+        self.append_flat(p.pk, slot, &p.index, &[&p.fixed], &[&p.masked]);
     }
 
     /// Writes point `pk`'s `sources` (sorted by key) at the arenas' ends, in place
     /// of slot `slot`'s records if it has one. A point whose terms would not fit
     /// the 16-bit offsets is not kept.
     fn append(&mut self, pk: PointKey, slot: Option<u32>, sources: &[SourceSlices]) {
-        let n_fixed: usize = sources.iter().map(|s| s.1.len()).sum();
-        let n_masked: usize = sources.iter().map(|s| s.2.len()).sum();
+        let index = Self::index_of(sources);
+        let fixed: Vec<&[FixedTerm]> = sources.iter().map(|s| s.1).collect();
+        let masked: Vec<&[MaskedTerm]> = sources.iter().map(|s| s.2).collect();
+        self.append_flat(pk, slot, &index, &fixed, &masked);
+    }
+
+    /// [`PointCache::append`] with the index records made: the fixed and masked
+    /// terms are the concatenations of `fixed` and `masked`.
+    fn append_flat(
+        &mut self,
+        pk: PointKey,
+        slot: Option<u32>,
+        index: &[TermIndex],
+        fixed: &[&[FixedTerm]],
+        masked: &[&[MaskedTerm]],
+    ) {
+        let n_fixed: usize = fixed.iter().map(|s| s.len()).sum();
+        let n_masked: usize = masked.iter().map(|s| s.len()).sum();
         if n_fixed > usize::from(u16::MAX) || n_masked > usize::from(u16::MAX) {
             if let Some(s) = slot {
                 self.forget(s);
@@ -300,7 +366,6 @@ impl PointCache {
             }
             return;
         }
-        let index = Self::index_of(sources);
         let span = PointSpan {
             index: self.index.len() as u32,
             n_index: index.len() as u32,
@@ -310,10 +375,12 @@ impl PointCache {
             n_masked: n_masked as u32,
             stamp: self.seq,
         };
-        let appended = self.index.extend_from_slice(&index).and_then(|()| {
-            for s in sources {
-                self.fixed.extend_from_slice(s.1)?;
-                self.masked.extend_from_slice(s.2)?;
+        let appended = self.index.extend_from_slice(index).and_then(|()| {
+            for s in fixed {
+                self.fixed.extend_from_slice(s)?;
+            }
+            for s in masked {
+                self.masked.extend_from_slice(s)?;
             }
             Ok(())
         });
@@ -357,6 +424,12 @@ impl PointCache {
                 e
             })
             .collect()
+    }
+
+    /// Where slot `s`'s records start in the three arenas.
+    fn starts(&self, s: u32) -> [u32; 3] {
+        let sp = self.spans[s as usize];
+        [sp.index, sp.fixed, sp.masked]
     }
 
     /// Counts slot `s`'s records as dead.
@@ -792,6 +865,46 @@ mod tests {
             assert_eq!(c.dead, [2, 3, 1]);
             let f = c.get(&pk).and_then(|v| v.get(9)).map(|(f, _)| f[1].f);
             assert_eq!(f, Some(0.25));
+        }
+    }
+
+    #[test]
+    fn a_key_twice_in_one_gather_keeps_its_first_terms() {
+        for (mut c, _dir) in caches() {
+            let pk = (0, 1, 2);
+            c.add(
+                pk,
+                vec![
+                    (7, terms(&[(1, 0.5)], &[2])),
+                    (3, terms(&[(4, 1.0)], &[])),
+                    (7, terms(&[(99, 1.0)], &[98])),
+                ],
+            );
+            check(&c, pk, 3, &[4], &[]);
+            check(&c, pk, 7, &[1], &[2]);
+            assert_eq!((c.index.len(), c.fixed.len(), c.masked.len()), (2, 2, 1));
+        }
+    }
+
+    #[test]
+    fn records_prepared_for_a_slot_since_rewritten_are_not_written() {
+        for (mut c, _dir) in caches() {
+            let pk = (2, 0, 0);
+            c.add(pk, vec![(2, terms(&[(1, 0.5)], &[]))]);
+            // Prepared from the point as it was, then the point is rewritten.
+            let stale = c.prepare(pk, vec![(4, terms(&[(5, 0.5)], &[]))]);
+            let fresh = c.prepare(pk, vec![(6, terms(&[(7, 0.5)], &[]))]);
+            assert!(stale.is_some() && fresh.is_some());
+            c.commit(fresh.expect("prepared"));
+            let before = (c.index.len(), c.fixed.len(), c.masked.len());
+            c.commit(stale.expect("prepared"));
+            // Same slot, but the span it was made from is dead: nothing written
+            // would be wrong, and nothing is lost but work.
+            assert_eq!((c.index.len(), c.fixed.len(), c.masked.len()), before);
+            check(&c, pk, 2, &[1], &[]);
+            check(&c, pk, 6, &[7], &[]);
+            // Nothing new: nothing to write.
+            assert!(c.prepare(pk, vec![(6, terms(&[(9, 1.0)], &[]))]).is_none());
         }
     }
 

@@ -16,8 +16,6 @@ use std::collections::HashMap;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::gather::FreshTerms;
-
 use super::{
     Between, CORNER_INSET, ElementId, KeyValues, Leaf, Patches, PointKey, Solution, SolveStats,
     Solver, hierarchy,
@@ -157,14 +155,13 @@ impl VertexCache {
     }
 
     /// Gathers up to `batch` of the points registered and not gathered yet; returns
-    /// the terms to keep (see [`Solver::gather_point`]).
-    #[allow(clippy::type_complexity)]
-    fn evaluate(
+    /// what `gather` made of the terms to keep (see [`Solver::gather_point`]).
+    fn evaluate<T: Send>(
         &mut self,
         batch: usize,
-        gather: impl Fn(ElementId, DVec3, PointKey) -> ([f64; 3], bool, FreshTerms) + Sync,
+        gather: impl Fn(ElementId, DVec3, PointKey) -> ([f64; 3], bool, Option<T>) + Sync,
         patches: &Patches,
-    ) -> Vec<(PointKey, FreshTerms)> {
+    ) -> Vec<T> {
         let from = self.values.len();
         let to = self.points.len().min(from + batch);
         let new: Vec<_> = self.points[from..to]
@@ -175,16 +172,14 @@ impl VertexCache {
                 // Evaluate a hair inside the cell: on an edge shared with a
                 // perpendicular wall the factor jumps (the wall is seen edge-on), and
                 // the interpolant wants the limit from inside.
-                let (b, valid, fresh) = gather(leaf, x + CORNER_INSET * (c - x), pk);
-                ((b, valid), (pk, fresh))
+                let (b, valid, keep) = gather(leaf, x + CORNER_INSET * (c - x), pk);
+                ((b, valid), keep)
             })
             .collect();
         let mut keep = Vec::new();
-        for (v, (pk, fresh)) in new {
+        for (v, k) in new {
             self.values.push(v);
-            if !fresh.is_empty() {
-                keep.push((pk, fresh));
-            }
+            keep.extend(k);
         }
         keep
     }
@@ -336,15 +331,21 @@ impl Solver<'_> {
                         };
                         if let Some((b, valid)) = between.and_then(|bw| bw.value(&pk, outside)) {
                             interpolated.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                            return (b, valid, Vec::new());
+                            return (b, valid, None);
                         }
-                        self.gather_point(leaf, x, view, pk, admit, &limits)
+                        let (b, valid, fresh) =
+                            self.gather_point(leaf, x, view, pk, admit, &limits);
+                        // The records to keep are laid out here, in parallel.
+                        let keep = view
+                            .filter(|_| !fresh.is_empty())
+                            .and_then(|v| v.prepare(pk, fresh));
+                        (b, valid, keep)
                     },
                     &self.patches,
                 );
                 if let Some(m) = known.as_mut() {
-                    for (pk, links) in fresh {
-                        m.add(pk, links);
+                    for p in fresh {
+                        m.commit(p);
                     }
                     // Out of core: the batch's pages go back to the scratch file.
                     m.release_resident();
