@@ -231,22 +231,35 @@ def frame_times(start, end, fps):
 
 def run_measured(cmd, log):
     """Runs cmd (a list), returns (wall seconds, peak RSS in MiB)."""
+    seconds, rss_mb, _ = run_timed(cmd, log)
+    return seconds, rss_mb
+
+
+def run_timed(cmd, log):
+    """Runs cmd (a list), returns (wall seconds, peak RSS in MiB, CPU seconds).
+
+    The CPU seconds (user + system, from /usr/bin/time; None without it) over the
+    wall seconds is how many cores the run kept busy."""
     rss_file = log + ".rss"
     timer = shutil.which("time") or ("/usr/bin/time" if os.path.exists("/usr/bin/time") else None)
-    full = [timer, "-f", "%M", "-o", rss_file] + cmd if timer else cmd
+    full = [timer, "-f", "%M %U %S", "-o", rss_file] + cmd if timer else cmd
     t0 = time.monotonic()
     with open(log, "w") as f:
         proc = subprocess.run(full, stdout=f, stderr=subprocess.STDOUT)
     seconds = time.monotonic() - t0
     if proc.returncode != 0:
         sys.exit(f"spacetime_bench: command failed ({proc.returncode}): {shlex.join(cmd)}; see {log}")
+    cpu = None
     if timer:
         with open(rss_file) as f:
-            rss_mb = int(f.read().split()[-1]) / 1024.0
+            # The last line: a notice of the child's exit status may come first.
+            kb, user, system = f.read().strip().splitlines()[-1].split()
+        rss_mb = int(kb) / 1024.0
+        cpu = float(user) + float(system)
     else:
         # Largest child so far (Linux: kilobytes).
         rss_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
-    return seconds, rss_mb
+    return seconds, rss_mb, cpu
 
 
 def probe_all(rhier, rhier_file, points_file, times):

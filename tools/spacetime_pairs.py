@@ -20,8 +20,10 @@ formats/examples/NAME.json) or a scene path. The per-frame command is
     rhier solve SCENE --per-frame --fps FPS PER_FRAME_ARGS -o OUT -q --threads T
 and the space-time command
     rhier solve SCENE SPACE_TIME_ARGS -o OUT -q --threads T
-Each run's wall time and peak RSS come from /usr/bin/time. The script prints one
-line per run and, at the end, the ratios per pair and their range.
+Each run's wall time, peak RSS and CPU time (user + system) come from
+/usr/bin/time. The script prints one line per run (with the cores it kept busy)
+and, at the end, the ratios per pair and their range, and the CPU-time ratio: the
+speed-up both methods would show if they used the cores alike.
 """
 
 import argparse
@@ -31,7 +33,7 @@ import shutil
 import sys
 import time
 
-from spacetime_bench import run_measured, scene_path
+from spacetime_bench import run_timed, scene_path
 
 
 def main():
@@ -57,7 +59,7 @@ def main():
     a = ap.parse_args()
     if a.pairs < 1:
         sys.exit("spacetime_pairs: --pairs must be at least 1")
-    # Without it run_measured falls back to the largest child so far, not each run's.
+    # Without it run_timed falls back to the largest child so far, not each run's.
     if not (shutil.which("time") or os.path.exists("/usr/bin/time")):
         sys.exit("spacetime_pairs: needs /usr/bin/time for each run's peak RSS")
     os.makedirs(a.out_dir, exist_ok=True)
@@ -73,14 +75,23 @@ def main():
     print(f"space-time: {shlex.join(st_cmd)}")
     print(f"started {time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime())}")
     ratios = []
+
+    def line(i, name, r):
+        busy = f"  {r[2]:7.2f} s CPU ({100 * r[2] / r[0]:.0f}%)" if r[2] is not None else ""
+        print(f"pair {i + 1}: {name:<10} {r[0]:7.2f} s  {r[1]:6.1f} MiB{busy}", flush=True)
+
     for i in range(a.pairs):
-        pf = run_measured(pf_cmd, os.path.join(a.out_dir, f"pf{i}.log"))
-        print(f"pair {i + 1}: per-frame  {pf[0]:7.2f} s  {pf[1]:6.1f} MiB", flush=True)
-        st = run_measured(st_cmd, os.path.join(a.out_dir, f"st{i}.log"))
-        print(f"pair {i + 1}: space-time {st[0]:7.2f} s  {st[1]:6.1f} MiB", flush=True)
-        ratios.append((pf[0] / st[0], st[1] / pf[1]))
+        pf = run_timed(pf_cmd, os.path.join(a.out_dir, f"pf{i}.log"))
+        line(i, "per-frame", pf)
+        st = run_timed(st_cmd, os.path.join(a.out_dir, f"st{i}.log"))
+        line(i, "space-time", st)
+        cpu = pf[2] / st[2] if pf[2] and st[2] else None
+        ratios.append((pf[0] / st[0], st[1] / pf[1], cpu))
     print(f"ended {time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime())}")
     print("speed-up per pair: " + " / ".join(f"{r[0]:.2f}x" for r in ratios))
+    if all(r[2] is not None for r in ratios):
+        # The work ratio: what the speed-up would be if both used the cores alike.
+        print("CPU-time ratio per pair: " + " / ".join(f"{r[2]:.2f}x" for r in ratios))
     print("peak RSS, space-time / per-frame: " + " / ".join(f"{r[1]:.2f}x" for r in ratios))
     lo, hi = min(r[0] for r in ratios), max(r[0] for r in ratios)
     print(f"speed-up range {lo:.2f}-{hi:.2f}x over {a.pairs} pairs")
