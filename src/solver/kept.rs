@@ -898,8 +898,8 @@ mod tests {
             c.commit(fresh.expect("prepared"));
             let before = (c.index.len(), c.fixed.len(), c.masked.len());
             c.commit(stale.expect("prepared"));
-            // Same slot, but the span it was made from is dead: nothing written
-            // would be wrong, and nothing is lost but work.
+            // Same slot, but the span it was made from is dead: writing it would
+            // drop source 6, so nothing is written (only work is lost).
             assert_eq!((c.index.len(), c.fixed.len(), c.masked.len()), before);
             check(&c, pk, 2, &[1], &[]);
             check(&c, pk, 6, &[7], &[]);
