@@ -1012,3 +1012,135 @@ fn frames_closer_in_motion_than_interp_motion_take_the_line() {
     assert!(g20 * 100 < g10 * 105, "{g20} against {g10}");
     assert!(t20 * 100 > t10 * 110, "{t20} against {t10}");
 }
+
+/// The empty Cornell box with a trough that slides 150 mm along z over `[0, 1]` s:
+/// two walls facing each other (x = 200 and 320) across a floor plate at y = 100.
+/// `split`: the left wall is an object of its own, on the trough's track with a key
+/// added halfway: the same motion, told apart only by its data, so the solver
+/// cannot know that the walls move as one.
+fn trough(split: bool) -> Scene {
+    use rhier::scene::{MaterialId, Object, Polygon};
+    let mut scene = cornell_box(false);
+    scene.time.start = 0.0;
+    scene.time.end = 1.0;
+    let quad = |v: [[f64; 3]; 4]| Polygon {
+        vertices: v.iter().map(|&p| DVec3::from_array(p)).collect(),
+        material: MaterialId(3),
+    };
+    let at = |t: f64| MotionKey {
+        t,
+        translation: DVec3::new(0.0, 0.0, 150.0 * t),
+        rotation: DQuat::IDENTITY,
+        scale: DVec3::ONE,
+    };
+    let left = quad([
+        [200., 100., 150.],
+        [200., 260., 150.],
+        [200., 260., 270.],
+        [200., 100., 270.],
+    ]);
+    let rest = vec![
+        quad([
+            [320., 100., 150.],
+            [320., 100., 270.],
+            [320., 260., 270.],
+            [320., 260., 150.],
+        ]),
+        quad([
+            [200., 100., 150.],
+            [200., 100., 270.],
+            [320., 100., 270.],
+            [320., 100., 150.],
+        ]),
+    ];
+    let track = |keys: &[f64]| {
+        Some(MotionTrack {
+            keys: keys.iter().map(|&t| at(t)).collect(),
+        })
+    };
+    if split {
+        scene.objects.push(Object {
+            name: "trough_left".into(),
+            polygons: vec![left],
+            motion: track(&[0.0, 0.5, 1.0]),
+        });
+        scene.objects.push(Object {
+            name: "trough".into(),
+            polygons: rest,
+            motion: track(&[0.0, 1.0]),
+        });
+    } else {
+        scene.objects.push(Object {
+            name: "trough".into(),
+            polygons: [vec![left], rest].concat(),
+            motion: track(&[0.0, 1.0]),
+        });
+    }
+    scene
+}
+
+/// Points on the trough's inner faces at time `t` (it slides 150 mm a second).
+fn trough_points(t: f64) -> Vec<ProbePoint> {
+    let dz = 150.0 * t;
+    let mut pts = Vec::new();
+    for a in [0.25, 0.5, 0.75] {
+        for b in [0.25, 0.5, 0.75] {
+            let (y, z) = (100.0 + 160.0 * a, 150.0 + 120.0 * b + dz);
+            pts.push(ProbePoint {
+                p: DVec3::new(200.0, y, z),
+                n: DVec3::X,
+            });
+            pts.push(ProbePoint {
+                p: DVec3::new(320.0, y, z),
+                n: -DVec3::X,
+            });
+            pts.push(ProbePoint {
+                p: DVec3::new(200.0 + 120.0 * a, 100.0, z),
+                n: DVec3::Y,
+            });
+        }
+    }
+    pts
+}
+
+#[test]
+fn surfaces_that_move_as_one_are_linked_once_and_give_the_frames_of_links_evaluated_at_each() {
+    // Paper 001 §5.2: the links between surfaces that share a motion keep their
+    // kernel (and here their visibility: nothing comes between the walls), so they
+    // are constant and evaluated once, not at every frame. The frames must be those
+    // of a solve that evaluates them at every frame (the same walls on tracks the
+    // solver cannot tell are one) and of the static solve of each frame.
+    let st = st(5.0, 0.5);
+    let (one, f_one) = run_frames(&trough(false), opts(), &st);
+    let (split, f_split) = run_frames(&trough(true), opts(), &st);
+    let varying = |f: &[spacetime::FrameRecord]| f.iter().map(|r| r.varying_links).sum::<u64>();
+    let (v_one, v_split) = (varying(&f_one), varying(&f_split));
+    eprintln!("varying links over the frames: {v_one} as one object, {v_split} split");
+    assert!(v_one < v_split);
+    for t in [0.0, 0.6, 1.0] {
+        let pts = trough_points(t);
+        let fixed = |scene: &Scene| {
+            let mut s = Solver::at_time(scene, opts(), t, [0.0, 1.0]).unwrap();
+            s.freeze_motion();
+            s.run(|_, _| {}).unwrap();
+            s.solution()
+        };
+        let (scene_one, scene_split) = (trough(false), trough(true));
+        let base_one = fixed(&scene_one);
+        let base_split = fixed(&scene_split);
+        let b_one = probe(&as_solution(&scene_one, &base_one, &one), &pts, t).unwrap();
+        let b_split = probe(&as_solution(&scene_split, &base_split, &split), &pts, t).unwrap();
+        let b_static = probe(&base_one, &pts, t).unwrap();
+        let (apart, from_static) = (
+            relative_rms(&b_one, &b_split),
+            relative_rms(&b_one, &b_static),
+        );
+        eprintln!(
+            "t = {t}: as one object {:.3}% from split, {:.3}% from the static solve ({:.3}% split)",
+            apart * 100.0,
+            from_static * 100.0,
+            relative_rms(&b_split, &b_static) * 100.0
+        );
+        assert!(apart < 0.005 && from_static < 0.015, "t = {t}");
+    }
+}

@@ -1205,12 +1205,18 @@ impl<'a> Solver<'a> {
     /// item 1, so no time sampling decides it). A link with a cluster end carries the
     /// visibility of rays between the ends' surfaces, all inside the box of both ends:
     /// it varies when a swept box meets that box. Always false in a static solve.
+    ///
+    /// Two surfaces that move as one (§5.2's "same motion": one object, or objects
+    /// with one track) keep their kernel, and their visibility too while nothing
+    /// with another motion can come between them: such a link is constant
+    /// ([`Solver::moves_as_one_and_clear`]).
     fn varying(&self, r: ElementId, s: ElementId) -> bool {
         let Some(w) = &self.window else {
             return false;
         };
-        if self.elem_moving(r) || self.elem_moving(s) {
-            return true;
+        let (mr, ms) = (self.elem_moving(r), self.elem_moving(s));
+        if mr || ms {
+            return !(mr && ms && self.moves_as_one_and_clear(r, s, w));
         }
         let geoms = self.elems.geoms.as_slice();
         let (gr, gs) = (&geoms[r.ix()], &geoms[s.ix()]);
@@ -1226,6 +1232,96 @@ impl<'a> Solver<'a> {
             DVec3::from_array(gs.normal),
         );
         w.swept.iter().any(|&(lo, hi)| !shaft.misses_box(lo, hi))
+    }
+
+    /// True if surface elements `r` and `s` move as one over the span of window `w`
+    /// and nothing with another motion can come between them then (Damez & Sillion
+    /// §5.2: a link whose ends share a motion has a kernel constant in time; it
+    /// varies only if an object with another motion crosses its shaft).
+    ///
+    /// "As one": the patches belong to one object, or to objects with equal tracks,
+    /// whose scale never changes (translation and rotation keep the distances and
+    /// angles between the two surfaces, so the form factor; a changing scale might
+    /// not). Clear: the box the two elements' corners sweep over the span meets no
+    /// box swept by an object with another track, and the box of no static
+    /// triangle. The sweep places the corners at the times
+    /// [`spacetime::swept_boxes`] samples (the keys among them); between two of them
+    /// the track translates linearly and turns at a steady rate about one axis, so
+    /// a corner at distance `r` from the object's origin strays from the chord of
+    /// its path by at most the sagitta `r (1 - cos(φ/2))` of the angle `φ` turned,
+    /// and the box is padded by that.
+    fn moves_as_one_and_clear(&self, r: ElementId, s: ElementId, w: &window::Window) -> bool {
+        let geoms = self.elems.geoms.as_slice();
+        let (gr, gs) = (&geoms[r.ix()], &geoms[s.ix()]);
+        if gr.patch == u32::MAX || gs.patch == u32::MAX {
+            return false;
+        }
+        let objects = &self.scene.objects;
+        let object = |g: &Geom| &objects[self.patches.objects[g.patch as usize] as usize];
+        let (a, b) = (object(gr), object(gs));
+        let Some(track) = a.motion.as_ref() else {
+            return false;
+        };
+        if !std::ptr::eq(a, b) && a.motion != b.motion {
+            return false;
+        }
+        if track.keys.windows(2).any(|k| k[0].scale != k[1].scale) {
+            return false;
+        }
+        // The corners in object space: the placement at the current time undone.
+        let undo = track.at(self.now).inverse();
+        let corners: Vec<DVec3> = [gr, gs]
+            .iter()
+            .flat_map(|g| g.corners[..g.n as usize].iter())
+            .map(|&c| undo.transform_point3(DVec3::from_array(c)))
+            .collect();
+        let scale = track.keys.first().map_or(DVec3::ONE, |k| k.scale);
+        let radius = corners
+            .iter()
+            .map(|&c| (scale * c).length())
+            .fold(0.0, f64::max);
+        let [t0, t1] = w.span;
+        let mut times: Vec<f64> = (0..=16).map(|i| t0 + (t1 - t0) * i as f64 / 16.0).collect();
+        times.extend(track.keys.iter().map(|k| k.t).filter(|&t| t > t0 && t < t1));
+        times.sort_by(f64::total_cmp);
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        let mut stray: f64 = 0.0;
+        let mut before: Option<glam::DQuat> = None;
+        for &t in &times {
+            let key = track.key_at(t);
+            let m = key.to_affine();
+            for &c in &corners {
+                let p = m.transform_point3(c);
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+            if let Some(q) = before {
+                let turned = q.angle_between(key.rotation);
+                stray = stray.max(radius * (1.0 - (0.5 * turned).cos()));
+            }
+            before = Some(key.rotation);
+        }
+        // Round-off in placing and undoing: a hair of the scene's size.
+        let pad = DVec3::splat(stray + 1e-9 * self.patches.diameter);
+        let (lo, hi) = (lo - pad, hi + pad);
+        // Other tracks: the boxes their objects sweep (one per moving object, in
+        // scene order, as `swept_boxes` makes them; anything else is not trusted).
+        let movers: Vec<&crate::scene::Object> = objects.iter().filter(|o| o.is_moving()).collect();
+        if movers.len() != w.swept.len() {
+            return false;
+        }
+        let boxes_meet = |(l, h): (DVec3, DVec3)| l.cmple(hi).all() && lo.cmple(h).all();
+        if movers
+            .iter()
+            .zip(&w.swept)
+            .any(|(o, &bx)| o.motion != a.motion && boxes_meet(bx))
+        {
+            return false;
+        }
+        // Static geometry: stopped at the first static triangle whose box meets it.
+        self.bvh.for_each_triangle_in_box(lo, hi, |patch, _| {
+            self.moving_patch.get(patch as usize) == Some(&true)
+        })
     }
 
     /// True if the scene has moving patches.
@@ -1763,11 +1859,9 @@ mod tests {
         };
         let (t0, t1) = (scene.time.start, scene.time.end);
         let mut s = Solver::at_time(scene, opts, t0, [t0 as f32, t1 as f32]).unwrap();
-        s.run_shared(spacetime::swept_boxes(scene, t0, t1), |_, _| {})
-            .unwrap();
+        s.run_shared([t0, t1], |_, _| {}).unwrap();
         let b_ref = s.radiosity_scale();
-        s.begin_window(spacetime::swept_boxes(scene, t0, end), b_ref)
-            .unwrap();
+        s.begin_window([t0, end], b_ref).unwrap();
         (s, b_ref)
     }
 

@@ -47,8 +47,12 @@ impl Snapshot {
 /// What a time window needs beyond the static solver (see [`spacetime`]).
 #[derive(Default)]
 pub(super) struct Window {
-    /// Boxes swept by the moving objects over the window.
+    /// Boxes swept by the moving objects over the window, one per moving object in
+    /// scene order ([`super::spacetime::swept_boxes`]).
     pub(super) swept: Vec<(DVec3, DVec3)>,
+    /// The time range `swept` covers (the window's, or the whole animation's in the
+    /// shared part).
+    pub(super) span: [f64; 2],
     /// The shared part, as the window found it (restored when it is released).
     pub(super) base: Snapshot,
     /// The window's own base: the shared part plus the refinement of the links
@@ -167,15 +171,17 @@ impl Solver<'_> {
     /// `eps · b_ref`, once for all the window's frames.
     ///
     /// The final-gather terms the last window handed on ([`Solver::release_window`])
-    /// are the window's to start with, those that hold against `swept`
-    /// (`Solver::revalidated`).
-    pub fn begin_window(&mut self, swept: Vec<(DVec3, DVec3)>, b_ref: f64) -> Result<()> {
+    /// are the window's to start with, those that hold against the boxes the moving
+    /// objects sweep over `span` (`Solver::revalidated`).
+    pub fn begin_window(&mut self, span: [f64; 2], b_ref: f64) -> Result<()> {
+        let swept = super::spacetime::swept_boxes(self.scene, span[0], span[1]);
         let points = match self.carried.take() {
             Some(c) => self.revalidated(&c, &swept)?,
             None => PointCache::new(&self.opts.storage, self.kept_budget)?,
         };
         self.window = Some(Window {
             swept,
+            span,
             base: Snapshot::of(&self.elems, &self.links),
             points: std::sync::Mutex::new(Some(points)),
             ..Window::default()
@@ -210,16 +216,19 @@ impl Solver<'_> {
     }
 
     /// Solves the part of a space-time solve that all windows share: the usual
-    /// rounds at the current time, with links classified against the boxes `swept`
-    /// over the whole animation and only constant links refined (a varying link stays
-    /// as coarse as it was created; each window refines it for its own frames).
+    /// rounds at the current time, with links classified against the boxes the
+    /// moving objects sweep over `span` (the whole animation) and only constant
+    /// links refined (a varying link stays as coarse as it was created; each window
+    /// refines it for its own frames).
     pub fn run_shared(
         &mut self,
-        swept: Vec<(DVec3, DVec3)>,
+        span: [f64; 2],
         on_round: impl FnMut(&mut RoundRecord, &Solver),
     ) -> Result<Vec<RoundRecord>> {
+        let swept = super::spacetime::swept_boxes(self.scene, span[0], span[1]);
         self.window = Some(Window {
             swept: swept.clone(),
+            span,
             ..Window::default()
         });
         self.shared_phase = true;
@@ -236,7 +245,7 @@ impl Solver<'_> {
         let t = self.now;
         for _ in 0..SHARED_PASSES {
             let b_ref = self.b_ref();
-            self.begin_window(swept.clone(), b_ref)?;
+            self.begin_window(span, b_ref)?;
             self.frame(t, b_ref)?;
             let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
             let b = self.elems.radiosities.as_slice()[..shared].to_vec();
@@ -247,6 +256,7 @@ impl Solver<'_> {
             let b_ref = self.b_ref();
             self.window = Some(Window {
                 swept: swept.clone(),
+                span,
                 ..Window::default()
             });
             self.shared_phase = true;
