@@ -1245,7 +1245,7 @@ impl<'a> Solver<'a> {
     /// not). Clear: the box the two elements' corners sweep over the span meets no
     /// box swept by an object with another track, and the box of no static
     /// triangle. The sweep places the corners at the times
-    /// [`spacetime::swept_boxes`] samples (the keys among them); between two of them
+    /// [`spacetime::swept_boxes`] samples ([`spacetime::sweep_times`]); between two of them
     /// the track translates linearly and turns at a steady rate about one axis, so
     /// a corner at distance `r` from the object's origin strays from the chord of
     /// its path by at most the sagitta `r (1 - cos(φ/2))` of the angle `φ` turned,
@@ -1280,10 +1280,7 @@ impl<'a> Solver<'a> {
             .iter()
             .map(|&c| (scale * c).length())
             .fold(0.0, f64::max);
-        let [t0, t1] = w.span;
-        let mut times: Vec<f64> = (0..=16).map(|i| t0 + (t1 - t0) * i as f64 / 16.0).collect();
-        times.extend(track.keys.iter().map(|k| k.t).filter(|&t| t > t0 && t < t1));
-        times.sort_by(f64::total_cmp);
+        let times = spacetime::sweep_times(Some(track), w.span[0], w.span[1]);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         let mut stray: f64 = 0.0;
         let mut before: Option<glam::DQuat> = None;

@@ -581,6 +581,18 @@ pub fn time_layout(times: &[f64], motion: &[f64], st: &SpaceTimeOptions) -> Vec<
         .collect()
 }
 
+/// The times a sweep over `[t0, t1]` places an object on `track` at, in order: 17
+/// evenly spaced and the track's keys inside the range (so that between two of them
+/// the track translates linearly and turns at a steady rate about one axis).
+pub(super) fn sweep_times(track: Option<&crate::scene::MotionTrack>, t0: f64, t1: f64) -> Vec<f64> {
+    let mut times: Vec<f64> = (0..=16).map(|i| t0 + (t1 - t0) * i as f64 / 16.0).collect();
+    if let Some(m) = track {
+        times.extend(m.keys.iter().map(|k| k.t).filter(|&t| t > t0 && t < t1));
+    }
+    times.sort_by(f64::total_cmp);
+    times
+}
+
 /// Boxes swept over `[t0, t1]` by each moving object of `scene`: the union of its
 /// box at 17 evenly spaced times and at the track's keys inside the range, widened by
 /// the largest distance a vertex travels between two consecutive samples (so the
@@ -588,11 +600,7 @@ pub fn time_layout(times: &[f64], motion: &[f64], st: &SpaceTimeOptions) -> Vec<
 pub fn swept_boxes(scene: &Scene, t0: f64, t1: f64) -> Vec<(DVec3, DVec3)> {
     let mut out = Vec::new();
     for obj in scene.objects.iter().filter(|o| o.is_moving()) {
-        let mut times: Vec<f64> = (0..=16).map(|i| t0 + (t1 - t0) * i as f64 / 16.0).collect();
-        if let Some(m) = &obj.motion {
-            times.extend(m.keys.iter().map(|k| k.t).filter(|&t| t > t0 && t < t1));
-        }
-        times.sort_by(f64::total_cmp);
+        let times = sweep_times(obj.motion.as_ref(), t0, t1);
         let verts: Vec<DVec3> = obj
             .polygons
             .iter()
@@ -1178,47 +1186,64 @@ mod tests {
     /// s: a floor plate at y = 100 and two walls facing each other across it (x =
     /// 200 and 320), one object. With `blade`, a static blade hangs from the
     /// ceiling down to y = 160 at x = 260, z 330–350: the trough's walls pass on
-    /// either side of it from t ≈ 0.5, and it comes between them.
-    fn trough(blade: bool) -> Scene {
+    /// either side of it from t ≈ 0.5, and it comes between them. With `split`, the
+    /// left wall is an object of its own on the trough's track with a key added
+    /// halfway: the same motion, told apart only by its data, so the solver cannot
+    /// know that the walls move as one.
+    fn trough(blade: bool, split: bool) -> Scene {
         let mut scene = cornell_box(false);
         scene.time.start = 0.0;
         scene.time.end = 1.0;
-        let white = MaterialId(3);
         let quad = |v: [[f64; 3]; 4]| Polygon {
             vertices: v.iter().map(|&p| DVec3::from_array(p)).collect(),
-            material: white,
+            material: MaterialId(3),
         };
-        let at = |t: f64, dz: f64| MotionKey {
-            t,
-            translation: DVec3::new(0.0, 0.0, dz),
-            rotation: glam::DQuat::IDENTITY,
-            scale: DVec3::ONE,
+        let track = |keys: &[f64]| {
+            Some(MotionTrack {
+                keys: keys
+                    .iter()
+                    .map(|&t| MotionKey {
+                        t,
+                        translation: DVec3::new(0.0, 0.0, 150.0 * t),
+                        rotation: glam::DQuat::IDENTITY,
+                        scale: DVec3::ONE,
+                    })
+                    .collect(),
+            })
         };
+        let left = quad([
+            [200., 100., 150.],
+            [200., 260., 150.],
+            [200., 260., 270.],
+            [200., 100., 270.],
+        ]);
+        let mut rest = vec![
+            quad([
+                [320., 100., 150.],
+                [320., 100., 270.],
+                [320., 260., 270.],
+                [320., 260., 150.],
+            ]),
+            quad([
+                [200., 100., 150.],
+                [200., 100., 270.],
+                [320., 100., 270.],
+                [320., 100., 150.],
+            ]),
+        ];
+        if split {
+            scene.objects.push(Object {
+                name: "trough_left".into(),
+                polygons: vec![left],
+                motion: track(&[0.0, 0.5, 1.0]),
+            });
+        } else {
+            rest.insert(0, left);
+        }
         scene.objects.push(Object {
             name: "trough".into(),
-            polygons: vec![
-                quad([
-                    [200., 100., 150.],
-                    [200., 260., 150.],
-                    [200., 260., 270.],
-                    [200., 100., 270.],
-                ]),
-                quad([
-                    [320., 100., 150.],
-                    [320., 100., 270.],
-                    [320., 260., 270.],
-                    [320., 260., 150.],
-                ]),
-                quad([
-                    [200., 100., 150.],
-                    [200., 100., 270.],
-                    [320., 100., 270.],
-                    [320., 100., 150.],
-                ]),
-            ],
-            motion: Some(MotionTrack {
-                keys: vec![at(0.0, 0.0), at(1.0, 150.0)],
-            }),
+            polygons: rest,
+            motion: track(&[0.0, 1.0]),
         });
         if blade {
             scene.objects.push(Object {
@@ -1266,7 +1291,7 @@ mod tests {
     fn surfaces_that_move_as_one_keep_their_links_constant_until_something_comes_between() {
         // Paper 001 §5.2: a link whose ends share a motion has a constant kernel,
         // and a constant visibility while nothing with another motion crosses it.
-        let (inside, across) = trough_links(&trough(false), [0.0, 1.0]);
+        let (inside, across) = trough_links(&trough(false, false), [0.0, 1.0]);
         assert!(
             inside.len() >= 4,
             "{} links inside the trough",
@@ -1275,10 +1300,108 @@ mod tests {
         assert!(inside.iter().all(|&v| !v), "{inside:?}");
         assert!(!across.is_empty() && across.iter().all(|&v| v));
         // The blade comes between the walls in the second half of the time only.
-        let (inside, _) = trough_links(&trough(true), [0.0, 1.0]);
+        let (inside, _) = trough_links(&trough(true, false), [0.0, 1.0]);
         assert!(inside.iter().any(|&v| v), "{inside:?}");
-        let (inside, _) = trough_links(&trough(true), [0.0, 0.25]);
+        let (inside, _) = trough_links(&trough(true, false), [0.0, 0.25]);
         assert!(inside.iter().all(|&v| !v), "{inside:?}");
+    }
+
+    /// Points on the trough's inner faces at time `t` (it slides 150 mm a second).
+    fn trough_points(t: f64) -> Vec<crate::playback::ProbePoint> {
+        use crate::playback::ProbePoint;
+        let dz = 150.0 * t;
+        let mut pts = Vec::new();
+        for a in [0.25, 0.5, 0.75] {
+            for b in [0.25, 0.5, 0.75] {
+                let (y, z) = (100.0 + 160.0 * a, 150.0 + 120.0 * b + dz);
+                pts.push(ProbePoint {
+                    p: DVec3::new(200.0, y, z),
+                    n: DVec3::X,
+                });
+                pts.push(ProbePoint {
+                    p: DVec3::new(320.0, y, z),
+                    n: -DVec3::X,
+                });
+                pts.push(ProbePoint {
+                    p: DVec3::new(200.0 + 120.0 * a, 100.0, z),
+                    n: DVec3::Y,
+                });
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn surfaces_that_move_as_one_are_linked_once_and_give_the_frames_of_links_evaluated_at_each() {
+        // Paper 001 §5.2: the links between surfaces that share a motion keep their
+        // kernel (and here their visibility: nothing comes between the walls), so
+        // they are constant and evaluated once, not at every frame. The frames must
+        // be those of a solve that evaluates them at every frame (the same walls on
+        // tracks the solver cannot tell are one) and of the static solve of each
+        // frame.
+        use crate::playback::probe;
+        use crate::solver::report::relative_rms;
+        use crate::solver::{Solution, SolveStats};
+        let st = SpaceTimeOptions {
+            fps: 5.0,
+            window: Some(0.5),
+            key_stride: Some(8),
+            ..SpaceTimeOptions::default()
+        };
+        // The frames' leaves and the varying links over all frames.
+        let run = |scene: &Scene| {
+            let (mut leaves, mut varying) = (Vec::new(), 0);
+            solve(
+                scene,
+                SolveOptions::default(),
+                &st,
+                |f| varying += f.varying_links,
+                |w| {
+                    leaves.extend(w.leaves.iter().copied());
+                    Ok(())
+                },
+            )
+            .expect("space-time solve");
+            (leaves, varying)
+        };
+        let (scene_one, scene_split) = (trough(false, false), trough(false, true));
+        let (one, v_one) = run(&scene_one);
+        let (split, v_split) = run(&scene_split);
+        eprintln!("varying links over the frames: {v_one} as one object, {v_split} split");
+        assert!(v_one < v_split);
+        for t in [0.0, 0.6, 1.0] {
+            let pts = trough_points(t);
+            let fixed = |scene: &Scene| {
+                let mut s =
+                    Solver::at_time(scene, SolveOptions::default(), t, [0.0, 1.0]).expect("solver");
+                s.freeze_motion();
+                s.run(|_, _| {}).expect("static solve");
+                s.solution()
+            };
+            // The stored leaves with the patches of a static solve.
+            let stored = |scene: &Scene, base: &Solution, leaves: &[Leaf]| Solution {
+                scene: scene.clone(),
+                patches: base.patches.clone(),
+                leaves: leaves.to_vec(),
+                stats: SolveStats::default(),
+            };
+            let (base_one, base_split) = (fixed(&scene_one), fixed(&scene_split));
+            let b_one = probe(&stored(&scene_one, &base_one, &one), &pts, t).expect("probe");
+            let b_split =
+                probe(&stored(&scene_split, &base_split, &split), &pts, t).expect("probe");
+            let b_static = probe(&base_one, &pts, t).expect("probe");
+            let (apart, from_static) = (
+                relative_rms(&b_one, &b_split),
+                relative_rms(&b_one, &b_static),
+            );
+            eprintln!(
+                "t = {t}: as one object {:.3}% from split, {:.3}% from the static solve ({:.3}% split)",
+                apart * 100.0,
+                from_static * 100.0,
+                relative_rms(&b_split, &b_static) * 100.0
+            );
+            assert!(apart < 0.005 && from_static < 0.015, "t = {t}");
+        }
     }
 
     #[test]
