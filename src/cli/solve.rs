@@ -127,6 +127,15 @@ pub struct Args {
     /// refused by a space-time solve.
     #[arg(long, default_value_t = SolveOptions::default().leaf_shapes)]
     pub leaf_shapes: f64,
+    /// A reconstruction point facing a surface across a gap narrower than this
+    /// fraction of the square root of the surface's area (a box's bottom hung just over the
+    /// floor, and the floor under it) is solved together with its foot on that
+    /// surface instead of gathering the element's mean (0: never). ACTOR's actors at
+    /// 0.1: their error 6.4% → 2.9% in a space-time solve for about 45% more time,
+    /// per-frame's 4.5% → 3.5% for 3% (BENCHMARKS.md, "Two surfaces across a
+    /// narrow gap").
+    #[arg(long, default_value_t = SolveOptions::default().near_gap)]
+    pub near_gap: f64,
     /// Most refine-and-solve rounds.
     #[arg(long, default_value_t = SolveOptions::default().max_rounds)]
     pub max_rounds: u32,
@@ -332,6 +341,7 @@ pub(super) fn solve_options(args: &Args) -> anyhow::Result<SolveOptions> {
         power_size: args.power_size,
         split_spread: args.split_spread,
         leaf_shapes: args.leaf_shapes,
+        near_gap: args.near_gap,
         max_rounds: args.max_rounds,
         target_error: args.target_error,
         time_budget: args.time_budget,

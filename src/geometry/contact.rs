@@ -187,7 +187,7 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
                 bvh.intersect(x + dir * (tol * 4.0), dir * patches.diameter, 0.0, 1.0)
                     .is_some_and(|h| patches.normals[h.patch as usize].dot(dir) > 0.0)
             };
-            let on = |&j: &usize| contains(&patches.polys[j], patches.normals[j], x, tol);
+            let on = |&j: &usize| patches.polys[j].contains(patches.normals[j], x, tol);
             // The ray first: a floor under a field of boxes faces every box bottom,
             // and nothing lies behind the floor.
             (pieces.len() > 1 && !covering.iter().any(on) && behind_is_back_face(n))
@@ -282,15 +282,4 @@ fn inner_point(p: &Poly) -> DVec3 {
     let c = p.centroid();
     let v = p.corners();
     c + 0.137 * (v[0] - c) + 0.071 * (v[1] - c)
-}
-
-/// True if `x` (in the plane of convex polygon `p`, normal `n`) lies inside `p`,
-/// `tol` inwards from its edges.
-fn contains(p: &Poly, n: DVec3, x: DVec3, tol: f64) -> bool {
-    let v = p.corners();
-    (0..v.len()).all(|k| {
-        let e = v[(k + 1) % v.len()] - v[k];
-        let len = e.length();
-        len > 0.0 && e.cross(x - v[k]).dot(n) / len > tol
-    })
 }

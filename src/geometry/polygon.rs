@@ -59,6 +59,18 @@ impl Poly {
         centroid_of(self.corners())
     }
 
+    /// True if `x` (in the plane of the polygon, whose normal is `n`) lies inside it,
+    /// more than `tol` inwards from every edge (a negative `tol` admits points that
+    /// far outside).
+    pub fn contains(&self, n: DVec3, x: DVec3, tol: f64) -> bool {
+        let v = self.corners();
+        (0..v.len()).all(|k| {
+            let e = v[(k + 1) % v.len()] - v[k];
+            let len = e.length();
+            len > 0.0 && e.cross(x - v[k]).dot(n) / len > tol
+        })
+    }
+
     /// Longest distance between two corners.
     pub fn diameter(&self) -> f64 {
         let c = self.corners();

@@ -369,6 +369,13 @@ pub struct SolveOptions {
     /// measured in BENCHMARKS.md ("Scale"). See the module docs, "Leaves seen by
     /// their shape".
     pub leaf_shapes: f64,
+    /// A reconstruction point facing a surface across a gap narrower than this
+    /// fraction of the square root of the surface's (patch's) area (a box's bottom
+    /// hung just over the floor, the floor under it) is solved together with its foot
+    /// on that surface, not gathered from its elements' mean radiosities (0, the
+    /// default: never). See the module docs of `src/solver/gather.rs`, "Two surfaces across a
+    /// narrow gap".
+    pub near_gap: f64,
 }
 
 impl Default for SolveOptions {
@@ -397,6 +404,7 @@ impl Default for SolveOptions {
             faint_source: 0.005,
             split_spread: 0.0,
             leaf_shapes: 0.0,
+            near_gap: 0.0,
             row_open_ratio: 0.25,
         }
     }
@@ -430,6 +438,7 @@ impl SolveOptions {
                 ("faint_source", Some(self.faint_source)),
                 ("--split-spread", Some(self.split_spread)),
                 ("--leaf-shapes", Some(self.leaf_shapes)),
+                ("--near-gap", Some(self.near_gap)),
             ],
             &[
                 ("--max-rounds", self.max_rounds),
