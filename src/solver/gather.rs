@@ -15,7 +15,7 @@
 //! A point 1 cm over a floor gets nearly all of its factor to the floor from the
 //! few centimetres around its foot, but the gather takes each floor element at its
 //! mean radiosity: a box's bottom hung over the floor read the lit floor around the
-//! box, 50–100× the path tracer's value under it (BENCHMARKS.md, "The actors'
+//! box, 50–150× the path tracer's value under it (BENCHMARKS.md, "The actors'
 //! bottom faces, diagnosed"), and the floor under it read the bottom's mean in turn.
 //! With [`SolveOptions::near_gap`], the terms of elements facing the point across a
 //! gap narrow for their patch, within [`NEAR_REACH`] gaps of the point's foot `y`,
@@ -92,7 +92,8 @@ impl Terms {
     }
 }
 
-/// A source is near a point only if the point's normal is within this cosine of facing it head-on.
+/// A source is near a point only if the point's normal is within this cosine of
+/// facing it head-on.
 const NEAR_COS: f64 = 0.9;
 
 /// How far from the foot, in gaps, an element of the surface across still counts
@@ -149,8 +150,7 @@ struct Sum<'a> {
     /// [`SolveOptions::near_gap`] (0: no source is near).
     near_gap: f64,
     h: [f64; 3],
-    /// The near sources' factors summed; the element and foot of the one that gives
-    /// the most.
+    /// The near sources apart ([`Near`]).
     near: Option<Near>,
 }
 
