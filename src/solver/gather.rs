@@ -417,7 +417,7 @@ impl Solver<'_> {
         admit: bool,
         limits: &GatherLimits,
     ) -> ([f64; 3], bool, FreshTerms) {
-        let (sum, valid, fresh) = self.gather_sum(leaf, x, known, pk, admit, limits);
+        let (sum, valid, fresh) = self.gather_sum(leaf, x, known, pk, admit, false, limits);
         let p = self.elems.geoms.as_slice()[leaf.ix()].patch;
         (self.across_gap(p, &sum, pk, limits), valid, fresh)
     }
@@ -437,7 +437,7 @@ impl Solver<'_> {
         let leaf = self.leaf_at(ElementId(near.elem), near.foot);
         // Its own rays: another key than any reconstruction point's.
         let pk_y = (pk.0 ^ 0x6761_7000, pk.1.rotate_left(7), pk.2);
-        let (sy, _, _) = self.gather_sum(leaf, near.foot, None, pk_y, false, limits);
+        let (sy, _, _) = self.gather_sum(leaf, near.foot, None, pk_y, false, true, limits);
         let py = self.elems.geoms.as_slice()[leaf.ix()].patch as usize;
         let (rho_y, em_y) = (self.patches.rhos[py], self.patches.emissions[py]);
         let mut hy = sy.h;
@@ -501,6 +501,12 @@ impl Solver<'_> {
     /// `limits.faint`: a non-emitting surface source whose light at `x` is bounded
     /// below this (`ρ B_s A_s / (π d²)`, `d` the distance to its bounding sphere) is
     /// gathered with its link's visibility instead of rays (0: rays always).
+    ///
+    /// `once`: a point gathered once and forgotten (a foot across a gap), which
+    /// keeps nothing in a window and so is gathered as a moving point is, its rays
+    /// cast at the scene as it is now: no static masks, no cluster opened because a
+    /// moving object may cross it.
+    #[allow(clippy::too_many_arguments)]
     fn gather_sum(
         &self,
         leaf: ElementId,
@@ -508,6 +514,7 @@ impl Solver<'_> {
         known: Option<&PointCache>,
         pk: PointKey,
         admit: bool,
+        once: bool,
         limits: &GatherLimits,
     ) -> (Sum<'_>, bool, FreshTerms) {
         let faint = limits.faint;
@@ -526,7 +533,10 @@ impl Solver<'_> {
         let p = g.patch as usize;
         let valid = self.outside_solids(x, n);
         let b = self.elems.radiosities.as_slice();
-        let window = self.window.as_ref().filter(|_| !self.elem_moving(leaf));
+        let window = self
+            .window
+            .as_ref()
+            .filter(|_| !once && !self.elem_moving(leaf));
         let cached = known.and_then(|m| m.get(&pk));
         let mut sum = Sum::new(&self.patches, x, n, limits.near_gap);
         let mut fresh = Vec::new();
