@@ -699,7 +699,7 @@ fn static_masks_plus_moving_rays_equal_full_visibility() {
     // objects only is exactly the fraction from full rays; so is the one-pass
     // `masked_rays`, and `visible_fraction_moving` from a kept static visibility.
     use rhier::oracle::{
-        masked_rays, static_clear_mask, visible_fraction, visible_fraction_masked,
+        PointRays, masked_rays, static_clear_mask, visible_fraction, visible_fraction_masked,
         visible_fraction_moving,
     };
     use rhier::pools::elements::Geom;
@@ -736,23 +736,29 @@ fn static_masks_plus_moving_rays_equal_full_visibility() {
                 let pb = rhier::oracle::poly(&gb);
                 let x = patches.point(a, 0.37, 0.41);
                 let (na, nb) = (patches.normals[a], patches.normals[b]);
-                let key = (k * 1000 + a * 31 + b) as u64;
-                let skip = [a as u32, b as u32];
-                let full = visible_fraction(&bvh, x, na, &gb, &pb, nb, 32, key, skip);
-                let mask = static_clear_mask(&bvh, x, &gb, &pb, 32, key, skip);
-                let split =
-                    visible_fraction_masked(Some(&bvh), x, na, &gb, &pb, nb, 32, key, skip, mask);
+                let r = PointRays {
+                    x,
+                    n: na,
+                    gs: &gb,
+                    pols: &pb,
+                    ns: nb,
+                    m: 32,
+                    key: (k * 1000 + a * 31 + b) as u64,
+                    skip: [a as u32, b as u32],
+                };
+                let full = visible_fraction(&bvh, &r);
+                let mask = static_clear_mask(&bvh, &r);
+                let split = visible_fraction_masked(Some(&bvh), &r, mask);
                 assert_eq!(full.to_bits(), split.to_bits(), "t {t}, patches {a} → {b}");
                 // The same in one pass, and from a kept static visibility.
-                let rays = masked_rays(&bvh, x, na, &gb, &pb, nb, 32, key, skip, None, true);
+                let rays = masked_rays(&bvh, &r, None, true);
                 assert_eq!(rays.mask, mask, "t {t}, patches {a} → {b}");
                 assert_eq!(rays.vis_now.to_bits(), full.to_bits());
-                let alone = visible_fraction_masked(None, x, na, &gb, &pb, nb, 32, key, skip, mask);
+                let alone = visible_fraction_masked(None, &r, mask);
                 assert_eq!(rays.vis_static.to_bits(), alone.to_bits());
-                let known = masked_rays(&bvh, x, na, &gb, &pb, nb, 32, key, skip, Some(mask), true);
+                let known = masked_rays(&bvh, &r, Some(mask), true);
                 assert_eq!(known, rays);
-                let kept =
-                    visible_fraction_moving(&bvh, x, na, &gb, &pb, nb, 32, key, skip, mask, alone);
+                let kept = visible_fraction_moving(&bvh, &r, mask, alone);
                 assert_eq!(kept.to_bits(), full.to_bits());
                 blocked += (rays.blocked != 0) as u32;
                 compared += 1;

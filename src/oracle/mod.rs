@@ -671,7 +671,17 @@ fn evaluate_surfaces(
     let mut rays = 0;
     for (i, (v, &x)) in vq.iter_mut().zip(&q.points).take(q.count).enumerate() {
         let key = hash3(set.seed, ids[0], ids[1] << 8 | i as u64);
-        *v = visible_fraction(bvh, x, nr, gs, &pols, ns, m, key, skip);
+        let r = PointRays {
+            x,
+            n: nr,
+            gs,
+            pols: &pols,
+            ns,
+            m,
+            key,
+            skip,
+        };
+        *v = visible_fraction(bvh, &r);
         rays += m;
     }
     let f: f64 = (0..q.count).map(|i| q.weights[i] * fq[i] * vq[i]).sum();
@@ -694,42 +704,75 @@ fn evaluate_surfaces(
     }
 }
 
-/// Kernel-weighted fraction of source `gs` visible from `x` (normal `n`), with `m`
-/// jittered stratified rays, ignoring hits on the patches `skip`.
-#[allow(clippy::too_many_arguments)]
-pub fn visible_fraction(
-    bvh: &SceneBvh,
-    x: DVec3,
-    n: DVec3,
-    gs: &Geom,
-    pols: &Poly,
-    ns: DVec3,
-    m: u32,
-    key: u64,
-    skip: [u32; 2],
-) -> f64 {
-    weighted_fraction(x, n, gs, pols, ns, m, key, |_, y| {
-        !bvh.occluded_except(x, y, skip)
-    })
+/// The rays from a point to a surface source that the ray functions below cast:
+/// `m` jittered stratified rays of sample `key` from `x` (normal `n`) to the element
+/// `gs` (polygon `pols`, normal `ns`), hits on the patches `skip` ignored. 112 bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct PointRays<'a> {
+    /// Where the rays start.
+    pub x: DVec3,
+    /// The normal there.
+    pub n: DVec3,
+    /// The source element.
+    pub gs: &'a Geom,
+    /// Its polygon ([`poly`] of `gs`).
+    pub pols: &'a Poly,
+    /// Its normal.
+    pub ns: DVec3,
+    /// How many rays.
+    pub m: u32,
+    /// Their jitter key.
+    pub key: u64,
+    /// Patches whose hits do not count (the receiver's and the source's).
+    pub skip: [u32; 2],
+}
+
+impl PointRays<'_> {
+    /// The same rays, at most 64 (one bit each in a mask).
+    fn capped(&self) -> Self {
+        PointRays {
+            m: self.m.min(64),
+            ..*self
+        }
+    }
+
+    /// The `m` jittered stratified target points on `gs`.
+    fn targets(&self) -> impl Iterator<Item = (u32, DVec3)> + '_ {
+        ray_targets(self.gs, self.pols, self.m, self.key)
+    }
+
+    /// Kernel-weighted mean of `visible(j, y)` over the ray targets (the plain mean
+    /// when every kernel weight is zero).
+    fn weighted(&self, mut visible: impl FnMut(u32, DVec3) -> bool) -> f64 {
+        let (mut wsum, mut vsum, mut plain) = (0.0, 0.0, 0.0);
+        for (j, y) in self.targets() {
+            let k = point_to_point_kernel(self.x, self.n, y, self.ns);
+            let vis = if visible(j, y) { 1.0 } else { 0.0 };
+            wsum += k;
+            vsum += k * vis;
+            plain += vis;
+        }
+        if wsum > 0.0 {
+            vsum / wsum
+        } else {
+            plain / self.m as f64
+        }
+    }
+}
+
+/// Kernel-weighted fraction of the source of `r` visible from its point.
+pub fn visible_fraction(bvh: &SceneBvh, r: &PointRays) -> f64 {
+    r.weighted(|_, y| !bvh.occluded_except(r.x, y, r.skip))
 }
 
 /// The rays of [`visible_fraction`] that nothing static blocks, as a bit mask (ray
-/// `j` → bit `j`; `m <= 64`).
+/// `j` → bit `j`; at most 64 rays).
 /// The solver makes its masks with the one-pass [`masked_rays`]; this and
 /// [`visible_fraction_masked`] are the plain definitions its test holds it to.
-#[allow(clippy::too_many_arguments)]
-pub fn static_clear_mask(
-    bvh: &SceneBvh,
-    x: DVec3,
-    gs: &Geom,
-    pols: &Poly,
-    m: u32,
-    key: u64,
-    skip: [u32; 2],
-) -> u64 {
+pub fn static_clear_mask(bvh: &SceneBvh, r: &PointRays) -> u64 {
     let mut mask = 0u64;
-    for (j, y) in ray_targets(gs, pols, m.min(64), key) {
-        if !bvh.occluded_by(x, y, skip, Parts::Static) {
+    for (j, y) in r.capped().targets() {
+        if !bvh.occluded_by(r.x, y, r.skip, Parts::Static) {
             mask |= 1 << j;
         }
     }
@@ -739,22 +782,10 @@ pub fn static_clear_mask(
 /// [`visible_fraction`] from a [`static_clear_mask`]: only the rays the static part
 /// leaves clear are cast, against the moving objects only (`None`: the caller knows
 /// no moving object is in the way, and no ray is cast). Equal to
-/// [`visible_fraction`] with the same arguments.
-#[allow(clippy::too_many_arguments)]
-pub fn visible_fraction_masked(
-    bvh: Option<&SceneBvh>,
-    x: DVec3,
-    n: DVec3,
-    gs: &Geom,
-    pols: &Poly,
-    ns: DVec3,
-    m: u32,
-    key: u64,
-    skip: [u32; 2],
-    mask: u64,
-) -> f64 {
-    weighted_fraction(x, n, gs, pols, ns, m.min(64), key, |j, y| {
-        mask & (1 << j) != 0 && !bvh.is_some_and(|b| b.occluded_by(x, y, skip, Parts::Moving))
+/// [`visible_fraction`] with the same rays.
+pub fn visible_fraction_masked(bvh: Option<&SceneBvh>, r: &PointRays, mask: u64) -> f64 {
+    r.capped().weighted(|j, y| {
+        mask & (1 << j) != 0 && !bvh.is_some_and(|b| b.occluded_by(r.x, y, r.skip, Parts::Moving))
     })
 }
 
@@ -762,47 +793,34 @@ pub fn visible_fraction_masked(
 /// the rays (their targets and kernel weights computed once): [`MaskedRays`].
 /// `mask`: the rays nothing static blocks, if known (else cast against the static
 /// part, as [`static_clear_mask`] does); `moving`: cast the rays `mask` leaves
-/// clear against the moving objects too. `m <= 64`.
-#[allow(clippy::too_many_arguments)]
-pub fn masked_rays(
-    bvh: &SceneBvh,
-    x: DVec3,
-    n: DVec3,
-    gs: &Geom,
-    pols: &Poly,
-    ns: DVec3,
-    m: u32,
-    key: u64,
-    skip: [u32; 2],
-    mask: Option<u64>,
-    moving: bool,
-) -> MaskedRays {
-    let m = m.min(64);
+/// clear against the moving objects too. At most 64 rays.
+pub fn masked_rays(bvh: &SceneBvh, r: &PointRays, mask: Option<u64>, moving: bool) -> MaskedRays {
+    let r = r.capped();
     let (mut wsum, mut vs, mut vn, mut ps, mut pn) = (0.0, 0.0, 0.0, 0.0, 0.0);
     let (mut clear, mut blocked) = (0u64, 0u64);
-    for (j, y) in ray_targets(gs, pols, m, key) {
+    for (j, y) in r.targets() {
         let bit = 1u64 << j;
         let open = match mask {
             Some(mask) => mask & bit != 0,
-            None => !bvh.occluded_by(x, y, skip, Parts::Static),
+            None => !bvh.occluded_by(r.x, y, r.skip, Parts::Static),
         };
-        let k = point_to_point_kernel(x, n, y, ns);
+        let k = point_to_point_kernel(r.x, r.n, y, r.ns);
         wsum += k;
         if !open {
             continue;
         }
         clear |= bit;
-        // The same sums, in the same order, as `weighted_fraction`'s.
+        // The same sums, in the same order, as `PointRays::weighted`'s.
         vs += k;
         ps += 1.0;
-        if moving && bvh.occluded_by(x, y, skip, Parts::Moving) {
+        if moving && bvh.occluded_by(r.x, y, r.skip, Parts::Moving) {
             blocked |= bit;
         } else {
             vn += k;
             pn += 1.0;
         }
     }
-    let frac = |v: f64, p: f64| if wsum > 0.0 { v / wsum } else { p / m as f64 };
+    let frac = |v: f64, p: f64| if wsum > 0.0 { v / wsum } else { p / r.m as f64 };
     MaskedRays {
         mask: clear,
         vis_static: frac(vs, ps),
@@ -830,24 +848,11 @@ pub struct MaskedRays {
 /// visibility `vis_static` ([`MaskedRays::vis_static`], as kept) is known: the rays
 /// of `mask` are cast at the moving objects first, and only if one is blocked are
 /// the kernel weights computed. With no ray blocked the answer is `vis_static`.
-#[allow(clippy::too_many_arguments)]
-pub fn visible_fraction_moving(
-    bvh: &SceneBvh,
-    x: DVec3,
-    n: DVec3,
-    gs: &Geom,
-    pols: &Poly,
-    ns: DVec3,
-    m: u32,
-    key: u64,
-    skip: [u32; 2],
-    mask: u64,
-    vis_static: f64,
-) -> f64 {
-    let m = m.min(64);
+pub fn visible_fraction_moving(bvh: &SceneBvh, r: &PointRays, mask: u64, vis_static: f64) -> f64 {
+    let r = r.capped();
     let mut blocked = 0u64;
-    for (j, y) in ray_targets(gs, pols, m, key) {
-        if mask & (1 << j) != 0 && bvh.occluded_by(x, y, skip, Parts::Moving) {
+    for (j, y) in r.targets() {
+        if mask & (1 << j) != 0 && bvh.occluded_by(r.x, y, r.skip, Parts::Moving) {
             blocked |= 1 << j;
         }
     }
@@ -855,7 +860,7 @@ pub fn visible_fraction_moving(
         return vis_static;
     }
     let open = mask & !blocked;
-    weighted_fraction(x, n, gs, pols, ns, m, key, |j, _| open & (1 << j) != 0)
+    r.weighted(|j, _| open & (1 << j) != 0)
 }
 
 /// The `m` jittered stratified target points on `gs` for the rays of sample `key`.
@@ -871,34 +876,6 @@ fn ray_targets(gs: &Geom, pols: &Poly, m: u32, key: u64) -> impl Iterator<Item =
         );
         (j, point_in(gs, pols, su, sv.min(1.0)))
     })
-}
-
-/// Kernel-weighted mean of `visible(j, y)` over the ray targets (the plain mean when
-/// every kernel weight is zero).
-#[allow(clippy::too_many_arguments)]
-fn weighted_fraction(
-    x: DVec3,
-    n: DVec3,
-    gs: &Geom,
-    pols: &Poly,
-    ns: DVec3,
-    m: u32,
-    key: u64,
-    mut visible: impl FnMut(u32, DVec3) -> bool,
-) -> f64 {
-    let (mut wsum, mut vsum, mut plain) = (0.0, 0.0, 0.0);
-    for (j, y) in ray_targets(gs, pols, m, key) {
-        let k = point_to_point_kernel(x, n, y, ns);
-        let vis = if visible(j, y) { 1.0 } else { 0.0 };
-        wsum += k;
-        vsum += k * vis;
-        plain += vis;
-    }
-    if wsum > 0.0 {
-        vsum / wsum
-    } else {
-        plain / m as f64
-    }
 }
 
 /// Point of a surface element at unit-square coordinates `(s, t)` (folded into the

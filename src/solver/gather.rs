@@ -273,10 +273,17 @@ impl Solver<'_> {
                 1.0
             } else {
                 let ps = oracle::poly(gs);
-                let ns = DVec3::from_array(gs.normal);
-                let skip = [receiver_patch, gs.patch];
-                let m = self.corner_rays_to(gs);
-                oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key, skip)
+                let r = oracle::PointRays {
+                    x,
+                    n,
+                    gs,
+                    pols: &ps,
+                    ns: DVec3::from_array(gs.normal),
+                    m: self.corner_rays_to(gs),
+                    key,
+                    skip: [receiver_patch, gs.patch],
+                };
+                oracle::visible_fraction(&self.bvh, &r)
             };
             if v <= 0.0 {
                 return;
@@ -366,13 +373,22 @@ impl Solver<'_> {
         let skip = [receiver_patch, gs.patch];
         // The rays' jitter key, as a masked term keeps it.
         let key = key & u64::from(u32::MAX);
+        let r = oracle::PointRays {
+            x,
+            n,
+            gs,
+            pols: &ps,
+            ns,
+            m,
+            key,
+            skip,
+        };
         match swept {
             Some(sw) if m <= 64 && !point_shaft_clear(x, n, gs, sw) => {
                 // The static mask, its visibility and, where a moving object is now
                 // between the point and the source, the visibility now: one pass.
                 let near = !point_shaft_clear(x, n, gs, &self.moving_now);
-                let rays =
-                    oracle::masked_rays(&self.bvh, x, n, gs, &ps, ns, m, key, skip, None, near);
+                let rays = oracle::masked_rays(&self.bvh, &r, None, near);
                 if rays.mask == 0 {
                     // Hidden by static geometry whatever moves.
                     return;
@@ -395,7 +411,7 @@ impl Solver<'_> {
                 out.masked.push((t, v));
             }
             _ => {
-                let v = oracle::visible_fraction(&self.bvh, x, n, gs, &ps, ns, m, key, skip);
+                let v = oracle::visible_fraction(&self.bvh, &r);
                 if v > 0.0 {
                     out.fixed.push((s as u32, f * v));
                 }
@@ -575,19 +591,17 @@ impl Solver<'_> {
                     // Rays are only cast where a moving object is now.
                     let near = !point_shaft_clear(x, n, gs, &self.moving_now);
                     let v = if near {
-                        oracle::visible_fraction_moving(
-                            &self.bvh,
+                        let r = oracle::PointRays {
                             x,
                             n,
                             gs,
-                            &oracle::poly(gs),
-                            DVec3::from_array(gs.normal),
-                            self.corner_rays_to(gs),
-                            u64::from(t.key),
-                            [p as u32, gs.patch],
-                            t.mask,
-                            f64::from(t.vis_static),
-                        )
+                            pols: &oracle::poly(gs),
+                            ns: DVec3::from_array(gs.normal),
+                            m: self.corner_rays_to(gs),
+                            key: u64::from(t.key),
+                            skip: [p as u32, gs.patch],
+                        };
+                        oracle::visible_fraction_moving(&self.bvh, &r, t.mask, t.vis_static.into())
                     } else {
                         f64::from(t.vis_static)
                     };

@@ -207,7 +207,17 @@ impl Solver<'_> {
                 ),
                 _ => return self.row_point_visibility(ids, g, gs, &ps, ns, x, n, i),
             };
-            let rays = oracle::masked_rays(&self.bvh, x, n, gs, &ps, ns, m, key, skip, mask, true);
+            let r = oracle::PointRays {
+                x,
+                n,
+                gs,
+                pols: &ps,
+                ns,
+                m,
+                key,
+                skip,
+            };
+            let rays = oracle::masked_rays(&self.bvh, &r, mask, true);
             if mask.is_none() {
                 made.set(made.get() | rays.mask << (i as u32 * m));
             }
@@ -275,10 +285,17 @@ impl Solver<'_> {
         n: DVec3,
         i: u64,
     ) -> f64 {
-        let key = self.row_ray_key(ids, i);
-        let skip = [g.patch, gs.patch];
-        let m = self.opts.rays_per_point;
-        oracle::visible_fraction(&self.bvh, x, n, gs, ps, ns, m, key, skip)
+        let r = oracle::PointRays {
+            x,
+            n,
+            gs,
+            pols: ps,
+            ns,
+            m: self.opts.rays_per_point,
+            key: self.row_ray_key(ids, i),
+            skip: [g.patch, gs.patch],
+        };
+        oracle::visible_fraction(&self.bvh, &r)
     }
 
     /// The jitter key of the rays of [`Solver::row_point_visibility`] at point `i`.
