@@ -131,7 +131,7 @@ pub struct Args {
     /// fraction of the square root of the surface's area (a box's bottom hung just over the
     /// floor, and the floor under it) is solved together with its foot on that
     /// surface instead of gathering the element's mean (0: never). ACTOR's actors at
-    /// 0.1: their error 6.4% → 2.9% in a space-time solve for about 45% more time,
+    /// 0.1: their error 6.4% → 2.9% in a space-time solve for 25–45% more time,
     /// per-frame's 4.5% → 3.5% for about 15% (BENCHMARKS.md, "Two surfaces across
     /// a narrow gap").
     #[arg(long, default_value_t = SolveOptions::default().near_gap)]
