@@ -102,12 +102,19 @@ const NEAR_COS: f64 = 0.9;
 const NEAR_REACH: f64 = 3.0;
 
 /// If the surface element `g` is a near source of the point `x` (normal `n`): the
-/// point's foot on it, `x` moved along the element's normal into its plane. Near:
+/// point's foot on it, `x` moved along the element's normal into its plane, and
+/// whether the element holds the foot. Near:
 /// the element faces the point across a gap below `near_gap` times the square root
 /// of its patch's area (`patches`), the foot lies inside that patch, and the
 /// element comes within [`NEAR_REACH`] gaps of the foot. A point by a corner of two
 /// walls (its foot on the other wall's edge, and the walls not facing) is not near.
-fn near_foot(x: DVec3, n: DVec3, g: &Geom, near_gap: f64, patches: &Patches) -> Option<DVec3> {
+fn near_foot(
+    x: DVec3,
+    n: DVec3,
+    g: &Geom,
+    near_gap: f64,
+    patches: &Patches,
+) -> Option<(DVec3, bool)> {
     if near_gap <= 0.0 || g.patch == u32::MAX {
         return None;
     }
@@ -121,9 +128,9 @@ fn near_foot(x: DVec3, n: DVec3, g: &Geom, near_gap: f64, patches: &Patches) -> 
         return None;
     }
     let foot = x - gap * ns;
-    (oracle::poly(g).contains(ns, foot, -NEAR_REACH * gap)
-        && patches.polys[p].contains(ns, foot, 0.0))
-    .then_some(foot)
+    let pg = oracle::poly(g);
+    (pg.contains(ns, foot, -NEAR_REACH * gap) && patches.polys[p].contains(ns, foot, 0.0))
+        .then(|| (foot, pg.contains(ns, foot, 0.0)))
 }
 
 /// A point's near sources: what the point gathers from them (`Σ factor ·
@@ -169,8 +176,7 @@ impl<'a> Sum<'a> {
     /// Adds the term `fv · B_e` of element `e` (geometry `g`, radiosity `b`).
     #[inline]
     fn add(&mut self, g: &Geom, b: [f32; 3], e: u32, fv: f64) {
-        if let Some(foot) = near_foot(self.x, self.n, g, self.near_gap, self.patches) {
-            let holds = oracle::poly(g).contains(DVec3::from_array(g.normal), foot, 0.0);
+        if let Some((foot, holds)) = near_foot(self.x, self.n, g, self.near_gap, self.patches) {
             let m = self.near.get_or_insert(Near {
                 f: 0.0,
                 elem: e,

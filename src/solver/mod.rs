@@ -373,8 +373,8 @@ pub struct SolveOptions {
     /// fraction of the square root of the surface's (patch's) area (a box's bottom
     /// hung just over the floor, the floor under it) is solved together with its foot
     /// on that surface, not gathered from its elements' mean radiosities (0, the
-    /// default: never). See the module docs of `src/solver/gather.rs`, "Two surfaces across a
-    /// narrow gap".
+    /// default: never). See the module docs of `src/solver/gather.rs`, "Two surfaces
+    /// across a narrow gap".
     pub near_gap: f64,
 }
 
