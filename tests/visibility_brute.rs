@@ -187,3 +187,69 @@ fn closest_hits_near_the_rays_origin_are_found() {
     assert!(near > 100, "too few rays test the near range: {near}");
     assert_eq!(wrong, 0);
 }
+
+/// The shadow cache ([`rhier::geometry::LastHit`]) changes which triangle a
+/// segment is tested against first, never the answer: bundles of 8 segments from a
+/// point of one patch to points of another (the solver's rays), on ACTOR at a time
+/// its actors are in the room, each answer taken with one cache carried through
+/// every bundle and every part asked (static, moving, all) against the same query
+/// without a cache. Every second bundle starts on the patch that blocked the last
+/// blocked segment, so a cached triangle the next bundle must skip is offered to it.
+#[test]
+fn the_shadow_cache_never_changes_an_answer() {
+    use rhier::geometry::{LastHit, Parts};
+    let t = 1.2;
+    let scene = rhier::scene::actor_scene(75);
+    let patches = Patches::at_time(&scene, t);
+    let bvh = SceneBvh::build(&scene, &patches, t);
+    let n = patches.len() as u64;
+    let mut last = LastHit::default();
+    let (mut rays, mut blocked, mut full, mut skipped) = (0, 0, 0, 0);
+    let mut blocker: Option<u32> = None;
+    for k in 0..4000u64 {
+        let i = match blocker.take() {
+            Some(p) if k % 2 == 1 => {
+                skipped += 1;
+                p as usize
+            }
+            _ => (hash3(k, 1, 7) % n) as usize,
+        };
+        let j = (hash3(k, 2, 7) % n) as usize;
+        if i == j {
+            continue;
+        }
+        let x = patches.point(i, u(hash3(k, 3, 7)), u(hash3(k, 4, 7)));
+        for which in [Parts::All, Parts::Static, Parts::Moving] {
+            let mut hidden = 0;
+            for r in 0..8u64 {
+                let y = patches.point(j, u(hash3(k, r, 8)), u(hash3(k, r, 9)));
+                let skip = [i as u32, j as u32];
+                let plain = bvh.occluded_by(x, y, skip, which);
+                let cached = bvh.occluded_cached(x, y, skip, which, &mut last);
+                assert_eq!(
+                    plain, cached,
+                    "bundle {k}, ray {r}, {which:?}: {x:?} -> {y:?} skipping {skip:?}"
+                );
+                rays += 1;
+                if plain {
+                    hidden += 1;
+                    blocked += 1;
+                    if which == Parts::All {
+                        blocker = bvh
+                            .intersect(x, y - x, rhier::geometry::SEGMENT_TRIM, 1.0)
+                            .map(|h| h.patch)
+                            .filter(|&p| p != i as u32 && p != j as u32);
+                    }
+                }
+            }
+            full += usize::from(hidden == 8);
+        }
+    }
+    // The cache is offered bundles it can serve and bundles it must not.
+    assert!(rays > 80_000, "{rays} rays");
+    assert!(
+        blocked > rays / 10 && full > 500,
+        "{blocked} of {rays} blocked, {full} bundles whole"
+    );
+    assert!(skipped > 300, "{skipped} bundles from the last blocker");
+}

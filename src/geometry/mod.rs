@@ -28,4 +28,4 @@ pub use formfactor::{
 pub use nearest::{closest_point_on_polygon, nearest_facing};
 pub use patches::{PatchId, Patches};
 pub use polygon::{Poly, centroid_of};
-pub use visibility::{Hit, Parts, SEGMENT_TRIM, SceneBvh};
+pub use visibility::{Hit, LastHit, Parts, SEGMENT_TRIM, SceneBvh};

@@ -45,7 +45,7 @@
 
 use glam::DVec3;
 
-use crate::geometry::{Parts, Poly, SceneBvh, point_to_point_kernel, point_to_polygon};
+use crate::geometry::{LastHit, Parts, Poly, SceneBvh, point_to_point_kernel, point_to_polygon};
 use crate::pools::elements::Geom;
 use crate::pools::links::Transport;
 use crate::pools::{ElementId, ElementKind, ElementPool, Emission, LinkState};
@@ -557,6 +557,7 @@ fn kernel_weighted_visibility(
     mut ends: impl FnMut(u64) -> ((DVec3, DVec3, u32), (DVec3, DVec3, u32)),
 ) -> (f64, u32) {
     let (mut wsum, mut vsum, mut rays) = (0.0, 0.0, 0);
+    let mut last = LastHit::default();
     for j in 0..m.max(1) as u64 {
         let ((x, nx, px), (y, ny, py)) = ends(j);
         let k = point_to_point_kernel(x, nx, y, ny);
@@ -565,7 +566,7 @@ fn kernel_weighted_visibility(
         }
         rays += 1;
         wsum += k;
-        if !bvh.occluded_except(x, y, [px, py]) {
+        if !bvh.occluded_cached(x, y, [px, py], Parts::All, &mut last) {
             vsum += k;
         }
     }
@@ -599,6 +600,7 @@ pub fn close_cluster_factor(
     let m = m.max(1);
     let r2_min = a_s / (std::f64::consts::PI * m as f64);
     let (mut ksum, mut kvis, mut rays) = (0.0, 0.0, 0);
+    let mut last = LastHit::default();
     for j in 0..m as u64 {
         let (x, nx, px) = surface_point(elems, r, hash3(key, j, 1));
         let (y, ny, py) = descend(elems, s, hash3(key, j, 2), by_power);
@@ -614,7 +616,7 @@ pub fn close_cluster_factor(
         }
         rays += 1;
         ksum += k;
-        if !bvh.occluded_except(x, y, [px, py]) {
+        if !bvh.occluded_cached(x, y, [px, py], Parts::All, &mut last) {
             kvis += k;
         }
     }
@@ -762,7 +764,8 @@ impl PointRays<'_> {
 
 /// Kernel-weighted fraction of the source of `r` visible from its point.
 pub fn visible_fraction(bvh: &SceneBvh, r: &PointRays) -> f64 {
-    r.weighted(|_, y| !bvh.occluded_except(r.x, y, r.skip))
+    let mut last = LastHit::default();
+    r.weighted(|_, y| !bvh.occluded_cached(r.x, y, r.skip, Parts::All, &mut last))
 }
 
 /// The rays of [`visible_fraction`] that nothing static blocks, as a bit mask (ray
@@ -771,8 +774,9 @@ pub fn visible_fraction(bvh: &SceneBvh, r: &PointRays) -> f64 {
 /// [`visible_fraction_masked`] are the plain definitions its test holds it to.
 pub fn static_clear_mask(bvh: &SceneBvh, r: &PointRays) -> u64 {
     let mut mask = 0u64;
+    let mut last = LastHit::default();
     for (j, y) in r.capped().targets() {
-        if !bvh.occluded_by(r.x, y, r.skip, Parts::Static) {
+        if !bvh.occluded_cached(r.x, y, r.skip, Parts::Static, &mut last) {
             mask |= 1 << j;
         }
     }
@@ -784,8 +788,10 @@ pub fn static_clear_mask(bvh: &SceneBvh, r: &PointRays) -> u64 {
 /// no moving object is in the way, and no ray is cast). Equal to
 /// [`visible_fraction`] with the same rays.
 pub fn visible_fraction_masked(bvh: Option<&SceneBvh>, r: &PointRays, mask: u64) -> f64 {
+    let mut last = LastHit::default();
     r.capped().weighted(|j, y| {
-        mask & (1 << j) != 0 && !bvh.is_some_and(|b| b.occluded_by(r.x, y, r.skip, Parts::Moving))
+        mask & (1 << j) != 0
+            && !bvh.is_some_and(|b| b.occluded_cached(r.x, y, r.skip, Parts::Moving, &mut last))
     })
 }
 
@@ -798,11 +804,13 @@ pub fn masked_rays(bvh: &SceneBvh, r: &PointRays, mask: Option<u64>, moving: boo
     let r = r.capped();
     let (mut wsum, mut vs, mut vn, mut ps, mut pn) = (0.0, 0.0, 0.0, 0.0, 0.0);
     let (mut clear, mut blocked) = (0u64, 0u64);
+    // One shadow cache for each part the rays are cast at.
+    let (mut last_static, mut last_moving) = (LastHit::default(), LastHit::default());
     for (j, y) in r.targets() {
         let bit = 1u64 << j;
         let open = match mask {
             Some(mask) => mask & bit != 0,
-            None => !bvh.occluded_by(r.x, y, r.skip, Parts::Static),
+            None => !bvh.occluded_cached(r.x, y, r.skip, Parts::Static, &mut last_static),
         };
         let k = point_to_point_kernel(r.x, r.n, y, r.ns);
         wsum += k;
@@ -813,7 +821,7 @@ pub fn masked_rays(bvh: &SceneBvh, r: &PointRays, mask: Option<u64>, moving: boo
         // The same sums, in the same order, as `PointRays::weighted`'s.
         vs += k;
         ps += 1.0;
-        if moving && bvh.occluded_by(r.x, y, r.skip, Parts::Moving) {
+        if moving && bvh.occluded_cached(r.x, y, r.skip, Parts::Moving, &mut last_moving) {
             blocked |= bit;
         } else {
             vn += k;
@@ -851,8 +859,9 @@ pub struct MaskedRays {
 pub fn visible_fraction_moving(bvh: &SceneBvh, r: &PointRays, mask: u64, vis_static: f64) -> f64 {
     let r = r.capped();
     let mut blocked = 0u64;
+    let mut last = LastHit::default();
     for (j, y) in r.targets() {
-        if mask & (1 << j) != 0 && bvh.occluded_by(r.x, y, r.skip, Parts::Moving) {
+        if mask & (1 << j) != 0 && bvh.occluded_cached(r.x, y, r.skip, Parts::Moving, &mut last) {
             blocked |= 1 << j;
         }
     }
