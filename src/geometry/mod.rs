@@ -27,5 +27,5 @@ pub use formfactor::{
 };
 pub use nearest::{closest_point_on_polygon, nearest_facing};
 pub use patches::{PatchId, Patches};
-pub use polygon::{Poly, centroid_of};
+pub use polygon::{MAX_CORNERS, Poly, centroid_of};
 pub use visibility::{Hit, LastHit, Parts, SEGMENT_TRIM, SceneBvh};

@@ -21,7 +21,11 @@ impl Poly {
     pub fn new(corners: &[DVec3]) -> Self {
         let mut v = [DVec3::ZERO; MAX_CORNERS];
         let n = corners.len().min(MAX_CORNERS);
-        v[..n].copy_from_slice(&corners[..n]);
+        // Corner by corner: `copy_from_slice` of a length only known at run time
+        // is a call to `memcpy`, 1.3% of ACTOR's space-time solve for 3 or 4 corners.
+        for (d, &c) in v.iter_mut().zip(&corners[..n]) {
+            *d = c;
+        }
         Poly { v, n }
     }
 

@@ -181,12 +181,14 @@ pub fn fine_samples(g: &Geom) -> Vec<(DVec3, f64)> {
 
 /// The world polygon of a surface element.
 pub fn poly(g: &Geom) -> Poly {
-    let n = g.n as usize;
-    let mut v = [DVec3::ZERO; 4];
-    for (i, c) in v.iter_mut().enumerate().take(n) {
-        *c = DVec3::from_array(g.corners[i]);
+    let mut p = Poly {
+        v: [DVec3::ZERO; crate::geometry::MAX_CORNERS],
+        n: (g.n as usize).min(4),
+    };
+    for (d, c) in p.v.iter_mut().zip(&g.corners[..p.n]) {
+        *d = DVec3::from_array(*c);
     }
-    Poly::new(&v[..n])
+    p
 }
 
 /// Centre and bounding radius of an element.
