@@ -226,6 +226,30 @@ impl Solver<'_> {
         }
     }
 
+    /// The final gather's rays from the point `x` (normal `n`, on patch
+    /// `receiver_patch`) to the surface element `gs` (polygon `pols`), jittered by
+    /// `key`: [`Solver::corner_rays_to`] of them, the two patches skipped.
+    fn gather_rays<'a>(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        receiver_patch: u32,
+        gs: &'a Geom,
+        pols: &'a crate::geometry::Poly,
+        key: u64,
+    ) -> oracle::PointRays<'a> {
+        oracle::PointRays {
+            x,
+            n,
+            gs,
+            pols,
+            ns: DVec3::from_array(gs.normal),
+            m: self.corner_rays_to(gs),
+            key,
+            skip: [receiver_patch, gs.patch],
+        }
+    }
+
     /// Transfer terms from source `s` to the point `x` (normal `n`): `Σ factor ·
     /// visibility · B_element` over `out` is the radiosity the point gathers from `s`;
     /// exact point-to-polygon factors, visibility by rays unless `clear`, sources
@@ -279,16 +303,7 @@ impl Solver<'_> {
                 1.0
             } else {
                 let ps = oracle::poly(gs);
-                let r = oracle::PointRays {
-                    x,
-                    n,
-                    gs,
-                    pols: &ps,
-                    ns: DVec3::from_array(gs.normal),
-                    m: self.corner_rays_to(gs),
-                    key,
-                    skip: [receiver_patch, gs.patch],
-                };
+                let r = self.gather_rays(x, n, receiver_patch, gs, &ps, key);
                 oracle::visible_fraction(&self.bvh, &r)
             };
             if v <= 0.0 {
@@ -374,23 +389,11 @@ impl Solver<'_> {
             out.fixed.push((s as u32, f));
             return;
         }
-        let m = self.corner_rays_to(gs);
-        let ns = DVec3::from_array(gs.normal);
-        let skip = [receiver_patch, gs.patch];
         // The rays' jitter key, as a masked term keeps it.
         let key = key & u64::from(u32::MAX);
-        let r = oracle::PointRays {
-            x,
-            n,
-            gs,
-            pols: &ps,
-            ns,
-            m,
-            key,
-            skip,
-        };
+        let r = self.gather_rays(x, n, receiver_patch, gs, &ps, key);
         match swept {
-            Some(sw) if m <= 64 && !point_shaft_clear(x, n, gs, sw) => {
+            Some(sw) if r.m <= 64 && !point_shaft_clear(x, n, gs, sw) => {
                 // The static mask, its visibility and, where a moving object is now
                 // between the point and the source, the visibility now: one pass.
                 let near = !point_shaft_clear(x, n, gs, &self.moving_now);
@@ -597,16 +600,8 @@ impl Solver<'_> {
                     // Rays are only cast where a moving object is now.
                     let near = !point_shaft_clear(x, n, gs, &self.moving_now);
                     let v = if near {
-                        let r = oracle::PointRays {
-                            x,
-                            n,
-                            gs,
-                            pols: &oracle::poly(gs),
-                            ns: DVec3::from_array(gs.normal),
-                            m: self.corner_rays_to(gs),
-                            key: u64::from(t.key),
-                            skip: [p as u32, gs.patch],
-                        };
+                        let ps = oracle::poly(gs);
+                        let r = self.gather_rays(x, n, p as u32, gs, &ps, u64::from(t.key));
                         oracle::visible_fraction_moving(&self.bvh, &r, t.mask, t.vis_static.into())
                     } else {
                         f64::from(t.vis_static)
