@@ -198,24 +198,11 @@ impl Solver<'_> {
         let m = self.opts.rays_per_point;
         let made = std::cell::Cell::new(0u64);
         let vis_at = |x: DVec3, i: u64| {
-            let skip = [g.patch, gs.patch];
-            let (key, mask) = match masks {
-                RowMasks::Make if i < 4 => (self.row_ray_key(ids, i), None),
-                RowMasks::Known(bits) if i < 4 => (
-                    self.row_ray_key(ids, i),
-                    Some(bits >> (i as u32 * m) & ((1 << m) - 1)),
-                ),
-                _ => return self.row_point_visibility(ids, g, gs, &ps, ns, x, n, i),
-            };
-            let r = oracle::PointRays {
-                x,
-                n,
-                gs,
-                pols: &ps,
-                ns,
-                m,
-                key,
-                skip,
+            let r = self.row_rays(ids, g, gs, &ps, ns, x, n, i);
+            let mask = match masks {
+                RowMasks::Make if i < 4 => None,
+                RowMasks::Known(bits) if i < 4 => Some(bits >> (i as u32 * m) & ((1 << m) - 1)),
+                _ => return oracle::visible_fraction(&self.bvh, &r),
             };
             let rays = oracle::masked_rays(&self.bvh, &r, mask, true);
             if mask.is_none() {
@@ -285,7 +272,25 @@ impl Solver<'_> {
         n: DVec3,
         i: u64,
     ) -> f64 {
-        let r = oracle::PointRays {
+        oracle::visible_fraction(&self.bvh, &self.row_rays(ids, g, gs, ps, ns, x, n, i))
+    }
+
+    /// The rays of [`Solver::row_point_visibility`]: `rays_per_point` of them from
+    /// point `i` at `x`, keyed by [`Solver::row_ray_key`], the leaf's and the
+    /// source's patches skipped.
+    #[allow(clippy::too_many_arguments)]
+    fn row_rays<'a>(
+        &self,
+        ids: RowRayIds,
+        g: &Geom,
+        gs: &'a Geom,
+        ps: &'a crate::geometry::Poly,
+        ns: DVec3,
+        x: DVec3,
+        n: DVec3,
+        i: u64,
+    ) -> oracle::PointRays<'a> {
+        oracle::PointRays {
             x,
             n,
             gs,
@@ -294,8 +299,7 @@ impl Solver<'_> {
             m: self.opts.rays_per_point,
             key: self.row_ray_key(ids, i),
             skip: [g.patch, gs.patch],
-        };
-        oracle::visible_fraction(&self.bvh, &r)
+        }
     }
 
     /// The jitter key of the rays of [`Solver::row_point_visibility`] at point `i`.
