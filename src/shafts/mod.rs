@@ -13,6 +13,12 @@
 //! [`Shaft::is_clear`] asks the scene's BVH for the triangles overlapping the box and
 //! stops at the first one it cannot cull: "clear" is a proof, "not clear" only means
 //! rays must decide.
+//!
+//! Against the few boxes moving objects sweep, [`clear_of_boxes`] settles most
+//! cases by boxes and by the segment between the ends' centres, and the rest with
+//! [`misses_all_boxes`], which makes the hull planes one at a time and stops as
+//! soon as every box lies outside one (the whole shaft's answer, with fewer
+//! planes).
 
 use glam::DVec3;
 
@@ -41,12 +47,7 @@ impl Shaft {
     /// The shaft between polygons `a` and `b` (corners in order, 3 to 4 each), whose
     /// unit normals are `na`, `nb`.
     pub fn new(a: &[DVec3], na: DVec3, b: &[DVec3], nb: DVec3) -> Shaft {
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for &p in a.iter().chain(b) {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
+        let (lo, hi) = bounds(a, b);
         let eps = (hi - lo).length() * 1e-9;
         let mut s = Shaft {
             lo,
@@ -56,41 +57,12 @@ impl Shaft {
             ends: [(na, na.dot(a[0])), (nb, nb.dot(b[0]))],
             eps,
         };
-        s.add_edge_planes(a, b);
-        s.add_edge_planes(b, a);
+        hull_planes(a, b, eps, |plane| {
+            s.planes[s.count] = plane;
+            s.count += 1;
+            true
+        });
         s
-    }
-
-    fn add_edge_planes(&mut self, edges_of: &[DVec3], corners_of: &[DVec3]) {
-        let k = edges_of.len();
-        for i in 0..k {
-            let (p, q) = (edges_of[i], edges_of[(i + 1) % k]);
-            for &c in corners_of {
-                if self.count == MAX_PLANES {
-                    return;
-                }
-                let n = (q - p).cross(c - p);
-                let len = n.length();
-                if len <= self.eps * (q - p).length() {
-                    continue;
-                }
-                let n = n / len;
-                let d = n.dot(p);
-                // Orient so every corner of both polygons is inside (n·x <= d).
-                let (mut above, mut below) = (false, false);
-                for &x in edges_of.iter().chain(corners_of) {
-                    let s = n.dot(x) - d;
-                    above |= s > self.eps;
-                    below |= s < -self.eps;
-                }
-                match (above, below) {
-                    (true, true) => continue, // not a hull face
-                    (true, false) => self.planes[self.count] = (-n, -d),
-                    _ => self.planes[self.count] = (n, d),
-                }
-                self.count += 1;
-            }
-        }
     }
 
     /// True if no point of the box `[lo, hi]` can lie on a segment between the two
@@ -98,27 +70,10 @@ impl Shaft {
     /// plane). Conservative: `false` does not prove an overlap.
     pub fn misses_box(&self, lo: DVec3, hi: DVec3) -> bool {
         let eps = self.eps;
-        if (0..3).any(|a| hi[a] < self.lo[a] - eps || lo[a] > self.hi[a] + eps) {
-            return true;
-        }
-        let corners: [DVec3; 8] = std::array::from_fn(|i| {
-            DVec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            )
-        });
-        for &(n, d) in &self.ends {
-            if corners.iter().all(|v| n.dot(*v) - d <= eps) {
-                return true;
-            }
-        }
-        for &(n, d) in &self.planes[..self.count] {
-            if corners.iter().all(|v| n.dot(*v) - d >= -eps) {
-                return true;
-            }
-        }
-        false
+        !box_in_reach((self.lo, self.hi), self.ends, eps, lo, hi)
+            || self.planes[..self.count]
+                .iter()
+                .any(|&(n, d)| box_outside(n, d, eps, lo, hi))
     }
 
     /// True if the triangle `t` cannot meet any segment between the two polygons.
@@ -153,6 +108,153 @@ impl Shaft {
     }
 }
 
+/// The box of the corners of `a` and `b`.
+#[inline]
+fn bounds(a: &[DVec3], b: &[DVec3]) -> (DVec3, DVec3) {
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for &c in a.iter().chain(b) {
+        lo = lo.min(c);
+        hi = hi.max(c);
+    }
+    (lo, hi)
+}
+
+/// The corner of the box `[lo, hi]` lowest along `n`: its `n · v` is the least of
+/// the eight corners' as computed (rounding is monotonic, and each corner's dot
+/// product is the same sum in the same order), so a test of every corner against a
+/// plane is a test of this one.
+#[inline]
+fn lowest_corner(n: DVec3, lo: DVec3, hi: DVec3) -> DVec3 {
+    DVec3::select(n.cmpge(DVec3::ZERO), lo, hi)
+}
+
+/// True if the box `[lo, hi]` lies outside the plane `(n, d)` (inside `n · p <= d`)
+/// within `eps`: every corner has `n · v - d >= -eps`.
+#[inline]
+fn box_outside(n: DVec3, d: f64, eps: f64, lo: DVec3, hi: DVec3) -> bool {
+    n.dot(lowest_corner(n, lo, hi)) - d >= -eps
+}
+
+/// True if the box `[lo, hi]` lies behind the end plane `(n, d)` (front `n · p >
+/// d`) within `eps`: every corner has `n · v - d <= eps`.
+#[inline]
+fn box_behind(n: DVec3, d: f64, eps: f64, lo: DVec3, hi: DVec3) -> bool {
+    n.dot(lowest_corner(-n, lo, hi)) - d <= eps
+}
+
+/// True if the box `[l, h]` may meet a shaft whose ends have the box `reach` and
+/// the planes `ends` (front `n · p > d`): neither that box nor an end's plane keeps
+/// it off, within `eps`. The tests of [`Shaft::misses_box`] before its hull planes.
+fn box_in_reach(
+    reach: (DVec3, DVec3),
+    ends: [(DVec3, f64); 2],
+    eps: f64,
+    l: DVec3,
+    h: DVec3,
+) -> bool {
+    let (lo, hi) = reach;
+    if (0..3).any(|k| h[k] < lo[k] - eps || l[k] > hi[k] + eps) {
+        return false;
+    }
+    !ends.iter().any(|&(n, d)| box_behind(n, d, eps, l, h))
+}
+
+/// Hands `f` the hull planes of the shaft between `a` and `b` (tolerance `eps`),
+/// each `(n, d)` with inside `n · p <= d`, in a fixed order (the edges of `a` with
+/// the corners of `b`, then the edges of `b` with the corners of `a`), at most
+/// [`MAX_PLANES`] of them, until `f` returns false.
+fn hull_planes(a: &[DVec3], b: &[DVec3], eps: f64, mut f: impl FnMut((DVec3, f64)) -> bool) {
+    let mut count = 0;
+    for (edges_of, corners_of) in [(a, b), (b, a)] {
+        let k = edges_of.len();
+        // A single point has no edge (its one "edge" would give no plane).
+        if k < 2 {
+            continue;
+        }
+        for i in 0..k {
+            let (p, q) = (edges_of[i], edges_of[(i + 1) % k]);
+            for &c in corners_of {
+                if count == MAX_PLANES {
+                    return;
+                }
+                let n = (q - p).cross(c - p);
+                let len = n.length();
+                if len <= eps * (q - p).length() {
+                    continue;
+                }
+                let n = n / len;
+                let d = n.dot(p);
+                // Orient so every corner of both polygons is inside (n·x <= d).
+                let (mut above, mut below) = (false, false);
+                for &x in edges_of.iter().chain(corners_of) {
+                    let s = n.dot(x) - d;
+                    above |= s > eps;
+                    below |= s < -eps;
+                }
+                let plane = match (above, below) {
+                    (true, true) => continue, // not a hull face
+                    (true, false) => (-n, -d),
+                    _ => (n, d),
+                };
+                count += 1;
+                if !f(plane) {
+                    return;
+                }
+            }
+        }
+    }
+}
+
+/// Most boxes [`misses_all_boxes`] settles without building a whole [`Shaft`].
+const LAZY_BOXES: usize = 8;
+
+/// True if [`Shaft::misses_box`] holds for each of `boxes`, the shaft being
+/// `Shaft::new(a, na, b, nb)`: the same answer bit for bit, with the hull planes
+/// made one at a time and no more of them than it takes to cull every box (a box
+/// a moving object sweeps mostly falls to one of the first planes; building all
+/// of them, `add_edge_planes` then, was 4% of a space-time solve).
+pub fn misses_all_boxes(
+    a: &[DVec3],
+    na: DVec3,
+    b: &[DVec3],
+    nb: DVec3,
+    boxes: &[(DVec3, DVec3)],
+) -> bool {
+    if boxes.len() > LAZY_BOXES {
+        let shaft = Shaft::new(a, na, b, nb);
+        return boxes.iter().all(|&(l, h)| shaft.misses_box(l, h));
+    }
+    let (lo, hi) = bounds(a, b);
+    let eps = (hi - lo).length() * 1e-9;
+    let ends = [(na, na.dot(a[0])), (nb, nb.dot(b[0]))];
+    // The boxes no test has culled yet.
+    let mut open = [(DVec3::ZERO, DVec3::ZERO); LAZY_BOXES];
+    let mut left = 0;
+    for &(l, h) in boxes {
+        if box_in_reach((lo, hi), ends, eps, l, h) {
+            open[left] = (l, h);
+            left += 1;
+        }
+    }
+    if left == 0 {
+        return true;
+    }
+    hull_planes(a, b, eps, |(n, d)| {
+        let mut i = 0;
+        while i < left {
+            let (l, h) = open[i];
+            if box_outside(n, d, eps, l, h) {
+                left -= 1;
+                open[i] = open[left];
+            } else {
+                i += 1;
+            }
+        }
+        left > 0
+    });
+    left == 0
+}
+
 /// How far inside a box (a fraction of the diagonal of the two ends' box) the
 /// segment between two ends' centres must run for [`clear_of_boxes`] to decide that
 /// the shaft between them meets the box without building it: 1000 times the
@@ -171,8 +273,9 @@ pub fn meets_any(lo: DVec3, hi: DVec3, boxes: &[(DVec3, DVec3)]) -> bool {
 /// from the side `na` faces). Decided as cheaply as it can be: boxes that miss the
 /// box of both ends need nothing more (most of them, for the current boxes of the
 /// moving objects); a box on the line between the two centres, in front of both
-/// ends, meets the shaft ([`segment_crosses_box`]); only then is the [`Shaft`]
-/// built and every box tried against it ([`Shaft::misses_box`]).
+/// ends, meets the shaft ([`segment_crosses_box`]); only then are the shaft's
+/// hull planes made, one at a time until every box is culled
+/// ([`misses_all_boxes`]).
 pub fn clear_of_boxes(
     a: &[DVec3],
     na: DVec3,
@@ -180,12 +283,7 @@ pub fn clear_of_boxes(
     nb: DVec3,
     boxes: &[(DVec3, DVec3)],
 ) -> bool {
-    let (lo, hi) = a
-        .iter()
-        .chain(b)
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &c| {
-            (lo.min(c), hi.max(c))
-        });
+    let (lo, hi) = bounds(a, b);
     if !meets_any(lo, hi, boxes) {
         return true;
     }
@@ -199,8 +297,7 @@ pub fn clear_of_boxes(
     {
         return false;
     }
-    let shaft = Shaft::new(a, na, b, nb);
-    boxes.iter().all(|&(l, h)| shaft.misses_box(l, h))
+    misses_all_boxes(a, na, b, nb, boxes)
 }
 
 /// True if the segment `p q` runs through the box `[lo, hi]` shrunk by `margin` on
@@ -276,6 +373,72 @@ mod tests {
         v
     }
 
+    /// [`Shaft::misses_box`] as the definition reads, every corner of the box
+    /// against every plane (it tests one corner per plane).
+    fn misses_by_corners(s: &Shaft, lo: DVec3, hi: DVec3) -> bool {
+        let eps = s.eps;
+        if (0..3).any(|a| hi[a] < s.lo[a] - eps || lo[a] > s.hi[a] + eps) {
+            return true;
+        }
+        let corners: [DVec3; 8] = std::array::from_fn(|i| {
+            DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            )
+        });
+        let all = |f: &dyn Fn(DVec3) -> bool| corners.iter().all(|&v| f(v));
+        s.ends.iter().any(|&(n, d)| all(&|v| n.dot(v) - d <= eps))
+            || s.planes[..s.count]
+                .iter()
+                .any(|&(n, d)| all(&|v| n.dot(v) - d >= -eps))
+    }
+
+    #[test]
+    fn one_corner_per_plane_answers_as_all_eight_do() {
+        // Boxes on and about the planes of axis-aligned and skew shafts, flat and
+        // empty ones among them: the lowest corner decides as the eight would.
+        let mut rnd = uniform(0x1234_5678_9abc_def1);
+        let (mut missed, mut met) = (0, 0);
+        for i in 0..20000 {
+            let a = square(0.0, true);
+            let mut b = square(1.0 + rnd(), false);
+            if i % 2 == 1 {
+                for v in &mut b {
+                    *v += DVec3::new(rnd() * 3.0 - 1.5, rnd() * 3.0 - 1.5, 0.0);
+                }
+            }
+            let s = Shaft::new(&a, DVec3::Z, &b, -DVec3::Z);
+            // Corners on a lattice of halves, so that many lie exactly on planes.
+            let mut q = || (rnd() * 8.0).floor() / 2.0 - 1.5;
+            let lo = DVec3::new(q(), q(), q());
+            let size = match i % 4 {
+                0 => DVec3::ZERO,
+                1 => DVec3::new(0.5, 0.0, 0.5),
+                _ => DVec3::new(q().abs(), q().abs(), q().abs()),
+            };
+            let hi = lo + size;
+            let m = s.misses_box(lo, hi);
+            assert_eq!(m, misses_by_corners(&s, lo, hi), "{lo} {hi} {b:?}");
+            if m {
+                missed += 1;
+            } else {
+                met += 1;
+            }
+        }
+        assert!(missed > 10000 && met > 1500, "{missed} missed, {met} met");
+    }
+
+    /// Numbers uniform in `[0, 1)` from a xorshift generator seeded with `state`.
+    fn uniform(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     #[test]
     fn blocker_between_is_not_culled_and_side_walls_are() {
         let (a, b) = (square(0.0, true), square(1.0, false));
@@ -332,13 +495,7 @@ mod tests {
         // Random quads and boxes: wherever the segment between the quads' centroids
         // runs through a box, the shaft must not miss it (the shortcut callers take
         // before building a shaft); and the shortcut must fire on a fair share.
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = uniform(0x2545_f491_4f6c_dd1d);
         let quad = |z: f64, up: bool, rnd: &mut dyn FnMut() -> f64| {
             let (x, y, w) = (rnd() * 4.0, rnd() * 4.0, 0.2 + rnd());
             let mut q = square(0.0, up);
@@ -417,5 +574,62 @@ mod tests {
             behind,
             1e-6
         ));
+    }
+
+    #[test]
+    fn planes_made_one_at_a_time_cull_the_boxes_the_whole_shaft_culls() {
+        // Random ends (a point, a triangle or a quad, facing each other or not)
+        // and one to ten boxes about them: the lazy test must give the whole
+        // shaft's answer every time (past `LAZY_BOXES` it builds the whole shaft),
+        // and both answers must be common.
+        let mut rnd = uniform(0x9e37_79b9_7f4a_7c15);
+        let poly = |corners: usize, z: f64, up: bool, rnd: &mut dyn FnMut() -> f64| {
+            let (x, y, w) = (rnd() * 4.0, rnd() * 4.0, 0.1 + rnd());
+            let mut p: Vec<DVec3> = square(0.0, true)[..corners.max(1)]
+                .iter()
+                .map(|v| DVec3::new(x + v.x * w, y + v.y * w, z))
+                .collect();
+            if corners == 1 {
+                p.truncate(1);
+            }
+            if !up {
+                p.reverse();
+            }
+            (p, if up { DVec3::Z } else { -DVec3::Z })
+        };
+        let (mut clear, mut blocked) = (0, 0);
+        for i in 0..6000 {
+            let (a, na) = poly([1, 3, 4][i % 3], 0.0, true, &mut rnd);
+            let z = 0.5 + 3.0 * rnd();
+            let (b, nb) = poly([3, 4][i % 2], z, i % 5 == 0, &mut rnd);
+            let boxes: Vec<(DVec3, DVec3)> = (0..1 + (i % 10))
+                .map(|_| {
+                    let lo = DVec3::new(rnd() * 5.0 - 0.5, rnd() * 5.0 - 0.5, rnd() * 4.0 - 0.5);
+                    (
+                        lo,
+                        lo + DVec3::new(0.05 + rnd(), 0.05 + rnd(), 0.05 + rnd()) * 1.2,
+                    )
+                })
+                .collect();
+            let shaft = Shaft::new(&a, na, &b, nb);
+            let whole = boxes.iter().all(|&(l, h)| shaft.misses_box(l, h));
+            for &(l, h) in &boxes {
+                assert_eq!(shaft.misses_box(l, h), misses_by_corners(&shaft, l, h));
+            }
+            assert_eq!(
+                misses_all_boxes(&a, na, &b, nb, &boxes),
+                whole,
+                "{a:?} {b:?} {boxes:?}"
+            );
+            if whole {
+                clear += 1;
+            } else {
+                blocked += 1;
+            }
+        }
+        assert!(
+            clear > 1000 && blocked > 1000,
+            "{clear} clear, {blocked} blocked"
+        );
     }
 }

@@ -1234,13 +1234,13 @@ impl<'a> Solver<'a> {
             return meets_any(rlo.min(slo), rhi.max(shi), &w.swept);
         }
         let (pr, ps) = (oracle::poly(gr), oracle::poly(gs));
-        let shaft = crate::shafts::Shaft::new(
+        !crate::shafts::misses_all_boxes(
             pr.corners(),
             DVec3::from_array(gr.normal),
             ps.corners(),
             DVec3::from_array(gs.normal),
-        );
-        w.swept.iter().any(|&(lo, hi)| !shaft.misses_box(lo, hi))
+            &w.swept,
+        )
     }
 
     /// True if surface elements `r` and `s` move as one over the span of window `w`
