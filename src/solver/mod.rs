@@ -1312,13 +1312,12 @@ impl<'a> Solver<'a> {
         let (lo, hi) = (lo - pad, hi + pad);
         // Other tracks: the boxes their objects sweep (one per moving object, in
         // scene order, as `swept_boxes` makes them; anything else is not trusted).
-        let movers: Vec<&crate::scene::Object> = objects.iter().filter(|o| o.is_moving()).collect();
-        if movers.len() != w.swept.len() {
+        let movers = || objects.iter().filter(|o| o.is_moving());
+        if movers().count() != w.swept.len() {
             return false;
         }
         let boxes_meet = |(l, h): (DVec3, DVec3)| l.cmple(hi).all() && lo.cmple(h).all();
-        if movers
-            .iter()
+        if movers()
             .zip(&w.swept)
             .any(|(o, &bx)| o.motion != a.motion && boxes_meet(bx))
         {

@@ -175,6 +175,17 @@ impl Solver<'_> {
     /// objects sweep over `span` (`Solver::revalidated`).
     pub fn begin_window(&mut self, span: [f64; 2], b_ref: f64) -> Result<()> {
         let swept = super::spacetime::swept_boxes(self.scene, span[0], span[1]);
+        self.begin_window_in(span, swept, b_ref)
+    }
+
+    /// [`Solver::begin_window`] with the boxes the moving objects sweep over `span`
+    /// already made (`spacetime::swept_boxes`).
+    fn begin_window_in(
+        &mut self,
+        span: [f64; 2],
+        swept: Vec<(DVec3, DVec3)>,
+        b_ref: f64,
+    ) -> Result<()> {
         let points = match self.carried.take() {
             Some(c) => self.revalidated(&c, &swept)?,
             None => PointCache::new(&self.opts.storage, self.kept_budget)?,
@@ -245,7 +256,7 @@ impl Solver<'_> {
         let t = self.now;
         for _ in 0..SHARED_PASSES {
             let b_ref = self.b_ref();
-            self.begin_window(span, b_ref)?;
+            self.begin_window_in(span, swept.clone(), b_ref)?;
             self.frame(t, b_ref)?;
             let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
             let b = self.elems.radiosities.as_slice()[..shared].to_vec();
