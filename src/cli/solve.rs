@@ -184,7 +184,7 @@ pub struct Args {
     pub fps: f64,
     /// Seconds of animation per space-time window: frames are solved window by
     /// window; each finished window is written and its memory released. Default:
-    /// three key intervals (see `--key-motion`), as long in motion as they are.
+    /// twelve key intervals (see `--key-motion`), as long in motion as they are.
     #[arg(long)]
     pub window: Option<f64>,
     /// A stored cell keeps one value over consecutive frames while its corners stay

@@ -28,7 +28,7 @@
 //!    This hierarchy and its coefficients are computed once and kept for every
 //!    window ([`Solver::run_shared`]).
 //! 2. *Windows*, earliest first: the animation's frames (`fps`) are grouped into
-//!    windows of three key intervals (below), or of `window` seconds. A window
+//!    windows of [`WINDOW_KEYS`] key intervals (below), or of `window` seconds. A window
 //!    re-classifies the links against the boxes swept during the window only (a
 //!    link far from where the objects are *now* becomes constant) and refines the
 //!    links that became constant: the window's base. Each frame then starts from
@@ -242,7 +242,22 @@ impl Default for SpaceTimeOptions {
 pub const INTERP_MOTION: f64 = 0.015;
 
 /// Key intervals per window when `--window` is not given ([`time_layout`]).
-pub const WINDOW_KEYS: usize = 3;
+///
+/// A window's start costs about a keyframe more than a keyframe: the window before
+/// ends on a keyframe and this one starts on the next frame, and the first one
+/// gathers with the terms handed on only (ACTOR: 0.81–0.89 s against 0.32–0.44 s,
+/// two threads). A longer window sweeps larger boxes, so more of its links vary,
+/// but on ACTOR and LIGHT that costs less than the starts it saves, and its peak
+/// RSS is the same (the kept terms go stale and are dropped; the leaves are on the
+/// pools' storage). Measured (BENCHMARKS.md, "Longer windows"), two threads, at
+/// 3 / 6 / 9 / 12 intervals: ACTOR 11.5 / 10.6–10.8 / 10.1–10.6 / 9.4–10.5 s at
+/// 3.01–3.03% error; ACTOR750 (30 s) 109.9 s against 92.8 s at 12, 29.9 against
+/// 29.8 MB. LIGHT's one window reconstructs against its first frame's radiosity
+/// scale, lower than its second window's was, so it meshes finer (3.44% against
+/// 3.49% at `--recon-tol 0.04`, 13.7 s against 11.4 s); at `--recon-tol 0.05` it is
+/// at the old error (3.49%) in the old time (11.2 s). At most `WINDOW_KEYS ·
+/// MAX_KEY_FRAMES + 1` frames are lost when a solve is interrupted.
+pub const WINDOW_KEYS: usize = 12;
 
 /// Most frames from one keyframe to the next when keyframes are spaced by motion
 /// ([`time_layout`]): where nothing moves, a window still ends every
@@ -507,7 +522,7 @@ pub struct WindowPlan {
 /// Either way a last window shorter than half the one before joins it (a window's
 /// start costs more than a frame). ACTOR moves about 0.6% of its diameter a frame at
 /// 25 fps, so the default `key_motion` 0.05 spaces its keyframes 8 frames apart, as the
-/// former default stride did, and its windows last 25 frames.
+/// former default stride did, and its 76 frames make one window.
 pub fn time_layout(times: &[f64], motion: &[f64], st: &SpaceTimeOptions) -> Vec<WindowPlan> {
     let n = times.len();
     let mut cum = Vec::with_capacity(n);
@@ -1488,34 +1503,36 @@ mod tests {
         assert_eq!(sizes(5, 0.08), [2, 2, 1]);
         assert_eq!(sizes(3, 1.0), [3]);
         assert_eq!(sizes(1, 1.0), [1]);
-        // Windows of three key intervals: the same for a stride.
-        assert_eq!(layout(76, 0.0, None, Some(8)).0, [25, 25, 26]);
+        // Windows of `WINDOW_KEYS` key intervals, for a stride too: twelve of 8
+        // frames hold ACTOR's 76, and 300 make windows of 97 frames, the short
+        // tail joining the last.
+        assert_eq!(layout(76, 0.0, None, Some(8)).0, [76]);
+        assert_eq!(layout(300, 0.0, None, Some(8)).0, [97, 97, 106]);
     }
 
     #[test]
     fn keyframes_follow_motion_not_frames() {
         // ACTOR's pace (0.6% of the diameter a frame, under 0.05 over 8 frames, over
-        // it at 9): keyframes 8 frames apart, windows of 25 frames, as the stride 8
-        // and 1 s windows gave.
+        // it at 9): keyframes 8 frames apart, as the stride 8 gave, and its 76
+        // frames one window.
         let (sizes, keys) = layout(76, 0.006, None, None);
-        assert_eq!(sizes, [25, 25, 26]);
-        assert_eq!(keys[0], [0, 8, 16, 24]);
-        assert_eq!(keys[2], [0, 8, 16, 24, 25]);
-        assert_eq!((sizes, keys), layout(76, 0.006, Some(1.0), Some(8)));
+        assert_eq!(sizes, [76]);
+        assert_eq!(keys[0], [0, 8, 16, 24, 32, 40, 48, 56, 64, 72, 75]);
+        assert_eq!((sizes, keys), layout(76, 0.006, Some(3.04), Some(8)));
         // The same motion over twice the frames (the paper's length measure, §6):
         // as many windows and keyframes, twice as far apart in frames.
         let (sizes, keys) = layout(151, 0.003, None, None);
-        assert_eq!(sizes, [49, 49, 53]);
-        assert_eq!(keys[0], [0, 16, 32, 48]);
-        assert_eq!(keys[2], [0, 16, 32, 48, 52]);
-        // Nothing moving: keyframes at most MAX_KEY_FRAMES apart.
-        let (sizes, keys) = layout(200, 0.0, None, None);
-        assert_eq!(sizes, [97, 103]);
-        assert_eq!(keys[0], [0, 32, 64, 96]);
+        assert_eq!(sizes, [151]);
+        assert_eq!(keys[0], [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 150]);
+        // Nothing moving: keyframes at most MAX_KEY_FRAMES apart, and a window
+        // every `WINDOW_KEYS` of them.
+        let (sizes, keys) = layout(800, 0.0, None, None);
+        assert_eq!(sizes, [385, 415]);
+        assert_eq!(keys[0], (0..=384).step_by(32).collect::<Vec<_>>());
         // Faster than `key_motion` a frame: every frame a keyframe.
-        let (sizes, keys) = layout(10, 0.2, None, None);
-        assert_eq!(sizes, [4, 4, 2]);
-        assert_eq!(keys[1], [0, 1, 2, 3]);
+        let (sizes, keys) = layout(30, 0.2, None, None);
+        assert_eq!(sizes, [13, 17]);
+        assert_eq!(keys[0], (0..13).collect::<Vec<_>>());
         // Motion that starts late: sparse keys while still, dense once it moves.
         let times: Vec<f64> = (0..60).map(|i| i as f64 / 25.0).collect();
         let motion: Vec<f64> = (0..59).map(|i| if i < 40 { 0.0 } else { 0.02 }).collect();
@@ -1529,7 +1546,7 @@ mod tests {
             })
             .flatten()
             .collect();
-        assert_eq!(starts, [0, 32, 42, 44, 45, 47, 49, 51, 52, 54, 56, 58, 59]);
+        assert_eq!(starts, [0, 32, 42, 44, 46, 48, 50, 52, 54, 56, 58, 59]);
     }
 
     proptest::proptest! {
@@ -1626,10 +1643,13 @@ mod tests {
         let fast = time_layout(&times, &motion, &st);
         let slow = time_layout(&slow_times, &slow_motion, &st);
         let count = |p: &[WindowPlan]| (p.len(), p.iter().map(|w| w.keys.len()).sum::<usize>());
-        assert_eq!(count(&fast), (3, 13));
+        assert_eq!(count(&fast), (1, 11));
         assert_eq!(count(&slow), count(&fast));
-        assert_eq!(fast[0].keys, [0, 8, 16, 24]);
-        assert_eq!(slow[0].keys, [0, 16, 32, 48]);
+        assert_eq!(fast[0].keys, [0, 8, 16, 24, 32, 40, 48, 56, 64, 72, 75]);
+        assert_eq!(
+            slow[0].keys,
+            [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 150]
+        );
     }
 
     #[test]
