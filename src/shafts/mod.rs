@@ -210,9 +210,10 @@ const LAZY_BOXES: usize = 8;
 
 /// True if [`Shaft::misses_box`] holds for each of `boxes`, the shaft being
 /// `Shaft::new(a, na, b, nb)`: the same answer bit for bit, with the hull planes
-/// made one at a time and no more of them than it takes to cull every box (a box
-/// a moving object sweeps mostly falls to one of the first planes; building all
-/// of them, `add_edge_planes` then, was 4% of a space-time solve).
+/// made one at a time and no more of them than it takes to cull every box.
+/// Building all of them (`add_edge_planes` then) was 4.8% of the instructions of
+/// ACTOR's space-time solve; this takes 3.8% (BENCHMARKS.md, "Longer windows; hull
+/// planes made one at a time").
 pub fn misses_all_boxes(
     a: &[DVec3],
     na: DVec3,
