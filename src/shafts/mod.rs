@@ -54,7 +54,7 @@ impl Shaft {
             hi,
             planes: [(DVec3::ZERO, 0.0); MAX_PLANES],
             count: 0,
-            ends: [(na, na.dot(a[0])), (nb, nb.dot(b[0]))],
+            ends: end_planes(a, na, b, nb),
             eps,
         };
         hull_planes(a, b, eps, |plane| {
@@ -106,6 +106,12 @@ impl Shaft {
             patch == skip[0] || patch == skip[1] || self.culls(&tri)
         })
     }
+}
+
+/// The planes of a shaft's two ends `(n, d)`, front `n · p > d`: polygon `a` with
+/// unit normal `na`, and `b` with `nb`.
+fn end_planes(a: &[DVec3], na: DVec3, b: &[DVec3], nb: DVec3) -> [(DVec3, f64); 2] {
+    [(na, na.dot(a[0])), (nb, nb.dot(b[0]))]
 }
 
 /// The box of the corners of `a` and `b`.
@@ -221,13 +227,24 @@ pub fn misses_all_boxes(
     nb: DVec3,
     boxes: &[(DVec3, DVec3)],
 ) -> bool {
+    misses_all_within(a, b, bounds(a, b), end_planes(a, na, b, nb), boxes)
+}
+
+/// [`misses_all_boxes`], given the box `reach` of both ends' corners and their
+/// planes `ends` ([`end_planes`]), which [`clear_of_boxes`] has made already.
+fn misses_all_within(
+    a: &[DVec3],
+    b: &[DVec3],
+    reach: (DVec3, DVec3),
+    ends: [(DVec3, f64); 2],
+    boxes: &[(DVec3, DVec3)],
+) -> bool {
     if boxes.len() > LAZY_BOXES {
-        let shaft = Shaft::new(a, na, b, nb);
+        let shaft = Shaft::new(a, ends[0].0, b, ends[1].0);
         return boxes.iter().all(|&(l, h)| shaft.misses_box(l, h));
     }
-    let (lo, hi) = bounds(a, b);
+    let (lo, hi) = reach;
     let eps = (hi - lo).length() * 1e-9;
-    let ends = [(na, na.dot(a[0])), (nb, nb.dot(b[0]))];
     // The boxes no test has culled yet.
     let mut open = [(DVec3::ZERO, DVec3::ZERO); LAZY_BOXES];
     let mut left = 0;
@@ -289,7 +306,7 @@ pub fn clear_of_boxes(
         return true;
     }
     let centre = |p: &[DVec3]| p.iter().sum::<DVec3>() / p.len() as f64;
-    let ends = [(na, na.dot(a[0])), (nb, nb.dot(b[0]))];
+    let ends = end_planes(a, na, b, nb);
     let margin = SHORTCUT_MARGIN * (hi - lo).length();
     let (ca, cb) = (centre(a), centre(b));
     if boxes
@@ -298,7 +315,7 @@ pub fn clear_of_boxes(
     {
         return false;
     }
-    misses_all_boxes(a, na, b, nb, boxes)
+    misses_all_within(a, b, (lo, hi), ends, boxes)
 }
 
 /// True if the segment `p q` runs through the box `[lo, hi]` shrunk by `margin` on
