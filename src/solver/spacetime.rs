@@ -230,16 +230,23 @@ impl Default for SpaceTimeOptions {
     }
 }
 
-/// Default [`SpaceTimeOptions::interp_motion`]: 1.5% of the scene's diameter, under
-/// a third of the default `key_motion`. Measured (BENCHMARKS.md, "Frames between
-/// taken on the line below a motion"): on ACTOR it frees the frames between
-/// keyframes two frames apart (the actors travel 1.2–1.3% in two frames); the
-/// room's error is unchanged (3.211% against 3.218%), the actors' visible faces
-/// are better (2.04% against 2.06%, the line averages the steps of their rays),
-/// and the solve takes 11–24% less time (runs of the same hour); LIGHT takes a
-/// third less at the same error in the room (3.667% against 3.663%). At 0.03
-/// ACTOR's room error grows to 3.29%.
-pub const INTERP_MOTION: f64 = 0.015;
+/// Default [`SpaceTimeOptions::interp_motion`]: 3% of the scene's diameter, under
+/// two thirds of the default `key_motion`, so the bisection of a key interval tests
+/// its midpoint and takes the line over each half below it (ACTOR: keyframes 8
+/// frames apart, the actors travel 2.5% in four frames).
+///
+/// Measured (BENCHMARKS.md, "Frames between on the line over half a key
+/// interval"), against the reference's probes at every reference time, two threads:
+/// - ACTOR `--eps 1 --recon-tol 0.08 --recon-tol-moving 0.08`: 2.89% (worst time
+///   3.29%) in 7.8–8.4 s; at 0.015 `--recon-tol 0.10` gave 3.03% (worst 3.34%) in
+///   9.5–10.9 s. Per-frame's `--eps 0.35` is at 3.15% (worst 3.63%).
+/// - LIGHT `--eps 0.5 --recon-tol 0.06`: 3.52% (worst 4.45%, the board 0.94%) in
+///   6.6–6.9 s, against 3.51% (4.48%, 0.94%) in about 10 s at 0.015.
+///
+/// Further, the line does leave stains: ACTOR with keyframes 10% apart and 0.05
+/// here (the halves of 8 frames free) is at 3.18% over all times but 4.52% at its
+/// worst, and LIGHT's board went from 0.94% to 6.5%.
+pub const INTERP_MOTION: f64 = 0.03;
 
 /// Key intervals per window when `--window` is not given ([`time_layout`]).
 ///
