@@ -238,12 +238,12 @@ impl Default for SpaceTimeOptions {
 /// Measured (BENCHMARKS.md, "Frames between on the line over half a key
 /// interval"), against the reference's probes at every reference time, two threads:
 /// - ACTOR `--eps 1 --recon-tol 0.08 --recon-tol-moving 0.08`: 2.89% (worst time
-///   3.29%) in 7.8–8.4 s; at 0.015 `--recon-tol 0.10` gave 3.03% (worst 3.34%) in
-///   9.5–10.9 s. Per-frame's `--eps 0.35` is at 3.15% (worst 3.63%).
+///   3.29%) in 7.8–8.7 s; at 0.015 `--recon-tol 0.10` gave 3.03% (worst 3.34%) in
+///   9.5–10.9 s. Per-frame's `--eps 0.35` is at 3.15% (worst 3.64%).
 /// - LIGHT `--eps 0.5 --recon-tol 0.06`: 3.52% (worst 4.45%, the board 0.94%) in
 ///   6.6–6.9 s, against 3.51% (4.48%, 0.94%) in about 10 s at 0.015.
 ///
-/// Further, the line does leave stains: ACTOR with keyframes 10% apart and 0.05
+/// Further out the line leaves stains: ACTOR with keyframes 10% apart and 0.05
 /// here (the halves of 8 frames free) is at 3.18% over all times but 4.52% at its
 /// worst, and LIGHT's board went from 0.94% to 6.5%.
 pub const INTERP_MOTION: f64 = 0.03;
