@@ -216,8 +216,9 @@ pub type Keyframe<'k> = (f64, &'k KeyValues);
 /// "Frames between on the line over half a key interval"). The paper splits a
 /// time range only while the light over it varies by more than its threshold
 /// (§5.2, criterion 2), so its time elements do not shorten with the frame
-/// interval; here that floor is set in motion. What it costs is the paper's "stains" (§5.2): a moving shadow's
-/// edge fades over the distance of one free interval instead of stepping.
+/// interval; here that floor is set in motion. What it costs is the paper's
+/// "stains" (§5.2): a moving shadow's edge fades over the distance of one free
+/// interval instead of stepping.
 #[derive(Clone, Copy, Debug)]
 pub struct Between<'k> {
     /// The moving objects travel less than [`super::spacetime::SpaceTimeOptions::interp_motion`]
