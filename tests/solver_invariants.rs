@@ -354,9 +354,11 @@ fn settings_outside_their_domain_are_refused_by_the_solver() {
     use rhier::solver::spacetime::SpaceTimeOptions;
     let st = SpaceTimeOptions::default();
     assert!(st.validate().is_ok());
-    // 0 turns `--interp-motion` off; it is not refused.
+    // 0 turns `--interp-motion` off, and makes `--moving-power-tol` skip only
+    // where nothing changes; neither is refused.
     let off = SpaceTimeOptions {
         interp_motion: 0.0,
+        moving_power_tol: 0.0,
         ..st
     };
     assert!(off.validate().is_ok());
@@ -394,6 +396,20 @@ fn settings_outside_their_domain_are_refused_by_the_solver() {
             "--interp-motion",
             SpaceTimeOptions {
                 interp_motion: -0.01,
+                ..st
+            },
+        ),
+        (
+            "--moving-power-tol",
+            SpaceTimeOptions {
+                moving_power_tol: f64::NAN,
+                ..st
+            },
+        ),
+        (
+            "--moving-power-tol",
+            SpaceTimeOptions {
+                moving_power_tol: -0.01,
                 ..st
             },
         ),

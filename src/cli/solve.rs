@@ -215,6 +215,12 @@ pub struct Args {
     /// The same motion played over more frames then costs little more.
     #[arg(long, default_value_t = SpaceTimeOptions::default().interp_motion)]
     pub interp_motion: f64,
+    /// Space-time: a frame between two solved frames skips its leaf solve (the
+    /// radiosity of what every frame shares taken on the line between them) when no
+    /// moving surface's power changes between them by more than this fraction of
+    /// the moving surfaces' total.
+    #[arg(long, default_value_t = SpaceTimeOptions::default().moving_power_tol)]
+    pub moving_power_tol: f64,
     /// Continue an interrupted space-time solve from its last finished window (kept
     /// in OUT.rhier.partial/).
     #[arg(long)]

@@ -28,6 +28,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
         key_motion: args.key_motion,
         interp_tol: args.interp_tol,
         interp_motion: args.interp_motion,
+        moving_power_tol: args.moving_power_tol,
     };
     st.validate()?;
     Ok(st)
@@ -37,7 +38,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
 /// changes a result (not the storage, thread count being part of determinism).
 fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> String {
     let settings = format!(
-        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {:?} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} interp motion {} threads {}",
+        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {:?} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} interp motion {} moving power {} threads {}",
         opts.eps,
         opts.min_size,
         opts.power_size,
@@ -58,6 +59,7 @@ fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> Str
         st.key_motion,
         st.interp_tol,
         st.interp_motion,
+        st.moving_power_tol,
         rayon::current_num_threads(),
     );
     let scene_text = rhier::scene::to_json_string(scene);

@@ -76,7 +76,8 @@
 //!    cannot follow, and cells the frame meshes anew, are gathered, and only in
 //!    the halves where the change is. Those gathers need the frame's radiosity:
 //!    when no moving surface changes the power it hands on between the two
-//!    nearest solved frames (by more than 1% of the moving surfaces' total), the
+//!    nearest solved frames (by more than [`SpaceTimeOptions::moving_power_tol`],
+//!    3% of the moving surfaces' total by default), the
 //!    frame skips its leaf solve, places the moving objects and gathers from the
 //!    hierarchy the last solve left, with the shared elements' radiosity
 //!    interpolated between those two frames ([`Solver::place_between`]); otherwise
@@ -193,13 +194,18 @@ pub struct SpaceTimeOptions {
     /// over, in motion, not in frames ([`Between::free`]). 0: never, every frame
     /// between is tested.
     pub interp_motion: f64,
+    /// A frame between two solved frames skips its leaf solve, and takes the
+    /// shared radiosity on the line between them, when no moving surface's power
+    /// changes between them by more than this fraction of the moving surfaces'
+    /// total ([`MOVING_POWER_TOL`]); 0: only where it does not change at all.
+    pub moving_power_tol: f64,
 }
 
 impl SpaceTimeOptions {
     /// Checks the time settings before any work (as [`SolveOptions::validate`]):
     /// `fps`, `window`, `key_motion`, `merge_tol` and `interp_tol` finite and > 0,
-    /// `interp_motion` finite and >= 0, `key_stride` >= 1, each named by its
-    /// `rhier solve` flag.
+    /// `interp_motion` and `moving_power_tol` finite and >= 0, `key_stride` >= 1,
+    /// each named by its `rhier solve` flag.
     pub fn validate(&self) -> Result<()> {
         super::check_domains(
             &[
@@ -209,7 +215,10 @@ impl SpaceTimeOptions {
                 ("--merge-tol", Some(self.merge_tol)),
                 ("--interp-tol", Some(self.interp_tol)),
             ],
-            &[("--interp-motion", Some(self.interp_motion))],
+            &[
+                ("--interp-motion", Some(self.interp_motion)),
+                ("--moving-power-tol", Some(self.moving_power_tol)),
+            ],
             &[("--key-stride", self.key_stride.unwrap_or(1))],
         )
     }
@@ -226,6 +235,7 @@ impl Default for SpaceTimeOptions {
             key_motion: 0.05,
             interp_tol: 0.01,
             interp_motion: INTERP_MOTION,
+            moving_power_tol: MOVING_POWER_TOL,
         }
     }
 }
@@ -272,15 +282,20 @@ pub const WINDOW_KEYS: usize = 12;
 /// that many and a bisection looks back over at most five levels.
 pub const MAX_KEY_FRAMES: usize = 32;
 
-/// Frames between two keyframes skip their leaf solve when no moving surface's
-/// power changes by more than this fraction of the moving surfaces' total between
-/// the two nearest solved frames. Measured (BENCHMARKS.md): at 0.01 ACTOR skips 52
-/// of its 63 frames between keyframes (stride 8, bisection; 42 of 54 at stride 4
-/// without) at the same error and LIGHT none; at 0.02 ACTOR takes 7% less time
-/// and its error grows from 3.169% to 3.185%; at 0.05 LIGHT skips 9 of 54 (stride
-/// 4) and its error grows from 1.41% to 1.44%; skipping every one, LIGHT's error is
-/// 2.6% (points beside the lamp the panel slides over, off by 20%).
-const MOVING_POWER_TOL: f64 = 0.01;
+/// Default [`SpaceTimeOptions::moving_power_tol`]. Frames between two keyframes
+/// skip their leaf solve when no moving surface's power changes by more than this
+/// fraction of the moving surfaces' total between the two nearest solved frames
+/// (the shared radiosity is then taken on the line between them,
+/// [`Solver::place_between`]). What the two scenes' midpoints measure
+/// (BENCHMARKS.md, "Midpoints skip their solve where the actors' light holds"):
+/// ACTOR's change by 1.1–2.4% over their key interval (actors walking through the
+/// room's light), LIGHT's by 6.5–54% (the board passing its lamp). At 0.03 every
+/// midpoint of ACTOR skips its solve, 8.35 s against 9.08 s at 0.01 (five
+/// alternated runs each), at the same error (2.887%, worst time 3.29%; actors
+/// 6.49% against 6.39%), and LIGHT solves the frames it solved at 0.01. Skipping
+/// every one, LIGHT's error is 6.2% against 3.5% (worst time 10.6%): points beside
+/// the lamp the panel slides over.
+pub const MOVING_POWER_TOL: f64 = 0.03;
 
 /// One frame of a window's solve order: a keyframe (`brackets: None`), or a frame
 /// between two frames already solved, the nearest on each side.
@@ -1007,7 +1022,7 @@ impl<'a> SpaceTime<'a> {
                     let i = keys.partition_point(|&f| f < k);
                     let prev = i.checked_sub(1).map(|i| keys[i]);
                     let held = prev.and_then(|p| rad.get(&p)).is_some_and(|ra| {
-                        SharedRadiosity::moving_power_holds(ra, &rad[&k], MOVING_POWER_TOL)
+                        SharedRadiosity::moving_power_holds(ra, &rad[&k], self.st.moving_power_tol)
                     });
                     let rows = solver.take_frame_rows();
                     if let Some(p) = prev.filter(|_| held) {
@@ -1047,8 +1062,13 @@ impl<'a> SpaceTime<'a> {
                     let holds = match (sa, sb) {
                         (Some(sa), Some(sb)) => {
                             let (ra, rb) = (&rad[&sa], &rad[&sb]);
-                            (free || SharedRadiosity::moving_power_holds(ra, rb, MOVING_POWER_TOL))
-                                .then_some((sa, ra, sb, rb))
+                            (free
+                                || SharedRadiosity::moving_power_holds(
+                                    ra,
+                                    rb,
+                                    self.st.moving_power_tol,
+                                ))
+                            .then_some((sa, ra, sb, rb))
                         }
                         _ => None,
                     };
