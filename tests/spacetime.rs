@@ -794,6 +794,13 @@ fn keyed_run(scene: &Scene, stride: u32) -> (Vec<WindowOutput>, Vec<spacetime::F
 /// them skip it (`midpoints_skip_their_solve_where_the_moving_power_holds`).
 const SOLVED_MIDPOINTS: f64 = 0.01;
 
+/// The windows of each of `runs`, solves of a sliding-block scene, as one solution
+/// each, on the patches of [`sliding_base`].
+fn sliding_solutions<const N: usize>(scene: &Scene, runs: [&[WindowOutput]; N]) -> [Solution; N] {
+    let base = sliding_base(scene);
+    runs.map(|windows| as_solution(scene, &base, windows))
+}
+
 /// A static solve of a sliding-block scene at its start (for its patches).
 fn sliding_base(scene: &Scene) -> Solution {
     let mut s = Solver::at_time(scene, opts(), 0.0, [0.0, 0.8]).unwrap();
@@ -865,11 +872,7 @@ fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
         gathered * 20 > interpolated,
         "the moving shadow is gathered"
     );
-    let base = sliding_base(&scene);
-    let (every, keyed) = (
-        as_solution(&scene, &base, &every),
-        as_solution(&scene, &base, &keyed),
-    );
+    let [every, keyed] = sliding_solutions(&scene, [&every, &keyed]);
     let pts = sliding_points();
     for t in [0.1, 0.3, 0.5, 0.6] {
         let fine = fine_probe(&scene, &pts, t);
@@ -943,11 +946,7 @@ fn midpoints_skip_their_solve_where_the_moving_power_holds() {
         "{midpoints_solved:?}"
     );
     assert_eq!(solved_at(&skipped_frames), [0, 4, 8]);
-    let base = sliding_base(&scene);
-    let (solved, skipped) = (
-        as_solution(&scene, &base, &solved),
-        as_solution(&scene, &base, &skipped),
-    );
+    let [solved, skipped] = sliding_solutions(&scene, [&solved, &skipped]);
     let pts = sliding_points();
     for t in [0.1, 0.2, 0.3, 0.6] {
         let fine = fine_probe(&scene, &pts, t);
@@ -992,11 +991,7 @@ fn frames_between_keyframes_skip_the_solve_where_moving_light_holds() {
         .map(|f| f.gathered)
         .sum();
     assert!(gathered > 0, "some points are gathered without a solve");
-    let base = sliding_base(&scene);
-    let (every, keyed) = (
-        as_solution(&scene, &base, &every),
-        as_solution(&scene, &base, &keyed),
-    );
+    let [every, keyed] = sliding_solutions(&scene, [&every, &keyed]);
     let pts = cornell_points();
     for t in [0.1, 0.3, 0.5, 0.7] {
         let a = probe(&every, &pts, t).unwrap();
@@ -1054,12 +1049,7 @@ fn frames_closer_in_motion_than_interp_motion_take_the_line() {
             assert!(b.varying_links > 0, "frame {} is solved", b.frame);
         }
     }
-    let base = sliding_base(&scene);
-    let (every, tested, free) = (
-        as_solution(&scene, &base, &every),
-        as_solution(&scene, &base, &tested),
-        as_solution(&scene, &base, &free),
-    );
+    let [every, tested, free] = sliding_solutions(&scene, [&every, &tested, &free]);
     let pts = sliding_points();
     for t in [0.1, 0.3, 0.5, 0.7] {
         let fine = fine_probe(&scene, &pts, t);
