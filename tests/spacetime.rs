@@ -913,6 +913,7 @@ fn midpoints_skip_their_solve_where_the_moving_power_holds() {
     // keyframes. Their gathers must be as close to a fine static solve of each
     // frame as with the midpoints solved. The block moved four times as fast
     // changes it by more than 3%, and its midpoints solve at the default too.
+
     // The frames that solved their leaf system, in frame order.
     let solved_at = |frames: &[spacetime::FrameRecord]| -> Vec<u32> {
         let mut solved: Vec<u32> = frames
