@@ -823,6 +823,18 @@ fn fine_probe(scene: &Scene, pts: &[ProbePoint], t: f64) -> Vec<[f64; 3]> {
     probe(&s.solution(), pts, t).unwrap()
 }
 
+/// The sliding-block solutions `sols` and [`fine_probe`]'s fine static solve at
+/// `t`, probed at `pts`: `(fine, [each solution's values])`.
+fn probes_at<const N: usize>(
+    scene: &Scene,
+    pts: &[ProbePoint],
+    sols: [&Solution; N],
+    t: f64,
+) -> (Vec<[f64; 3]>, [Vec<[f64; 3]>; N]) {
+    let fine = fine_probe(scene, pts, t);
+    (fine, sols.map(|s| probe(s, pts, t).unwrap()))
+}
+
 #[test]
 fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
     // One window of 9 frames (fps 10 over 0.8 s), keyframes 0, 4 and 8: the frames
@@ -875,9 +887,7 @@ fn frames_between_keyframes_are_as_accurate_as_gathered_frames() {
     let [every, keyed] = sliding_solutions(&scene, [&every, &keyed]);
     let pts = sliding_points();
     for t in [0.1, 0.3, 0.5, 0.6] {
-        let fine = fine_probe(&scene, &pts, t);
-        let a = probe(&every, &pts, t).unwrap();
-        let b = probe(&keyed, &pts, t).unwrap();
+        let (fine, [a, b]) = probes_at(&scene, &pts, [&every, &keyed], t);
         let (e_every, e_keyed) = (relative_rms(&a, &fine), relative_rms(&b, &fine));
         let apart = relative_rms(&b, &a);
         let scale = a.iter().map(|v| v[0]).fold(0.0, f64::max);
@@ -950,9 +960,7 @@ fn midpoints_skip_their_solve_where_the_moving_power_holds() {
     let [solved, skipped] = sliding_solutions(&scene, [&solved, &skipped]);
     let pts = sliding_points();
     for t in [0.1, 0.2, 0.3, 0.6] {
-        let fine = fine_probe(&scene, &pts, t);
-        let a = probe(&solved, &pts, t).unwrap();
-        let b = probe(&skipped, &pts, t).unwrap();
+        let (fine, [a, b]) = probes_at(&scene, &pts, [&solved, &skipped], t);
         let (e_solved, e_skipped) = (relative_rms(&a, &fine), relative_rms(&b, &fine));
         let apart = relative_rms(&b, &a);
         eprintln!(
@@ -1053,10 +1061,7 @@ fn frames_closer_in_motion_than_interp_motion_take_the_line() {
     let [every, tested, free] = sliding_solutions(&scene, [&every, &tested, &free]);
     let pts = sliding_points();
     for t in [0.1, 0.3, 0.5, 0.7] {
-        let fine = fine_probe(&scene, &pts, t);
-        let a = probe(&every, &pts, t).unwrap();
-        let b = probe(&tested, &pts, t).unwrap();
-        let c = probe(&free, &pts, t).unwrap();
+        let (fine, [a, b, c]) = probes_at(&scene, &pts, [&every, &tested, &free], t);
         let (e_every, e_tested, e_free) = (
             relative_rms(&a, &fine),
             relative_rms(&b, &fine),
