@@ -40,13 +40,12 @@
 //! ([`PointCache::encode`], [`PointCache::decode`]); the rebuild goes over points in
 //! key order, so it makes the same cache from those as from the window's own.
 
-use std::collections::HashMap;
 use std::ops::Range;
 
 use bytemuck::{Pod, Zeroable};
 
-use super::PointKey;
 use super::gather::Terms;
+use super::{FastMap, PointKey};
 use crate::Result;
 use crate::pools::{Column, Storage};
 
@@ -185,7 +184,7 @@ pub struct Prepared {
 
 /// The kept final-gather terms of a window (module docs).
 pub struct PointCache {
-    slots: HashMap<PointKey, u32>,
+    slots: FastMap<PointKey, u32>,
     spans: Vec<PointSpan>,
     index: Column<TermIndex>,
     fixed: Column<FixedTerm>,
@@ -208,7 +207,7 @@ impl PointCache {
     /// An empty cache on `storage`, keeping at most `budget` bytes.
     pub fn new(storage: &Storage, budget: Option<usize>) -> Result<Self> {
         Ok(PointCache {
-            slots: HashMap::new(),
+            slots: FastMap::default(),
             spans: Vec::new(),
             index: Column::new(storage, "kept-index")?,
             fixed: Column::new(storage, "kept-fixed")?,
@@ -445,7 +444,7 @@ impl PointCache {
     /// budget, every point not in `used`), and compacts the arenas when dead records
     /// (of rewritten or dropped points) make up a quarter of one, or, over the
     /// budget, when there are any.
-    pub fn collect(&mut self, used: &HashMap<PointKey, usize>) {
+    pub fn collect(&mut self, used: &FastMap<PointKey, usize>) {
         self.seq += 1;
         let seq = self.seq;
         for pk in used.keys() {
@@ -917,8 +916,8 @@ mod tests {
             c.add(b, vec![(2, terms(&[(4, 0.5), (5, 0.125)], &[6]))]);
             // `a` gains a source (its first span dies), both registered.
             c.add(a, vec![(8, terms(&[(9, 1.0)], &[]))]);
-            let both: HashMap<PointKey, usize> = [(a, 0), (b, 1)].into_iter().collect();
-            let only_b: HashMap<PointKey, usize> = [(b, 1)].into_iter().collect();
+            let both: FastMap<PointKey, usize> = [(a, 0), (b, 1)].into_iter().collect();
+            let only_b: FastMap<PointKey, usize> = [(b, 1)].into_iter().collect();
             c.collect(&both);
             for round in 0..STALE_AFTER {
                 assert!(c.get(&a).is_some(), "round {round}");

@@ -181,6 +181,11 @@ pub use window::FrameCost;
 use window::Window;
 
 use std::collections::HashMap;
+
+/// A hash map with aHash for the solver's hot tables, whose keys are small tuples
+/// of ids looked up per point and per row entry: std's SipHash was a tenth of a
+/// space-time solve's serial time (BENCHMARKS.md, "Serial time").
+pub(crate) type FastMap<K, V> = HashMap<K, V, ahash::RandomState>;
 use std::time::Instant;
 
 use glam::DVec3;
@@ -533,7 +538,7 @@ pub struct Solver<'a> {
     balance_fixed: bool,
     /// Static solve: each leaf's row coefficients by chain link (`(link, coef)`,
     /// sorted by link), reused by the next round for links that did not change.
-    row_cache: HashMap<u32, Vec<KeptCoef>>,
+    row_cache: FastMap<u32, Vec<KeptCoef>>,
     /// Static solve with [`SolveOptions::leaf_shapes`]: the shape of the radiosity
     /// over the small quad leaves whose light varies over them, `leaf →` one factor
     /// per quadrant (mean 1 by the quadrature weights), for the final gather
@@ -671,7 +676,7 @@ impl<'a> Solver<'a> {
             leaf_gain: Vec::new(),
             balancing: false,
             balance_fixed: false,
-            row_cache: HashMap::new(),
+            row_cache: FastMap::default(),
             shapes: HashMap::new(),
             rays: 0,
             shaft_clear: 0,

@@ -11,14 +11,12 @@
 //! are not gathered ([`super::Between`]), and every point's value comes back for
 //! later frames to interpolate ([`super::KeyValues`]).
 
-use std::collections::HashMap;
-
 use glam::DVec3;
 use rayon::prelude::*;
 
 use super::{
-    Between, CORNER_INSET, ElementId, KeyValues, Leaf, Patches, PointKey, Solution, SolveStats,
-    Solver, hierarchy,
+    Between, CORNER_INSET, ElementId, FastMap, KeyValues, Leaf, Patches, PointKey, Solution,
+    SolveStats, Solver, hierarchy,
 };
 
 /// Points gathered in parallel at a time by the reconstruction: enough to keep the
@@ -137,7 +135,7 @@ impl Cell {
 /// Final-gather values at distinct parameter points of each patch.
 #[derive(Default)]
 struct VertexCache {
-    index: HashMap<(u32, u32, u32), usize>,
+    index: FastMap<(u32, u32, u32), usize>,
     /// (leaf whose links gather, patch, parameter point, point inset towards this
     /// uv, the point's key).
     points: Vec<GatherPoint>,

@@ -73,7 +73,7 @@ struct LeafRow {
 /// ([`Window::factors`]).
 struct FactorMemo<'m> {
     leaf: u32,
-    kept: &'m HashMap<(u32, u32), f64>,
+    kept: &'m FastMap<(u32, u32), f64>,
     fresh: Vec<((u32, u32), f64)>,
 }
 

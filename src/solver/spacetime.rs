@@ -702,7 +702,7 @@ type CellKey = (u32, [[u32; 2]; 4]);
 /// Consecutive frames' cells merged into leaves with longer time ranges while their
 /// corners hold within `tol` of the running mean (module docs).
 struct TimeMerge {
-    runs: HashMap<CellKey, Run>,
+    runs: super::FastMap<CellKey, Run>,
     /// Closed leaves, in the order their runs closed: on the pools' storage, so out
     /// of core on `--storage mmap` ([`in_file_order`] sorts them).
     done: Column<Leaf>,
@@ -988,7 +988,7 @@ impl<'a> SpaceTime<'a> {
         solver.set_time(frames[0]);
         solver.begin_window([w0, w1], b_ref)?;
         let mut merge = TimeMerge {
-            runs: HashMap::new(),
+            runs: Default::default(),
             done: Column::new(&solver.opts.storage, "window-leaves")?,
             tol,
         };

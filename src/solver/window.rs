@@ -63,13 +63,13 @@ pub(super) struct Window {
     /// Leaf-row coefficients of constant links on static leaves: `(leaf, link) →
     /// (F, visible fraction)`, keyed as [`Solver::row_key`] keys them (the leaves
     /// and links a frame makes by what they stand for).
-    pub(super) rows: HashMap<(u32, u32), (f32, f32)>,
+    pub(super) rows: FastMap<(u32, u32), (f32, f32)>,
     /// The row entries a cached coefficient of [`Window::rows`] opens into when its
     /// source is opened ([`Solver::push_opened`]): the same children and factors at
     /// every frame while none of them has children the frame refined, so they are
     /// computed once (the same values, bit for bit; LIGHT spent a fifth of its time
     /// on these factors, frame after frame).
-    pub(super) opened: HashMap<(u32, u32), RowEntries>,
+    pub(super) opened: FastMap<(u32, u32), RowEntries>,
     /// Entries held by [`Window::opened`].
     pub(super) opened_entries: usize,
     /// Leaf-row `(F, visible fraction)` of varying links between static ends (a
@@ -77,7 +77,7 @@ pub(super) struct Window {
     /// frame with no moving object's box in the shaft between the ends
     /// ([`Solver::clear_of_moving`]): at any such frame their rays meet static
     /// geometry only, with the same keys, so the value is the same bit for bit.
-    pub(super) hidden: HashMap<(u32, u32), (f64, f64)>,
+    pub(super) hidden: FastMap<(u32, u32), (f64, f64)>,
     /// The static part of the rays at a static leaf's quadrature points for row
     /// entries of varying links between static ends, keyed as [`Window::hidden`],
     /// at frames with a moving object's box in the shaft between the ends (which
@@ -88,7 +88,7 @@ pub(super) struct Window {
     /// value casting every ray would give, bit for bit (the final gather's
     /// [`kept::MaskedTerm`] for rows; paper 001 §5.2: what a moving object cannot
     /// change is computed once).
-    pub(super) masks: HashMap<(u32, u32), u64>,
+    pub(super) masks: FastMap<(u32, u32), u64>,
     /// Exact factors `Σ_q w_q F(x_q → e)` from a static leaf (keyed by
     /// [`Solver::stable_id`]) to a static element `e` of the window's base that a
     /// source of its row opens into ([`Solver::push_opened`]): the geometry of both
@@ -96,14 +96,14 @@ pub(super) struct Window {
     /// Those of a varying link's source were computed again at every solved frame
     /// (LIGHT: 5.0 M of them over its 76 frames), where [`Window::opened`] keeps
     /// only a constant link's entries.
-    pub(super) factors: HashMap<(u32, u32), f64>,
+    pub(super) factors: FastMap<(u32, u32), f64>,
     /// Ids that the caches above key a frame's own elements by, which the next frame
     /// makes again with other ids: `(element of the window's base, path of child
     /// indices below it) → id` from [`FRAME_SID`] up ([`Solver::intern_frame_elements`]).
     /// A static leaf a frame's refinement makes has the same geometry and casts the
     /// same rays ([`Solver::ray_id`]) at every frame that makes it, so what the
     /// caches hold for it holds at all of them.
-    pub(super) stable: HashMap<(u32, u64), u32>,
+    pub(super) stable: FastMap<(u32, u64), u32>,
     /// This frame's elements past the window's base: their ids in [`Window::stable`]
     /// (`u32::MAX`: too deep to key).
     pub(super) sids: Vec<u32>,
