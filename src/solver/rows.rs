@@ -740,10 +740,8 @@ impl Solver<'_> {
 
     /// Appends the next leaf's row.
     fn push_row(&mut self, row: Vec<(u32, f64)>) {
-        for (s, c) in row {
-            self.row_sources.push(s);
-            self.row_coefs.push(c);
-        }
+        self.row_sources.extend(row.iter().map(|e| e.0));
+        self.row_coefs.extend(row.iter().map(|e| e.1));
         self.row_start.push(self.row_sources.len() as u32);
     }
 
@@ -898,7 +896,9 @@ impl Solver<'_> {
                 pulled[l.ix()] = [*gl, 0.0, 0.0];
             }
             pull(nodes, geoms, &mut pulled);
+            let pulled = &pulled;
             (0..nl)
+                .into_par_iter()
                 .map(|li| rows(li).map(|(s, c)| c * pulled[*s as usize][0]).sum())
                 .collect()
         };

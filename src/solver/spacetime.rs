@@ -1116,8 +1116,11 @@ impl<'a> SpaceTime<'a> {
             let cells: Arc<[Leaf]> = r.leaves.into();
             values.insert(k, r.values.with_cells(cells.clone()));
             // The frame's gathers leave the heaps fragmented (ACTOR, out of core:
-            // 6 MB less resident at the end of a window).
-            super::release_free_memory();
+            // 6 MB less resident at the end of a window); a frame that gathered
+            // nothing allocated what the next one reuses.
+            if gathered > 0 {
+                super::release_free_memory();
+            }
             frame_cells += cells.len() as u64;
             let n_cells = cells.len() as u64;
             pending.insert(k, cells);
