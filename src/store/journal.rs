@@ -2,8 +2,11 @@
 //!
 //! A space-time solve writes its `.rhier` file through a [`super::Writer`], which only
 //! makes the file valid at the end. So that an interrupted solve loses at most the
-//! window it was working on, every finished window is also written to the directory
-//! `<out>.partial/` as one file `window-NNNNN.bin`:
+//! window it was working on, every finished window but the last is also written to
+//! the directory `<out>.partial/` as one file `window-NNNNN.bin` (the last one's
+//! leaves go to the writer, which finishes the file right after; a solve
+//! interrupted there solves that window again, and nothing comes after it to hand
+//! its terms to):
 //!
 //! | bytes | field |
 //! |---|---|
