@@ -181,11 +181,6 @@ pub use window::FrameCost;
 use window::Window;
 
 use std::collections::HashMap;
-
-/// A hash map with aHash for the solver's hot tables, whose keys are small tuples
-/// of ids looked up per point and per row entry: std's SipHash was a tenth of a
-/// space-time solve's serial time (BENCHMARKS.md, "Serial time").
-pub(crate) type FastMap<K, V> = HashMap<K, V, ahash::RandomState>;
 use std::time::Instant;
 
 use glam::DVec3;
@@ -206,6 +201,11 @@ use kept::{MaskedTerm, PointCache};
 pub use report::RoundRecord;
 pub use rows::BALANCE_TRIGGER;
 pub use solution::{Leaf, PatchGeometry, Shape, Solution, SolveStats};
+
+/// A hash map with aHash for the solver's hot tables, whose keys are small tuples
+/// of ids looked up per point and per row entry: std's SipHash was a tenth of a
+/// space-time solve's serial time (BENCHMARKS.md, "Serial time").
+pub(crate) type FastMap<K, V> = HashMap<K, V, ahash::RandomState>;
 
 /// The cluster-source model of every link, leaf row and final gather: a cluster's
 /// visibility rays aim at points drawn by power and its emission leaves by the axes
