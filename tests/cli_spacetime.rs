@@ -84,6 +84,49 @@ fn interrupted_solve_leaves_no_file_and_resume_gives_the_same_leaves() {
 }
 
 #[test]
+fn the_last_window_is_solved_again_on_resume_from_the_one_before() {
+    // A solve is journaled up to the window before the last (the last hands its
+    // terms to nothing; a solve interrupted in it solves it again). Stopped there,
+    // the journal holds the four windows and the terms the fourth hands on, and
+    // resuming solves the last window from those, as the uninterrupted solve did.
+    let dir = tempfile::tempdir().unwrap();
+    let (full, cut) = (dir.path().join("full.rhier"), dir.path().join("cut.rhier"));
+    let out = solve(&full, &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = solve(&cut, &["--stop-after-windows", "4"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!cut.exists());
+    let journal = rhier::store::journal::journal_dir(&cut);
+    assert!(journal.join("window-00003.bin").exists());
+    assert!(journal.join("kept-00003.bin").exists());
+    assert!(!journal.join("window-00004.bin").exists());
+    let out = solve(&cut, &["--resume"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!journal.exists());
+    let (a, b) = (
+        rhier::store::Reader::open(&full).unwrap(),
+        rhier::store::Reader::open(&cut).unwrap(),
+    );
+    assert_eq!(a.chunks().len(), 5);
+    assert_eq!(b.chunks().len(), 5);
+    for k in 0..5 {
+        assert_eq!(
+            a.chunk_leaves(k).unwrap(),
+            b.chunk_leaves(k).unwrap(),
+            "chunk {k}"
+        );
+    }
+}
+
+#[test]
 fn out_of_core_by_default_with_the_leaves_of_ram_and_no_scratch_left() {
     // A space-time solve pages its pools, kept terms and leaves through files in
     // the journal directory unless asked for RAM; the file is the same either way
