@@ -25,16 +25,29 @@ fn solve(out: &Path, extra: &[&str]) -> Output {
         .unwrap()
 }
 
+/// [`solve`], which must succeed.
+fn solve_ok(out: &Path, extra: &[&str]) {
+    let o = solve(out, extra);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// `a` and `b` hold as many chunks, with the same leaves.
+fn assert_same_chunks(a: &rhier::store::Reader, b: &rhier::store::Reader) {
+    assert_eq!(a.chunks().len(), b.chunks().len());
+    for k in 0..a.chunks().len() {
+        assert_eq!(
+            a.chunk_leaves(k).unwrap(),
+            b.chunk_leaves(k).unwrap(),
+            "chunk {k}"
+        );
+    }
+}
+
 #[test]
 fn interrupted_solve_leaves_no_file_and_resume_gives_the_same_leaves() {
     let dir = tempfile::tempdir().unwrap();
     let (full, cut) = (dir.path().join("full.rhier"), dir.path().join("cut.rhier"));
-    let out = solve(&full, &[]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    solve_ok(&full, &[]);
     // 2 s at 4 fps: 9 frames, windows of 2 frames: 5 windows, one chunk each.
     let a = rhier::store::Reader::open(&full).unwrap();
     assert_eq!(a.chunks().len(), 5);
@@ -61,22 +74,11 @@ fn interrupted_solve_leaves_no_file_and_resume_gives_the_same_leaves() {
     );
     assert!(journal.exists());
 
-    let out = solve(&cut, &["--resume"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    solve_ok(&cut, &["--resume"]);
     assert!(!journal.exists());
     let b = rhier::store::Reader::open(&cut).unwrap();
     assert_eq!(b.chunks().len(), 5);
-    for k in 0..5 {
-        assert_eq!(
-            a.chunk_leaves(k).unwrap(),
-            b.chunk_leaves(k).unwrap(),
-            "chunk {k}"
-        );
-    }
+    assert_same_chunks(&a, &b);
     // Every time of the animation has leaves covering the frame, and probing works.
     for t in [0.0, 0.37, 1.0, 1.99, 2.0] {
         assert!(!b.leaves_at(t).unwrap().is_empty(), "t = {t}");
@@ -91,12 +93,7 @@ fn the_last_window_is_solved_again_on_resume_from_the_one_before() {
     // resuming solves the last window from those, as the uninterrupted solve did.
     let dir = tempfile::tempdir().unwrap();
     let (full, cut) = (dir.path().join("full.rhier"), dir.path().join("cut.rhier"));
-    let out = solve(&full, &[]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    solve_ok(&full, &[]);
     let out = solve(&cut, &["--stop-after-windows", "4"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(!cut.exists());
@@ -104,26 +101,14 @@ fn the_last_window_is_solved_again_on_resume_from_the_one_before() {
     assert!(journal.join("window-00003.bin").exists());
     assert!(journal.join("kept-00003.bin").exists());
     assert!(!journal.join("window-00004.bin").exists());
-    let out = solve(&cut, &["--resume"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    solve_ok(&cut, &["--resume"]);
     assert!(!journal.exists());
     let (a, b) = (
         rhier::store::Reader::open(&full).unwrap(),
         rhier::store::Reader::open(&cut).unwrap(),
     );
     assert_eq!(a.chunks().len(), 5);
-    assert_eq!(b.chunks().len(), 5);
-    for k in 0..5 {
-        assert_eq!(
-            a.chunk_leaves(k).unwrap(),
-            b.chunk_leaves(k).unwrap(),
-            "chunk {k}"
-        );
-    }
+    assert_same_chunks(&a, &b);
 }
 
 #[test]
@@ -138,21 +123,13 @@ fn out_of_core_by_default_with_the_leaves_of_ram_and_no_scratch_left() {
         (&paged, &["--stats"][..]),
         (&ram, &["--storage", "ram"][..]),
     ] {
-        let o = solve(out, extra);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        solve_ok(out, extra);
     }
     let (a, b) = (
         rhier::store::Reader::open(&paged).unwrap(),
         rhier::store::Reader::open(&ram).unwrap(),
     );
-    assert_eq!(a.chunks().len(), b.chunks().len());
-    for k in 0..a.chunks().len() {
-        assert_eq!(
-            a.chunk_leaves(k).unwrap(),
-            b.chunk_leaves(k).unwrap(),
-            "chunk {k}"
-        );
-    }
+    assert_same_chunks(&a, &b);
     let names = |d: &Path| -> Vec<String> {
         let mut v: Vec<String> = std::fs::read_dir(d)
             .unwrap()
