@@ -216,13 +216,6 @@ const SOURCES_BY_POWER: bool = true;
 /// Most refine-and-solve passes in one space-time frame.
 const FRAME_PASSES: usize = 3;
 
-/// Passes of the shared part that refine constant links against a radiosity solved
-/// with the varying links refined. One, as the space-time module docs describe it:
-/// LIGHT's second pass refined nothing (it made the same hierarchy, with its
-/// error to four digits, 3.516%) and cost a solve of the start time, 0.15 s;
-/// ACTOR's first pass refines nothing already (BENCHMARKS.md, "Serial time").
-const SHARED_PASSES: usize = 1;
-
 /// A leaf-row entry with a coefficient at most this is not opened into children
 /// ([`Solver::push_opened`]): its share of the leaf's light is too small to matter.
 /// Measured on the Cornell blocks at eps 0.02: 1e-3 doubles the solve's time (2.1 →
