@@ -320,6 +320,9 @@ impl Solver<'_> {
             while cache.values.len() < cache.points.len() {
                 let admit = known.as_ref().is_some_and(|c| c.admits());
                 let view = known.as_deref();
+                // Whether a point of the batch was gathered (read the kept terms);
+                // a batch of interpolated points touches no page of them.
+                let gathered = std::sync::atomic::AtomicBool::new(false);
                 let fresh = cache.evaluate(
                     GATHER_BATCH,
                     |leaf, x, pk| {
@@ -331,6 +334,7 @@ impl Solver<'_> {
                             interpolated.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                             return (b, valid, None);
                         }
+                        gathered.store(true, std::sync::atomic::Ordering::Relaxed);
                         let (b, valid, fresh) =
                             self.gather_point(leaf, x, view, pk, admit, &limits);
                         // The records to keep are laid out here, in parallel.
@@ -341,11 +345,14 @@ impl Solver<'_> {
                     },
                     &self.patches,
                 );
-                if let Some(m) = known.as_mut() {
+                if let Some(m) = known.as_mut().filter(|_| gathered.into_inner()) {
                     for p in fresh {
                         m.commit(p);
                     }
-                    // Out of core: the batch's pages go back to the scratch file.
+                    // Out of core: the pages the batch read and wrote go back to the
+                    // scratch file. A batch interpolated whole touched none and has
+                    // nothing to commit (most of a frame between: 6k of LIGHT's 12k
+                    // `madvise` calls).
                     m.release_resident();
                 }
             }
