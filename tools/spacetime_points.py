@@ -60,6 +60,7 @@ def main():
             for vf, rf in zip(values, ref)
             for b, r in zip(vf, rf)
         )
+
         def pick(q):
             return errs[min(len(errs) - 1, int(q * len(errs)))]
 
