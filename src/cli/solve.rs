@@ -221,6 +221,11 @@ pub struct Args {
     /// the moving surfaces' total.
     #[arg(long, default_value_t = SpaceTimeOptions::default().moving_power_tol)]
     pub moving_power_tol: f64,
+    /// Space-time: take the line between two solved frames over the whole light of
+    /// the points on moving surfaces. By default their direct light is computed
+    /// anew at every frame between, and the line is over the rest of their light.
+    #[arg(long)]
+    pub whole_light_between: bool,
     /// Continue an interrupted space-time solve from its last finished window (kept
     /// in OUT.rhier.partial/).
     #[arg(long)]

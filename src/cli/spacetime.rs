@@ -29,6 +29,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
         interp_tol: args.interp_tol,
         interp_motion: args.interp_motion,
         moving_power_tol: args.moving_power_tol,
+        direct_apart: !args.whole_light_between,
     };
     st.validate()?;
     Ok(st)
@@ -38,7 +39,7 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
 /// changes a result (not the storage, thread count being part of determinism).
 fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> String {
     let settings = format!(
-        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {:?} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} interp motion {} moving power {} threads {}",
+        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {:?} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} interp motion {} moving power {} direct apart {} threads {}",
         opts.eps,
         opts.min_size,
         opts.power_size,
@@ -60,6 +61,7 @@ fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> Str
         st.interp_tol,
         st.interp_motion,
         st.moving_power_tol,
+        st.direct_apart,
         rayon::current_num_threads(),
     );
     let scene_text = rhier::scene::to_json_string(scene);

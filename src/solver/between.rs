@@ -19,7 +19,12 @@
 
 use std::sync::Arc;
 
-use super::{ElementId, Emission, Leaf, PointKey, Solver};
+use glam::DVec3;
+
+use super::{ElementId, Emission, Leaf, PointKey, Solver, hierarchy};
+use crate::geometry::{Poly, point_to_polygon};
+use crate::oracle;
+use crate::pools::elements::Geom;
 
 /// The leaf-row entries with a moving end (a moving leaf, or a moving source) of
 /// one solved frame of a space-time window, keyed by what they stand for (the
@@ -127,6 +132,10 @@ impl SharedRadiosity {
 pub struct KeyValues {
     /// (point, radiosity, outside every solid), sorted by point.
     points: Vec<(PointKey, [f32; 3], bool)>,
+    /// The direct light the points on moving surfaces reflect ([`Solver::direct_light`]),
+    /// sorted by point: a frame between takes the line over the rest of their light
+    /// only.
+    direct: Vec<(PointKey, [f32; 3])>,
     /// The keyframe's cells, sorted by patch (as [`Solver::reconstruct`] returns
     /// them), shared with the window's time merge until it has taken them.
     cells: std::sync::Arc<[Leaf]>,
@@ -141,8 +150,23 @@ impl KeyValues {
         points.sort_unstable_by_key(|p| p.0);
         KeyValues {
             points,
+            direct: Vec::new(),
             cells: Default::default(),
         }
+    }
+
+    /// Adds the direct light of the points on moving surfaces (in any order).
+    pub(super) fn with_direct(mut self, mut direct: Vec<(PointKey, [f32; 3])>) -> Self {
+        direct.sort_unstable_by_key(|p| p.0);
+        self.direct = direct;
+        self
+    }
+
+    /// The direct light point `pk` reflected at the frame, if it is on a moving
+    /// surface.
+    pub(super) fn direct(&self, pk: &PointKey) -> Option<[f64; 3]> {
+        let i = self.direct.binary_search_by_key(pk, |p| p.0).ok()?;
+        Some(self.direct[i].1.map(f64::from))
     }
 
     /// The value the frame gave point `pk` (gathered or interpolated) and whether it
@@ -159,6 +183,32 @@ impl KeyValues {
         self
     }
 
+    /// [`KeyValues::at`] less the direct light, for a point on a moving surface: the
+    /// frame's own value less its direct light if it had the point (outside the
+    /// solids), else the frame's cell holding it, interpolated over its corners'
+    /// values less their direct light; `None` if a value or a direct light is
+    /// missing.
+    pub(super) fn indirect_at(&self, pk: &PointKey) -> Option<[f64; 3]> {
+        if let Some((v, ok)) = self.known(pk) {
+            let d = self.direct(pk).filter(|_| ok)?;
+            return Some(std::array::from_fn(|k| v[k] - d[k]));
+        }
+        let lo = self.cells.partition_point(|l| l.patch < pk.0);
+        let hi = self.cells.partition_point(|l| l.patch <= pk.0);
+        let (u, v) = (point_param(pk.1), point_param(pk.2));
+        let cell = crate::playback::probe::leaf_at(&self.cells[lo..hi], u, v)?;
+        let w = cell.weights(u, v);
+        let mut out = [0.0; 3];
+        for (c, wc) in w.iter().enumerate().take(cell.corners as usize) {
+            let ck = (pk.0, point_coord(cell.uv[c][0]), point_coord(cell.uv[c][1]));
+            let d = self.direct(&ck)?;
+            for k in 0..3 {
+                out[k] += wc * (f64::from(cell.b[c][k]) - d[k]);
+            }
+        }
+        Some(out)
+    }
+
     /// The value at point `pk` outside every solid: the frame's own if it had the
     /// point (and it lay outside the solids then), else the frame's cell holding it.
     pub(super) fn at(&self, pk: &PointKey) -> Option<[f64; 3]> {
@@ -170,6 +220,11 @@ impl KeyValues {
         let (u, v) = (point_param(pk.1), point_param(pk.2));
         crate::playback::probe::leaf_at(&self.cells[lo..hi], u, v).map(|l| l.eval(u, v))
     }
+}
+
+/// A point key's coordinate for the parameter `x` ([`VertexCache::register`]).
+pub(super) fn point_coord(x: f32) -> u32 {
+    (x as f64 * (1u64 << 24) as f64).round() as u32
 }
 
 /// The parameter a point key's coordinate stands for ([`VertexCache::register`]).
@@ -244,20 +299,60 @@ impl Between<'_> {
     /// validity (they must agree on it); any other point asks `outside_now` (one
     /// ray, no gather) and, if outside the solids, interpolates the frames' cells
     /// ([`KeyValues::with_cells`]).
+    ///
+    /// A point on a moving surface comes with its direct light now (`direct_now`,
+    /// [`Solver::direct_light`]): where the frames hold its direct light too, the
+    /// line (and the tests above) are over the rest of its light, and its direct
+    /// light now is added, else over its whole light.
     pub(super) fn value(
         &self,
         pk: &PointKey,
-        outside_now: impl FnOnce() -> bool,
+        outside_now: impl Fn() -> bool,
+        direct_now: Option<[f64; 3]>,
     ) -> Option<([f64; 3], bool)> {
-        let (va, vb, valid) = match (self.a.1.known(pk), self.b.1.known(pk)) {
+        let less = |d| self.value_less(pk, &outside_now, d);
+        match direct_now.map(|d| less(Some(d))) {
+            Some(Ok(v)) => v,
+            // The frames lack a direct light: the line over the whole light.
+            Some(Err(Missing)) | None => less(None).ok().flatten(),
+        }
+    }
+
+    /// [`Between::value`], the line over the light less `direct_now` (`None`: the
+    /// whole light); `Err` if the frames lack a value or a direct light the line
+    /// needs.
+    fn value_less(
+        &self,
+        pk: &PointKey,
+        outside_now: &impl Fn() -> bool,
+        direct_now: Option<[f64; 3]>,
+    ) -> Result<Option<([f64; 3], bool)>, Missing> {
+        // A point on a moving surface whose direct light the frames hold: the line
+        // over the rest of its light, and its direct light now.
+        let minus = |(v, ok): ([f64; 3], bool), d: [f64; 3]| -> ([f64; 3], bool) {
+            (std::array::from_fn(|k| v[k] - d[k]), ok)
+        };
+        let known = |kv: &KeyValues| match direct_now {
+            Some(_) => kv.known(pk).zip(kv.direct(pk)).map(|(v, d)| minus(v, d)),
+            None => kv.known(pk),
+        };
+        let at = |kv: &KeyValues| match direct_now {
+            Some(_) => kv.indirect_at(pk),
+            None => kv.at(pk),
+        };
+        let (va, vb, valid) = match (known(self.a.1), known(self.b.1)) {
             (Some((va, oka)), Some((vb, okb))) if oka == okb => (va, vb, oka),
-            (Some(_), Some(_)) => return None,
+            (Some(_), Some(_)) => return Ok(None),
             _ => {
                 if !outside_now() {
                     // Inside a solid: the cell takes its other corners' values.
-                    return Some(([0.0; 3], false));
+                    return Ok(Some(([0.0; 3], false)));
                 }
-                (self.a.1.at(pk)?, self.b.1.at(pk)?, true)
+                (
+                    at(self.a.1).ok_or(Missing)?,
+                    at(self.b.1).ok_or(Missing)?,
+                    true,
+                )
             }
         };
         let (ta, tb) = (self.a.0, self.b.0);
@@ -270,18 +365,89 @@ impl Between<'_> {
         };
         let linear = || {
             self.before.is_some_and(|(tp, p)| {
-                p.at(pk)
-                    .is_some_and(|vp| close(&va, &line(tp, &vp, tb, &vb, ta)))
+                at(p).is_some_and(|vp| close(&va, &line(tp, &vp, tb, &vb, ta)))
             })
         };
         if !(self.free || close(&va, &vb) || linear()) {
-            return None;
+            return Ok(None);
         }
-        Some((line(ta, &va, tb, &vb, self.t), valid))
+        let v = line(ta, &va, tb, &vb, self.t);
+        let d = direct_now.unwrap_or_default();
+        Ok(Some((std::array::from_fn(|k| v[k] + d[k]), valid)))
     }
 }
 
+/// The frames lack a value or a direct light ([`Between::value_less`]).
+#[derive(Clone, Copy, Debug)]
+struct Missing;
+
+/// An emitting patch as placed at the current time: its index, geometry, polygon
+/// and emission ([`Solver::direct_light`]).
+pub(super) type Emitter = (u32, Geom, Poly, [f64; 3]);
+
 impl Solver<'_> {
+    /// The emitting patches as placed now, for [`Solver::direct_light`].
+    pub(super) fn emitters_now(&self) -> Vec<Emitter> {
+        (0..self.patches.len())
+            .filter(|&p| self.patches.emissions[p].iter().any(|&e| e > 0.0))
+            .map(|p| {
+                let g = hierarchy::whole_patch_geom(&self.patches, p);
+                let poly = oracle::poly(&g);
+                (p as u32, g, poly, self.patches.emissions[p])
+            })
+            .collect()
+    }
+
+    /// The direct light a point `x` (normal `n`) of patch `p` reflects: `ρ_p Σ_e E_e
+    /// F(x, e) V(x, e)` over the emitting patches `emitters`, exact point-to-polygon
+    /// factors and the final gather's rays to an emitter (jittered by the point's
+    /// key, so the same point casts the same rays at every frame).
+    ///
+    /// On a moving surface this is the part of the light that changes fastest as it
+    /// passes a lamp (a panel sliding 45 cm in front of one: the inverse square and
+    /// the cosines); a frame between two solved frames takes the line over the rest
+    /// only ([`Between::value`]).
+    pub(super) fn direct_light(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        p: u32,
+        pk: &PointKey,
+        emitters: &[Emitter],
+    ) -> [f64; 3] {
+        let mut h = [0.0; 3];
+        for (e, g, poly, em) in emitters {
+            if *e == p {
+                continue;
+            }
+            let f = point_to_polygon(x, n, poly);
+            if f <= 0.0 {
+                continue;
+            }
+            let key = oracle::hash3(
+                u64::from(pk.0) << 32 | u64::from(*e),
+                u64::from(pk.1) << 32 | u64::from(pk.2),
+                0xd1ec,
+            );
+            let r = oracle::PointRays {
+                x,
+                n,
+                gs: g,
+                pols: poly,
+                ns: DVec3::from_array(g.normal),
+                m: self.opts.corner_rays * 4,
+                key,
+                skip: [p, *e],
+            };
+            let v = oracle::visible_fraction(&self.bvh, &r);
+            for k in 0..3 {
+                h[k] += em[k] * f * v;
+            }
+        }
+        let rho = self.patches.rhos[p as usize];
+        std::array::from_fn(|k| rho[k] * h[k])
+    }
+
     /// The solved frames around the next frames solved, whose row entries with a
     /// moving end those frames take where they hold ([`TimeRange`]); `None`: every
     /// entry is computed (a keyframe).
@@ -414,7 +580,7 @@ mod tests {
             t: 5.0,
             tol: 0.01,
         };
-        let at = |i: u32| between.value(&(0, i, 0), || true);
+        let at = |i: u32| between.value(&(0, i, 0), || true, None);
         let (v0, ok0) = at(0).expect("agreeing keyframes interpolate");
         assert!(ok0);
         // Keyframe values are kept in f32, as the leaves store them.
@@ -430,17 +596,19 @@ mod tests {
             before: None,
             ..between
         };
-        assert!(bare.value(&(0, 0, 0), || true).is_some());
-        assert_eq!(bare.value(&(0, 1, 0), || true), None);
+        assert!(bare.value(&(0, 0, 0), || true, None).is_some());
+        assert_eq!(bare.value(&(0, 1, 0), || true, None), None);
         // Brackets closer in motion than `interp_motion`: a point both hold takes
         // the line whatever its values (the shadow edge of point 2 fades over the
         // interval); one they do not both hold, or with another validity, does not.
         let free = Between { free: true, ..bare };
-        let (v2, ok2) = free.value(&(0, 2, 0), || true).expect("free: the line");
+        let (v2, ok2) = free
+            .value(&(0, 2, 0), || true, None)
+            .expect("free: the line");
         assert!(ok2);
         assert!((v2[2] - (1.0 + 0.25 * (0.4 - 1.0))).abs() < 1e-7, "{v2:?}");
-        assert_eq!(free.value(&(0, 3, 0), || true), None);
-        assert_eq!(free.value(&(0, 4, 0), || true), None);
+        assert_eq!(free.value(&(0, 3, 0), || true, None), None);
+        assert_eq!(free.value(&(0, 4, 0), || true, None), None);
         // Equal values come back bit for bit (where nothing changes, consecutive
         // frames are equal and the store merges them).
         let same = values(&[(0, [0.1, 0.2, 0.3], true)]);
@@ -453,7 +621,7 @@ mod tests {
             tol: 0.0,
         };
         let kept = [0.1f32, 0.2, 0.3].map(f64::from);
-        assert_eq!(flat.value(&(0, 0, 0), || true), Some((kept, true)));
+        assert_eq!(flat.value(&(0, 0, 0), || true, None), Some((kept, true)));
     }
 
     #[test]
@@ -507,12 +675,149 @@ mod tests {
         };
         let q = |x: f64| (x * (1u64 << 24) as f64) as u32;
         let pk = (7, q(0.25), q(0.5));
-        let (v, valid) = between.value(&pk, || true).expect("the cells agree");
+        let (v, valid) = between.value(&pk, || true, None).expect("the cells agree");
         assert!(valid);
         assert!((v[0] - 1.2525).abs() < 1e-6, "{v:?}");
         // Inside a solid now: no value is needed, no gather is made.
-        assert_eq!(between.value(&pk, || false), Some(([0.0; 3], false)));
+        assert_eq!(between.value(&pk, || false, None), Some(([0.0; 3], false)));
         // A patch neither keyframe has cells on is gathered.
-        assert_eq!(between.value(&(8, q(0.25), q(0.5)), || true), None);
+        assert_eq!(between.value(&(8, q(0.25), q(0.5)), || true, None), None);
+    }
+
+    #[test]
+    fn a_moving_point_takes_the_line_over_its_light_less_its_direct_light() {
+        // Point 1 on a moving surface: the rest of its light 1.0, 1.2, 1.4 at the
+        // frames 0, 4, 8 (a line), its direct light 2, 6, 3 (a bump the line cannot
+        // follow). Point 2 lacks its direct light at `b`.
+        let frame = |v: &[(u32, f64, f64)], lacking: Option<u32>| {
+            KeyValues::from_points(v.iter().map(|&(i, b, d)| ((0, i, 0), grey(b + d), true)))
+                .with_direct(
+                    v.iter()
+                        .filter(|p| Some(p.0) != lacking)
+                        .map(|&(i, _, d)| ((0, i, 0), [d as f32; 3]))
+                        .collect(),
+                )
+        };
+        let p = frame(&[(1, 1.0, 2.0), (2, 1.0, 2.0)], None);
+        let a = frame(&[(1, 1.2, 6.0), (2, 1.2, 6.0)], None);
+        let b = frame(&[(1, 1.4, 3.0), (2, 1.4, 3.0)], Some(2));
+        let between = Between {
+            free: false,
+            before: Some((0.0, &p)),
+            a: (4.0, &a),
+            b: (8.0, &b),
+            t: 5.0,
+            tol: 0.01,
+        };
+        let pk = (0, 1, 0);
+        let (v, ok) = between
+            .value(&pk, || true, Some(grey(5.5)))
+            .expect("the rest of its light is on a line");
+        assert!(ok);
+        // 1.25 on the line, 5.5 of direct light now.
+        assert!((v[0] - 6.75).abs() < 1e-6, "{v:?}");
+        // The whole light (3.0, 7.2 and 4.4 at the frames 0, 4, 8) is on no line.
+        assert_eq!(between.value(&pk, || true, None), None);
+        // Without the direct light at `b`, point 2 is tested on its whole light:
+        // gathered here, and on the line between `a` and `b` when free.
+        assert_eq!(between.value(&(0, 2, 0), || true, Some(grey(5.5))), None);
+        let free = Between {
+            free: true,
+            ..between
+        };
+        let (v2, _) = free
+            .value(&(0, 2, 0), || true, Some(grey(5.5)))
+            .expect("free: the line");
+        assert!((v2[0] - (7.2 + 0.25 * (4.4 - 7.2))).abs() < 1e-6, "{v2:?}");
+    }
+
+    #[test]
+    fn a_moving_point_no_frame_gathered_takes_the_cells_less_their_corners_direct_light() {
+        // Patch 7 is one quad cell at each frame; its corners' direct light is known
+        // at both frames, the rest of their light is 1 at `a` and 2 at `b`.
+        let q = point_coord;
+        let corners = [[0.0f32, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        let frame = |rest: f32, direct: [f32; 4]| {
+            let cell = Leaf {
+                patch: 7,
+                corners: 4,
+                time: [0.0, 0.0],
+                uv: corners,
+                b: direct.map(|d| [rest + d; 3]),
+            };
+            KeyValues::default()
+                .with_direct(
+                    corners
+                        .iter()
+                        .zip(direct)
+                        .map(|(c, d)| ((7, q(c[0]), q(c[1])), [d; 3]))
+                        .collect(),
+                )
+                .with_cells([cell].into())
+        };
+        let a = frame(1.0, [4.0, 0.0, 0.0, 4.0]);
+        let b = frame(2.0, [0.0, 8.0, 8.0, 0.0]);
+        let pk = (7, q(0.25), q(0.5));
+        let rest = |kv: &KeyValues| kv.indirect_at(&pk).map(|v| v[0]);
+        assert!((rest(&a).unwrap() - 1.0).abs() < 1e-6);
+        assert!((rest(&b).unwrap() - 2.0).abs() < 1e-6);
+        let between = Between {
+            free: true,
+            before: None,
+            a: (0.0, &a),
+            b: (4.0, &b),
+            t: 1.0,
+            tol: 0.01,
+        };
+        let (v, _) = between.value(&pk, || true, Some(grey(3.0))).unwrap();
+        assert!((v[0] - 4.25).abs() < 1e-6, "{v:?}");
+        // A corner without its direct light: no rest to take.
+        let lacking = KeyValues::default().with_cells(a.cells.clone());
+        assert_eq!(lacking.indirect_at(&pk), None);
+    }
+
+    #[test]
+    fn the_direct_light_of_a_point_is_its_exact_factor_to_each_lamp() {
+        // The Cornell box's floor under the centre of its lamp (130 × 105 mm,
+        // 548.8 mm up, nothing between): `ρ E F`, with the factor of a parallel
+        // rectangle over a point, the sum of four rectangles with a corner over it.
+        let scene = crate::scene::cornell_box(false);
+        let s = Solver::at_time(
+            &scene,
+            super::super::SolveOptions::default(),
+            0.0,
+            [0.0, 0.0],
+        )
+        .unwrap();
+        let floor = (0..s.patches.len())
+            .find(|&p| s.patches.normals[p].y > 0.99 && s.patches.point(p, 0.5, 0.5).y.abs() < 1e-9)
+            .expect("the Cornell box has a floor") as u32;
+        let emitters = s.emitters_now();
+        assert_eq!(emitters.len(), 1);
+        let x = DVec3::new(278.0, 0.0, 279.5);
+        let d = s.direct_light(x, DVec3::Y, floor, &(floor, 0, 0), &emitters);
+        let corner = |a: f64, b: f64| {
+            let (x, y) = (a / 548.8, b / 548.8);
+            let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+            (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
+        };
+        let f = 4.0 * corner(65.0, 52.5);
+        let (rho, e) = (s.patches.rhos[floor as usize], emitters[0].3);
+        for k in 0..3 {
+            let want = rho[k] * e[k] * f;
+            assert!(
+                (d[k] - want).abs() < 1e-9 * want,
+                "{k}: {} against {want}",
+                d[k]
+            );
+        }
+        // The lamp itself gets no direct light from itself; the ceiling around it
+        // none either (the lamp is in its plane).
+        let lamp = emitters[0].0;
+        let c = s.patches.point(lamp as usize, 0.5, 0.5);
+        assert_eq!(
+            s.direct_light(c, -DVec3::Y, lamp, &(lamp, 0, 0), &emitters),
+            [0.0; 3]
+        );
     }
 }

@@ -129,13 +129,7 @@ fn push_patch_root(
     parent: u32,
     time: [f32; 2],
 ) -> Result<ElementId> {
-    let poly = &patches.polys[patch];
-    let uv = if poly.n == 3 {
-        [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]
-    } else {
-        [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
-    };
-    let geom = surface_geom(patches, patch, poly.n, &uv);
+    let geom = whole_patch_geom(patches, patch);
     let node = Node {
         parent,
         first_child: 0,
@@ -145,6 +139,17 @@ fn push_patch_root(
         pad: [0; 2],
     };
     pool.push(node, geom, time)
+}
+
+/// Geometry of the whole of `patch` (its root element's).
+pub fn whole_patch_geom(patches: &Patches, patch: usize) -> Geom {
+    let n = patches.polys[patch].n;
+    let uv = if n == 3 {
+        [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]
+    } else {
+        [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+    };
+    surface_geom(patches, patch, n, &uv)
 }
 
 /// Geometry of the sub-domain `uv` (3 or 4 parameter corners) of `patch`.

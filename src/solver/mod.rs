@@ -561,6 +561,8 @@ pub struct Solver<'a> {
     links_at: f64,
     /// Most bytes a window keeps in final-gather terms (`None`: no bound).
     kept_budget: Option<usize>,
+    /// [`Solver::set_direct_apart`].
+    direct_apart: bool,
     /// The final-gather terms the last window kept on the shared part's elements,
     /// handed to the next window ([`Solver::release_window`], [`Solver::begin_window`]).
     carried: Option<PointCache>,
@@ -684,6 +686,7 @@ impl<'a> Solver<'a> {
             now: t,
             links_at: t,
             kept_budget: None,
+            direct_apart: false,
             carried: None,
             time_range: None,
             frame_rows: FrameRows::default(),

@@ -14,6 +14,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::between::point_coord;
 use super::{
     Between, CORNER_INSET, ElementId, FastMap, KeyValues, Leaf, Patches, PointKey, Solution,
     SolveStats, Solver, hierarchy,
@@ -140,12 +141,18 @@ struct VertexCache {
     /// uv, the point's key).
     points: Vec<GatherPoint>,
     values: Vec<([f64; 3], bool)>,
+    /// The direct light of the points on moving surfaces, in a space-time window
+    /// ([`Solver::direct_light`]).
+    direct: Vec<(PointKey, [f32; 3])>,
 }
+
+/// What the reconstruction makes of one point: its value, whether it lies outside
+/// every solid, the terms to keep, and its direct light if it is on a moving surface.
+type Evaluated<T> = ([f64; 3], bool, Option<T>, Option<[f64; 3]>);
 
 impl VertexCache {
     fn register(&mut self, c: &Cell, uv: [f32; 2], toward: [f32; 2]) -> usize {
-        let q = |x: f32| (x as f64 * (1u64 << 24) as f64).round() as u32;
-        let key = (c.patch, q(uv[0]), q(uv[1]));
+        let key = (c.patch, point_coord(uv[0]), point_coord(uv[1]));
         *self.index.entry(key).or_insert_with(|| {
             self.points.push((c.leaf, c.patch, uv, toward, key));
             self.points.len() - 1
@@ -157,7 +164,7 @@ impl VertexCache {
     fn evaluate<T: Send>(
         &mut self,
         batch: usize,
-        gather: impl Fn(ElementId, DVec3, PointKey) -> ([f64; 3], bool, Option<T>) + Sync,
+        gather: impl Fn(ElementId, DVec3, PointKey) -> Evaluated<T> + Sync,
         patches: &Patches,
     ) -> Vec<T> {
         let from = self.values.len();
@@ -170,14 +177,16 @@ impl VertexCache {
                 // Evaluate a hair inside the cell: on an edge shared with a
                 // perpendicular wall the factor jumps (the wall is seen edge-on), and
                 // the interpolant wants the limit from inside.
-                let (b, valid, keep) = gather(leaf, x + CORNER_INSET * (c - x), pk);
-                ((b, valid), keep)
+                (pk, gather(leaf, x + CORNER_INSET * (c - x), pk))
             })
             .collect();
         let mut keep = Vec::new();
-        for (v, k) in new {
-            self.values.push(v);
+        for (pk, (b, valid, k, d)) in new {
+            self.values.push((b, valid));
             keep.extend(k);
+            if let Some(d) = d {
+                self.direct.push((pk, d.map(|x| x as f32)));
+            }
         }
         keep
     }
@@ -288,6 +297,11 @@ impl Solver<'_> {
         let limits = self.gather_limits(b_ref, true);
         let min_len = self.opts.recon_min_size * self.patches.diameter;
         let mut cache = VertexCache::default();
+        // In a space-time window the points on moving surfaces keep their direct
+        // light apart, for the frames between to interpolate the rest only.
+        let emitters =
+            (self.direct_apart && self.window.is_some() && self.moving_patch.contains(&true))
+                .then(|| self.emitters_now());
         let mut cells: Vec<Cell> = self
             .leaves
             .iter()
@@ -326,13 +340,17 @@ impl Solver<'_> {
                 let fresh = cache.evaluate(
                     GATHER_BATCH,
                     |leaf, x, pk| {
-                        let outside = || {
-                            let n = DVec3::from_array(geoms[leaf.ix()].normal);
-                            self.outside_solids(x, n)
-                        };
-                        if let Some((b, valid)) = between.and_then(|bw| bw.value(&pk, outside)) {
+                        let n = DVec3::from_array(geoms[leaf.ix()].normal);
+                        let outside = || self.outside_solids(x, n);
+                        let direct = emitters
+                            .as_ref()
+                            .filter(|_| self.moving_patch[pk.0 as usize])
+                            .map(|em| self.direct_light(x, n, pk.0, &pk, em));
+                        if let Some((b, valid)) =
+                            between.and_then(|bw| bw.value(&pk, outside, direct))
+                        {
                             interpolated.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                            return (b, valid, None);
+                            return (b, valid, None, direct.filter(|_| valid));
                         }
                         gathered.store(true, std::sync::atomic::Ordering::Relaxed);
                         let (b, valid, fresh) =
@@ -341,7 +359,7 @@ impl Solver<'_> {
                         let keep = view
                             .filter(|_| !fresh.is_empty())
                             .and_then(|v| v.prepare(pk, fresh));
-                        (b, valid, keep)
+                        (b, valid, keep, direct.filter(|_| valid))
                     },
                     &self.patches,
                 );
@@ -436,6 +454,7 @@ impl Solver<'_> {
                 let (b, ok) = cache.values[i];
                 (pk, b, ok)
             }))
+            .with_direct(std::mem::take(&mut cache.direct))
         } else {
             KeyValues::default()
         };

@@ -199,6 +199,13 @@ pub struct SpaceTimeOptions {
     /// changes between them by more than this fraction of the moving surfaces'
     /// total ([`MOVING_POWER_TOL`]); 0: only where it does not change at all.
     pub moving_power_tol: f64,
+    /// The points on moving surfaces keep their direct light apart: a frame
+    /// between two solved frames computes it anew and takes the line over the rest
+    /// of their light only ([`Solver::direct_light`], [`Between::value`]). A panel
+    /// sliding past a lamp is lit along a curve the line cannot follow; its
+    /// inter-reflections with what it passes follow it less steeply. `false`: the
+    /// line over the whole light.
+    pub direct_apart: bool,
 }
 
 impl SpaceTimeOptions {
@@ -236,6 +243,7 @@ impl Default for SpaceTimeOptions {
             interp_tol: 0.01,
             interp_motion: INTERP_MOTION,
             moving_power_tol: MOVING_POWER_TOL,
+            direct_apart: true,
         }
     }
 }
@@ -879,6 +887,7 @@ impl<'a> SpaceTime<'a> {
         let motion = frame_motion(scene, &times, solver.patches.diameter);
         let windows = time_layout(&times, &motion, &st);
         solver.set_kept_budget(st.kept_budget);
+        solver.set_direct_apart(st.direct_apart);
         let rounds = solver.run_shared([t_start, t_end], on_round)?;
         let b_ref = solver.radiosity_scale().max(f64::MIN_POSITIVE);
         let stats = SpaceTimeStats {

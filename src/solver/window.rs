@@ -521,6 +521,12 @@ impl Solver<'_> {
         self.kept_budget = bytes.map(|b| usize::try_from(b).unwrap_or(usize::MAX));
     }
 
+    /// Whether a window's reconstructions keep the direct light of the points on
+    /// moving surfaces apart ([`super::spacetime::SpaceTimeOptions::direct_apart`]).
+    pub fn set_direct_apart(&mut self, on: bool) {
+        self.direct_apart = on;
+    }
+
     /// Bytes of what the current window keeps: final-gather terms and leaf-row
     /// coefficients (0 outside a window).
     pub fn kept_bytes(&self) -> u64 {
