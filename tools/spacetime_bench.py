@@ -420,10 +420,11 @@ def write_png(rows, path):
                 axis.set_major_formatter(plain)
                 axis.set_minor_formatter(plain)
         bottom.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2)
-    fig.suptitle("untagged curves: earlier builds (BENCHMARKS.md); tagged points: the last build",
+    fig.suptitle("untagged curves: earlier builds (BENCHMARKS.md); tagged points: the last build "
+                 "measured on each scene",
                  fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
 
 
@@ -435,12 +436,15 @@ def read_rows(path):
 
 
 def latest_build(rows):
-    """Rows of curves (methods without a build tag) and of the last build measured
-    (methods ending in "(<hash>)"): older snapshots stay in the CSV, not the plot."""
+    """Rows of curves (methods without a build tag) and, per scene, of the last build
+    measured on it (methods ending in "(<hash>)"): older snapshots stay in the CSV,
+    not the plot."""
     tag = lambda m: m[m.rfind("(") + 1:-1] if m.endswith(")") and "(" in m else None
-    tags = [tag(r["method"]) for r in rows if tag(r["method"])]
-    last = tags[-1] if tags else None
-    return [r for r in rows if tag(r["method"]) in (None, last)]
+    last = {}
+    for r in rows:
+        if tag(r["method"]):
+            last[r["scene"]] = tag(r["method"])
+    return [r for r in rows if tag(r["method"]) in (None, last.get(r["scene"]))]
 
 
 def plot(rows, csv_path):
