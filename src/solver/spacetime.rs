@@ -72,6 +72,13 @@
 //!    two ends agree, or lie on one line with the frame as far before, takes the
 //!    linear interpolation in time instead of a gather ([`Between`]; the paper's
 //!    elements are constant over a time range, eq. 8, these are linear over one).
+//!    A point on a moving surface keeps its direct light apart: every
+//!    reconstruction computes it (`Solver::direct_light`: exact factors to the
+//!    emitting patches, the gather's rays), and the line and its tests are over the
+//!    rest of its light, the direct light now added
+//!    ([`SpaceTimeOptions::direct_apart`]; a panel sliding past a lamp is lit
+//!    along a bump the line cannot follow, what it gets back from what it lights
+//!    along a far flatter one).
 //!    Only points a moving object's shadow or reflection changes in a way a line
 //!    cannot follow, and cells the frame meshes anew, are gathered, and only in
 //!    the halves where the change is. Those gathers need the frame's radiosity:
@@ -201,7 +208,7 @@ pub struct SpaceTimeOptions {
     pub moving_power_tol: f64,
     /// The points on moving surfaces keep their direct light apart: a frame
     /// between two solved frames computes it anew and takes the line over the rest
-    /// of their light only ([`Solver::direct_light`], [`Between::value`]). A panel
+    /// of their light only (`Solver::direct_light`, [`Between`]). A panel
     /// sliding past a lamp is lit along a curve the line cannot follow; its
     /// inter-reflections with what it passes follow it less steeply. `false`: the
     /// line over the whole light.
