@@ -385,17 +385,30 @@ struct Missing;
 /// and emission ([`Solver::direct_light`]).
 pub(super) type Emitter = (u32, Geom, Poly, [f64; 3]);
 
+/// Most emitting patches [`Solver::direct_light`] is computed over. Each costs a
+/// factor and the final gather's rays to an emitter (32 by default) at every point
+/// on a moving surface at every frame; a scene lit by more (an emissive mesh of many
+/// triangles) takes the line over the whole light of its moving points, as with
+/// [`super::spacetime::SpaceTimeOptions::direct_apart`] off, rather than pay that.
+pub(super) const MAX_DIRECT_EMITTERS: usize = 16;
+
 impl Solver<'_> {
-    /// The emitting patches as placed now, for [`Solver::direct_light`].
-    pub(super) fn emitters_now(&self) -> Vec<Emitter> {
-        (0..self.patches.len())
+    /// The emitting patches as placed now, for [`Solver::direct_light`]; `None` if
+    /// there are more than [`MAX_DIRECT_EMITTERS`].
+    pub(super) fn emitters_now(&self) -> Option<Vec<Emitter>> {
+        let lit: Vec<usize> = (0..self.patches.len())
             .filter(|&p| self.patches.emissions[p].iter().any(|&e| e > 0.0))
-            .map(|p| {
-                let g = hierarchy::whole_patch_geom(&self.patches, p);
-                let poly = oracle::poly(&g);
-                (p as u32, g, poly, self.patches.emissions[p])
-            })
-            .collect()
+            .take(MAX_DIRECT_EMITTERS + 1)
+            .collect();
+        (lit.len() <= MAX_DIRECT_EMITTERS).then(|| {
+            lit.into_iter()
+                .map(|p| {
+                    let g = hierarchy::whole_patch_geom(&self.patches, p);
+                    let poly = oracle::poly(&g);
+                    (p as u32, g, poly, self.patches.emissions[p])
+                })
+                .collect()
+        })
     }
 
     /// The direct light a point `x` (normal `n`) of patch `p` reflects: `ρ_p Σ_e E_e
@@ -792,7 +805,7 @@ mod tests {
         let floor = (0..s.patches.len())
             .find(|&p| s.patches.normals[p].y > 0.99 && s.patches.point(p, 0.5, 0.5).y.abs() < 1e-9)
             .expect("the Cornell box has a floor") as u32;
-        let emitters = s.emitters_now();
+        let emitters = s.emitters_now().expect("one lamp");
         assert_eq!(emitters.len(), 1);
         let x = DVec3::new(278.0, 0.0, 279.5);
         let d = s.direct_light(x, DVec3::Y, floor, &(floor, 0, 0), &emitters);
@@ -819,5 +832,47 @@ mod tests {
             s.direct_light(c, -DVec3::Y, lamp, &(lamp, 0, 0), &emitters),
             [0.0; 3]
         );
+    }
+
+    #[test]
+    fn a_scene_lit_by_many_emitters_takes_the_line_over_the_whole_light() {
+        // The Cornell box with its lamp cut into a grid of n × n lamps: up to
+        // `MAX_DIRECT_EMITTERS` the direct light is kept apart, over it not.
+        let lamps = |n: usize| {
+            let mut scene = crate::scene::cornell_box(false);
+            let lamp = scene
+                .objects
+                .iter_mut()
+                .find(|o| o.name == "light")
+                .expect("the Cornell box has a light");
+            let v = lamp.polygons[0].vertices.clone();
+            let material = lamp.polygons[0].material;
+            let at = |s: f64, t: f64| v[0] + s * (v[1] - v[0]) + t * (v[3] - v[0]);
+            lamp.polygons = (0..n * n)
+                .map(|k| {
+                    let (i, j) = ((k % n) as f64, (k / n) as f64);
+                    let d = 1.0 / n as f64;
+                    crate::scene::Polygon {
+                        vertices: vec![
+                            at(i * d, j * d),
+                            at((i + 1.0) * d, j * d),
+                            at((i + 1.0) * d, (j + 1.0) * d),
+                            at(i * d, (j + 1.0) * d),
+                        ],
+                        material,
+                    }
+                })
+                .collect();
+            let s = Solver::at_time(
+                &scene,
+                super::super::SolveOptions::default(),
+                0.0,
+                [0.0, 0.0],
+            )
+            .unwrap();
+            s.emitters_now().map(|e| e.len())
+        };
+        assert_eq!(lamps(4), Some(16));
+        assert_eq!(lamps(5), None);
     }
 }

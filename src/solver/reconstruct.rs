@@ -301,7 +301,8 @@ impl Solver<'_> {
         // light apart, for the frames between to interpolate the rest only.
         let emitters =
             (self.direct_apart && self.window.is_some() && self.moving_patch.contains(&true))
-                .then(|| self.emitters_now());
+                .then(|| self.emitters_now())
+                .flatten();
         let mut cells: Vec<Cell> = self
             .leaves
             .iter()

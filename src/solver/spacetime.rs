@@ -211,7 +211,8 @@ pub struct SpaceTimeOptions {
     /// of their light only (`Solver::direct_light`, [`Between`]). A panel
     /// sliding past a lamp is lit along a curve the line cannot follow; its
     /// inter-reflections with what it passes follow it less steeply. `false`: the
-    /// line over the whole light.
+    /// line over the whole light, as in a scene lit by more than 16 emitting
+    /// patches, where the direct light would cost too many rays.
     pub direct_apart: bool,
 }
 
