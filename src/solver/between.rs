@@ -15,7 +15,9 @@
 //! - [`KeyValues`]: the value of every reconstruction point; a frame between two
 //!   solved frames takes a point's value on the line between theirs where they
 //!   agree or the point's light is linear in time ([`Between`]), and gathers it
-//!   otherwise.
+//!   otherwise. A point on a moving surface also keeps the direct light it
+//!   reflects ([`Solver::direct_light`]): the line is over the rest of its light,
+//!   and the frame between adds its own direct light.
 
 use std::sync::Arc;
 
@@ -127,7 +129,8 @@ impl SharedRadiosity {
 ///
 /// The points are a sorted array of 28-byte records with `f32` radiosity, what the
 /// leaves store (a window keeps those of about six frames: a hash map of `f64`s
-/// held 2.4 MB of ACTOR's out-of-core peak for four).
+/// held 2.4 MB of ACTOR's out-of-core peak for four); the direct light of those on
+/// moving surfaces is a second sorted array, of 24-byte records.
 #[derive(Clone, Debug, Default)]
 pub struct KeyValues {
     /// (point, radiosity, outside every solid), sorted by point.

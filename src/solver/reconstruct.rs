@@ -9,7 +9,8 @@
 //! their corner values (bilinear within the cell). In a space-time window the
 //! points a frame between two solved frames may take on the line between theirs
 //! are not gathered ([`super::Between`]), and every point's value comes back for
-//! later frames to interpolate ([`super::KeyValues`]).
+//! later frames to interpolate ([`super::KeyValues`]), with the direct light of the
+//! points on moving surfaces apart (`Solver::direct_light`).
 
 use glam::DVec3;
 use rayon::prelude::*;
