@@ -1171,7 +1171,7 @@ fn a_sliding_box_hung_over_the_floor_keeps_its_gap_dark_in_every_frame() {
 /// The Cornell box (no blocks) with a square panel, 160 mm wide and 10 mm thick,
 /// hung with its top 69 mm under the lamp and sliding 500 mm along x across it
 /// over `[0, 0.8]` s (centred under the lamp at 0.4 s): the light on its top
-/// rises and falls tenfold as it passes (LIGHT's board, in small).
+/// rises and falls steeply as it passes (LIGHT's board, in small).
 fn panel_under_lamp() -> Scene {
     let mut scene = cornell_box(false);
     scene.time.end = 0.8;
