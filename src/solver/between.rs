@@ -196,10 +196,7 @@ impl KeyValues {
             let d = self.direct(pk).filter(|_| ok)?;
             return Some(std::array::from_fn(|k| v[k] - d[k]));
         }
-        let lo = self.cells.partition_point(|l| l.patch < pk.0);
-        let hi = self.cells.partition_point(|l| l.patch <= pk.0);
-        let (u, v) = (point_param(pk.1), point_param(pk.2));
-        let cell = crate::playback::probe::leaf_at(&self.cells[lo..hi], u, v)?;
+        let (cell, u, v) = self.cell_holding(pk)?;
         let w = cell.weights(u, v);
         let mut out = [0.0; 3];
         for (c, wc) in w.iter().enumerate().take(cell.corners as usize) {
@@ -218,10 +215,15 @@ impl KeyValues {
         if let Some((v, true)) = self.known(pk) {
             return Some(v);
         }
+        self.cell_holding(pk).map(|(l, u, v)| l.eval(u, v))
+    }
+
+    /// The frame's cell holding point `pk`, and the point's parameters.
+    fn cell_holding(&self, pk: &PointKey) -> Option<(&Leaf, f64, f64)> {
         let lo = self.cells.partition_point(|l| l.patch < pk.0);
         let hi = self.cells.partition_point(|l| l.patch <= pk.0);
         let (u, v) = (point_param(pk.1), point_param(pk.2));
-        crate::playback::probe::leaf_at(&self.cells[lo..hi], u, v).map(|l| l.eval(u, v))
+        crate::playback::probe::leaf_at(&self.cells[lo..hi], u, v).map(|l| (l, u, v))
     }
 }
 
