@@ -12,7 +12,7 @@ use rhier::playback::{probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
 use rhier::solver::spacetime::{FrameRecord, SpaceTime, SpaceTimeOptions};
 use rhier::solver::{SolveOptions, SolveStats};
-use rhier::store::journal::Journal;
+use rhier::store::journal::{Journal, fingerprint};
 use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
 
 use super::solve::{Args, storage};
@@ -33,43 +33,6 @@ fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
     };
     st.validate()?;
     Ok(st)
-}
-
-/// What makes two solves produce the same windows: the scene and every setting that
-/// changes a result (not the storage, thread count being part of determinism).
-fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> String {
-    let settings = format!(
-        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {:?} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} interp motion {} moving power {} direct apart {} threads {}",
-        opts.eps,
-        opts.min_size,
-        opts.power_size,
-        opts.rays_per_point,
-        opts.corner_rays,
-        opts.open_ratio,
-        opts.max_rounds,
-        opts.tolerance,
-        opts.seed,
-        opts.recon_tol,
-        opts.recon_tol_moving,
-        opts.recon_min_size,
-        opts.contact_meshing,
-        st.fps,
-        st.window,
-        st.merge_tol,
-        st.key_stride,
-        st.key_motion,
-        st.interp_tol,
-        st.interp_motion,
-        st.moving_power_tol,
-        st.direct_apart,
-        rayon::current_num_threads(),
-    );
-    let scene_text = rhier::scene::to_json_string(scene);
-    format!(
-        "rhier space-time journal 3\n{settings}\nscene crc32 {:#010x}, {} bytes\n",
-        crc32fast::hash(scene_text.as_bytes()),
-        scene_text.len()
-    )
 }
 
 /// Runs the space-time solve of a moving scene.
@@ -97,7 +60,7 @@ pub fn run(
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("{stem}.rhier")));
     let probes = args.probe.as_deref().map(read_probe_points).transpose()?;
-    let key = fingerprint(scene, &opts, &st);
+    let key = fingerprint(scene, &opts, &st)?;
     // A device or FIFO (`-o /dev/null`) is written in place at the end (see the
     // store's writer): nothing could be resumed into it, so it gets no journal beside
     // it (which, next to /dev/null, a user could not even create).
