@@ -1,14 +1,15 @@
-//! Command-line interface: clap derive, one file per subcommand. Error context (anyhow)
-//! is added here and only here; the library returns [`rhier::Error`].
+//! Command-line interface: clap derive, one module per subcommand (`solve` is a
+//! folder: its three ways of solving share one module of arguments, see
+//! [`solve`]). Modules import in one direction: `inspect` and `play` use `probe`'s
+//! printing, `solve`'s modes its `common`, and nothing imports back. Error context
+//! (anyhow) is added here and only here; the library returns [`rhier::Error`].
 
 mod flatland;
 mod inspect;
-mod per_frame;
 mod play;
 mod probe;
 mod reference;
 mod solve;
-mod spacetime;
 
 use clap::{Parser, Subcommand};
 

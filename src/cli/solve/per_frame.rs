@@ -4,7 +4,6 @@
 //! (unless `-q`) and with `--report CSV` writes one row per frame.
 
 use std::io::Write;
-use std::path::PathBuf;
 
 use anyhow::Context;
 use rhier::Error;
@@ -12,14 +11,15 @@ use rhier::solver::SolveOptions;
 use rhier::solver::per_frame::{FrameReport, write_per_frame};
 use rhier::store::WriteOptions;
 
-use super::solve::{Args, load};
+use super::common::Args;
 
 /// Runs `rhier solve --per-frame` with the checked settings `opts`.
 pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
+    let output = &args.output;
     let unsupported = [
-        (args.reference.is_some(), "--reference"),
-        (args.probe.is_some(), "--probe"),
-        (args.keep_links, "--keep-links"),
+        (output.reference.is_some(), "--reference"),
+        (output.probe.is_some(), "--probe"),
+        (output.keep_links, "--keep-links"),
     ];
     if let Some((_, flag)) = unsupported.iter().find(|(on, _)| *on) {
         anyhow::bail!(
@@ -27,15 +27,13 @@ pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
         );
     }
     let start = std::time::Instant::now();
-    let (scene, stem) = load(args)?;
+    let (scene, stem) = args.scene.load()?;
     for w in &scene.warnings {
         eprintln!("rhier: warning: {w}");
     }
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("{stem}.rhier")));
-    let mut csv = match &args.report {
+    let out = output.out_path(&stem);
+    let fps = args.animation.fps;
+    let mut csv = match &output.report {
         Some(path) => {
             let file = std::fs::File::create(path)
                 .with_context(|| format!("creating {}", path.display()))?;
@@ -46,12 +44,12 @@ pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let quiet = args.quiet;
+    let quiet = output.quiet;
     let stats = write_per_frame(
         &out,
         &scene,
         &opts,
-        args.fps,
+        fps,
         WriteOptions::default(),
         |report, _| {
             if !quiet {
@@ -70,14 +68,14 @@ pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
         eprintln!(
             "solved {} frames at {} fps in {:.3} s ({:.3} s per frame): {} stored cells; wrote {}",
             stats.frames,
-            args.fps,
+            fps,
             start.elapsed().as_secs_f64(),
             stats.stats.seconds / stats.frames.max(1) as f64,
             stats.leaves,
             out.display()
         );
     }
-    if args.stats {
+    if output.stats {
         println!(
             "frames {}\nleaves {}\nlargest frame: elements {}, links {} active / {} passive",
             stats.frames,
