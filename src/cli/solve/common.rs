@@ -80,6 +80,11 @@ pub struct Args {
 #[command(next_help_heading = "Scene")]
 pub struct SceneArgs {
     /// Scene file (.json native, .gltf/.glb, .obj); none = the embedded Cornell box.
+    ///
+    /// The native JSON format is specified in formats/scene.md; a glTF file's node
+    /// animations (translation, rotation, scale) become motion tracks; an OBJ file is
+    /// static. A scene with motion is solved over its whole time domain: in time
+    /// windows by default (space-time), or frame by frame with `--per-frame`.
     // Listed under "Arguments", where a positional argument is looked for.
     #[arg(help_heading = None::<&str>)]
     pub scene: Option<PathBuf>,
@@ -88,6 +93,12 @@ pub struct SceneArgs {
     pub blocks: bool,
     /// Solve an embedded scene instead of a file: the Cornell box, or the animated
     /// ACTOR / LIGHT scenes of 75 (3 s), 150 or 750 frames at 25 fps.
+    ///
+    /// ACTOR and LIGHT follow Damez & Sillion (section 3.1). ACTOR is a furnished
+    /// 5 × 4 × 2.7 m room with a ceiling light and a window, two human-sized boxes
+    /// walking across it; LIGHT is the same room with a ceiling light and a lower wall
+    /// lamp that a sliding board hides mid-shot. The 150- and 750-frame versions walk
+    /// the same motion back and forth. The same scenes are in formats/examples/.
     #[arg(long, value_enum, conflicts_with = "scene")]
     pub builtin: Option<Builtin>,
 }
@@ -97,25 +108,54 @@ pub struct SceneArgs {
 #[command(next_help_heading = "Output")]
 pub struct OutputArgs {
     /// Output `.rhier` file (default: `<scene stem>.rhier` in the working directory).
+    ///
+    /// A device or FIFO (`-o /dev/null` to time a solve and keep nothing) is written
+    /// in place at the end, and gets no resume journal.
     #[arg(short = 'o', long = "out")]
     pub out: Option<PathBuf>,
     /// Write one CSV row per round (error against run time).
+    ///
+    /// A static solve writes a row per refine-and-solve round, as it prints a line:
+    /// elapsed seconds, elements, leaves, active and passive links, bytes per pool,
+    /// rays cast, links settled by shafts, the estimated error and the linear solve's
+    /// residual (and the true error with `--reference`). A space-time solve writes a
+    /// row per frame, in time order: cells, points gathered and interpolated,
+    /// elements, links, varying links, rays, pool bytes, the bytes of final-gather
+    /// terms the window keeps and the residual. `--per-frame` writes a row per frame.
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// Reference points with known radiosity (`rhier reference` output, or any JSON
     /// array of `{"p":..,"n":..,"B":[r,g,b]}`): adds the true error per round.
+    ///
+    /// The true error is the relative RMS error, at those points, of what `rhier
+    /// probe` would return after the round. A static solve only: for an animation,
+    /// compare probes at every frame (tools/spacetime_bench.py).
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Probe points to evaluate after the solve (JSON array of `{"p":..,"n":..}`).
+    ///
+    /// Each point gets the radiosity of the surface nearest `p` whose normal faces
+    /// along `n`, at the scene's start: the interpolant of the stored cell holding
+    /// the point (bilinear on quads, linear on triangles), not an element average;
+    /// the same answer as `rhier probe`. Not with `--per-frame`: probe its output
+    /// with `rhier probe FILE --time T`.
     #[arg(long, requires = "probe_out")]
     pub probe: Option<PathBuf>,
     /// Where to write the probe results.
     #[arg(long, requires = "probe")]
     pub probe_out: Option<PathBuf>,
     /// Keep the links in the output file.
+    ///
+    /// Every link, active and passive, with its coefficient and error bound. A
+    /// static solve only: `--per-frame` refuses it, and a space-time solve releases
+    /// each window's links when the window is written.
     #[arg(long)]
     pub keep_links: bool,
     /// Print the memory counters of the run.
+    ///
+    /// Elements, links, the BVH and the stored cells, with the bytes each holds (a
+    /// space-time solve: the shared part's and the largest window's pools;
+    /// `--per-frame`: the counts of its largest frame).
     #[arg(long)]
     pub stats: bool,
     /// Print nothing but errors and warnings.
@@ -128,51 +168,88 @@ pub struct OutputArgs {
 #[command(next_help_heading = "Accuracy")]
 pub struct AccuracyArgs {
     /// Refinement threshold, relative to the RMS reflected radiosity.
+    ///
+    /// Smaller refines the hierarchy further: more elements and links, a smaller
+    /// error, more time. A static solve refines in levels: up to two rounds at
+    /// `2 eps`, then rounds at `eps`; the estimated error it prints is the change of
+    /// the answer between the two levels (see `--target-error`). In a space-time
+    /// solve the room's error often follows `--recon-tol` more than `--eps`.
     #[arg(long, default_value_t = SolveOptions::default().eps)]
     pub eps: f64,
     /// Smallest element edge as a fraction of the scene's diameter.
     #[arg(long, default_value_t = SolveOptions::default().min_size)]
     pub min_size: f64,
     /// Reconstruction tolerance, relative to the RMS reflected radiosity.
+    ///
+    /// The stored answer is a mesh of cells whose corners carry a final gather
+    /// through the links of the cell's leaf and its ancestors, with exact
+    /// point-to-polygon form factors. A cell splits while the gather at its centre
+    /// differs from its corners' interpolant by more than this, so the mesh follows
+    /// room edges, contact lines and shadows. Smaller: finer cells, more gathers.
     #[arg(long, default_value_t = SolveOptions::default().recon_tol)]
     pub recon_tol: f64,
     /// Reconstruction tolerance on the surfaces of moving objects (default:
-    /// `--recon-tol`). The actors of a space-time solve at the tolerance best for the
-    /// room come out coarser than the room; half of it there costs little.
+    /// `--recon-tol`).
+    ///
+    /// The actors of a space-time solve at the tolerance best for the room come out
+    /// coarser than the room; half of it on them costs little.
     #[arg(long)]
     pub recon_tol_moving: Option<f64>,
     /// Receivers smaller than the square of this fraction of the scene's diameter
     /// are refined on the power their links may get wrong, not on their radiosity
-    /// (0: never). Smaller is slower and, in cluttered scenes, more accurate
+    /// (0: never).
+    ///
+    /// A small face is then refined for what it hands on to the rest of the scene,
+    /// and the final gather gives its own values; this keeps the links of a room of
+    /// a hundred thousand polygons bounded. Smaller refines the small faces of
+    /// cluttered rooms further: slower, more memory and, there, more accurate
     /// (BENCHMARKS.md, "Scale").
     #[arg(long, default_value_t = SolveOptions::default().power_size)]
     pub power_size: f64,
-    /// After the last round of a static solve, split the leaves below the power area
-    /// whose radiosity differs across their own quadrature points by more than this
-    /// fraction of the RMS reflected radiosity, and solve again (0: never). Mends
-    /// narrow slots in clutter; 0.15 measured (BENCHMARKS.md, "Scale"). Static
-    /// scenes and `--per-frame` frames only: refused by a space-time solve.
+    /// After the last round of a static solve, split the small leaves whose
+    /// radiosity varies across them by more than this fraction of the RMS reflected
+    /// radiosity, and solve again (0: never).
+    ///
+    /// Small: below the power area of `--power-size`; the spread is over the leaf's
+    /// own quadrature points. It mends narrow slots in clutter, whose faces the power
+    /// criterion leaves whole though their radiosity varies several-fold over their
+    /// height, for more time and memory, and does not help every scene (BENCHMARKS.md,
+    /// "Scale"). Static scenes and the frames of `--per-frame` only: a space-time
+    /// solve refuses it.
     #[arg(long, default_value_t = SolveOptions::default().split_spread)]
     pub split_spread: f64,
-    /// After the last round of a static solve, a leaf below the power area whose
-    /// radiosity across its quadrants strays from its mean by more than this
-    /// fraction of it is gathered quadrant by quadrant, not at its mean (0: never).
-    /// Mends narrow slots in clutter for about 14% more time; 0.1 measured
-    /// (BENCHMARKS.md, "Scale"). Static scenes and `--per-frame` frames only:
-    /// refused by a space-time solve.
+    /// After the last round of a static solve, gather from the small leaves whose
+    /// radiosity strays from their mean by more than this fraction of it quadrant by
+    /// quadrant, not at their mean (0: never).
+    ///
+    /// Small: below the power area of `--power-size`. It mends the same narrow slots
+    /// as `--split-spread` in the final gather only: no leaf is added and nothing is
+    /// solved again, so it costs less time and no memory, and, as the split, does not
+    /// help every scene (BENCHMARKS.md, "Scale"). Static scenes and the frames of
+    /// `--per-frame` only: a space-time solve refuses it.
     #[arg(long, default_value_t = SolveOptions::default().leaf_shapes)]
     pub leaf_shapes: f64,
-    /// A reconstruction point facing a surface across a gap narrower than this
-    /// fraction of the square root of the surface's area (a box's bottom hung just over the
-    /// floor, and the floor under it) is solved together with its foot on that
-    /// surface instead of gathering the element's mean (0: never). ACTOR's actors at
-    /// 0.1: their error 6.4% → 2.9% in a space-time solve for 25–45% more time,
-    /// per-frame's 4.5% → 3.5% for about 15% (BENCHMARKS.md, "Two surfaces across
-    /// a narrow gap").
+    /// Solve a reconstruction point that faces a surface across a gap narrower than
+    /// this fraction of the square root of the surface's area together with its foot
+    /// on that surface (0: never).
+    ///
+    /// A face hovering close over another (a box's bottom hung just over the floor,
+    /// as ACTOR's actors are) is not a contact, and light leaks into the gap from
+    /// the coarse mean of the leaf a point there faces. With this on, such a point
+    /// and its foot on the facing surface are solved together instead of gathering
+    /// that mean, for more time. It works in every kind of solve (BENCHMARKS.md, "Two
+    /// surfaces across a narrow gap").
     #[arg(long, default_value_t = SolveOptions::default().near_gap)]
     pub near_gap: f64,
     /// Do not cut patches along the lines where other polygons rest on them (see
     /// geometry::contact): faster in cluttered scenes, less accurate near contacts.
+    ///
+    /// By default, patches are cut along contact lines (a block resting on the
+    /// floor) and the pieces hidden underneath are dropped, so no element straddles
+    /// a contact; a patch is also cut along the outline of a polygon hanging
+    /// parallel just in front of it (a lamp just under a ceiling). In a cluttered
+    /// scene the cuts multiply the patches. A face hovering close over another is
+    /// not a contact: see `--near-gap`.
     #[arg(long)]
     pub no_contact_meshing: bool,
     /// Most refine-and-solve rounds.
@@ -180,6 +257,15 @@ pub struct AccuracyArgs {
     pub max_rounds: u32,
     /// Refine (halving `--eps` as needed) until the estimated relative error, the
     /// final gather's change between levels, is below this (static scenes)
+    ///
+    /// The estimate is the answer's own: the relative RMS change of the final gather
+    /// (what `rhier probe` returns) at 128 points spread over the surfaces by area,
+    /// between the last round at `2 eps` and this one, relative to the reflected
+    /// radiosity there (the first level has none: `n/a` on the terminal, NaN in the
+    /// CSV). It overestimates at a coarse `--eps`, where the change is mostly the
+    /// coarser level's own error, and is blind to a bias that halving `--eps` does
+    /// not change, as in rooms cluttered with boxes, where it reads low. Space-time
+    /// solves report none; `--per-frame` reports each frame's.
     #[arg(long)]
     pub target_error: Option<f64>,
     /// Start no new round after this many seconds.
@@ -196,6 +282,11 @@ pub struct AccuracyArgs {
 pub struct AnimationArgs {
     /// Solve every frame independently (the frame-by-frame baseline) at `--fps`,
     /// streaming one chunk per frame into the output file.
+    ///
+    /// Frame `i` is at `t = start + i/F` and holds over the times nearest to it, so
+    /// `rhier probe OUT --time T` plays any time back. Each frame is solved as the
+    /// static scene it is. Prints one line per frame unless `-q`; `--report` writes
+    /// one row per frame. Not with `--reference`, `--probe` or `--keep-links`.
     #[arg(long)]
     pub per_frame: bool,
     /// Frames per second at which a moving scene is solved (space-time, or
@@ -203,51 +294,95 @@ pub struct AnimationArgs {
     #[arg(long, default_value_t = 25.0)]
     pub fps: f64,
     /// Seconds of animation per space-time window: frames are solved window by
-    /// window; each finished window is written and its memory released. Default:
-    /// twelve key intervals (see `--key-motion`), as long in motion as they are.
+    /// window; each finished window is written and its memory released.
+    ///
+    /// Default: twelve key intervals (see `--key-motion`), as long in motion as they
+    /// are. Memory does not grow with the animation's length; a shorter window holds
+    /// less at once. A window takes from the one before only the final-gather terms
+    /// that still hold over it.
     #[arg(long)]
     pub window: Option<f64>,
     /// A stored cell keeps one value over consecutive frames while its corners stay
     /// within this fraction of the RMS reflected radiosity of their mean.
+    ///
+    /// Such a cell is stored once, with the longer time range.
     #[arg(long, default_value_t = 0.01)]
     pub merge_tol: f64,
     /// Space-time: every N-th frame of a window (and its first and last) is a
-    /// keyframe gathered at every reconstruction point; the frames between, taken
-    /// by bisection, interpolate the points where the two nearest solved frames
-    /// agree, or follow a line with the frame as far before, and gather the rest
-    /// (1: gather every frame). Default: keyframes spaced by motion (`--key-motion`).
+    /// keyframe gathered at every reconstruction point (1: gather every frame).
+    ///
+    /// The frames between, taken by bisection, interpolate the points where the two
+    /// nearest solved frames agree, or follow a line with the frame as far before,
+    /// and gather the rest (see `--interp-tol`). Default: keyframes spaced by motion
+    /// (`--key-motion`).
     #[arg(long)]
     pub key_stride: Option<u32>,
     /// Space-time, without `--key-stride`: the next keyframe is the last frame
     /// before some point of a moving object has moved more than this fraction of the
-    /// scene's diameter since the keyframe before (at most 32 frames on). The same
-    /// motion played over more frames makes as many keyframes.
+    /// scene's diameter since the keyframe before (at most 32 frames on).
+    ///
+    /// Keyframes follow the motion, not the frame count: the same motion played over
+    /// more frames makes as many keyframes and windows, and only the frames between
+    /// multiply. Further apart is faster; too far, and moving shadows leave stains
+    /// the frames between cannot mend.
     #[arg(long, default_value_t = SpaceTimeOptions::default().key_motion)]
     pub key_motion: f64,
     /// Space-time: how far (a fraction of the RMS reflected radiosity) a point's
     /// values at the solved frames around may stray from agreeing, or from a line,
     /// for a frame between to interpolate it.
+    ///
+    /// The frames between two keyframes come by bisection: the midpoint first, then
+    /// each half's midpoint between its two ends, and so on. A point within this of
+    /// agreeing at both ends, or of the line through the frame as far before, is
+    /// interpolated in time instead of gathered; the rest (where a moving shadow's
+    /// edge passed) is gathered at the frame, so a change is chased down only in the
+    /// half it happened in.
     #[arg(long, default_value_t = SpaceTimeOptions::default().interp_tol)]
     pub interp_tol: f64,
     /// Space-time: a frame between two solved frames over which no moving object
     /// travels more than this fraction of the scene's diameter takes the line
     /// between them at every point both hold, and skips its leaf solve (0: never).
-    /// The same motion played over more frames then costs little more.
+    ///
+    /// Below this motion the bisection stops testing points, so the same motion
+    /// played over more frames costs little more; a moving shadow's edge fades over
+    /// that distance instead of stepping.
     #[arg(long, default_value_t = SpaceTimeOptions::default().interp_motion)]
     pub interp_motion: f64,
     /// Space-time: a frame between two solved frames skips its leaf solve (the
     /// radiosity of what every frame shares taken on the line between them) when no
     /// moving surface's power changes between them by more than this fraction of
     /// the moving surfaces' total.
+    ///
+    /// The moving objects are still placed at the frame, and its points gather from
+    /// the last solved hierarchy. Otherwise the frame is solved and becomes an end
+    /// for the halves below it. Walking actors change the light they hand on little
+    /// between keyframes, and the frames between skip the solve; a panel sliding
+    /// over a lamp changes it much, and they are solved.
     #[arg(long, default_value_t = SpaceTimeOptions::default().moving_power_tol)]
     pub moving_power_tol: f64,
     /// Space-time: take the line between two solved frames over the whole light of
-    /// the points on moving surfaces. By default their direct light is computed
-    /// anew at every frame between, and the line is over the rest of their light.
+    /// the points on moving surfaces.
+    ///
+    /// By default their direct light is computed anew at every frame between, and
+    /// the line is over the rest of their light only (in scenes with at most 16
+    /// emitting patches: exact factors to each lamp, with rays). A panel sliding past a lamp is lit
+    /// along a curve the line cannot follow; its inter-reflections with what it
+    /// passes follow it less steeply. This flag saves the rays of the direct light
+    /// and is less accurate on such surfaces (BENCHMARKS.md, "The direct light of
+    /// moving surfaces").
     #[arg(long)]
     pub whole_light_between: bool,
     /// Continue an interrupted space-time solve from its last finished window (kept
     /// in OUT.rhier.partial/).
+    ///
+    /// Every finished window but the last is kept in the journal directory
+    /// `OUT.rhier.partial/` (checksummed; removed when the file is complete), with
+    /// the final-gather terms it hands the next window, so the resumed file has the
+    /// same leaves as an uninterrupted solve; an interrupted solve leaves no
+    /// `.rhier` file. A journal made with another scene or another setting that
+    /// changes the result is refused, and the error names the first that differs;
+    /// what changes no result (`--storage`, `--scratch`, `--threads`, the output
+    /// flags) may change.
     #[arg(long)]
     pub resume: bool,
     /// Stop with an error after this many windows (to test --resume).
@@ -262,6 +397,11 @@ pub struct ResourceArgs {
     /// Where the element and link pools (and a space-time window's kept final-gather
     /// terms and leaves) live [default: mmap for a space-time solve, out of core in
     /// the journal directory `OUT.rhier.partial/` beside the output; ram otherwise]
+    ///
+    /// Without `--storage`, the environment variable `RHIER_STORAGE` sets the
+    /// default of a static or per-frame solve: `ram` (unset), `mmap` (the system temp
+    /// directory) or `mmap:DIR`. On memory-mapped files the leaves are the same as in
+    /// RAM and the solve is a little slower.
     #[arg(long, value_enum)]
     pub storage: Option<StorageKind>,
     /// Directory for memory-mapped pool files, created if missing (default: a
@@ -269,12 +409,18 @@ pub struct ResourceArgs {
     #[arg(long)]
     pub scratch: Option<PathBuf>,
     /// Memory budget in bytes: the pools live in memory-mapped files (`--scratch`)
-    /// and a window that exceeds it is reported; a space-time solve also keeps at
-    /// most this many bytes of final-gather terms per window (over it, points are
-    /// gathered afresh each frame: slower, same result).
+    /// and a window that exceeds it is reported.
+    ///
+    /// A space-time solve also keeps at most this many bytes of final-gather terms
+    /// and leaf rows per window: over it, the points the last frame did not use are
+    /// dropped first and new ones are gathered afresh at every frame (slower; the
+    /// result moves very little, where a frame has opened a source into finer
+    /// children than when its terms were kept).
     #[arg(long)]
     pub budget: Option<u64>,
     /// Worker threads (default: all cores).
+    ///
+    /// Results are deterministic for a given seed and thread count.
     #[arg(long)]
     pub threads: Option<usize>,
 }
