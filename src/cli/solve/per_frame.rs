@@ -1,15 +1,19 @@
 //! `rhier solve --per-frame --fps F`: the frame-by-frame baseline
-//! ([`rhier::solver::per_frame`]): one independent static solve per frame, streamed
-//! into the output `.rhier` file one chunk per frame. Prints one line per frame
-//! (unless `-q`) and with `--report CSV` writes one row per frame.
+//! ([`rhier::solver::per_frame`]): one independent static solve per frame, each
+//! frame's solution handed back and written here into the output `.rhier` file, one
+//! chunk per frame, in time order, through the store's [`Writer`] (the file appears
+//! when every frame is written). Prints one line per frame (unless `-q`) and with
+//! `--report CSV` writes one row per frame.
 
 use std::io::Write;
+use std::path::Path;
 
 use anyhow::Context;
 use rhier::Error;
-use rhier::solver::SolveOptions;
-use rhier::solver::per_frame::{FrameReport, write_per_frame};
-use rhier::store::WriteOptions;
+use rhier::scene::Scene;
+use rhier::solver::per_frame::{FrameReport, PerFrameStats, solve_per_frame};
+use rhier::solver::{Solution, SolveOptions};
+use rhier::store::{SolutionHeader, WriteOptions, Writer};
 
 use super::common::Args;
 
@@ -45,24 +49,17 @@ pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
         None => None,
     };
     let quiet = output.quiet;
-    let stats = write_per_frame(
-        &out,
-        &scene,
-        &opts,
-        fps,
-        WriteOptions::default(),
-        |report, _| {
-            if !quiet {
-                eprintln!("{}", report.summary());
-            }
-            if let Some((w, path)) = &mut csv {
-                writeln!(w, "{}", report.csv_row())
-                    .and_then(|()| w.flush())
-                    .map_err(|e| Error::io(path.clone(), e))?;
-            }
-            Ok(())
-        },
-    )
+    let stats = write_frames(&out, &scene, &opts, fps, |report| {
+        if !quiet {
+            eprintln!("{}", report.summary());
+        }
+        if let Some((w, path)) = &mut csv {
+            writeln!(w, "{}", report.csv_row())
+                .and_then(|()| w.flush())
+                .map_err(|e| Error::io(path.clone(), e))?;
+        }
+        Ok(())
+    })
     .with_context(|| format!("per-frame solve into {}", out.display()))?;
     if !quiet {
         eprintln!(
@@ -86,4 +83,54 @@ pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Solves every frame of `scene` at `fps` ([`solve_per_frame`]) and writes each
+/// frame's leaves into the `.rhier` file `path` as one chunk over the frame's
+/// interval, in time order; `on_frame` sees each frame's report after its chunk is
+/// written. Memory holds one frame whatever the animation's length.
+fn write_frames(
+    path: &Path,
+    scene: &Scene,
+    opts: &SolveOptions,
+    fps: f64,
+    mut on_frame: impl FnMut(&FrameReport) -> rhier::Result<()>,
+) -> rhier::Result<PerFrameStats> {
+    let mut writer: Option<(Writer, usize)> = None;
+    let stats = solve_per_frame(scene, opts, fps, |report, solution: &Solution| {
+        let w = match &mut writer {
+            Some((w, patch_count)) => {
+                // The patch set does not depend on t (Solver::at_time); a change
+                // would make earlier chunks' patch numbers wrong.
+                if solution.patches.len() != *patch_count {
+                    return Err(Error::invalid(
+                        path,
+                        format!("frame {} at t = {}", report.index, report.t),
+                        format!("the {patch_count} patches of frame 0"),
+                        format!("{} patches", solution.patches.len()),
+                    ));
+                }
+                w
+            }
+            None => {
+                let header = SolutionHeader {
+                    scene,
+                    patches: &solution.patches,
+                };
+                let w = Writer::create(path, &header, WriteOptions::default())?;
+                &mut writer.insert((w, solution.patches.len())).0
+            }
+        };
+        w.write_chunk(report.range[0], report.range[1], &solution.leaves)?;
+        on_frame(report)
+    })?;
+    match writer {
+        Some((w, _)) => w.finish(&stats.stats)?,
+        None => {
+            return Err(Error::Usage(
+                "per-frame solve: no frame was solved".to_string(),
+            ));
+        }
+    }
+    Ok(stats)
 }
