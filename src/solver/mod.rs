@@ -281,7 +281,7 @@ const SPLIT_PASSES: usize = 2;
 pub const CORNER_INSET: f64 = 1e-3;
 
 /// Settings of a solve.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct SolveOptions {
     /// Where the pools live; the default is RAM unless [`Storage::ENV`] says
     /// otherwise.
