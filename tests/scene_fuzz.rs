@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
 use rhier::scene;
 
 fn example(name: &str) -> Vec<u8> {
@@ -86,7 +87,14 @@ fn interesting_number() -> impl Strategy<Value = f64> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, .. ProptestConfig::default() })]
+    // Failing cases are kept next to this file, in `<file>.proptest-regressions`
+    // (proptest's default would put them under a `proptest-regressions/` directory
+    // beside the nearest folder holding a `main.rs`).
+    #![proptest_config(ProptestConfig {
+        cases: 256,
+        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..200)) {

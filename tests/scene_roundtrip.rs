@@ -6,6 +6,7 @@ use std::path::Path;
 
 use glam::{DQuat, DVec3};
 use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
 use rhier::scene::{
     self, Material, MaterialId, MotionKey, MotionTrack, Object, Polygon, Scene, TimeDomain,
 };
@@ -134,7 +135,14 @@ fn numbers(s: &Scene) -> Vec<f64> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 128, .. ProptestConfig::default() })]
+    // Failing cases are kept next to this file, in `<file>.proptest-regressions`
+    // (proptest's default would put them under a `proptest-regressions/` directory
+    // beside the nearest folder holding a `main.rs`).
+    #![proptest_config(ProptestConfig {
+        cases: 128,
+        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn json_round_trip_and_validation_is_idempotent(s in scene_strategy()) {
