@@ -2,7 +2,7 @@
 //! bases, the pieces under the blocks are dropped, and what remains of the floor has
 //! exactly the floor's area minus the two footprints.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use rhier::geometry::{Patches, split_at_contacts};

@@ -9,8 +9,7 @@ use rhier::flatland::mesh::Mesh;
 use rhier::flatland::scene::load;
 use rhier::flatland::views::{Topology, all_views, form_factors_mu, visibility_graph};
 
-mod common;
-use common::random_flat_geometry;
+use crate::common::random_flat_geometry;
 
 fn assert_same_mu(a: &PairMap, b: &PairMap, tol: f64, what: &str) {
     for (k, x) in a {

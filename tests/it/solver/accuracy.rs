@@ -7,7 +7,7 @@
 //! This error is dominated by the lamp's own points (`B ≈ E`); the mean-bias test
 //! below measures the indirectly lit ceiling alone.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use rhier::geometry::Patches;

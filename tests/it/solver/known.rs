@@ -1,6 +1,6 @@
 //! Known-answer scenes for the hierarchical solver.
 
-mod common;
+use crate::common;
 
 use rhier::solver::{SolveOptions, solve};
 

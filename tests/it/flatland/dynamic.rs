@@ -11,8 +11,7 @@ use rhier::flatland::radiosity::form_factors;
 use rhier::flatland::scene::load;
 use rhier::flatland::{geometry_at, solve, solve_with};
 
-mod common;
-use common::random_moving_flat_scene;
+use crate::common::random_moving_flat_scene;
 
 fn scene_path() -> &'static Path {
     Path::new(concat!(

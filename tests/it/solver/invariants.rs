@@ -8,7 +8,7 @@
     reason = "dense matrix code reads best with indices"
 )]
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use rhier::geometry::{Patches, point_to_polygon};

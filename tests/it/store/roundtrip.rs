@@ -2,7 +2,7 @@
 //! back; probing the file equals probing the solution in memory; RAM-built and
 //! file-built bytes are identical; chunked space-time files are read chunk by chunk.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use rhier::playback::{ProbePoint, SolutionView, probe};

@@ -1,7 +1,7 @@
 //! Known answers for the Monte Carlo reference (`rhier reference`), which the
 //! accuracy benchmarks and tests measure the solver against.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 

@@ -2,7 +2,7 @@
 //! window, an interrupted solve leaves no `.rhier` file and `--resume` finishes it with
 //! the same leaves, and bad settings are refused with exit code 1 or 2.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Output};

@@ -10,8 +10,7 @@ use rhier::flatland::geometry::{FlatGeometry, Hit};
 use rhier::flatland::radiosity::form_factors;
 use rhier::flatland::scene::{PosedSegment, orient};
 
-mod common;
-use common::{Lcg, random_flat_geometry};
+use crate::common::{Lcg, random_flat_geometry};
 
 /// Labels (unordered segment pairs) of the free segments of a line, by brute force.
 fn brute_labels(g: &FlatGeometry, theta: f64, p: f64) -> Vec<(u32, u32)> {

@@ -5,8 +5,7 @@ use rhier::flatland::geometry::FlatGeometry;
 use rhier::flatland::radiosity::form_factors;
 use rhier::flatland::scene::PosedSegment;
 
-mod common;
-use common::random_segments;
+use crate::common::random_segments;
 
 fn seg(a: [f64; 2], b: [f64; 2]) -> PosedSegment {
     PosedSegment::new(a, b, 0)

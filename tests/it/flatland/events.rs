@@ -12,8 +12,7 @@ use rhier::flatland::radiosity::form_factors;
 use rhier::flatland::scene::{FlatScene, first_crossing, load, parse};
 use rhier::flatland::views::{Topology, all_views};
 
-mod common;
-use common::{Lcg, random_moving_flat_scene, random_segments_json};
+use crate::common::{Lcg, random_moving_flat_scene, random_segments_json};
 
 /// Brute-force visibility graph (all point pairs, `sees`).
 fn brute_graph(scene: &FlatScene, t: f64) -> Vec<(u32, u32)> {
