@@ -1,9 +1,9 @@
 //! Known answers for the Monte Carlo reference (`rhier reference`), which the
 //! accuracy benchmarks and tests measure the solver against.
 
-use crate::common;
-
 use glam::DVec3;
+
+use crate::common;
 
 /// Closed enclosure, uniform E and ρ: B = E / (1 − ρ) at every point; the estimate
 /// must agree within 4 standard errors and 1.5% at every ρ. At ρ = 0.99 a path

@@ -3,9 +3,7 @@
 
 use std::process::Command;
 
-fn rhier() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rhier"))
-}
+use crate::common::rhier;
 
 /// Runs `cmd` and fails the test with its standard error unless it succeeds.
 fn succeed(cmd: &mut Command) -> std::process::Output {

@@ -2,19 +2,15 @@
 //! window, an interrupted solve leaves no `.rhier` file and `--resume` finishes it with
 //! the same leaves, and bad settings are refused with exit code 1 or 2.
 
-use crate::common;
-
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
+
+use crate::common::{self, rhier};
 
 const SCENE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/formats/examples/cornell_moving.json"
 );
-
-fn rhier() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rhier"))
-}
 
 fn solve(out: &Path, extra: &[&str]) -> Output {
     rhier()

@@ -1,8 +1,23 @@
-//! Scenes built in code for the integration tests.
-#![allow(dead_code)]
+//! What several test modules share: the `rhier` binary, the example files, scenes
+//! built in code (boxes, enclosures, random flatland scenes) and a seeded generator.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
 
 use glam::DVec3;
 use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
+
+/// A command that runs the `rhier` binary cargo built for these tests.
+pub fn rhier() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rhier"))
+}
+
+/// The path of `formats/examples/<name>`, the example files the formats' docs show.
+pub fn example(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("formats/examples")
+        .join(name)
+}
 
 /// An axis-aligned box `[lo, hi]` as 6 quads facing inwards, each split into
 /// `n × n` quads; all faces use material 0 unless `material_of_face` says otherwise.

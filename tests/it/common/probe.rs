@@ -1,5 +1,4 @@
-//! Probe-point sets and the error measure for accuracy tests.
-#![allow(dead_code)]
+//! Probe-point grids for the accuracy tests.
 
 use glam::DVec3;
 use rhier::geometry::Patches;
@@ -19,32 +18,6 @@ pub fn grid_points(patches: &Patches, k: usize) -> Vec<(DVec3, DVec3)> {
                     (u, v)
                 };
                 out.push((patches.point(i, u, v), patches.normals[i]));
-            }
-        }
-    }
-    out
-}
-
-/// Points near contact edges: for every patch with an edge on the plane `y = 0`
-/// (a block side resting on the floor), points on the floor at distances `ds` from
-/// the middle of that edge, outside, and on the side itself at heights `ds`.
-pub fn contact_points(patches: &Patches, ds: &[f64]) -> Vec<(DVec3, DVec3)> {
-    let mut out = Vec::new();
-    for i in 0..patches.len() {
-        let n = patches.normals[i];
-        if n.y.abs() > 0.1 {
-            continue; // only vertical faces
-        }
-        let c = patches.polys[i].corners();
-        for k in 0..c.len() {
-            let (a, b) = (c[k], c[(k + 1) % c.len()]);
-            if a.y.abs() < 1e-6 && b.y.abs() < 1e-6 {
-                let m = (a + b) * 0.5;
-                let out_dir = DVec3::new(n.x, 0.0, n.z).normalize();
-                for &d in ds {
-                    out.push((m + out_dir * d, DVec3::Y));
-                    out.push((m + DVec3::Y * d, n));
-                }
             }
         }
     }

@@ -1,19 +1,10 @@
 //! `rhier flatland` end to end: the real binary in a temporary directory.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 use serde_json::Value;
 
-fn rhier() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rhier"))
-}
-
-fn example(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("formats/examples")
-        .join(name)
-}
+use crate::common::{example, rhier};
 
 fn read(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()

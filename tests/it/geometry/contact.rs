@@ -2,11 +2,11 @@
 //! bases, the pieces under the blocks are dropped, and what remains of the floor has
 //! exactly the floor's area minus the two footprints.
 
-use crate::common;
-
 use glam::DVec3;
 use rhier::geometry::{Patches, split_at_contacts};
 use rhier::scene::{Material, Object, Scene};
+
+use crate::common;
 
 fn footprint_area(patches: &Patches, floor_y: f64) -> f64 {
     // Block tops are horizontal quads above the floor facing up; their footprint is

@@ -2,7 +2,6 @@
 //! sample files (probe, play, inspect, exit codes).
 
 use std::path::Path;
-use std::process::Command;
 
 use glam::DVec3;
 use rhier::playback::Frame;
@@ -14,6 +13,8 @@ use rhier::scene::{Camera, Material, MaterialId, Object, Polygon, Scene};
 use rhier::solver::{PatchGeometry, Solution, SolveStats};
 use rhier::store::samples::{box_solution, uniform_leaves};
 use rhier::store::{WriteOptions, write_solution};
+
+use crate::common::rhier;
 
 /// A 2 × 2 white wall in the plane z = 0 facing +z, radiosity `b` everywhere, seen
 /// head-on from (0, 0, 3).
@@ -171,10 +172,6 @@ fn gltf_export_parses_back_with_expected_counts() {
             assert!((c[k] as f64 - (m[k] * 0.25).clamp(0.0, 1.0)).abs() < 1e-6);
         }
     }
-}
-
-fn rhier() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rhier"))
 }
 
 #[test]

@@ -7,16 +7,12 @@
 //! `RHIER_REGENERATE_EXAMPLES=1 cargo test --test scene_animated` rewrites the JSON
 //! examples from the embedded scenes.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::DVec3;
 use rhier::scene::{self, Object, Scene, actor_scene, light_scene, validate};
 
-fn example(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("formats/examples")
-        .join(name)
-}
+use crate::common::example;
 
 /// (file name, builtin name, scene) of every embedded animated scene.
 fn all_scenes() -> Vec<(&'static str, &'static str, Scene)> {

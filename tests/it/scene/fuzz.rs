@@ -9,13 +9,10 @@ use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 use rhier::scene;
 
+use crate::common;
+
 fn example(name: &str) -> Vec<u8> {
-    std::fs::read(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("formats/examples")
-            .join(name),
-    )
-    .unwrap()
+    std::fs::read(common::example(name)).unwrap()
 }
 
 /// Replaces the numbers of a JSON value at the chosen positions by `values`.

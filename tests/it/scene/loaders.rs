@@ -10,7 +10,7 @@
 //! `formats/examples/cornell*.json` from the embedded scene.
 
 use std::f64::consts::{FRAC_PI_4, PI};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::{DAffine3, DQuat, DVec3};
 use rhier::scene::{
@@ -18,11 +18,7 @@ use rhier::scene::{
     validate::NO_EMITTER_WARNING,
 };
 
-fn example(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("formats/examples")
-        .join(name)
-}
+use crate::common::example;
 
 fn close(a: DVec3, b: DVec3, tol: f64) -> bool {
     (a - b).abs().max_element() <= tol

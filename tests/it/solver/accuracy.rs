@@ -7,12 +7,12 @@
 //! This error is dominated by the lamp's own points (`B ≈ E`); the mean-bias test
 //! below measures the indirectly lit ceiling alone.
 
-use crate::common;
-
 use glam::DVec3;
 use rhier::geometry::Patches;
 use rhier::playback::{ProbePoint, probe};
 use rhier::solver::{SolveOptions, solve};
+
+use crate::common;
 
 fn error_against_reference(blocks: bool) -> f64 {
     let scene = rhier::scene::cornell_box(blocks);

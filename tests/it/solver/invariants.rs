@@ -8,14 +8,14 @@
     reason = "dense matrix code reads best with indices"
 )]
 
-use crate::common;
-
 use glam::DVec3;
 use rhier::geometry::{Patches, point_to_polygon};
 use rhier::oracle::samples;
 use rhier::pools::Storage;
 use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
 use rhier::solver::{SolveOptions, Solver, solve};
+
+use crate::common;
 
 /// A unit box, 2×2 quads per face, a lamp on the ceiling quads of one corner.
 fn lit_box() -> Scene {

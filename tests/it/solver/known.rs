@@ -1,8 +1,8 @@
 //! Known-answer scenes for the hierarchical solver.
 
-use crate::common;
-
 use rhier::solver::{SolveOptions, solve};
+
+use crate::common;
 
 /// Closed enclosure, uniform E and ρ: B = E / (1 − ρ) everywhere, at every stored
 /// corner. Tolerance 1% (the bar), for ρ up to 0.999.

@@ -5,7 +5,6 @@
 //! values at every frame; the CLI writes the file and one CSV row per frame.
 
 use std::path::Path;
-use std::process::Command;
 
 use glam::DVec3;
 use rhier::playback::{ProbePoint, probe};
@@ -13,6 +12,8 @@ use rhier::scene::{self, MotionKey, MotionTrack, Scene, TimeDomain};
 use rhier::solver::per_frame::{FrameReport, frame_times, write_per_frame};
 use rhier::solver::{Solution, SolveOptions, Solver};
 use rhier::store::{Reader, WriteOptions};
+
+use crate::common::rhier;
 
 /// Coarse settings: the tests check bookkeeping, not accuracy.
 fn coarse() -> SolveOptions {
@@ -247,7 +248,7 @@ fn cli_per_frame_writes_the_file_and_one_report_row_per_frame() {
     std::fs::write(&scene_file, scene::to_json_string(&moving_cornell())).unwrap();
     let (out, csv) = (dir.path().join("m.rhier"), dir.path().join("m.csv"));
     let run = |extra: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_rhier"))
+        rhier()
             .args(["solve", "--per-frame", "--eps", "2", "--max-rounds", "2"])
             .args(["--recon-tol", "0.5", "--threads", "2"])
             .args(extra)

@@ -2,8 +2,6 @@
 //! back; probing the file equals probing the solution in memory; RAM-built and
 //! file-built bytes are identical; chunked space-time files are read chunk by chunk.
 
-use crate::common;
-
 use glam::DVec3;
 use rhier::playback::{ProbePoint, SolutionView, probe};
 use rhier::solver::{Leaf, Solution};
@@ -11,6 +9,8 @@ use rhier::store::samples::{
     PLATE_TRAVEL, animated_box, box_solution, plate_radiosity, wall_radiosity,
 };
 use rhier::store::{Reader, SolutionHeader, WriteOptions, Writer, encode_solution, write_solution};
+
+use crate::common;
 
 fn lcg(s: &mut u64) -> f64 {
     *s = s

@@ -2,13 +2,13 @@
 //! and check that probing the file gives the solve's own probe answers bit for bit,
 //! that the file holds the solution's leaves, and that `rhier probe` prints them.
 
-use std::process::Command;
-
 use glam::DVec3;
 use rhier::playback::{ProbePoint, probe};
 use rhier::scene::cornell_box;
 use rhier::solver::{SolveOptions, solve};
 use rhier::store::{Reader, WriteOptions, write_solution};
+
+use crate::common::rhier;
 
 #[test]
 fn solve_file_probe_equals_the_solves_probe() {
@@ -75,7 +75,7 @@ fn solve_file_probe_equals_the_solves_probe() {
         .map(|p| serde_json::json!({"p": p.p.to_array(), "n": p.n.to_array()}))
         .collect();
     std::fs::write(&pts, serde_json::to_string(&json).unwrap()).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_rhier"))
+    let out = rhier()
         .arg("probe")
         .arg(&path)
         .arg("--points")
