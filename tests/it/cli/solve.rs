@@ -19,12 +19,7 @@ fn succeed(cmd: &mut Command) -> std::process::Output {
 #[test]
 fn default_job_writes_the_cornell_box() {
     let dir = tempfile::tempdir().unwrap();
-    let out = rhier()
-        .current_dir(dir.path())
-        .arg("--help")
-        .output()
-        .unwrap();
-    assert!(out.status.success());
+    succeed(rhier().current_dir(dir.path()).arg("--help"));
     succeed(rhier().current_dir(dir.path()));
     let file = dir.path().join("cornell.rhier");
     let reader = rhier::store::Reader::open(&file).unwrap();
@@ -55,14 +50,7 @@ fn solve_probe_equals_file_probe_and_report_has_rounds() {
     );
     let from_solve: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&vals).unwrap()).unwrap();
-    let out = rhier()
-        .arg("probe")
-        .arg(&file)
-        .arg("--points")
-        .arg(&pts)
-        .output()
-        .unwrap();
-    assert!(out.status.success());
+    let out = succeed(rhier().arg("probe").arg(&file).arg("--points").arg(&pts));
     let from_file: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let (a, b) = (
         from_solve.as_array().unwrap(),

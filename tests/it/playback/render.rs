@@ -244,8 +244,15 @@ fn cli_probe_play_inspect_on_a_file() {
         .arg(&frames)
         .output()
         .unwrap();
-    assert!(out.status.success());
-    assert!(gltf::Gltf::open(frames.join("frame_00000.gltf")).is_ok());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let exported = frames.join("frame_00000.gltf");
+    if let Err(e) = gltf::Gltf::open(&exported) {
+        panic!("{} does not parse: {e}", exported.display());
+    }
 
     let out = rhier()
         .arg("inspect")
@@ -253,7 +260,11 @@ fn cli_probe_play_inspect_on_a_file() {
         .arg("--json")
         .output()
         .unwrap();
-    assert!(out.status.success());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["header"]["version"], 1);
     assert_eq!(v["scene"]["patches"], 7);

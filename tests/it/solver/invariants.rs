@@ -289,7 +289,9 @@ fn slivers_touching_and_coplanar_polygons_stay_finite() {
 fn settings_outside_their_domain_are_refused_by_the_solver() {
     let scene = lit_box();
     let base = SolveOptions::default();
-    assert!(base.validate().is_ok());
+    if let Err(e) = base.validate() {
+        panic!("the default settings are refused: {e}");
+    }
     let cases: [(&str, SolveOptions); 7] = [
         (
             "--eps",
@@ -353,7 +355,9 @@ fn settings_outside_their_domain_are_refused_by_the_solver() {
     // NaN time).
     use rhier::solver::spacetime::SpaceTimeOptions;
     let st = SpaceTimeOptions::default();
-    assert!(st.validate().is_ok());
+    if let Err(e) = st.validate() {
+        panic!("the default space-time settings are refused: {e}");
+    }
     // 0 turns `--interp-motion` off, and makes `--moving-power-tol` skip only
     // where nothing changes; neither is refused.
     let off = SpaceTimeOptions {
@@ -361,7 +365,9 @@ fn settings_outside_their_domain_are_refused_by_the_solver() {
         moving_power_tol: 0.0,
         ..st
     };
-    assert!(off.validate().is_ok());
+    if let Err(e) = off.validate() {
+        panic!("interp_motion = moving_power_tol = 0 is refused: {e}");
+    }
     for (name, bad) in [
         ("--fps", SpaceTimeOptions { fps: 0.0, ..st }),
         (
