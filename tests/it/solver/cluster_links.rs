@@ -323,13 +323,12 @@ fn a_flat_emitter_cluster_radiates_like_its_surface() {
 /// Writes LIGHT at t = 0 with its motion removed (a static scene file both `rhier
 /// solve` and `rhier reference` read) to `$LIGHT_T0_OUT`: the input of
 /// `tools/light_left_wall.py`, which measures the left wall's error against the path
-/// tracer for BENCHMARKS.md "## Cluster links". Run with `--ignored`.
+/// tracer for BENCHMARKS.md "## Cluster links". Run with
+/// `LIGHT_T0_OUT=light_t0.json cargo test --release --test it solver::cluster_links::write_light_at_t0 -- --ignored`.
 #[test]
-#[ignore]
+#[ignore = "writes $LIGHT_T0_OUT for tools/light_left_wall.py"]
 fn write_light_at_t0() {
-    let Some(out) = std::env::var_os("LIGHT_T0_OUT") else {
-        return;
-    };
+    let out = std::env::var_os("LIGHT_T0_OUT").expect("LIGHT_T0_OUT names the file to write");
     let mut scene = rhier::scene::light_scene(75);
     for o in &mut scene.objects {
         if let Some(m) = o.motion.take() {
