@@ -1117,7 +1117,7 @@ fn a_sliding_box_hung_over_the_floor_keeps_its_gap_dark_in_every_frame() {
     // kept over the window) whose foot lies on the moving bottom. Each frame's gap
     // must match the static solve of that frame with the option within 0.5% of the
     // lit floor (measured: 0.27% at most; the two solves' hierarchies differ, and
-    // the static one is within 0.2% of the path tracer, in `solver_known`); without
+    // the static one is within 0.2% of the path tracer, in `solver::known`); without
     // the option the space-time gap is off by 2–9% of it (asserted: over 1%).
     let scene = sliding_hung_box();
     let with = SolveOptions {

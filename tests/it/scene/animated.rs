@@ -4,8 +4,8 @@
 //! `formats/examples/` load equal to them, longer shots repeat the same motion back
 //! and forth, and LIGHT's board really hides its wall lamp mid-shot.
 //!
-//! `RHIER_REGENERATE_EXAMPLES=1 cargo test --test scene_animated` rewrites the JSON
-//! examples from the embedded scenes.
+//! `RHIER_REGENERATE_EXAMPLES=1 cargo test --release --test it scene::animated`
+//! rewrites the JSON examples from the embedded scenes.
 
 use std::path::Path;
 

@@ -6,8 +6,8 @@
 //! `tools/make_moving_cube_gltf.py`, `formats/examples/room.obj`) and from the
 //! published Cornell box data, not from the loaders' output.
 //!
-//! `RHIER_REGENERATE_EXAMPLES=1 cargo test --test scene_loaders` rewrites
-//! `formats/examples/cornell*.json` from the embedded scene.
+//! `RHIER_REGENERATE_EXAMPLES=1 cargo test --release --test it scene::loaders`
+//! rewrites `formats/examples/cornell*.json` from the embedded scene.
 
 use std::f64::consts::{FRAC_PI_4, PI};
 use std::path::Path;
