@@ -24,7 +24,7 @@ fn area_factor(recv: [DVec3; 4], n: DVec3, src: &Poly, k: usize) -> f64 {
 }
 
 #[test]
-fn parallel_directly_opposed_rectangles() {
+fn parallel_opposed_rectangles_match_howell_c11() {
     // a × b rectangles at distance c: Howell C-11.
     let (a, b, c) = (1.0f64, 2.0f64, 0.7f64);
     let (x, y) = (a / c, b / c);
@@ -54,7 +54,7 @@ fn parallel_directly_opposed_rectangles() {
 }
 
 #[test]
-fn perpendicular_rectangles_sharing_an_edge() {
+fn perpendicular_rectangles_sharing_an_edge_match_howell_c14() {
     // Receiver w (along x) × l (along y) on z = 0; source h (along z) × l on x = 0.
     let (w, h, l) = (1.0f64, 1.0f64, 1.0f64);
     let (hh, ww) = (h / l, w / l);
@@ -86,7 +86,7 @@ fn perpendicular_rectangles_sharing_an_edge() {
 }
 
 #[test]
-fn coaxial_parallel_disks() {
+fn coaxial_parallel_disks_match_howell_c40() {
     // Disk radius r1 to coaxial disk radius r2 at distance h: Howell C-40.
     let (r1, r2, h) = (0.5f64, 0.8f64, 1.0f64);
     let (x1, x2) = (r1 / h, r2 / h);

@@ -175,7 +175,7 @@ fn gltf_export_parses_back_with_expected_counts() {
 }
 
 #[test]
-fn cli_probe_play_inspect_on_a_file() {
+fn cli_probe_play_and_inspect_read_back_the_written_box() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("box.rhier");
     let sol = box_solution(2);
@@ -273,7 +273,7 @@ fn cli_probe_play_inspect_on_a_file() {
 }
 
 #[test]
-fn cli_exit_codes() {
+fn cli_bad_files_and_times_exit_1_and_bad_usage_exits_2() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
     // Corrupt file: exit 1 with a message naming it.
     for name in [

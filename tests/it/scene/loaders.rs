@@ -383,7 +383,7 @@ fn check_moving_cube(s: &Scene) {
 }
 
 #[test]
-fn animated_gltf_embedded_buffer() {
+fn animated_gltf_loads_the_cube_motion_the_sample_defines() {
     check_moving_cube(&scene::load(&example("moving_cube.gltf")).unwrap());
 }
 
@@ -398,7 +398,7 @@ fn glb_and_external_buffer_equal_embedded_gltf() {
 }
 
 #[test]
-fn obj_with_mtl() {
+fn obj_with_mtl_loads_the_materials_and_polygons_the_sample_defines() {
     let s = scene::load(&example("room.obj")).unwrap();
     let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(names, ["white", "lamp", "blue"]);
