@@ -5,8 +5,8 @@ wall lamp) against the path tracer (`rhier reference`), per eps and binary.
 usage: tools/light_left_wall.py SCENE_JSON OUT_DIR RHIER [RHIER ...] [--paths N]
 
 SCENE_JSON is LIGHT at t = 0 without motion, written by
-`LIGHT_T0_OUT=light_t0.json cargo test --release --test cluster_links -- --ignored
-write_light_at_t0`. The reference is cached in OUT_DIR. Prints one line per binary
+`LIGHT_T0_OUT=light_t0.json cargo test --release --test it
+solver::cluster_links::write_light_at_t0 -- --ignored`. The reference is cached in OUT_DIR. Prints one line per binary
 and eps: relative RMS error and the best of 3 wall-clock run times.
 """
 import argparse

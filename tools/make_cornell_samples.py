@@ -2,7 +2,7 @@
 """Writes the Cornell box with blocks as OBJ + MTL and as glTF, from the native
 formats/examples/cornell_blocks.json (itself written from the embedded scene, see
 formats/scene.md): formats/examples/cornell_blocks.obj, cornell_blocks.mtl and
-cornell_blocks.gltf. tests/scene_loaders.rs checks that both load to the embedded
+cornell_blocks.gltf. tests/it/scene/loaders.rs checks that both load to the embedded
 scene within f32 precision, so the three readers agree on one known scene.
 
 Mapping used (the inverse of the readers' mapping, formats/scene.md):

@@ -55,7 +55,7 @@ pub enum Parts {
 /// depend on what is cached here (but for f32 round-off at a node's box, which
 /// could hide from the traversal a grazing hit the triangle test makes: none in
 /// ACTOR's, LIGHT's and the Cornell box's files, nor in
-/// `tests/visibility_brute.rs`'s rays). Keep one per bundle (one call's rays), not
+/// `tests/it/geometry/visibility.rs`'s rays). Keep one per bundle (one call's rays), not
 /// one per thread, so that what is tested first does not depend on scheduling.
 /// 8 bytes.
 #[derive(Clone, Copy, Debug)]
@@ -367,7 +367,7 @@ impl SceneBvh {
     /// parameter `10⁻⁴`, so a hit that close to `o` was lost and the next one beyond
     /// returned. A bounce of `rhier reference` from a point within a millimetre of
     /// a room's corner went through the wall it faced: 2·10⁻⁴ of the bounces in a
-    /// closed box, 2% of the light at ρ = 0.99 (`tests/reference_known.rs`).
+    /// closed box, 2% of the light at ρ = 0.99 (`tests/it/reference.rs`).
     /// Occlusion queries need no shift: they trim their segments by
     /// [`SEGMENT_TRIM`], which is that same `10⁻⁴`.
     pub fn intersect(&self, o: DVec3, d: DVec3, smin: f64, smax: f64) -> Option<Hit> {

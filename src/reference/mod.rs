@@ -13,7 +13,7 @@
 //! divided by it), so no path weighs more than 1 and a path lasts about
 //! `1/(1 − ρ)` bounces (a hundred at ρ = 0.99; `MAX_BOUNCES` is far beyond).
 //! The estimate is unbiased; its standard error is reported per point
-//! (`tests/reference_known.rs`: a closed box at ρ = 0.99 within 1% of `E/(1 − ρ)`).
+//! (`tests/it/reference.rs`: a closed box at ρ = 0.99 within 1% of `E/(1 − ρ)`).
 
 use glam::DVec3;
 use rayon::prelude::*;

@@ -35,7 +35,7 @@
 //! equal to these scenes bit for bit and validation leaves them unchanged.
 //!
 //! This module holds data only: it does not check that moving objects stay clear of
-//! the furniture (`tests/scene_animated.rs` does, at 200 times per scene).
+//! the furniture (`tests/it/scene/animated.rs` does, at 200 times per scene).
 
 use glam::{DQuat, DVec3};
 

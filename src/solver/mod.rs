@@ -1726,7 +1726,7 @@ fn b_of(elems: &ElementPool, e: usize) -> f64 {
 /// ([`oracle::cluster_emission`]). The receiver's cosine is the bounding sphere's
 /// part above `x`'s horizon ([`clipped_cosine`]), not the centre's: a wall point
 /// level with the centre of a cluster of ceiling and upper walls saw all of it at a
-/// cosine near 0 (the 32 × 32 clutter of `tests/scale.rs` absorbed 0.982 of what it
+/// cosine near 0 (the 32 × 32 clutter of `tests/it/solver/scale.rs` absorbed 0.982 of what it
 /// emits with the centre's cosine, 0.985 with the clipped one).
 fn cluster_kernel(gs: &Geom, c: DVec3, r: f64, dir: &Emission, bs: f64, x: DVec3, n: DVec3) -> f64 {
     let d = c - x;

@@ -87,7 +87,7 @@ pub const BALANCE_TRIGGER: f64 = 0.02;
 /// Most passes of [`Solver::balance_rows`] (a column pass, then a row pass).
 const BALANCE_PASSES: usize = 200;
 /// A row summing to less than this, or more than its inverse, is not scaled.
-/// On `tests/scale.rs`'s 2.8 cm slots, scaling rows down to 0.5 took the slots
+/// On `tests/it/solver/scale.rs`'s 2.8 cm slots, scaling rows down to 0.5 took the slots
 /// from 28% to 98% too bright; down to 0.8, they stay at 28%.
 const BALANCE_ROW_MIN: f64 = 0.8;
 /// A row summing to at most this sees next to nothing (a leaf inside a solid).

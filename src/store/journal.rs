@@ -74,7 +74,7 @@ pub const SOLVE_OPTIONS_NOT_IN_KEY: &[&str] = &[
 /// Fields of [`SpaceTimeOptions`] left out of the [`fingerprint`]: none.
 /// `kept_budget` is in: a term dropped under the budget is gathered again, and the
 /// value moves a little where the frame has opened a source into finer children
-/// than when the term was kept (tests/spacetime.rs,
+/// than when the term was kept (tests/it/spacetime.rs,
 /// `a_budget_on_kept_terms_bounds_them_and_keeps_the_result`), so a file resumed
 /// under another budget would match neither solve.
 pub const SPACE_TIME_OPTIONS_NOT_IN_KEY: &[&str] = &[];

@@ -496,7 +496,7 @@ fn mirrored_static_node_keeps_the_front_face_lit() {
 fn readme_scene_example_loads_with_the_stated_orientation() {
     let readme =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
-    let section = &readme[readme.find("### Scene formats").unwrap()..];
+    let section = &readme[readme.find("## Scene and file formats").unwrap()..];
     let start = section.find("```json\n").unwrap() + "```json\n".len();
     let text = &section[start..start + section[start..].find("```").unwrap()];
     let s = scene::load_json_str(text, Path::new("README.md")).unwrap();
