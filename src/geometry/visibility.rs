@@ -109,6 +109,9 @@ struct Part {
     local_to_world: DAffine3,
     /// Object placed by this part's motion (`u32::MAX` for the static part).
     object: u32,
+    /// Part space is world (or object) space times this power of two
+    /// ([`unit_scale`]).
+    unit: f64,
     /// World box of the part where it is placed (segments that miss it skip the
     /// part).
     world_box: (DVec3, DVec3),
@@ -120,6 +123,7 @@ impl Part {
         tri_patch: Vec<u32>,
         local_to_world: DAffine3,
         object: u32,
+        unit: f64,
     ) -> Option<Part> {
         if tris.is_empty() {
             return None;
@@ -142,6 +146,7 @@ impl Part {
             world_to_local: local_to_world.inverse(),
             local_to_world,
             object,
+            unit,
             world_box: (DVec3::ZERO, DVec3::ZERO),
         };
         part.update_box();
@@ -167,8 +172,11 @@ impl Part {
             wlo = wlo.min(w);
             whi = whi.max(w);
         }
-        // Pad by round-off of the f32 BVH.
-        let pad = DVec3::splat((whi - wlo).length() * 1e-6 + 1e-9);
+        // Pad by round-off of the f32 BVH: relative to the box's size and to its
+        // coordinates (f32 round-off grows with them; an absolute floor would be
+        // all of a micrometre scene and nothing of a kilometre one).
+        let reach = whi.abs().max(wlo.abs()).max_element();
+        let pad = DVec3::splat(((whi - wlo).length() + reach) * 1e-6);
         self.world_box = (wlo - pad, whi + pad);
     }
 
@@ -223,25 +231,28 @@ impl SceneBvh {
         let (mut st, mut sp) = (Vec::new(), Vec::new());
         let mut moving: Vec<(Vec<Triangle>, Vec<u32>)> =
             vec![(Vec::new(), Vec::new()); scene.objects.len()];
+        let unit = unit_scale(patches.diameter);
         for i in 0..patches.len() {
             let obj = patches.objects[i] as usize;
             if scene.objects.get(obj).is_some_and(|o| o.is_moving()) {
                 let g = &patches.geometry[i];
                 let (tris, tp) = &mut moving[obj];
-                push_triangles(&g.vertices[..g.corners as usize], i as u32, tris, tp);
+                push_triangles(&g.vertices[..g.corners as usize], unit, i as u32, tris, tp);
             } else {
-                push_triangles(patches.polys[i].corners(), i as u32, &mut st, &mut sp);
+                let corners = patches.polys[i].corners();
+                push_triangles(corners, unit, i as u32, &mut st, &mut sp);
             }
         }
         for (obj, (tris, tp)) in moving.into_iter().enumerate() {
             parts.extend(Part::build(
                 tris,
                 tp,
-                scene.objects[obj].to_world(t),
+                scene.objects[obj].to_world(t) * from_unit(unit),
                 obj as u32,
+                unit,
             ));
         }
-        parts.extend(Part::build(st, sp, DAffine3::IDENTITY, u32::MAX));
+        parts.extend(Part::build(st, sp, from_unit(unit), u32::MAX, unit));
         SceneBvh { parts }
     }
 
@@ -250,11 +261,12 @@ impl SceneBvh {
     /// sees the same triangles as the static scene of that frame would.
     pub fn build_static(patches: &Patches) -> SceneBvh {
         let (mut st, mut sp) = (Vec::new(), Vec::new());
+        let unit = unit_scale(patches.diameter);
         for i in 0..patches.len() {
-            push_triangles(patches.polys[i].corners(), i as u32, &mut st, &mut sp);
+            push_triangles(patches.polys[i].corners(), unit, i as u32, &mut st, &mut sp);
         }
         SceneBvh {
-            parts: Part::build(st, sp, DAffine3::IDENTITY, u32::MAX)
+            parts: Part::build(st, sp, from_unit(unit), u32::MAX, unit)
                 .into_iter()
                 .collect(),
         }
@@ -265,7 +277,7 @@ impl SceneBvh {
     pub fn place(&mut self, scene: &Scene, t: f64) {
         for part in &mut self.parts {
             if let Some(obj) = scene.objects.get(part.object as usize) {
-                part.local_to_world = obj.to_world(t);
+                part.local_to_world = obj.to_world(t) * from_unit(part.unit);
                 part.world_to_local = part.local_to_world.inverse();
                 part.update_box();
             }
@@ -480,8 +492,32 @@ impl SceneBvh {
     }
 }
 
-fn push_triangles(v: &[DVec3], patch: u32, tris: &mut Vec<Triangle>, tp: &mut Vec<u32>) {
-    let f = |p: DVec3| Vec3A::new(p.x as f32, p.y as f32, p.z as f32);
+/// The power of two that brings a scene of diameter `diameter` to a diameter in
+/// `[0.5, 2)`: the BVHs are built in world (or object) space times it. obvhs has
+/// absolute constants (a ray direction component under `f32::EPSILON` is taken as
+/// that, not its value; f32 products of three lengths overflow past ~1e12), so a
+/// scene in micrometres or in light years would lose rays that the same scene in
+/// metres keeps. A power of two scales every f32 exactly: in part space the same
+/// scene in any unit has the same coordinates up to their exponent, and a scene
+/// of diameter ~1 is cast bit for bit as before.
+fn unit_scale(diameter: f64) -> f64 {
+    if diameter.is_finite() && diameter > 0.0 {
+        2f64.powi(-(diameter.log2().round() as i32))
+    } else {
+        1.0
+    }
+}
+
+/// Part space (`unit` × world or object space) → world or object space.
+fn from_unit(unit: f64) -> DAffine3 {
+    DAffine3::from_scale(DVec3::splat(1.0 / unit))
+}
+
+fn push_triangles(v: &[DVec3], unit: f64, patch: u32, tris: &mut Vec<Triangle>, tp: &mut Vec<u32>) {
+    let f = |p: DVec3| {
+        let p = p * unit;
+        Vec3A::new(p.x as f32, p.y as f32, p.z as f32)
+    };
     for k in 1..v.len().saturating_sub(1) {
         tris.push(Triangle {
             v0: f(v[0]),
