@@ -320,3 +320,69 @@ pub fn uniform_scene(polygons: Vec<Polygon>, rho: f64, e: f64) -> Scene {
         ..Default::default()
     }
 }
+
+/// A 4 × 2.5 × 4 m room lit by a ceiling lamp, with three boxes on the floor: two
+/// touching face to face and a third standing on the first.
+pub fn touching_boxes() -> Scene {
+    let (white, lamp, red) = (MaterialId(0), MaterialId(1), MaterialId(2));
+    let mut room = tiled_box(
+        DVec3::ZERO,
+        DVec3::new(4.0, 2.5, 4.0),
+        Tiling::Quads(1),
+        true,
+        white,
+    );
+    room.extend(tiled_rect(
+        DVec3::new(1.5, 2.49, 1.5),
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(0.0, 0.0, 1.0),
+        Tiling::Quads(1),
+        lamp,
+    ));
+    let mut boxes = tiled_box(
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(1.8, 0.6, 1.8),
+        Tiling::Quads(1),
+        false,
+        white,
+    );
+    boxes.extend(tiled_box(
+        DVec3::new(1.8, 0.0, 1.2),
+        DVec3::new(2.4, 0.4, 1.7),
+        Tiling::Quads(1),
+        false,
+        red,
+    ));
+    boxes.extend(tiled_box(
+        DVec3::new(1.2, 0.6, 1.2),
+        DVec3::new(1.6, 0.9, 1.6),
+        Tiling::Quads(1),
+        false,
+        white,
+    ));
+    let material = |name: &str, rho: [f64; 3], emission: [f64; 3]| Material {
+        name: name.into(),
+        rho,
+        emission,
+    };
+    Scene {
+        materials: vec![
+            material("white", [0.7; 3], [0.0; 3]),
+            material("lamp", [0.0; 3], [10.0; 3]),
+            material("red", [0.6, 0.1, 0.1], [0.0; 3]),
+        ],
+        objects: vec![
+            Object {
+                name: "room".into(),
+                polygons: room,
+                motion: None,
+            },
+            Object {
+                name: "boxes".into(),
+                polygons: boxes,
+                motion: None,
+            },
+        ],
+        ..Default::default()
+    }
+}

@@ -7,3 +7,4 @@ mod invariants;
 mod known;
 mod per_frame;
 mod scale;
+mod scale_free;

@@ -1,0 +1,154 @@
+//! Scale freedom (issue 45): the same scene in millimetres, metres or kilometres must
+//! give the same radiosity, so every tolerance of the solver must be relative to the
+//! scene's size. Each scene (the Cornell box with its blocks, in millimetres; a room
+//! with boxes touching each other and the floor, in metres) is solved as given and
+//! scaled (every vertex and every probe point), with the same options, and probed at
+//! a 3 × 3 grid on every patch plus points 0.4%–8% of the room's width from where the
+//! boxes meet the floor (on the floor and on the boxes' sides), where contact
+//! meshing, ray offsets and coplanarity tests act: 950 and 965 points.
+//!
+//! Difference measure: `|a − b| / max(|a|, 1% of the scene's RMS radiosity)`, worst
+//! channel. A plain relative measure is meaningless where `B` is near zero (a
+//! ceiling behind a hanging lamp, a colour channel the walls barely reflect); the
+//! floor keeps it relative everywhere else.
+//!
+//! Scaling by a power of two scales every floating-point number exactly, so any
+//! difference there comes from an absolute length or epsilon: the answers must be
+//! bit for bit the same from 2^-30 to 2^40 (before the BVHs were built at unit
+//! scale, `SceneBvh`, the Cornell box differed by 117% at 2^-30). Scaling by 1000 or
+//! 0.001 also rounds every coordinate differently, and the solver is not yet stable
+//! under that: a relative perturbation of 1e-13 of the touching-boxes scene changes
+//! its first refinement (453 → 521 elements) and the answer by up to 14%; the
+//! Cornell box at ×1000 differs by up to 3.8% (419 of 950 points over 1e-3), at
+//! ×0.001 by 1.9% (35 points); the boxes differ at 790 and 812 of 965 points,
+//! worst at the ceiling behind the lamp (dark: 0 against 0.002). That test is
+//! `#[ignore]`d until it holds.
+
+use glam::DVec3;
+use rhier::geometry::Patches;
+use rhier::playback::{ProbePoint, probe};
+use rhier::scene::{Scene, cornell_box};
+use rhier::solver::{SolveOptions, solve};
+
+use crate::common;
+use crate::common::shapes;
+
+/// `scene` with every vertex multiplied by `s`.
+fn scaled(scene: &Scene, s: f64) -> Scene {
+    let mut out = scene.clone();
+    for obj in &mut out.objects {
+        for poly in &mut obj.polygons {
+            for v in &mut poly.vertices {
+                *v *= s;
+            }
+        }
+    }
+    out
+}
+
+/// Solves `scene` at scale 1 and at each of `scales` with `opts`, probes each at the
+/// same points (scaled alike) and returns, per scale, the worst difference from
+/// scale 1 (module docs), the point where it is, and how many points differ by more
+/// than 1e-3.
+fn scale_differences(
+    name: &str,
+    scene: &Scene,
+    ds: &[f64],
+    scales: &[f64],
+    opts: &SolveOptions,
+) -> Vec<(f64, f64, DVec3, usize)> {
+    let patches = Patches::at_time(scene, 0.0);
+    let mut pts = common::probe::grid_points(&patches, 3);
+    pts.extend(common::probe::contact_points(
+        &patches,
+        0.0,
+        ds,
+        &[0.02, 0.1, 0.3, 0.5, 0.7, 0.9, 0.98],
+    ));
+    let at = |s: f64| {
+        let points: Vec<ProbePoint> = pts
+            .iter()
+            .map(|&(p, n)| ProbePoint { p: p * s, n })
+            .collect();
+        let (sol, _) = solve(&scaled(scene, s), opts.clone()).unwrap();
+        probe(&sol, &points, 0.0).unwrap()
+    };
+    let base = at(1.0);
+    let rms = (base.iter().flatten().map(|b| b * b).sum::<f64>() / (3 * base.len()) as f64).sqrt();
+    let mut out = Vec::new();
+    for &s in scales {
+        let other = at(s);
+        let (mut worst, mut at_point, mut count) = (0.0f64, 0, 0);
+        for (i, (a, b)) in base.iter().zip(&other).enumerate() {
+            let d = (0..3)
+                .map(|c| (a[c] - b[c]).abs() / a[c].abs().max(0.01 * rms))
+                .fold(0.0, f64::max);
+            count += usize::from(d > 1e-3);
+            if d > worst {
+                (worst, at_point) = (d, i);
+            }
+        }
+        eprintln!(
+            "{name} ×{s}: worst {worst:.2e} at {} ({count} of {} over 1e-3)",
+            pts[at_point].0,
+            pts.len()
+        );
+        out.push((s, worst, pts[at_point].0, count));
+    }
+    out
+}
+
+/// Power-of-two scales: mm ↔ m (2^±10) and far beyond.
+const EXACT_SCALES: [f64; 4] = [
+    1024.0,
+    1.0 / 1024.0,
+    1.0 / (1u64 << 30) as f64,
+    (1u64 << 40) as f64,
+];
+
+const CORNELL_GAPS: [f64; 5] = [2.0, 5.0, 10.0, 20.0, 40.0];
+const BOXES_GAPS: [f64; 5] = [0.005, 0.01, 0.02, 0.05, 0.1];
+
+#[test]
+fn cornell_blocks_bit_for_bit_at_power_of_two_scales() {
+    let scene = cornell_box(true);
+    let opts = SolveOptions::default();
+    for (s, w, p, count) in
+        scale_differences("cornell", &scene, &CORNELL_GAPS, &EXACT_SCALES, &opts)
+    {
+        assert!(
+            w == 0.0,
+            "×{s}: {count} points differ, worst {w:.2e} at {p}"
+        );
+    }
+}
+
+#[test]
+fn touching_boxes_bit_for_bit_at_power_of_two_scales() {
+    let scene = shapes::touching_boxes();
+    let opts = SolveOptions::default();
+    for (s, w, p, count) in scale_differences("boxes", &scene, &BOXES_GAPS, &EXACT_SCALES, &opts) {
+        assert!(
+            w == 0.0,
+            "×{s}: {count} points differ, worst {w:.2e} at {p}"
+        );
+    }
+}
+
+#[test]
+#[ignore = "issue 45: rounding of a scaled scene still changes refinement decisions (module docs)"]
+fn same_answer_in_millimetres_and_kilometres() {
+    let opts = SolveOptions::default();
+    let cases = [
+        ("cornell", cornell_box(true), CORNELL_GAPS),
+        ("boxes", shapes::touching_boxes(), BOXES_GAPS),
+    ];
+    for (name, scene, gaps) in cases {
+        for (s, w, p, count) in scale_differences(name, &scene, &gaps, &[1000.0, 0.001], &opts) {
+            assert!(
+                w <= 1e-3,
+                "{name} ×{s}: {count} points differ, worst {w:.2e} at {p}"
+            );
+        }
+    }
+}
