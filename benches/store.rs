@@ -16,7 +16,7 @@ use glam::DVec3;
 use rhier::playback::nearest::nearest_brute_force;
 use rhier::playback::raster::{FrameMesh, Shading, auto_camera, render};
 use rhier::playback::{Frame, ProbePoint, probe};
-use rhier::solver::Leaf;
+use rhier::solution::Leaf;
 use rhier::store::samples::{AnimatedSample, animated_box, tiled_box};
 use rhier::store::{Reader, SolutionHeader, WriteOptions, Writer, write_solution};
 

@@ -37,6 +37,7 @@ pub mod pools;
 pub mod reference;
 pub mod scene;
 pub mod shafts;
+pub mod solution;
 pub mod solver;
 pub mod store;
 

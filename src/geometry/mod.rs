@@ -26,6 +26,6 @@ pub use formfactor::{
     point_to_polygon,
 };
 pub use nearest::{closest_point_on_polygon, nearest_facing};
-pub use patches::{PatchId, Patches};
+pub use patches::{PatchGeometry, PatchId, Patches, param_point};
 pub use polygon::{MAX_CORNERS, Poly, centroid_of};
 pub use visibility::{Hit, LastHit, Parts, SEGMENT_TRIM, SceneBvh};

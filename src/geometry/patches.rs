@@ -6,7 +6,6 @@ use glam::DVec3;
 
 use super::polygon::Poly;
 use crate::scene::Scene;
-use crate::solver::PatchGeometry;
 
 /// Index of a patch in [`Patches`].
 #[repr(transparent)]
@@ -99,11 +98,11 @@ impl Patches {
         self.polys.is_empty()
     }
 
-    /// World point of patch `i` at parameter `(u, v)` (see [`crate::solver::solution`]).
+    /// World point of patch `i` at parameter `(u, v)` ([`param_point`]).
     pub fn point(&self, i: usize, u: f64, v: f64) -> DVec3 {
         let p = &self.polys[i];
         let c = [p.v[0], p.v[1], p.v[2], p.v[3]];
-        crate::solver::solution::param_point(&c, p.n as u32, u, v)
+        param_point(&c, p.n as u32, u, v)
     }
 
     /// Diameter of the bounding box of all patches (what `diameter` caches).
@@ -121,5 +120,36 @@ impl Patches {
         } else {
             0.0
         }
+    }
+}
+
+/// One input polygon as stored: object, material, object-space corners.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatchGeometry {
+    /// Owning object (index in the scene's objects).
+    pub object: u32,
+    /// Material index.
+    pub material: u32,
+    /// 3 or 4.
+    pub corners: u32,
+    /// Object-space corners (the 4th unused for triangles).
+    pub vertices: [DVec3; 4],
+}
+
+impl PatchGeometry {
+    /// Point of the patch at parameter `(u, v)`, in the patch's own (object) space.
+    pub fn point(&self, u: f64, v: f64) -> DVec3 {
+        param_point(&self.vertices, self.corners, u, v)
+    }
+}
+
+/// The patch parameterisation ([`crate::solution`]'s module docs): affine on a
+/// triangle (`corners == 3`), bilinear on a quad. The one definition every module
+/// uses.
+pub fn param_point(p: &[DVec3; 4], corners: u32, u: f64, v: f64) -> DVec3 {
+    if corners == 3 {
+        p[0] + u * (p[1] - p[0]) + v * (p[2] - p[0])
+    } else {
+        (1.0 - u) * (1.0 - v) * p[0] + u * (1.0 - v) * p[1] + u * v * p[2] + (1.0 - u) * v * p[3]
     }
 }

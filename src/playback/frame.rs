@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use super::SolutionView;
 use crate::error::Result;
-use crate::solver::Leaf;
+use crate::solution::Leaf;
 
 /// A patch in world space at the frame's time. 128 bytes (4 + 4 + 4 × 24 + 24).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,7 +29,7 @@ const _: () = assert!(std::mem::size_of::<WorldPatch>() == 128);
 impl WorldPatch {
     /// World point at parameter `(u, v)`.
     pub fn point(&self, u: f64, v: f64) -> DVec3 {
-        crate::solver::solution::param_point(&self.v, self.corners, u, v)
+        crate::solution::param_point(&self.v, self.corners, u, v)
     }
 
     /// Corners in use.

@@ -25,7 +25,7 @@ use glam::DAffine3;
 
 use crate::error::Result;
 use crate::scene::{Camera, TimeDomain};
-use crate::solver::{Leaf, PatchGeometry, Solution};
+use crate::solution::{Leaf, PatchGeometry, Solution};
 use crate::store::Reader;
 
 pub use frame::{Frame, WorldPatch};

@@ -19,7 +19,7 @@ use super::SolutionView;
 use super::frame::{Frame, WorldPatch};
 use super::nearest::NearestIndex;
 use crate::error::{Error, Result};
-use crate::solver::Leaf;
+use crate::solution::leaf_at;
 
 /// One probe: a point and the normal the surface must face along.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -209,30 +209,6 @@ pub fn patch_params(patch: &WorldPatch, q: DVec3) -> (f64, f64) {
         w -= (j11 * b2 - j12 * b1) / det;
     }
     (u.clamp(0.0, 1.0), w.clamp(0.0, 1.0))
-}
-
-/// The leaf of `leaves` (one patch's) holding `(u, v)`: the first whose domain
-/// contains it, else the first within `1e-6` (a point in a crack between f32
-/// domains), else the one whose domain centre is nearest.
-pub fn leaf_at(leaves: &[Leaf], u: f64, v: f64) -> Option<&Leaf> {
-    let found = leaves.iter().find(|l| l.contains(u, v, 0.0));
-    found
-        .or_else(|| leaves.iter().find(|l| l.contains(u, v, 1e-6)))
-        .or_else(|| {
-            leaves
-                .iter()
-                .min_by(|a, b| domain_distance(a, u, v).total_cmp(&domain_distance(b, u, v)))
-        })
-}
-
-fn domain_distance(l: &Leaf, u: f64, v: f64) -> f64 {
-    let n = l.corners as usize;
-    let (mut cu, mut cv) = (0.0, 0.0);
-    for c in &l.uv[..n] {
-        cu += c[0] as f64 / n as f64;
-        cv += c[1] as f64 / n as f64;
-    }
-    (cu - u).powi(2) + (cv - v).powi(2)
 }
 
 /// Probes a frame already built.

@@ -7,7 +7,7 @@
 //! over every leaf corner at the same world position on a surface of the same normal
 //! and material (so walls meeting at an edge, or a light and the ceiling around it,
 //! are not blurred together); with [`Shading::Flat`] each
-//! leaf carries its mean [`crate::solver::Leaf::mean`]. [`render`] projects with a pinhole camera,
+//! leaf carries its mean [`crate::solution::Leaf::mean`]. [`render`] projects with a pinhole camera,
 //! clips against the near plane, culls back faces (surfaces are lit on their front
 //! side only), and fills pixels whose centre is inside a triangle (top-left rule not
 //! needed: a z-buffer test with `<` resolves shared edges). [`tone_map`] multiplies by

@@ -223,7 +223,7 @@ impl KeyValues {
         let lo = self.cells.partition_point(|l| l.patch < pk.0);
         let hi = self.cells.partition_point(|l| l.patch <= pk.0);
         let (u, v) = (point_param(pk.1), point_param(pk.2));
-        crate::playback::probe::leaf_at(&self.cells[lo..hi], u, v).map(|l| (l, u, v))
+        crate::solution::leaf_at(&self.cells[lo..hi], u, v).map(|l| (l, u, v))
     }
 }
 

@@ -169,7 +169,6 @@ pub mod per_frame;
 mod reconstruct;
 pub mod report;
 mod rows;
-pub mod solution;
 pub mod spacetime;
 mod window;
 
@@ -198,9 +197,9 @@ use crate::scene::Scene;
 use crate::shafts::meets_any;
 use kept::{MaskedTerm, PointCache};
 
+use crate::solution::{Leaf, PatchGeometry, Solution, SolveStats};
 pub use report::RoundRecord;
 pub use rows::BALANCE_TRIGGER;
-pub use solution::{Leaf, PatchGeometry, Shape, Solution, SolveStats};
 
 /// A hash map with aHash for the solver's hot tables, whose keys are small tuples
 /// of ids looked up per point and per row entry: std's SipHash was a tenth of a
@@ -258,7 +257,7 @@ fn uv_inside(uv: &[[f32; 2]; 4], n: u32, p: [f64; 2]) -> bool {
 }
 
 /// Relative RMS change between two sets of sample values, `a` the newer:
-/// [`report::relative_rms`] of `b` against `a` over the samples both have (`NaN` if
+/// [`crate::solution::relative_rms`] of `b` against `a` over the samples both have (`NaN` if
 /// none).
 fn relative_change(a: &[Option<[f64; 3]>], b: &[Option<[f64; 3]>]) -> f64 {
     let (new, old): (Vec<[f64; 3]>, Vec<[f64; 3]>) = a
@@ -269,7 +268,7 @@ fn relative_change(a: &[Option<[f64; 3]>], b: &[Option<[f64; 3]>]) -> f64 {
     if new.is_empty() {
         f64::NAN
     } else {
-        report::relative_rms(&old, &new)
+        crate::solution::relative_rms(&old, &new)
     }
 }
 

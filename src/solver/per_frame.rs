@@ -9,7 +9,7 @@
 //! any other frame, `[t_i − 1/(2F), t_i + 1/(2F)]` clipped to the time domain (the last
 //! frame's interval reaches the domain's end, so that every time of the domain is
 //! covered by exactly one frame; consecutive intervals share their bounds, computed
-//! once, so that [`crate::solver::Leaf::is_live`] picks exactly one frame at a bound). Each frame is
+//! once, so that [`crate::solution::Leaf::is_live`] picks exactly one frame at a bound). Each frame is
 //! placed by [`Solver::at_time`] with its leaves labelled with that interval, frozen
 //! ([`Solver::freeze_motion`]: solved as a static scene is, with every shortcut a
 //! static solve takes), run to completion and reconstructed; [`solve_per_frame`]

@@ -107,20 +107,3 @@ pub fn write_csv(path: &Path, records: &[RoundRecord]) -> Result<()> {
     let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
     f.write_all(out.as_bytes()).map_err(|e| Error::io(path, e))
 }
-
-/// Relative RMS error `sqrt(Σ(B − B_ref)² / Σ B_ref²)` over points and channels: the
-/// measure DESIGN.md fixes for every error report (absolute RMS if the reference is 0).
-pub fn relative_rms(b: &[[f64; 3]], reference: &[[f64; 3]]) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (x, y) in b.iter().zip(reference) {
-        for c in 0..3 {
-            num += (x[c] - y[c]).powi(2);
-            den += y[c] * y[c];
-        }
-    }
-    if den > 0.0 {
-        (num / den).sqrt()
-    } else {
-        num.sqrt()
-    }
-}

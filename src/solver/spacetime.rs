@@ -1402,8 +1402,8 @@ mod tests {
         // tracks the solver cannot tell are one) and of the static solve of each
         // frame.
         use crate::playback::probe;
-        use crate::solver::report::relative_rms;
-        use crate::solver::{Solution, SolveStats};
+        use crate::solution::relative_rms;
+        use crate::solution::{Solution, SolveStats};
         let st = SpaceTimeOptions {
             fps: 5.0,
             window: Some(0.5),

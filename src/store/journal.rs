@@ -47,8 +47,9 @@ use std::path::{Path, PathBuf};
 use super::format::crc32;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
+use crate::solution::Leaf;
+use crate::solver::SolveOptions;
 use crate::solver::spacetime::SpaceTimeOptions;
-use crate::solver::{Leaf, SolveOptions};
 use bytemuck::Zeroable;
 
 const MAGIC: &[u8; 8] = b"RHIERWIN";

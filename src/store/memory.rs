@@ -11,7 +11,7 @@ use serde::Serialize;
 use super::format::{Codec, SectionEntry, SectionKind};
 use super::reader::Reader;
 use super::records::ChunkRecord;
-use crate::solver::{Leaf, PatchGeometry};
+use crate::solution::{Leaf, PatchGeometry};
 
 /// Bytes of one section of a file.
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -10,7 +10,7 @@
 //! solve in progress so that `solve --resume` can continue it.
 //!
 //! It does not evaluate radiosity: that is [`crate::playback`], which runs the same
-//! code on a [`crate::solver::Solution`] in memory and on a [`Reader`].
+//! code on a [`crate::solution::Solution`] in memory and on a [`Reader`].
 
 pub mod format;
 pub mod journal;

@@ -30,7 +30,7 @@ use crate::error::{Error, Result};
 use crate::scene::{
     Camera, Material, MaterialId, MotionKey, MotionTrack, Object, Polygon, Scene, TimeDomain,
 };
-use crate::solver::{Leaf, PatchGeometry, Solution, SolveStats};
+use crate::solution::{Leaf, PatchGeometry, Solution, SolveStats};
 
 /// Largest zstd window (log2 bytes) a reader accepts: bounds the decoder's memory.
 pub const ZSTD_WINDOW_LOG_MAX: u32 = 27;

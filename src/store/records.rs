@@ -7,14 +7,14 @@
 //! pointers (Cargo.toml features `little_endian`, `unaligned`, `pointer_width_64`), so
 //! an archive is read in place from any byte offset of a mapped file and may exceed
 //! 2 GiB. These types are plain mirrors of the in-memory contract
-//! ([`crate::solver::solution`], [`crate::scene`]); conversion functions live here and
+//! ([`crate::solution`], [`crate::scene`]); conversion functions live here and
 //! do not validate semantics (the reader does).
 
 use glam::{DQuat, DVec3};
 use rkyv::{Archive, Deserialize, Serialize};
 
 use crate::scene::{Camera, Material, MotionKey, MotionTrack};
-use crate::solver::{Leaf, PatchGeometry, SolveStats};
+use crate::solution::{Leaf, PatchGeometry, SolveStats};
 
 /// A material: name, reflectance, exitance.
 #[derive(Archive, Serialize, Deserialize, Clone, Debug, PartialEq)]

@@ -17,7 +17,7 @@ use glam::{DQuat, DVec3};
 use crate::scene::{
     Material, MaterialId, MotionKey, MotionTrack, Object, Polygon, Scene, TimeDomain,
 };
-use crate::solver::{Leaf, PatchGeometry, Solution, SolveStats};
+use crate::solution::{Leaf, PatchGeometry, Solution, SolveStats};
 
 /// Radiosity of the box walls at world point `p`.
 pub fn wall_radiosity(p: DVec3) -> [f64; 3] {

@@ -36,7 +36,7 @@ use super::records::{
 };
 use crate::error::{Error, Result};
 use crate::scene::Scene;
-use crate::solver::{Leaf, PatchGeometry, Solution, SolveStats};
+use crate::solution::{Leaf, PatchGeometry, Solution, SolveStats};
 
 /// zstd level used for compressed sections.
 pub const ZSTD_LEVEL: i32 = 3;

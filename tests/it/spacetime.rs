@@ -5,11 +5,12 @@ use rhier::geometry::{Patches, SceneBvh};
 use rhier::playback::{ProbePoint, probe};
 use rhier::scene::{MotionKey, MotionTrack, Scene, cornell_box};
 use rhier::shafts::Shaft;
-use rhier::solver::report::relative_rms;
+use rhier::solution::relative_rms;
+use rhier::solution::{Leaf, Solution, SolveStats};
 use rhier::solver::spacetime::{
     self, SpaceTime, SpaceTimeOptions, WindowOutput, frame_times, swept_boxes,
 };
-use rhier::solver::{Leaf, Solution, SolveOptions, SolveStats, Solver};
+use rhier::solver::{SolveOptions, Solver};
 
 fn key(t: f64, x: f64) -> MotionKey {
     MotionKey {

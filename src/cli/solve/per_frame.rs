@@ -11,8 +11,9 @@ use std::path::Path;
 use anyhow::Context;
 use rhier::Error;
 use rhier::scene::Scene;
+use rhier::solution::Solution;
+use rhier::solver::SolveOptions;
 use rhier::solver::per_frame::{FrameReport, PerFrameStats, solve_per_frame};
-use rhier::solver::{Solution, SolveOptions};
 use rhier::store::{SolutionHeader, WriteOptions, Writer};
 
 use super::common::Args;

@@ -8,8 +8,9 @@ use std::time::Instant;
 use anyhow::Context;
 use rhier::playback::{probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
+use rhier::solution::SolveStats;
+use rhier::solver::SolveOptions;
 use rhier::solver::spacetime::{FrameRecord, SpaceTime};
-use rhier::solver::{SolveOptions, SolveStats};
 use rhier::store::journal::{Journal, fingerprint};
 use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
 
@@ -234,7 +235,7 @@ pub fn run(
         m.add_pool(
             "stored cells",
             stored,
-            stored * std::mem::size_of::<rhier::solver::Leaf>() as u64,
+            stored * std::mem::size_of::<rhier::solution::Leaf>() as u64,
         );
         println!("{m}");
     }

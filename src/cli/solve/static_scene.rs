@@ -8,7 +8,8 @@ use std::time::Instant;
 use anyhow::Context;
 use rhier::playback::{ProbePoint, probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
-use rhier::solver::report::{self, relative_rms};
+use rhier::solution::relative_rms;
+use rhier::solver::report;
 use rhier::solver::{RoundRecord, SolveOptions, Solver};
 use rhier::store::{
     LinkRecord, MemoryReport, SolutionHeader, WriteOptions, Writer, write_solution,
@@ -189,7 +190,7 @@ pub fn run(
         m.add_pool(
             "stored cells",
             solution.leaves.len() as u64,
-            (solution.leaves.len() * std::mem::size_of::<rhier::solver::Leaf>()) as u64,
+            (solution.leaves.len() * std::mem::size_of::<rhier::solution::Leaf>()) as u64,
         );
         println!("{m}");
     }

@@ -4,7 +4,7 @@
 use glam::DVec3;
 use rhier::playback::{ProbePoint, probe};
 use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
-use rhier::solver::{Leaf, PatchGeometry, Solution, SolveStats};
+use rhier::solution::{Leaf, PatchGeometry, Solution, SolveStats};
 
 fn quad(z: f64, facing_up: bool) -> Vec<DVec3> {
     let mut v = vec![

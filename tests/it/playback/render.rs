@@ -10,7 +10,7 @@ use rhier::playback::raster::{
     FrameMesh, Shading, auto_camera, auto_exposure, render, srgb_oetf, tone_map,
 };
 use rhier::scene::{Camera, Material, MaterialId, Object, Polygon, Scene};
-use rhier::solver::{PatchGeometry, Solution, SolveStats};
+use rhier::solution::{PatchGeometry, Solution, SolveStats};
 use rhier::store::samples::{box_solution, uniform_leaves};
 use rhier::store::{WriteOptions, write_solution};
 

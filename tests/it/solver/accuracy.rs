@@ -25,7 +25,7 @@ fn error_against_reference(blocks: bool) -> f64 {
     let (sol, _) = solve(&scene, SolveOptions::default()).unwrap();
     let points: Vec<ProbePoint> = pts.iter().map(|&(p, n)| ProbePoint { p, n }).collect();
     let b = probe(&sol, &points, 0.0).unwrap();
-    rhier::solver::report::relative_rms(&b, &reference)
+    rhier::solution::relative_rms(&b, &reference)
 }
 
 #[test]

@@ -208,7 +208,7 @@ fn invariant_to_scene_scale_and_linear_in_emission() {
         let (b, _) = solve(&scaled(&base, s, e), SolveOptions::default()).unwrap();
         let scaled_pts: Vec<_> = pts.iter().map(|&(p, n)| (p * s, n)).collect();
         let vb: Vec<[f64; 3]> = probe_all(&b, &scaled_pts, 1.0 / e);
-        let rel = rhier::solver::report::relative_rms(&vb, &va);
+        let rel = rhier::solution::relative_rms(&vb, &va);
         assert!(
             rel < 5e-3,
             "scale {s} emission {e}: relative RMS difference {rel}"
@@ -216,7 +216,11 @@ fn invariant_to_scene_scale_and_linear_in_emission() {
     }
 }
 
-fn probe_all(sol: &rhier::solver::Solution, pts: &[(DVec3, DVec3)], factor: f64) -> Vec<[f64; 3]> {
+fn probe_all(
+    sol: &rhier::solution::Solution,
+    pts: &[(DVec3, DVec3)],
+    factor: f64,
+) -> Vec<[f64; 3]> {
     let points: Vec<rhier::playback::ProbePoint> = pts
         .iter()
         .map(|&(p, n)| rhier::playback::ProbePoint { p, n })

@@ -9,8 +9,9 @@ use std::path::Path;
 use glam::DVec3;
 use rhier::playback::{ProbePoint, probe};
 use rhier::scene::{self, MotionKey, MotionTrack, Scene, TimeDomain};
+use rhier::solution::Solution;
 use rhier::solver::per_frame::{FrameReport, frame_times, write_per_frame};
-use rhier::solver::{Solution, SolveOptions, Solver};
+use rhier::solver::{SolveOptions, Solver};
 use rhier::store::{Reader, WriteOptions};
 
 use crate::common::rhier;

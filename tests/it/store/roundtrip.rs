@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use rhier::playback::{ProbePoint, SolutionView, probe};
-use rhier::solver::{Leaf, Solution};
+use rhier::solution::{Leaf, Solution};
 use rhier::store::samples::{
     PLATE_TRAVEL, animated_box, box_solution, plate_radiosity, wall_radiosity,
 };

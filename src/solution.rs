@@ -3,8 +3,11 @@
 //! range, with radiosity at its corners.
 //!
 //! This is the contract between [`crate::solver`], [`crate::store`] and
-//! [`crate::playback`]: the store persists exactly these records, and probing a
-//! [`Solution`] in memory or read back from a `.rhier` file runs the same code.
+//! [`crate::playback`], and it sits below all three: the store persists exactly these
+//! records, and probing a [`Solution`] in memory or read back from a `.rhier` file
+//! runs the same code. It also holds how a point finds its leaf ([`leaf_at`]) and the
+//! error measure every report uses ([`relative_rms`]). It knows nothing of how a
+//! solution is computed, stored or drawn.
 //!
 //! ## Patch parameterisation
 //! A patch is one input polygon. A quad `v0 v1 v2 v3` is parameterised bilinearly,
@@ -14,7 +17,8 @@
 //! a planar quad, and the image of a parametric triangle is a triangle.
 
 use bytemuck::{Pod, Zeroable};
-use glam::DVec3;
+
+pub use crate::geometry::{PatchGeometry, param_point};
 
 /// Shape of a patch or leaf domain.
 #[repr(u32)]
@@ -147,36 +151,6 @@ impl Leaf {
     }
 }
 
-/// One input polygon as stored: object, material, object-space corners.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PatchGeometry {
-    /// Owning object (index in the scene's objects).
-    pub object: u32,
-    /// Material index.
-    pub material: u32,
-    /// 3 or 4.
-    pub corners: u32,
-    /// Object-space corners (the 4th unused for triangles).
-    pub vertices: [DVec3; 4],
-}
-
-impl PatchGeometry {
-    /// Point of the patch at parameter `(u, v)`, in the patch's own (object) space.
-    pub fn point(&self, u: f64, v: f64) -> DVec3 {
-        param_point(&self.vertices, self.corners, u, v)
-    }
-}
-
-/// The patch parameterisation (module docs): affine on a triangle (`corners == 3`),
-/// bilinear on a quad. The one definition every module uses.
-pub fn param_point(p: &[DVec3; 4], corners: u32, u: f64, v: f64) -> DVec3 {
-    if corners == 3 {
-        p[0] + u * (p[1] - p[0]) + v * (p[2] - p[0])
-    } else {
-        (1.0 - u) * (1.0 - v) * p[0] + u * (1.0 - v) * p[1] + u * v * p[2] + (1.0 - u) * v * p[3]
-    }
-}
-
 /// Statistics of the solve that produced a solution (also printed by `solve`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SolveStats {
@@ -211,4 +185,45 @@ pub struct Solution {
     pub leaves: Vec<Leaf>,
     /// Statistics of the solve.
     pub stats: SolveStats,
+}
+
+/// The leaf of `leaves` (one patch's) holding `(u, v)`: the first whose domain
+/// contains it, else the first within `1e-6` (a point in a crack between f32
+/// domains), else the one whose domain centre is nearest.
+pub fn leaf_at(leaves: &[Leaf], u: f64, v: f64) -> Option<&Leaf> {
+    let found = leaves.iter().find(|l| l.contains(u, v, 0.0));
+    found
+        .or_else(|| leaves.iter().find(|l| l.contains(u, v, 1e-6)))
+        .or_else(|| {
+            leaves
+                .iter()
+                .min_by(|a, b| domain_distance(a, u, v).total_cmp(&domain_distance(b, u, v)))
+        })
+}
+
+fn domain_distance(l: &Leaf, u: f64, v: f64) -> f64 {
+    let n = l.corners as usize;
+    let (mut cu, mut cv) = (0.0, 0.0);
+    for c in &l.uv[..n] {
+        cu += c[0] as f64 / n as f64;
+        cv += c[1] as f64 / n as f64;
+    }
+    (cu - u).powi(2) + (cv - v).powi(2)
+}
+
+/// Relative RMS error `sqrt(Σ(B − B_ref)² / Σ B_ref²)` over points and channels: the
+/// measure DESIGN.md fixes for every error report (absolute RMS if the reference is 0).
+pub fn relative_rms(b: &[[f64; 3]], reference: &[[f64; 3]]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (x, y) in b.iter().zip(reference) {
+        for c in 0..3 {
+            num += (x[c] - y[c]).powi(2);
+            den += y[c] * y[c];
+        }
+    }
+    if den > 0.0 {
+        (num / den).sqrt()
+    } else {
+        num.sqrt()
+    }
 }
