@@ -912,7 +912,7 @@ impl<'a> Solver<'a> {
         let closed = self.closed == Some(true);
         let excess = balance > 1.0 + POWER_EXCESS_MAX;
         let lost = closed && balance < 0.5;
-        if excess || lost || !(residual <= RESIDUAL_MAX) {
+        if excess || lost || residual.is_nan() || residual > RESIDUAL_MAX {
             return Err(crate::Error::Unsound(format!(
                 "the solve cannot be right: its leaf system absorbs {balance:.4} of the \
                  power the scene emits{} (at most {:.2} is possible{}), and its linear solve \
