@@ -198,8 +198,9 @@ pub struct SolveOptions {
     /// Stop when the estimated error is below this; refinement then goes on below
     /// `eps` (halving it) until the estimate gets there.
     pub target_error: Option<f64>,
-    /// Points the per-round error estimate gathers at ([`Solver::run`]); 0: no estimate and no `eps` schedule (what a solve of a
-    /// scene with motion always does).
+    /// Points the per-round error estimate gathers at ([`Solver::run`]); 0: no
+    /// estimate and no `eps` schedule (what a solve of a scene with motion always
+    /// does).
     pub error_samples: u32,
     /// Stop starting new rounds after this many seconds.
     pub time_budget: Option<f64>,
