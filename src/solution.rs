@@ -166,7 +166,7 @@ pub struct SolveStats {
     pub links_passive: u64,
     /// Estimated relative error of the stored answer: the change of the final gather
     /// between refinement levels combined with the reconstruction's interpolation
-    /// error ([`crate::solver`] module docs, "Estimated error"); `NaN` when no two
+    /// error ([`crate::solver::Solver::run`]); `NaN` when no two
     /// levels were compared (no error samples, a scene with motion, a solve that
     /// stopped in its first level).
     pub estimated_error: f64,

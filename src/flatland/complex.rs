@@ -1,6 +1,6 @@
-//! The visibility complex of a flatland scene (paper §2.2–2.3) and the exact measure
-//! of every bundle of free lines between two elements, by a rotational sweep of the
-//! dual arrangement.
+//! The visibility complex of a flatland scene (paper 002 §2.2–2.3) and the exact
+//! measure of every bundle of free lines between two elements, by a rotational sweep
+//! of the dual arrangement ([`sweep`]).
 //!
 //! # How it works
 //!
@@ -14,54 +14,30 @@
 //! where its two bounding curves became neighbours to the event where one of them
 //! crosses another curve (an *event* = the direction of a line through two points; a
 //! group of collinear points reverses as a block). The piece of a face of the complex
-//! inside one gap is a *cell*; a face (§2.2: rays with label `(O_l, O_r)` that can be
-//! moved into each other keeping the label) is the union of the cells of one label
-//! that touch along a stretch of curve or continue through an event, found with
-//! union-find: cells of neighbouring gaps with the same label share a face (a curve
-//! can be crossed without a label change only if the point's segments are on neither
-//! side of the free segment); regions meeting at an event point only are not joined
-//! (faces are open sets). The chart's seam `theta0 + pi ~ theta0` is glued with the order
-//! reversed (`p(theta + pi) = -p(theta)`); `theta0` is chosen in the widest event-free
-//! interval so that no two curves meet on the seam.
-//!
-//! *Edges* (§2.2: rays with one label through one point) are the stretches of a curve
-//! that bound a face from below or above (the label exists on one side of the curve
-//! only); sorted by `theta` they form the face's *lower and upper chains* (§2.3).
-//! *Vertices* are the events whose two points see each other (visibility-graph edges,
-//! bitangents), with their length `d(v)` of eq. 3.
+//! (§2.2) inside one gap is a *cell*; cells of one label that touch are joined into
+//! faces ([`CFace`]), bounded by *edges* ([`CEdge`]) and *vertices* ([`CVertex`]).
+//! The chart's seam `theta0 + pi ~ theta0` is glued with the order reversed
+//! (`p(theta + pi) = -p(theta)`).
 //!
 //! # Exact measures (eq. 2–3)
 //!
-//! The measure of lines in a gap bounded below by point `u` and above by `w` over
-//! `[t0, t1]` is `integral (w - u) . n(theta) dtheta = (w - u) . (N(t1) - N(t0))` with
-//! `N = (cos, sin)`. Summed over the cells of a face this telescopes into
-//! `sum of +- d(v)` over the vertices bounding the face (eq. 3, since `w - u` is
-//! parallel to the line at its event): the string rule. For two elements `i, j`,
+//! The measure of the lines of a gap over an angle interval is closed-form
+//! (`gap_area`); summed over a face's cells it telescopes into `sum of +- d(v)` over
+//! the vertices bounding the face (eq. 3): the string rule. For two elements `i, j`,
 //! `mu_ij` (the measure of lines whose free segment joins the lit sides of `i` and `j`)
 //! gives `L_i F_ij = mu_ij / 2` (eq. 2; `mu` of all lines meeting a segment of length
 //! `L` is `2 L`, which makes closure exact). No quadrature anywhere.
 //!
-//! # Cost, honestly
-//!
-//! `P` points, `n` segments: all `P (P - 1) / 2` point pairs are events (sorted:
-//! `O(P^2 log P)`), each event rebuilds `O(1)` gaps (generic position) with one cast
-//! of `O(n)`: `O(P^2 (log P + n))` in all for the cells, and the structure it stores
-//! (cells: one per free segment per gap) is that large too. The complex's vertices
-//! (with `record`) are the visibility graph taken from [`super::views`]
-//! (`O(P^2 log P)`, no per-pair `O(n)` test). The exact form factors do not use this
-//! sweep any more: [`super::views`] sums them from the views in `O(P^2 log P)`
-//! (`O(m log m)` once the views are known); this sweep remains the reference they are
-//! tested against, the builder of faces with chains, and the clipped measure of
-//! [`Clip`]. Neither reaches the paper's output-sensitive `O(m + n log n)` sweep of
-//! Rivière \[17\] (`m` = size of the visibility graph).
-//!
 //! # What it does not do
 //!
-//! Faces whose rays go to infinity (the paper's external faces) are not stored: only
-//! free segments between two segments. In degenerate scenes (three collinear points,
-//! segments collinear with other points) the measures stay exact, but face
-//! connectivity is only guaranteed in general position (random scenes); the chains of
-//! a face that crosses the chart's seam are reported in two parts.
+//! It is not the paper's output-sensitive `O(m + n log n)` sweep of Rivière \[17\]: it
+//! costs `O(P^2 (log P + n))` ([`sweep`]), so the exact form factors come from
+//! [`super::views`], and this sweep remains their reference, the builder of faces
+//! with chains and the clipped measure of [`Clip`]. Faces whose rays go to infinity
+//! (the paper's external faces) are not stored: only free segments between two
+//! segments. In degenerate scenes (three collinear points, segments collinear with
+//! other points) the measures stay exact, but face connectivity is only guaranteed
+//! in general position; the chains of a face that crosses the seam come in two parts.
 
 use std::collections::HashMap;
 use std::f64::consts::PI;
@@ -115,6 +91,10 @@ const _: () = assert!(std::mem::size_of::<Cell>() == 48);
 
 /// A vertex of the complex: the line through two mutually visible points (a
 /// visibility-graph edge, §2.2), with its length `d(v)` (eq. 3). 32 bytes.
+///
+/// Vertices are the sweep's events whose two points see each other (bitangents);
+/// with `record` they are taken from the visibility graph of [`super::views`]
+/// (`O(P^2 log P)`, no per-pair `O(n)` test).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CVertex {
     /// Angle of the line (absolute, in the chart).
@@ -141,6 +121,11 @@ pub enum Side {
 }
 
 /// An edge of the complex: rays of one face through one point, over `theta`. 48 bytes.
+///
+/// Edges (§2.2: rays with one label through one point) are the stretches of a
+/// point's curve that bound a face from below or above (the label exists on one side
+/// of the curve only); sorted by `theta` they form the face's *lower and upper
+/// chains* (§2.3, [`Complex::chains`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CEdge {
     /// Angular extent.
@@ -159,6 +144,14 @@ const _: () = assert!(std::mem::size_of::<CEdge>() == 48);
 
 /// A face of the complex: a maximal connected bundle of free segments between two
 /// elements. 64 bytes.
+///
+/// A face (§2.2: rays with label `(O_l, O_r)` that can be moved into each other
+/// keeping the label) is the union of the cells of one label that touch along a
+/// stretch of curve or continue through an event, found with union-find: cells of
+/// neighbouring gaps with the same label share a face (a curve can be crossed
+/// without a label change only if the point's segments are on neither side of the
+/// free segment); regions meeting at an event point only are not joined (faces are
+/// open sets).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CFace {
     /// Angular extent in the chart.
@@ -429,7 +422,10 @@ impl Angle {
     }
 }
 
-/// Measure of the lines of the gap `(u below, w above)` over `[a, b]`.
+/// Measure of the lines of the gap `(u below, w above)` over `[a, b]`:
+/// `integral (w - u) . n(theta) dtheta = (w - u) . (N(b) - N(a))` with
+/// `N = (cos, sin)`. Summed over the cells of a face this telescopes into eq. 3's
+/// `sum of +- d(v)`, since `w - u` is parallel to the line at its event.
 #[inline]
 fn gap_area(u: [f64; 2], w: [f64; 2], a: Angle, b: Angle) -> f64 {
     (w[0] - u[0]) * (b.c - a.c) + (w[1] - u[1]) * (b.s - a.s)
@@ -437,7 +433,16 @@ fn gap_area(u: [f64; 2], w: [f64; 2], a: Angle, b: Angle) -> f64 {
 
 /// Sweeps the dual plane of `geom` (see the module header). With `clip`, only the
 /// measure inside the clip region is accumulated (and only gaps with a positive
-/// clipped measure are cast); with `record`, the complex is built too.
+/// clipped measure are cast); with `record`, the complex is built too. The chart's
+/// `theta0` is chosen in the widest event-free interval, so that no two curves meet
+/// on the seam.
+///
+/// Cost, for `P` points and `n` segments: all `P (P - 1) / 2` point pairs are events
+/// (sorted: `O(P^2 log P)`), each event rebuilds `O(1)` gaps (generic position) with
+/// one cast of `O(n)`: `O(P^2 (log P + n))` in all for the cells, and the structure
+/// it stores (one cell per free segment per gap) is that large too. The exact form
+/// factors do not use this sweep: [`super::views`] sums them in `O(P^2 log P)`
+/// (`O(m log m)` once the views are known, `m` the visibility graph's size).
 pub fn sweep(geom: &FlatGeometry, clip: Option<&Clip>, record: bool) -> SweepOut {
     let np = geom.points.len();
     let mut out = SweepOut::default();

@@ -1,4 +1,4 @@
-//! Moving polygons (paper §5): the form factors kept up to date event by event.
+//! Moving polygons (paper 002 §5): the form factors kept up to date event by event.
 //!
 //! # How it works
 //!
@@ -6,25 +6,18 @@
 //! cyclic list of the points it sees with the element hit between them — the vertices
 //! and edges of the visibility complex on that point's dual curve) and each point's
 //! contribution to the measures `mu` (eq. 3 per edge); `mu` is their sum. A step
-//! `t0 -> t1` of rigidly moving objects:
+//! `t0 -> t1` of rigidly moving objects ([`Dynamic::step`]):
 //!
 //! 1. **Events (§5.2).** [`super::events::find_events`] finds the times where three
 //!    points become collinear (a point crossing the segment between two others) and
 //!    queues them in a [`std::collections::BinaryHeap`] by time.
-//! 2. **In order.** Events are popped earliest first; those within `1e-12 (t1 - t0)`
-//!    of each other form one group, applied on the geometry posed at the middle of
-//!    the event-free interval that follows. The elementary change of §5.2 (Figure
-//!    15: `p` crosses the segment `l r`) modifies only the views of `l` and `r`, and
-//!    only in the window of directions around the line `l p r`:
-//!    [`super::views::splice_event`] re-sweeps that window with the few elements that
-//!    can be hit there (the window's old hits, the elements at `p` and `r`, what `p`
-//!    and `r` see beyond themselves) and splices it into the view, `O(deg p + deg r)`
-//!    work independent of the scene size. When the local case does not apply (a
-//!    point in several simultaneous events, `l` seeing neither `p` nor an element
-//!    hiding it) the whole view is re-swept (`O(P log P)`). An event whose views
-//!    changed is a topological change of the complex ([`StepReport::events`]);
-//!    others (the triple hidden behind other segments) change nothing. After the last
-//!    event every view is the view at `t1` (tested against from-scratch views).
+//! 2. **In order.** Events are applied earliest first, simultaneous ones as a group.
+//!    The elementary change of §5.2 (Figure 15: `p` crosses the segment `l r`)
+//!    modifies only the views of `l` and `r`, and only in the window of directions
+//!    around the line `l p r`, which [`super::views::splice_event`] re-sweeps and
+//!    splices in; where that local case does not apply the whole view is re-swept.
+//!    An event whose views changed is a topological change of the complex
+//!    ([`StepReport::events`]). After the last event every view is the view at `t1`.
 //! 3. **Measures (§5.1).** Only the points whose contribution can have changed are
 //!    re-evaluated at `t1`: the moving points, the points whose view contains a moving
 //!    point (their edges end at vertices through the moving object: the faces
@@ -36,27 +29,13 @@
 //! [`super::radiosity::form_factors`], with paths through many topological changes,
 //! rotations included).
 //!
-//! # Local, and not
+//! # What it does not do
 //!
-//! Local: each event touches the views of its two outer points, and within them only
-//! the window of directions around the event's line (`O(deg)` work per event, the
-//! analogue of the paper's constant-time update once the triple is known); the
-//! measure update touches only the edges on the curves of the points listed in step 3
-//! (reported as `edges_visited`), and the form factors of the element pairs those
-//! edges bound (`ff_recomputed`). Not local, honestly: (a) a view spliced or re-swept
-//! is compared with the stored one (`O(deg)`), and the window's directions are found
-//! by computing the angles of `p`'s and `r`'s views (`O(deg p + deg r)`, not `O(1)`);
-//! simultaneous events at one point and the end-time re-sweeps cost `O(P log P)` per
-//! view; (b) finding the events tests all `O(k P^2)` triples with a moving point by
-//! sampling (see [`super::events`]) rather than the paper's kinetic queue of
-//! `O(log m_O)` per event; (c) the points re-evaluated at `t1` are re-integrated over
-//! their whole view (`O(deg)` each), and finding the points whose view contains a
-//! moving point scans all views (`O(m)`, no reverse index). With the discontinuity
-//! mesh the elements themselves move with the shadows, so each step is a full
-//! recomputation (reported as such); a step where two points coincide (the point set
-//! changes) or where a point crosses a segment (objects interpenetrating between
-//! keyframes, found as an event whose two ends lie on one segment) is a full
-//! recomputation too.
+//! It is not the paper's constant-time update: an event costs `O(deg)`, the events
+//! are found by testing every triple with a moving point rather than by a kinetic
+//! queue, and some steps are full recomputations (what is local and what is not:
+//! [`Dynamic::step`]). With the discontinuity mesh the elements themselves move with
+//! the shadows, so every step is a full recomputation (reported as such).
 
 use std::collections::HashSet;
 use std::time::Instant;
@@ -212,6 +191,37 @@ impl<'s> Dynamic<'s> {
 
     /// Moves to time `t1`, applying the visibility events in order and updating only
     /// what the motion changes (module header).
+    ///
+    /// Events within `1e-12 (t1 - t0)` of each other form one group, applied on the
+    /// geometry posed at the middle of the event-free interval that follows. At an
+    /// event where `p` crosses `l r`, [`super::views::splice_event`] re-sweeps the
+    /// window of directions around the line `l p r` with the few elements that can be
+    /// hit there (the window's old hits, the elements at `p` and `r`, what `p` and `r`
+    /// see beyond themselves), `O(deg p + deg r)` work independent of the scene size.
+    /// When the local case does not apply (a point in several simultaneous events,
+    /// `l` seeing neither `p` nor an element hiding it) the whole view is re-swept
+    /// (`O(P log P)`). Events whose triple is hidden behind other segments change
+    /// nothing. After the last event every view is the view at `t1` (tested against
+    /// from-scratch views).
+    ///
+    /// Local: each event touches the views of its two outer points, and within them
+    /// only the window of directions around the event's line (the analogue of the
+    /// paper's constant-time update once the triple is known); the measure update
+    /// touches only the edges on the curves of the points re-evaluated
+    /// ([`StepReport::edges_visited`]), and the form factors of the element pairs
+    /// those edges bound ([`StepReport::ff_recomputed`]). Not local: (a) a view
+    /// spliced or re-swept is compared with the stored one (`O(deg)`), and the
+    /// window's directions are found by computing the angles of `p`'s and `r`'s views
+    /// (`O(deg p + deg r)`, not `O(1)`); simultaneous events at one point and the
+    /// end-time re-sweeps cost `O(P log P)` per view; (b) finding the events tests all
+    /// `O(k P^2)` triples with a moving point by sampling (see [`super::events`])
+    /// rather than the paper's kinetic queue of `O(log m_O)` per event; (c) the points
+    /// re-evaluated at `t1` are re-integrated over their whole view (`O(deg)` each),
+    /// and finding the points whose view contains a moving point scans all views
+    /// (`O(m)`, no reverse index). A step where two points coincide (the point set
+    /// changes) or where a point crosses a segment (objects interpenetrating between
+    /// keyframes, found as an event whose two ends lie on one segment) is a full
+    /// recomputation, as is every step with the discontinuity mesh.
     pub fn step(&mut self, t1: f64) -> StepReport {
         let start = Instant::now();
         let full = |s: &mut Self| {

@@ -1,7 +1,7 @@
 //! Views: the visibility polygon of every point, by a rotational sweep around the
 //! point with a balanced tree, and the exact form factors (string rule, eq. 2–3)
 //! summed from the views — the output-sensitive part of the visibility complex
-//! (paper §2.2–2.3) in `O(P^2 log P)`, without casting lines.
+//! (paper 002 §2.2–2.3) in `O(P^2 log P)`, without casting lines.
 //!
 //! # Views
 //!
@@ -9,15 +9,8 @@
 //! directions, counter-clockwise, of the points `v` sees (the visibility-graph edges
 //! at `v`, i.e. the vertices of the complex on `v`'s dual curve), each with the
 //! element first hit by the rays from `v` just after that direction. It is computed by
-//! Lee's rotational sweep: every element not on a segment through `v` and not
-//! collinear with it is an arc of directions; the arcs met by the current ray sit in a
-//! [`BTreeSet`] ordered by distance along the ray (a fixed order for non-crossing
-//! segments, decided exactly by orientation tests, no angle); at each direction of a
-//! point (events grouped within `1e-12` rad) the ending arcs leave, the nearest point
-//! of the group is visible unless the nearest arc is strictly in front of it (a point
-//! touching the open segment blocks, as [`FlatGeometry::sees`]), the starting arcs
-//! enter, and the tree's first element is the hit of the next interval. Cost per
-//! point `O(P log P)`; for all points `O(P^2 log P)` time, `O(P + n)` memory per sweep.
+//! Lee's rotational sweep ([`view_of`]) in `O(P log P)` per point, `O(P^2 log P)` for
+//! all, with `O(P + n)` memory per sweep.
 //!
 //! # Form factors from the views
 //!
@@ -25,16 +18,10 @@
 //! over its cells (see [`super::complex`]); regrouped by point it is a sum over the
 //! stretches of curve of each point `v` bounding a face: `+ v . dN` where `v` bounds
 //! the face from above, `- v . dN` from below (`dN = N(theta1) - N(theta0)`, eq. 3
-//! written per edge). The lines just above and just below `v`'s curve at `theta` have
-//! the same free segments except near `v`: along the direction `d(theta)` they hit
-//! `[back, incident elements of v on that side..., forward]`, where `forward` /
-//! `back` are `v`'s view at `theta` / `theta + pi` and the incident elements are
-//! ordered by where a line shifted by `eps` crosses them. Labels present on one side
-//! only are the complex's *edges* on `v`'s curve (§2.2); their lit-side pairs carry
-//! `-+ v . dN`. These change only at `v`'s boundaries and at the directions of its
-//! incident elements, so a point contributes `O(deg v)` terms and all form factors
-//! cost `O(m log m)` once the views are known (`m` = visibility-graph size), the sum
-//! being exact (no quadrature), equal to the dual sweep's to round-off (tested).
+//! written per edge). A point contributes `O(deg v)` terms ([`contributions`]), so
+//! all form factors cost `O(m log m)` once the views are known (`m` = visibility-graph
+//! size), the sum being exact (no quadrature), equal to the dual sweep's to round-off
+//! (tested).
 //!
 //! # What it does not do
 //!
@@ -223,6 +210,15 @@ fn nearest_seen(
 }
 
 /// The view of point `v` (module header), and the number of event groups swept.
+///
+/// Lee's rotational sweep: every element not on a segment through `v` and not
+/// collinear with it is an arc of directions; the arcs met by the current ray sit in
+/// a [`BTreeSet`] ordered by distance along the ray (a fixed order for non-crossing
+/// segments, decided exactly by orientation tests, no angle). At each direction of a
+/// point (events grouped within `1e-12` rad) the ending arcs leave, the nearest point
+/// of the group is visible unless the nearest arc is strictly in front of it (a point
+/// touching the open segment blocks, as [`FlatGeometry::sees`]), the starting arcs
+/// enter, and the tree's first element is the hit of the next interval.
 pub fn view_of(geom: &FlatGeometry, topo: &Topology, v: u32) -> (View, usize) {
     let pts = &geom.points;
     let c = pts[v as usize];
@@ -382,6 +378,15 @@ pub type Contributions = Vec<((u32, u32), f64)>;
 /// Contributions of point `v` with `view` to the measures `mu` at the positions of
 /// `geom` (module header): `(element pair, measure)` sorted by pair, merged; and the
 /// number of angular intervals integrated.
+///
+/// The lines just above and just below `v`'s curve at `theta` have the same free
+/// segments except near `v`: along the direction `d(theta)` they hit `[back,
+/// incident elements of v on that side..., forward]`, where `forward` / `back` are
+/// `v`'s view at `theta` / `theta + pi` and the incident elements are ordered by
+/// where a line shifted by `eps` crosses them. Labels present on one side only are
+/// the complex's *edges* on `v`'s curve (§2.2); their lit-side pairs carry
+/// `-+ v . dN`. These change only at `v`'s boundaries and at the directions of its
+/// incident elements, hence `O(deg v)` terms.
 pub fn contributions(
     geom: &FlatGeometry,
     topo: &Topology,

@@ -1,5 +1,5 @@
 //! A sweep of the dual plane restricted to the lines meeting a convex region `K`:
-//! the faces of the visibility complex "related to" a moving object (paper §5.1) are
+//! the faces of the visibility complex "related to" a moving object (paper 002 §5.1) are
 //! visited without enumerating the rest of the complex.
 //!
 //! How it works: at every angle `theta` the lines meeting `K` form the interval
@@ -23,19 +23,10 @@
 //! one cast line) and new ones are born. `K` is grown by `1e-9` of the scene size so
 //! that the moving object's own corners lie strictly inside it (always in the window).
 //!
-//! Cost: `O(P^2)` orientation tests to select the events, then
-//! `O(E_R (P + w log w))` for the `E_R` events inside the region with windows of
-//! `w` points, and one `O(n)` cast per gap born: proportional to the part of line space
-//! the motion touches, as in §5.1 ("in time proportional to their number"), apart from
-//! the quadratic but trigonometry-free selection.
-//!
-//! Faces: each gap's front-facing labels come from one cast at its birth; cells of
-//! one label are joined (union-find) across a point curve between neighbouring gaps,
-//! from a dead gap to the new gap with the same lower (upper) bound when that bound
-//! took no part in the event, and across the chart's seam, exactly as in
-//! [`super::complex`]; the roots are the faces visited (connected pieces of faces
-//! inside the region; over a region containing the whole scene they are the complex's
-//! front faces, tested).
+//! The cost is proportional to the part of line space the motion touches, as in §5.1
+//! ("in time proportional to their number"), apart from a quadratic but
+//! trigonometry-free selection of the events ([`window_sweep`]); the faces met are
+//! counted by joining cells as [`super::complex`] does ([`WindowOut::faces`]).
 //!
 //! What it does not do: it does not store the faces' chains or vertices, only their
 //! measures and their number; the region must be convex.
@@ -64,11 +55,22 @@ pub struct WindowOut {
     pub events: usize,
     /// Front-facing faces of the complex met (connected pieces inside the region:
     /// a face that leaves the region and comes back counts twice).
+    ///
+    /// Each gap's front-facing labels come from one cast at its birth; cells of one
+    /// label are joined (union-find) across a point curve between neighbouring gaps,
+    /// from a dead gap to the new gap with the same lower (upper) bound when that
+    /// bound took no part in the event, and across the chart's seam, exactly as in
+    /// [`super::complex`]; the roots are the faces visited. Over a region containing
+    /// the whole scene they are the complex's front faces (tested).
     pub faces: usize,
 }
 
 /// Measures the free lines of `geom` that meet the convex hull of `points` (grown
 /// slightly, see the module header).
+///
+/// Cost: `O(P^2)` orientation tests to select the events, then
+/// `O(E_R (P + w log w))` for the `E_R` events inside the region with windows of `w`
+/// points, and one `O(n)` cast per gap born.
 pub fn window_sweep(geom: &FlatGeometry, points: &[[f64; 2]]) -> WindowOut {
     let mut out = WindowOut::default();
     if points.is_empty() || geom.points.is_empty() {

@@ -26,19 +26,11 @@
 //! and when no pair faces the other the visibility is 0. No shaft test applies (a
 //! cluster's box holds its own surfaces, so a shaft from it is never clear).
 //!
-//! Such a coefficient is only an estimate: its error bound is the whole unoccluded
-//! transport with every cosine at its bound (1 on a cluster side, which covers the
-//! directional estimate), whatever the rays found. A few rays prove neither a clear
-//! nor a hidden link, so the bound covers any visibility in `[0, 1]`: a link whose
-//! rays are all blocked gets coefficient 0 but keeps that bound, and is refined
-//! (down to surface links, whose shafts and rays decide) whenever the light it
-//! could carry matters. Only links that could carry little energy stay at cluster
-//! level, hidden or not.
-//!
-//! Ends closer than `1.5 (r_r + r_s)` (bounding spheres) have no estimate and an
-//! unbounded spread: such a link is opened wherever its error counts, and where it
-//! is left whole (a receiver below the power area) it carries a Monte Carlo factor
-//! over pairs of surface points ([`close_cluster_factor`]).
+//! Such a coefficient is only an estimate, so its error bound covers any visibility
+//! (see [`evaluate`]): only links that could carry little energy stay at cluster
+//! level, hidden or not. Ends closer than `1.5 (r_r + r_s)` (bounding spheres) have
+//! no estimate and an unbounded spread; left whole, such a link carries a Monte
+//! Carlo factor ([`close_cluster_factor`]).
 //!
 //! Deterministic: the ray jitter is a hash of (receiver, source, sample), not of the
 //! thread or the order of evaluation.
@@ -316,6 +308,15 @@ fn cluster_factor(area_s: f64, cr: f64, cs: f64, d2: f64) -> f64 {
 /// is hashed from for the two ends: their element ids, or in a space-time window
 /// keys that follow the elements' geometry, so that an element a frame makes again
 /// casts the same rays at every frame (`Solver::ray_id`).
+///
+/// A link with a cluster end gets an estimate, so its error bound is the whole
+/// unoccluded transport with every cosine at its bound (1 on a cluster side, which
+/// covers the directional estimate), whatever the rays found. A few rays prove
+/// neither a clear nor a hidden link, so the bound covers any visibility in
+/// `[0, 1]`: a link whose rays are all blocked gets coefficient 0 but keeps that
+/// bound, and is refined (down to surface links, whose shafts and rays decide)
+/// whenever the light it could carry matters. A link whose ends are too close for
+/// the estimate has an unbounded spread: it is opened wherever its error counts.
 pub fn evaluate(
     elems: &ElementPool,
     bvh: &SceneBvh,
@@ -388,7 +389,7 @@ pub fn evaluate(
         spread = cluster_factor(gs.area, cr_max, cs_max, d2);
     }
     // Visibility by rays between the ends' surfaces; the spread keeps the unoccluded
-    // bound (see module docs).
+    // bound (see this function's docs).
     let (mut vis, mut rays) = (1.0, 0);
     let key = hash3(set.seed ^ 0xc105, ids[0], ids[1]);
     if f > 0.0 {

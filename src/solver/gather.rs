@@ -257,6 +257,17 @@ impl Solver<'_> {
     /// the estimate of its links: [`oracle::cluster_emission`], visibility by
     /// [`oracle::point_cluster_visibility`] from `x`.
     ///
+    /// A source whose radiosity varies is opened too: the gather multiplies its
+    /// *average* radiosity by the exact factor of the whole source, which is off by
+    /// the covariance of `F(x, y)` and `B(y)` over it, about `(r/d) ΔB_s` of the
+    /// factor (`r/d` the source's radius over its distance, `ΔB_s` the spread of the
+    /// leaf radiosities under it). A surface source is opened while `(r/d) ΔB_s >
+    /// open_spread · B_ref` ([`SolveOptions::open_spread`]); its children share the
+    /// visible fraction the rays to the whole source measured, so the opening costs
+    /// point-to-polygon factors, not rays. The errors have one sign where a source's
+    /// brightest parts are the nearest (the Cornell ceiling sees the floor's bright
+    /// middle nearest; BENCHMARKS.md, "Sources whose radiosity varies").
+    ///
     /// With `swept` (a static point and a static source in a time window), a term
     /// whose shaft from `x` meets a box swept by a moving object becomes a
     /// [`MaskedTerm`] (its rays' static visibility kept); the others are fixed. A
@@ -289,8 +300,7 @@ impl Solver<'_> {
                 meets_any(lo.min(x), hi.max(x), sw)
             });
         // A surface whose radiosity varies is opened too: its average would be off by
-        // about `(r/d) ΔB_s` of its factor (module docs, "Sources whose radiosity
-        // varies").
+        // about `(r/d) ΔB_s` of its factor (see this function's docs).
         let varies = gs.patch != u32::MAX && rad / d * limits.spread[s] as f64 > limits.open_spread;
         let large = rad / d > self.opts.open_ratio || swept_cluster;
         // Not where a moving object may cross the rays: the children would need rays

@@ -23,22 +23,18 @@
 //! **Collection.** After each reconstruction the points it registered are stamped;
 //! points no reconstruction has registered for [`STALE_AFTER`] reconstructions are
 //! dropped (the cells a moving object re-meshes move on with it, and a window
-//! would otherwise keep every point any frame ever made: ACTOR's first window grew
-//! from 11.7k to 26k points, 110 MB). Under a byte budget, the points the last
+//! would otherwise keep every point any frame ever made). Under a byte budget, the points the last
 //! reconstruction did not register are dropped too and no new point is admitted
 //! while over it. Dropping changes the work, never the values: a point gathered
 //! afresh gets the same terms it had.
 //!
 //! **Carried.** A window's terms outlive it (`Solver::release_window` keeps the
 //! cache as it is): the next window starts from those on the shared part's
-//! elements, rebuilt once ([`PointCache::carried`], `Solver::revalidated`), keeping
-//! a source's masked terms and its terms keyed clear whatever moves, and its fixed
-//! terms (visibility included) only where the box around the point and the source
-//! meets none of the boxes the new window's objects sweep; a masked term whose own
-//! box meets none becomes the fixed term a fresh gather would make. Between windows
-//! the terms on the shared part can be written for a resumed solve's journal
-//! ([`PointCache::encode`], [`PointCache::decode`]); the rebuild goes over points in
-//! key order, so it makes the same cache from those as from the window's own.
+//! elements that still hold against the boxes its own objects sweep, rebuilt once
+//! ([`PointCache::carried`]; which hold: `Solver::revalidated`). Between windows
+//! they can be written for a resumed solve's journal ([`PointCache::encode`],
+//! [`PointCache::decode`]); the rebuild goes over points in key order, so it makes
+//! the same cache from those as from the window's own.
 
 use std::ops::Range;
 

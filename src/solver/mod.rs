@@ -1,164 +1,43 @@
 //! Hierarchical radiosity with clustering (Hanrahan, Salzman & Aupperle 1991; Smits,
-//! Arvo & Greenberg 1994), solved with GMRES, reconstructed by a final gather at the
-//! leaves' corners.
+//! Arvo & Greenberg 1994), solved with GMRES, reconstructed by a final gather. This
+//! is the static solver; [`spacetime`] runs it over an animation (paper 001).
 //!
 //! One solve runs **rounds**. Each round:
 //! 1. *refine*: every active link whose error bound `ρ_r · B_s · ΔK` exceeds
 //!    `eps · B_ref` is split at its larger end ([`crate::oracle`]); the new links are
-//!    evaluated in parallel (rayon) wave by wave, and the refined link stays in the pool
-//!    as *passive*. The first round starts from the root cluster's self-link, so no
-//!    `n²` initial linking happens.
-//! 2. *solve*: `(I − ρK) B = E` over the leaves with GMRES ([`gmres`]), the operator
-//!    applied matrix-free as pull (area-weighted averages up the tree) and a gather of
-//!    each leaf's row (the sources of its chain links with leaf-level coefficients,
-//!    below), leaves in parallel.
+//!    evaluated in parallel (rayon) wave by wave, and the refined link stays in the
+//!    pool as *passive*. The first round starts from the root cluster's self-link, so
+//!    no `n²` initial linking happens. A receiver below the power area is refined on
+//!    the power it hands on, not its radiosity ([`SolveOptions::power_size`]).
+//! 2. *solve*: `(I − ρK) B = E` over the leaves with GMRES ([`gmres`]), matrix-free:
+//!    pull up the tree, then each leaf gathers from the sources of the links of the
+//!    leaf and its ancestors (which cover the scene exactly once), with coefficients
+//!    re-integrated over the leaf itself (`Solver::compute_leaf_rows`).
 //!
-//! **Leaf-level coefficients.** The link hierarchy decides *which* sources a leaf
-//! gathers from and at what level (the links of the leaf and of its ancestors, which
-//! cover the scene exactly once); the coefficient of each of those sources is then
-//! re-integrated over the leaf itself: `F = Σ_q w_q F(x_q → A_s) · V(x_q, s)` at the
-//! leaf's quadrature points, exact inner factor; `V = 1` for links a shaft proved clear,
-//! otherwise re-cast from the leaf's own points (an ancestor's average visibility is
-//! wrong next to a contact or a shadow edge), and from its corners where the points
-//! agree, on a finer rule if a corner disagrees (`Solver::hidden_row_coef`). Pushing an
-//! ancestor's irradiance down instead would hand every leaf the ancestor's average
-//! coupling: next to a wall or a block a small leaf's coupling to the adjacent surface
-//! is far larger than its parent's, and with `ρ → 1` the rows' small defects are
-//! amplified by `1/(1 − ρ)`. At every quadrature point the factors of a partition of a
-//! closed room sum to 1 exactly, so `B = E/(1−ρ)` holds to round-off at `ρ = 0.999`.
-//! The price: a GMRES step costs `Σ_leaves chain length` instead of the link count.
+//! A static solve refines in levels and estimates its error from how a final gather
+//! at fixed points changes between levels, and from the power its leaf system makes
+//! or loses ([`Solver::run`]). A closed scene whose leaf system strays from the power
+//! it emits by more than [`BALANCE_TRIGGER`] has its rows balanced and is solved
+//! again (`Solver::balance_rows`).
 //!
-//! **Reconstruction.** A piecewise-constant solution is a poor point answer, so the
-//! stored leaves carry radiosity at their corners, computed by a final gather at each
-//! distinct corner: `B(x) = E + ρ Σ F(x → A_s) V(x, s) B_s` over the sources of the
-//! links of the leaf and its ancestors (which cover the scene exactly once), opening
-//! sources that are large seen from `x` into their children, with exact
-//! point-to-polygon factors. A corner that lies inside a solid (its normal ray first
-//! meets a back face, e.g. under a block resting on the floor) takes the mean of its
-//! leaf's valid corners instead. `probe` interpolates these corners.
+//! The stored answer is not the piecewise-constant leaves but a final gather at the
+//! corners of cells meshed where `B(x)` bends, with exact point-to-polygon factors
+//! and sources that look large or whose radiosity varies opened into their children.
+//! Two optional mends for leaves whose radiosity strays across them act after the
+//! last round: [`SolveOptions::split_spread`] and [`SolveOptions::leaf_shapes`].
 //!
-//! **Scale.** A receiver smaller than the power area `A_p` ([`SolveOptions::power_size`])
-//! is refined on the power its links may get wrong, not its radiosity; a static
-//! solve keeps each leaf's row coefficients (and the visible fraction of each source
-//! seen from the leaf) from round to round (a static scene only; cleared when a
-//! time window restores the pools), and the final gather of a leaf smaller
-//! than `A_p` takes the visibility of non-emitting surface sources from that row
-//! where the row's rays all agree (fully visible or fully hidden), and of clusters
-//! with no emitter under them from their link, instead of casting rays (emitters
-//! keep their rays); any point skips the rays of a source that can hand it
-//! less than [`SolveOptions::faint_source`] (link visibility instead). A cluster
-//! source's row coefficient is the directional cluster estimate at the leaf's own
-//! points and orientation (a Monte Carlo factor for links too close for it), rebuilt
-//! once after each solve so that it matches the radiosity it depends on.
+//! What it does not do: the reconstruction's cells do not refine the link hierarchy;
+//! a scene with motion is solved through [`spacetime`] windows only (no leaf split,
+//! no row coefficients kept from round to round). Results are deterministic for a
+//! given seed and thread count (ray jitter hashed from link ids; disjoint outputs).
 //!
-//! **Leaves split on their spread.** The power criterion leaves small faces whole,
-//! and the leaf system knows only a leaf's mean radiosity. In the narrow slots of a
-//! cluttered floor a face's radiosity varies several-fold over its height (lit over
-//! its neighbour at the top, in shadow at the bottom), and the faces around see
-//! its dark part at its mean: the 2.8 cm slots of a 100k-polygon room of boxes
-//! came out twice as bright as the path tracer. After the last round of a static
-//! solve, each leaf below the power area sums its row's sources at each of its
-//! quadrature points (`Solver::leaf_spread`: exact factors, the row's
-//! visibility or the row's own rays again); a leaf whose reflected radiosity spreads
-//! there by more than [`SolveOptions::split_spread`] `· B_ref` is subdivided, down
-//! to the reconstruction's smallest cell, and the leaf system is solved again, in
-//! two passes at most. The children gather through their ancestors' links: no link
-//! changes. A scene with motion (space-time windows) does not split. Off by default:
-//! at 0.15 it took `gen_cubes 20` from 2.72% to 1.89% and 129 from 9.80% to 8.54%
-//! (+70–75% time, 2.1× the memory at 100k polygons) but 50 from 4.78% to 5.22%,
-//! where the boxes' faces are too dark, not too bright.
-//!
-//! **Leaves seen by their shape.** The same fault mended where it shows, in the
-//! final gather, without new leaves or a second solve
-//! ([`SolveOptions::leaf_shapes`], off by default). After the last round, each
-//! quad leaf below the power area takes its radiosity at its four quadrature
-//! points from its row (as the split does); where one strays from their mean by
-//! more than `leaf_shapes` of it, the leaf keeps one factor per quadrant (value
-//! over mean, so its power is unchanged), and a point gathering from it sums the
-//! exact factors of the four quadrants times theirs instead of the whole leaf's
-//! factor times 1 (`shaped_factor`). The leaf's own radiosity and the leaf system
-//! are untouched. Measured at 0.1 (BENCHMARKS.md, "Scale"): the 100k-polygon room
-//! 9.80% → 8.86% for 14% more time and no more memory (the split: 8.54% for 75%
-//! more and 2.1× the memory); like the split it makes `gen_cubes 50` worse, 4.78%
-//! → 5.03%.
-//!
-//! **Sources larger than they look.** A leaf row gathers each source's average
-//! radiosity; a surface source that looks large from the leaf is opened into its
-//! children in that row ([`SolveOptions::row_open_ratio`]), which keeps the leaf
-//! system from losing the light of bright parts of big sources.
-//!
-//! **Sources whose radiosity varies.** The final gather multiplies a source's
-//! *average* radiosity by the exact factor of the whole source, which is off by the
-//! covariance of `F(x, y)` and `B(y)` over the source: about `(r/d) ΔB_s` of the
-//! factor, `r/d` the source's radius over its distance and `ΔB_s` the spread of the
-//! leaf radiosities under it. A surface source is opened into its children while
-//! `(r/d) ΔB_s > open_spread · B_ref` ([`SolveOptions::open_spread`]); the children
-//! share the visible fraction the rays to the whole source measured, so the opening
-//! costs point-to-polygon factors, not rays. The errors have one sign where the
-//! brightest parts of a source are the nearest (the Cornell ceiling sees the floor's
-//! bright middle nearest): that ceiling was 3.8% too dark, 1.9% with the opening.
-//!
-//! **Estimated error.** The stored answer is the final gather, so its error is
-//! estimated from it, not from the links' bounds (those bound the piecewise-constant
-//! hierarchy, which the gather replaces: their sum read 1.1 on a Cornell box whose
-//! answer is within 1.3% off the lamp). A static solve refines in levels, at most two
-//! rounds at `2 eps` and then rounds at `eps`, and gathers at 128 fixed points spread
-//! over the surfaces by area after every round; a round's estimate is the relative RMS
-//! change of those values (reflected radiosity) since the last round of the level
-//! before. The change is mostly the coarser level's error, so it overestimates at
-//! coarse eps; it does not see what no refinement changes (a bias of the cluster
-//! estimates, the reconstruction's one-signed interpolation error where `B` is
-//! concave), so it underestimates at fine eps. [`Solver::solution`] adds the
-//! reconstruction's measured interpolation error
-//! ([`Reconstruction::interpolation_error`]). With a target, eps keeps halving until
-//! the estimate reaches it.
-//!
-//! **Light the factors make.** No answer absorbs more power than the scene emits,
-//! so a leaf system that does ([`Solver::power_balance`] above 1) has factors that
-//! sum above 1 somewhere (cluster estimates, quadrature), and its answer is too
-//! bright on average by about that excess (in a closed room of one reflectance `ρ`,
-//! by exactly `ρ` times it). A level change does not see it, and reflectance
-//! amplifies it: rows summing a fraction of a percent above the hemisphere each
-//! leaf sees made ACTOR's room at `ρ = 0.99` 45% too bright against the path
-//! tracer, while the change between levels read 1.9%
-//! (BENCHMARKS.md, "Stiff scenes"). A round's estimate is therefore at least the
-//! excess. A deficit proves nothing where light may escape; where 64 cosine rays
-//! from each of 128 points spread by area all meet a front face
-//! ([`Solver::is_closed`]) the scene absorbs all it emits, and a deficit counts
-//! too (a closed room with a floating box at `ρ = 0.99` absorbed 0.877 and was 12%
-//! too dark, the change reading 2.6%).
-//!
-//! **A closed scene's leaf system balanced.** In a closed scene exact factors make
-//! every row gather a whole hemisphere and every leaf's light arrive somewhere in
-//! full. Where a solve finds its leaf system absorbing more or less than the power
-//! emitted by over 2% ([`BALANCE_TRIGGER`]), the rows are scaled to gather their
-//! hemisphere and the leaves given gains as sources so that each sends what it
-//! gathers (Sinkhorn's alternating scaling, `Solver::balance_rows`), and it is
-//! solved again. That took ACTOR's room at `ρ = 0.99` from 40–73% too bright to
-//! within 1.3–1.9% of the path tracer, and the closed room above to its exact
-//! mean. Rows that miss a fifth of their hemisphere are not scaled, and what they
-//! miss is lost: ACTOR's room at eps 0.25 absorbs 0.967 at `ρ = 0.99` and 0.74 at
-//! 0.999, and the estimate and the warning say so; where such rows hold over 0.5%
-//! of the area the system is not balanced at all. A leaf system within 2% is
-//! solved as it stands: balancing ACTOR's room at its own reflectances
-//! (0.99–1.01) moved its points by ±1–2% both ways and took them no closer to the
-//! path tracer. Its first, coarse rounds are off by 2–3% and balanced, which
-//! changes what the later rounds refine by a fraction of a percent of the answer.
-//!
-//! Results are deterministic for a given seed and thread count (ray jitter is hashed
-//! from link ids; parallel loops write disjoint outputs).
-//!
-//! **Where the code lies.** This module holds the [`Solver`] (its pools, options and
-//! rounds: refinement, link evaluation, push-pull, the error estimate) and the kernel
-//! helpers both gathers share; each part below adds its own `impl Solver` block:
-//! - `rows.rs`: the leaf system's rows and their solve;
-//! - `gather.rs`: the final gather at one point;
-//! - `reconstruct.rs`: the cells the gathers mesh, stored as leaves;
-//! - `window.rs`: a space-time window on the pools, one frame inside it, and the
-//!   keys a frame's elements keep by place;
-//! - `kept.rs`: what a window keeps of the final-gather terms;
-//! - `between.rs`: what a window carries from a solved frame to the frames between;
-//! - [`spacetime`] drives the windows; [`per_frame`] is the frame-by-frame baseline.
+//! **Where the code lies.** This module holds the [`Solver`] (pools, options, rounds,
+//! the error estimate) and the kernel helpers both gathers share; each file below
+//! adds an `impl Solver` block: `rows.rs` (the leaf system), `gather.rs` (the final
+//! gather at one point), `reconstruct.rs` (the cells the gathers mesh), `window.rs`
+//! (a space-time window on the pools), `kept.rs` (the final-gather terms a window
+//! keeps), `between.rs` (what a window carries to the frames between); [`spacetime`]
+//! drives the windows and [`per_frame`] is the frame-by-frame baseline.
 
 mod between;
 mod gather;
@@ -311,16 +190,16 @@ pub struct SolveOptions {
     /// Final gather: a surface source is also opened into its children while
     /// `r/d · ΔB_s` exceeds this times the RMS radiosity (`r/d` as for
     /// [`Self::open_ratio`], `ΔB_s` the spread of the leaf radiosities under it; 0:
-    /// never). See the module docs, "Sources whose radiosity varies".
+    /// never). Why: see `Solver::point_terms` (`src/solver/gather.rs`).
     pub open_spread: f64,
     /// Most refine-and-solve rounds.
     pub max_rounds: u32,
     /// Stop when the estimated error is below this; refinement then goes on below
     /// `eps` (halving it) until the estimate gets there.
     pub target_error: Option<f64>,
-    /// Points the per-round error estimate gathers at ([`Solver::run`], module docs
-    /// "Estimated error"); 0: no estimate and no `eps` schedule (what a solve of a
-    /// scene with motion always does).
+    /// Points the per-round error estimate gathers at ([`Solver::run`]); 0: no
+    /// estimate and no `eps` schedule (what a solve of a scene with motion always
+    /// does).
     pub error_samples: u32,
     /// Stop starting new rounds after this many seconds.
     pub time_budget: Option<f64>,
@@ -332,18 +211,15 @@ pub struct SolveOptions {
     /// differs from its corners' interpolant by more than this times the RMS radiosity.
     pub recon_tol: f64,
     /// Reconstruction tolerance on the surfaces of moving objects (`None`:
-    /// `recon_tol`). On ACTOR the tolerance that is best for the room's error in a
-    /// space-time solve (0.16) left the actors' own faces at 3.1% against
-    /// per-frame's 2.3% (at its best, 0.08); 0.08 on the actors alone takes them to
-    /// 2.1% for 8% more time, the room unchanged (BENCHMARKS.md, "Keyframes and
-    /// windows spaced by motion").
+    /// `recon_tol`): the tolerance best for a room's error in a space-time solve can
+    /// leave the moving objects' own faces coarse, and a finer one on them alone
+    /// costs little (BENCHMARKS.md, "Keyframes and windows spaced by motion").
     pub recon_tol_moving: Option<f64>,
     /// Smallest reconstruction cell edge, as a fraction of the scene's diameter.
     pub recon_min_size: f64,
     /// Cut patches along contact lines before solving ([`split_at_contacts`]). On
-    /// by default: on the Cornell blocks it takes the contact points from 17% to 12%
-    /// RMS error (eps 0.5); in cluttered scenes it multiplies patches (2407 → 3773 on
-    /// a room of 400 boxes).
+    /// by default: it lowers the error at contact points; in cluttered scenes it
+    /// multiplies patches (BENCHMARKS.md, "Contact meshing").
     pub contact_meshing: bool,
     /// Edge, as a fraction of the scene's diameter, of the square area `A_p` below
     /// which a receiver is refined on the *power* its links may get wrong instead of
@@ -358,8 +234,8 @@ pub struct SolveOptions {
     /// Leaf rows: a surface source whose bounding sphere's radius exceeds this times
     /// its distance from a leaf's quadrature point is opened into its children in
     /// that leaf's row, each with its own radiosity and exact polygon factor (0:
-    /// never). Gathering big sources' average radiosity lost 2.8% of the light of a
-    /// closed room lit by a small lamp (module docs, "Sources larger than they look").
+    /// never). Gathering a big source's average radiosity loses the light of its
+    /// bright parts, which the leaf system then never hands on.
     pub row_open_ratio: f64,
     /// Final gather: a non-emitting source that can hand a point less than this
     /// times the RMS radiosity takes its link's visibility instead of rays (0: rays
@@ -368,15 +244,16 @@ pub struct SolveOptions {
     /// After the last round (static scenes), a leaf below the power area whose
     /// reflected radiosity differs across its own quadrature points by more than
     /// this times the RMS radiosity is subdivided, and the leaf system solved again
-    /// (two passes at most; 0, the default: never). 0.15 is the value measured in
-    /// BENCHMARKS.md ("Scale"). See the module docs, "Leaves split on their spread".
+    /// (two passes at most; 0, the default: never). Why, and what it costs:
+    /// `Solver::split_on_spread`; 0.15 is the value measured in BENCHMARKS.md,
+    /// "Leaves seen by their shape, and split on their spread".
     pub split_spread: f64,
     /// After the last round (static scenes), a quad leaf below the power area whose
     /// radiosity at one of its quadrature points strays from their mean by more than
     /// this fraction of it is seen by the final gather with that shape, one factor
-    /// per quadrant, instead of as its mean (0, the default: never). 0.1 is the value
-    /// measured in BENCHMARKS.md ("Scale"). See the module docs, "Leaves seen by
-    /// their shape".
+    /// per quadrant, instead of as its mean (0, the default: never). Why:
+    /// `Solver::leaf_shapes`; 0.1 is the value measured in BENCHMARKS.md, "Leaves
+    /// seen by their shape, and split on their spread".
     pub leaf_shapes: f64,
     /// A reconstruction point facing a surface across a gap narrower than this
     /// fraction of the square root of the surface's (patch's) area (a box's bottom
@@ -742,10 +619,21 @@ impl<'a> Solver<'a> {
     ///
     /// A static scene with [`SolveOptions::error_samples`] refines in levels: at
     /// most two rounds at `2 eps`, then rounds at `eps` until nothing refines. Each
-    /// round's estimated error is the change of the final gather at the sample
-    /// points since the last round of the level before (module docs, "Estimated
-    /// error"). With a target error, a solve that reaches `eps` above the target
-    /// keeps halving it.
+    /// round's estimated error is the relative RMS change of the final gather
+    /// (reflected radiosity) at the sample points, spread over the surfaces by area,
+    /// since the last round of the level before. With a target error, a solve that
+    /// reaches `eps` above the target keeps halving it.
+    ///
+    /// Why the final gather: it is the stored answer, and the links' bounds bound the
+    /// piecewise-constant hierarchy the gather replaces (their sum reads far above
+    /// the gather's true error). The change is mostly the coarser level's error, so
+    /// it overestimates at coarse eps; it does not see what no refinement changes (a
+    /// bias of the cluster estimates, the reconstruction's one-signed interpolation
+    /// error where `B` is concave), so it underestimates at fine eps.
+    /// [`Solver::solution`] adds the reconstruction's interpolation error, and a
+    /// round's estimate is at least the power the leaf system makes or loses
+    /// (`with_power_error`). BENCHMARKS.md, "The estimated error against the true
+    /// error".
     pub fn run(
         &mut self,
         mut on_round: impl FnMut(&mut RoundRecord, &Solver),
@@ -868,7 +756,7 @@ impl<'a> Solver<'a> {
             }
         }
         // Leaves split on their spread, then the leaf system solved again (static
-        // scenes; module docs). Each pass is reported as a round.
+        // scenes; `split_on_spread`). Each pass is reported as a round.
         let time_budget = self.opts.time_budget;
         let budget_left = || time_budget.is_none_or(|b| start.elapsed().as_secs_f64() < b);
         for _ in 0..SPLIT_PASSES {
@@ -1532,7 +1420,7 @@ impl<'a> Solver<'a> {
     /// agree and the same rays again (same keys) where they do not; for clusters the
     /// cluster estimate at each point, or the link's factor at every point for a
     /// link too close for it. The leaf system only knows a leaf's mean; this is
-    /// what the mean hides (module docs, "Leaves split on their spread").
+    /// what the mean hides ([`Solver::split_on_spread`]).
     fn leaf_spread(&self, leaf: ElementId) -> f64 {
         let (h, q) = self.leaf_point_light(leaf);
         let g = &self.elems.geoms.as_slice()[leaf.ix()];
@@ -1555,6 +1443,15 @@ impl<'a> Solver<'a> {
     /// from their weighted mean by more than [`SolveOptions::leaf_shapes`] of it, in
     /// the channel whose mean is largest. Quadrant `q` (cut at the parametric
     /// midpoints) holds quadrature point `q`, and takes its value over the mean.
+    ///
+    /// Why: it mends where it shows the fault [`Solver::split_on_spread`] mends by
+    /// new leaves, in the final gather, with no new leaf and no second solve. A
+    /// point gathering from a shaped leaf sums the exact factors of its four
+    /// quadrants times their values ([`shaped_factor`]) instead of the whole leaf's
+    /// factor times 1; the values are over the mean, so the leaf's power is
+    /// unchanged, and its own radiosity and the leaf system are untouched. Off by
+    /// default, like the split, for the same reason (BENCHMARKS.md, "Leaves seen by
+    /// their shape, and split on their spread").
     fn leaf_shapes(&self) -> HashMap<u32, [f32; 4]> {
         let geoms = self.elems.geoms.as_slice();
         self.leaves
@@ -1647,6 +1544,17 @@ impl<'a> Solver<'a> {
     /// (children no smaller in area than `(recon_min_size · diameter)²`). The children gather
     /// through their ancestors' links, so no link changes. Returns how many leaves
     /// were split.
+    ///
+    /// Why: the power criterion leaves small faces whole, and the leaf system knows
+    /// only a leaf's mean. In the narrow slots of a cluttered floor a face's radiosity
+    /// varies several-fold over its height (lit over its neighbour at the top, in
+    /// shadow at the bottom), and the faces around see its dark part at its mean, too
+    /// bright. [`Solver::run`] calls this after the last round of a static solve and
+    /// solves the leaf system again, [`SPLIT_PASSES`] passes at most; a scene with
+    /// motion does not split. Off by default: it helps where the slots are too
+    /// bright and hurts where faces are already too dark, at a cost in time and
+    /// memory (BENCHMARKS.md, "Leaves seen by their shape, and split on their
+    /// spread").
     fn split_on_spread(&mut self) -> Result<usize> {
         let limit = self.opts.split_spread * self.b_ref();
         let floor = (self.opts.recon_min_size * self.patches.diameter).powi(2);
@@ -1884,9 +1792,19 @@ const CLOSURE_RAYS: u64 = 64;
 
 /// A round's error estimate: the change between levels `change` (`NaN` in the first
 /// level), at least how far the power the leaf system absorbs strays from what the
-/// scene emits, `balance − 1` (module docs, "Light the factors make"): an excess
-/// always, a deficit only in a `closed` scene (elsewhere light may escape). A
-/// `NaN` balance (a scene that emits nothing) adds nothing.
+/// scene emits, `balance − 1`: an excess always, a deficit only in a `closed`
+/// scene (elsewhere light may escape). A `NaN` balance (a scene that emits
+/// nothing) adds nothing.
+///
+/// Why: no answer absorbs more power than the scene emits, so a leaf system that
+/// does ([`Solver::power_balance`] above 1) has factors that sum above 1 somewhere
+/// (cluster estimates, quadrature), and its answer is too bright on average by
+/// about that excess (in a closed room of one reflectance `ρ`, by exactly `ρ` times
+/// it). A change between levels does not see it, and reflectance amplifies it
+/// (BENCHMARKS.md, "Stiff scenes"). A deficit proves nothing where light may
+/// escape; where every closure ray from the sample points meets a front face
+/// ([`Solver::is_closed`]) the scene absorbs all it emits, and a deficit counts
+/// too.
 fn with_power_error(change: f64, balance: f64, closed: Option<bool>) -> f64 {
     if change.is_nan() || balance.is_nan() {
         return change;

@@ -467,7 +467,23 @@ impl Solver<'_> {
     }
 
     /// Leaf rows: every chain link's source with its coefficient re-integrated over
-    /// the leaf (see module docs).
+    /// the leaf.
+    ///
+    /// The link hierarchy decides *which* sources a leaf gathers from and at what
+    /// level (the links of the leaf and of its ancestors, which cover the scene
+    /// exactly once); each source's coefficient is then integrated over the leaf
+    /// itself, `F = Σ_q w_q F(x_q → A_s) · V(x_q, s)` at its quadrature points with
+    /// the exact inner factor, `V = 1` where a shaft proved the link clear and rays
+    /// from the leaf's own points otherwise ([`Solver::hidden_row_coef`]). Pushing an
+    /// ancestor's irradiance down instead would hand every leaf the ancestor's
+    /// average coupling, far off for a small leaf beside a wall or a block, and
+    /// `ρ → 1` amplifies a row's defect by `1/(1 − ρ)`. At every quadrature point the
+    /// factors of a partition of a closed room sum to 1 exactly, so `B = E/(1 − ρ)`
+    /// holds to round-off. The price: a GMRES step costs the sum of the leaves' chain
+    /// lengths, not the link count. A static solve keeps the surface entries from
+    /// round to round ([`KeptCoef`]); a cluster source's entry is its directional
+    /// estimate at the leaf's points and orientation, recomputed once after each
+    /// solve from the radiosity it depends on (`Solver::refresh_cluster_rows`).
     pub(super) fn compute_leaf_rows(&mut self) {
         self.intern_frame_elements();
         let elems = &self.elems;
@@ -807,6 +823,11 @@ impl Solver<'_> {
     /// in rows balancing leaves unscaled ([`BALANCE_OUT_MAX`]). A space-time solve
     /// keeps what its shared part's last round decided for every frame and window
     /// (`balance_fixed`), so that the light does not jump from frame to frame.
+    ///
+    /// A leaf system within the trigger is solved as it stands: balancing it moves
+    /// its answer both ways and no closer to the path tracer. What rows left
+    /// unscaled miss is lost, and the error estimate and the CLI's warning say so
+    /// (BENCHMARKS.md, "Stiff scenes").
     fn solve_balanced(&mut self) -> Result<f64> {
         if !self.balance_rows() && !self.balance_fixed {
             self.balancing = false;
@@ -1029,8 +1050,8 @@ impl Solver<'_> {
     /// emission or no leaf system yet), from the leaf system as last solved:
     /// `Σ_i A_i (1 − ρ_i) H_i` over `Σ_i A_i E_i`, summed over the channels,
     /// `H_i = Σ_j K_ij B_j` the leaf's row. At most 1 for any exact answer, 1 in a
-    /// closed scene; above 1, the factors make light (module docs, "Light the
-    /// factors make").
+    /// closed scene; above 1, the factors make light (`Solver::run`'s error
+    /// estimate counts it, `with_power_error`).
     pub fn power_balance(&self) -> f64 {
         if self.row_start.len() != self.leaves.len() + 1 {
             return f64::NAN;

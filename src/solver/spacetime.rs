@@ -1,150 +1,43 @@
 //! Space-time solve of an animation whose motion is known, streamed in time order
 //! (Damez & Sillion, "Space-Time Hierarchical Radiosity", EGWR 1999; paper 001).
 //!
-//! **What is shared and what is per time.** The radiosity equation holds at each
-//! instant on its own (paper eq. 1–2: `K` carries `δ(t, t')`), so time only couples
-//! through what a solver can *reuse*. Damez & Sillion's shortcuts (§5.2) say what
-//! does not change: a link whose ends share a motion has a constant kernel, and a
-//! link whose shaft no moving object crosses has constant visibility. Here both are
-//! decided without time sampling, from the boxes the moving objects sweep (the
-//! motion volumes of §7 item 1): a surface link between static ends is **constant**
-//! over a time range if its shaft misses every swept box; a cluster link between
-//! static ends if the box of both ends (which holds its visibility rays) misses every
-//! swept box; a surface link between two surfaces that move as one (one object, or
-//! objects on equal tracks, never rescaled) if the box their corners sweep over the
-//! range meets no box swept by another track and no static triangle's box (its
-//! kernel is the same at every time, and so is its visibility while nothing with
-//! another motion can come between; `Solver::moves_as_one_and_clear`); everything
-//! else is **varying**.
+//! **Constant and varying.** The radiosity equation holds at each instant on its own
+//! (paper eq. 1–2: `K` carries `δ(t, t')`), so time couples only through what can be
+//! *reused*. Per §5.2 a link whose ends share a motion has a constant kernel, and one
+//! whose shaft no moving object crosses has constant visibility; here both are
+//! decided without time sampling, against the boxes the moving objects sweep (the
+//! motion volumes of §7 item 1): over a time range a link is **constant** or
+//! **varying** (`Solver::varying`).
 //!
 //! The solve runs in three stages:
-//! 1. *Shared part*: the usual rounds of refine + solve at the start time, links
-//!    classified against the boxes swept over the whole animation, and only constant
-//!    links refined (and the varying links that have no estimate at all, a cluster's
-//!    self-link or a too-close cluster link, which would otherwise carry no light
-//!    and leave the rounds without a radiosity scale); then the start time is
-//!    solved once with its varying links
-//!    refined, and the constant links are refined again against that radiosity.
-//!    This hierarchy and its coefficients are computed once and kept for every
-//!    window ([`Solver::run_shared`]).
-//! 2. *Windows*, earliest first: the animation's frames (`fps`) are grouped into
-//!    windows of [`WINDOW_KEYS`] key intervals (below), or of `window` seconds. A window
-//!    re-classifies the links against the boxes swept during the window only (a
-//!    link far from where the objects are *now* becomes constant) and refines the
-//!    links that became constant: the window's base. Each frame then starts from
-//!    that base, places the moving objects, re-evaluates and refines the varying
-//!    links only (so the hierarchy near a moving object is as fine as this frame
-//!    needs, not the union over the window), and
-//!    solves the leaf system warm-started from the previous frame. Constant links
-//!    keep their coefficients, leaf-row coefficients (with the entries they open
-//!    into) and final-gather terms for the whole window; a varying link between
-//!    static ends keeps its leaf-row coefficient for the frames where no moving
-//!    object's box meets the shaft between the ends (its rays then meet the same
-//!    static geometry with the same keys) and, for the others, the static part of
-//!    its rays as masks (re-cast at the moving objects only, as the final gather
-//!    below does), and a static leaf keeps its factors to
-//!    the static elements its sources open into. The leaves and links a frame's
-//!    refinement makes are made again by the next frame under other ids; their
-//!    rays are keyed by their place under the shared part (the path of child
-//!    indices, `Solver::ray_id`) and the caches key them by it too, so a static
-//!    leaf a frame made keeps its row like a leaf of the base (and its jitter does
-//!    not change from frame to frame). A static point gathering from a static source through a swept
-//!    box keeps the static half of every ray (a mask, [`crate::oracle::static_clear_mask`])
-//!    and re-casts it against the moving objects only, and only when one of them is
-//!    between the point and the source at that frame. The kept terms are flat
-//!    arenas on the pools' storage (`kept`: out of core on `--storage mmap`); points
-//!    no frame has registered for a while are dropped. What a window keeps can be
-//!    bounded ([`SpaceTimeOptions::kept_budget`]): over the bound, the points the
-//!    last frame did not gather are dropped and new ones are gathered every frame.
+//! 1. *Shared part* ([`Solver::run_shared`]): the usual rounds at the start time,
+//!    links classified over the whole animation and only constant links refined;
+//!    computed once and kept for every window.
+//! 2. *Windows*, earliest first, of [`WINDOW_KEYS`] key intervals, keyframes spaced
+//!    by motion ([`time_layout`]). A window re-classifies the links against the boxes
+//!    swept during it and refines those that became constant; each frame places the
+//!    moving objects, refines only its varying links and solves the leaf system
+//!    warm-started from the frame before (`window.rs`). What holds over the window
+//!    is kept: constant links' coefficients, leaf-row entries (`rows.rs`) and
+//!    final-gather terms (`kept.rs`). Keyframes are reconstructed by a final gather
+//!    at every point; the frames between are solved by bisection ([`solve_order`],
+//!    the paper's time split at the midpoint, §4.3) and take on the line between the
+//!    solved frames around them what they allow, gathering the rest ([`Between`]).
+//! 3. *Release* ([`Solver::release_window`]): the window's leaves go to the output (a
+//!    `.rhier` chunk), the pools are restored to the shared part, so memory does not
+//!    grow with the animation's length; the final-gather terms that still hold are
+//!    the only state handed to the next window (and journaled beside it).
 //!
-//!    *Keyframes.* A window's first and last frames, and frames between them
-//!    spaced by motion (the last frame before a moving object has travelled
-//!    [`SpaceTimeOptions::key_motion`] of the scene's diameter since the keyframe
-//!    before, [`time_layout`]; or every `key_stride`-th frame), are solved and
-//!    reconstructed by a final gather at every point. The paper splits in time where
-//!    the light changes, not every so many frames, so the same motion played over
-//!    twice the frames (its length measure, §6) makes as many keyframes and
-//!    windows here; only the frames between, which mostly interpolate, double. The
-//!    frames between are solved right after the keyframe that ends
-//!    their interval, by bisection ([`solve_order`]: the midpoint first, between
-//!    the two keyframes, then each half's midpoint between its ends, as the paper
-//!    splits elements in time at the midpoint, §4.3). A point whose values at the
-//!    two ends agree, or lie on one line with the frame as far before, takes the
-//!    linear interpolation in time instead of a gather ([`Between`]; the paper's
-//!    elements are constant over a time range, eq. 8, these are linear over one).
-//!    A point on a moving surface keeps its direct light apart: every
-//!    reconstruction computes it (`Solver::direct_light`: exact factors to the
-//!    emitting patches, the gather's rays), and the line and its tests are over the
-//!    rest of its light, the direct light now added
-//!    ([`SpaceTimeOptions::direct_apart`]; a panel sliding past a lamp is lit
-//!    along a bump the line cannot follow, what it gets back from what it lights
-//!    along a far flatter one).
-//!    Only points a moving object's shadow or reflection changes in a way a line
-//!    cannot follow, and cells the frame meshes anew, are gathered, and only in
-//!    the halves where the change is. Those gathers need the frame's radiosity:
-//!    when no moving surface changes the power it hands on between the two
-//!    nearest solved frames (by more than [`SpaceTimeOptions::moving_power_tol`],
-//!    3% of the moving surfaces' total by default), the
-//!    frame skips its leaf solve, places the moving objects and gathers from the
-//!    hierarchy the last solve left, with the shared elements' radiosity
-//!    interpolated between those two frames ([`Solver::place_between`]); otherwise
-//!    (a panel sliding over a lamp changes what light it hands on) it is solved like
-//!    a keyframe, and the halves below it interpolate from it. The bisection stops
-//!    testing below a motion: a frame whose two ends are closer than
-//!    [`SpaceTimeOptions::interp_motion`] (the moving objects travel less than that
-//!    fraction of the scene's diameter between them) takes the line at every point
-//!    both hold and skips its solve ([`Between::free`]), so the same motion over
-//!    twice the frames adds frames that cost a few gathers (cells the ends lack).
-//! 3. *Release*: the window's leaves go to the output (one `.rhier` chunk per
-//!    window; they are kept on the pools' storage as their runs close, so out of
-//!    core on `--storage mmap`, and written without a copy), and everything the
-//!    window added to the pools is dropped; the shared
-//!    part is restored exactly as it was, and memory does not grow with the
-//!    animation's length. What the window kept of the final gather on the shared
-//!    part's elements (static points, static sources) is handed to the next
-//!    window, which keeps what still holds against the boxes its own objects
-//!    sweep ([`Solver::release_window`], `Solver::revalidated`; the paper's "what
-//!    is constant in time is computed once", across windows as within one): a
-//!    window's first keyframe no longer gathers from an empty cache (ACTOR's
-//!    took 1.74–1.77 s, now 1.17–1.46 s, other keyframes 0.5–0.8 s, one
-//!    thread; BENCHMARKS.md). That is the only state one window
-//!    hands the next; the journal keeps it beside each finished window, and a
-//!    resumed solve reads it back and produces the same leaves.
+//! **Elements with time ranges.** A cell whose corners stay within `merge_tol · B_ref`
+//! of their running mean over consecutive frames becomes one leaf with a longer time
+//! range (§4.3, eq. 8–9; `TimeMerge`); a leaf-row entry with a moving end is linear
+//! over a time range where its light allows ([`crate::solver::TimeRange`]).
 //!
-//! **Elements with time ranges.** Each frame's reconstruction cells hold for the
-//! frame's interval `[t_i − Δ/2, t_i + Δ/2)`; within a window, a cell whose corner
-//! values stay within `merge_tol · B_ref` of their running mean over consecutive
-//! frames becomes one leaf with a longer time range and the mean values (the
-//! constant-in-time basis of §4.3, eq. 8–9). Where nothing changes, a window stores
-//! each cell once.
-//!
-//! **How this departs from the paper, and why.** The paper splits *elements* in
-//! time (two children, midpoint) and keeps all time levels in one hierarchy, with
-//! links between elements of overlapping time ranges; its memory is 10–17× a static
-//! frame (§6) and its time sampling of visibility made it only 2–2.5× faster than
-//! frame by frame. Here time is resolved where it changes in two ways instead: the
-//! *coefficients* of varying links are evaluated per frame and those of constant
-//! links once, and the stored *leaves* are merged in time where their values hold.
-//! Light does not flow between different times (no inter-temporal exchange, which
-//! §4.3 notes is an artefact of the discretisation); the reconstruction, the
-//! costliest part, is interpolated in time between keyframes where that holds, and
-//! so is the leaf solve where the moving surfaces' light holds.
-//!
-//! **Interactions over a time range (eq. 8–9).** What the leaf system transports
-//! is its rows' coefficients, so that is where time ranges apply to a varying
-//! interaction. A frame solved between two solved frames (a midpoint of the
-//! bisection whose moving light does not hold) takes each row entry with a moving
-//! end (a moving leaf, or a moving source) on the line between its values at
-//! those two frames when its light changes by at most `interp_tol · B_ref` between
-//! them: the entry is not split in time over the range, and costs no factors and
-//! no rays at the frames in it. Any other entry is split in time there (computed
-//! at the frame, which becomes an end for the halves). Entries between two static
-//! ends stay per frame where a moving object is in the shaft between them (the
-//! transient blocker the paper's shaft test splits in time for, §5.2); where none
-//! is they are constant and kept (above). ([`crate::solver::TimeRange`].) The
-//! links themselves are still evaluated at every solved frame: their coefficients
-//! only choose what the rows gather from, and their evaluation is 3% of ACTOR's
-//! profile.
+//! **How this departs from the paper.** It splits *elements* in time and keeps every
+//! time level in one hierarchy (§6); here varying links are evaluated per frame,
+//! constant ones once, and leaves merged in time where their values hold. No light
+//! flows between times (inter-temporal exchange is an artefact of the discretisation,
+//! §4.3). Compared: BENCHMARKS.md, "Space-time against frame by frame (ACTOR, LIGHT)".
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -716,7 +609,8 @@ impl Run {
 type CellKey = (u32, [[u32; 2]; 4]);
 
 /// Consecutive frames' cells merged into leaves with longer time ranges while their
-/// corners hold within `tol` of the running mean (module docs).
+/// corners hold within `tol` of the running mean (module docs, "Elements with time
+/// ranges"): where nothing changes, a window stores each cell once.
 struct TimeMerge {
     runs: super::FastMap<CellKey, Run>,
     /// Closed leaves, in the order their runs closed: on the pools' storage, so out

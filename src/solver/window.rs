@@ -230,7 +230,12 @@ impl Solver<'_> {
     /// rounds at the current time, with links classified against the boxes the
     /// moving objects sweep over `span` (the whole animation) and only constant
     /// links refined (a varying link stays as coarse as it was created; each window
-    /// refines it for its own frames).
+    /// refines it for its own frames), but for the varying links that have no
+    /// estimate at all (a cluster's self-link, a too-close cluster link), which would
+    /// otherwise carry no light and leave the rounds without a radiosity scale. The
+    /// start time is then solved once with its varying links refined, and the
+    /// constant links refined again against that radiosity. This hierarchy and its
+    /// coefficients are computed once and kept for every window.
     pub fn run_shared(
         &mut self,
         span: [f64; 2],
@@ -288,7 +293,12 @@ impl Solver<'_> {
     /// Drops what the current window added to the pools and restores the shared part
     /// as it was when the window began. The final-gather terms the window kept are
     /// kept for the next window, as they are: [`Solver::begin_window`] keeps those
-    /// on the shared part's elements that still hold there.
+    /// on the shared part's elements that still hold there, so that a window's
+    /// first keyframe does not gather from an empty cache (the paper's "what is
+    /// constant in time is computed once", across windows as within one). They are
+    /// the only state one window hands the next: the journal keeps them beside each
+    /// finished window, and a resumed solve reads them back and makes the same
+    /// leaves.
     pub fn release_window(&mut self) {
         self.reset_frame();
         if let Some(mut w) = self.window.take() {

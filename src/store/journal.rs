@@ -21,10 +21,7 @@
 //! | 56.. | `n` leaves as [`Leaf`] records (96 bytes each, little-endian) |
 //!
 //! Beside the last finished window, `kept-NNNNN.bin` holds the final-gather terms
-//! it hands the next window (`solver::kept`): a 32-byte header (magic `RHIERKPT`,
-//! version, window index, payload length as u64, CRC-32 of the payload, zero) and
-//! the payload. It is written before the window's file and the one before it is
-//! removed after, so a journaled window always has its terms beside it.
+//! it hands the next window (layout and write order: [`Journal::write_kept`]).
 //!
 //! Each is written to a temporary name, fsynced and renamed, so a window file is
 //! either whole or absent. The file `solve.key` holds a fingerprint of the scene and
@@ -34,9 +31,7 @@
 //! solve, naming the first setting that differs, counts
 //! the windows `0, 1, …` up to the first missing one and reads them back one at a
 //! time (memory stays at one window's leaves), checking every field and the CRC (a
-//! damaged window is an error that names the file, not a silent re-solve). A
-//! window is written a block of leaves at a time, the header last, so leaves on
-//! memory-mapped storage are never copied.
+//! damaged window is an error that names the file, not a silent re-solve).
 //! The directory is removed when the `.rhier` file is complete. Nothing in it looks
 //! like a `.rhier` file.
 
@@ -226,6 +221,8 @@ impl Journal {
     /// Records finished window `index` over `time` with its `leaves`, calling
     /// `after_block` after each block of them is written (so that memory-mapped
     /// leaves can hand their pages back, as [`super::Writer::write_chunk_paged`]).
+    /// The leaves are written a block at a time and the header last, so leaves on
+    /// memory-mapped storage are never copied.
     pub fn append_leaves(
         &self,
         index: u32,
@@ -253,10 +250,11 @@ impl Journal {
 
     /// Records the final-gather terms window `index` hands the next one, written
     /// by `payload` (see `PointCache::encode`), as `kept-NNNNN.bin`: a 32-byte
-    /// header (magic `RHIERKPT`, version, window index, payload length, CRC-32 of
-    /// the payload) and the payload. Written before the window's own file, so a
-    /// journaled window always has its terms beside it; the previous window's are
-    /// removed once this window's file is written ([`Journal::drop_kept`]).
+    /// header (magic `RHIERKPT`, version, window index, payload length as u64,
+    /// CRC-32 of the payload, zero) and the payload. Written before the window's own
+    /// file, so a journaled window always has its terms beside it; the previous
+    /// window's are removed once this window's file is written
+    /// ([`Journal::drop_kept`]).
     pub fn write_kept(
         &self,
         index: u32,
