@@ -6,8 +6,8 @@
 //! [`super::nearest`]), the closest point `q` on it, its parameters `(u, v)`
 //! ([`patch_params`]: barycentric for triangles, inverse bilinear for quads), the leaf
 //! of that patch whose domain contains `(u, v)`, and return that leaf's interpolant
-//! [`Leaf::eval`] at `(u, v)` (not an element average). It does not interpolate across
-//! patches: the value is the one leaf's.
+//! [`crate::solution::Leaf::eval`] at `(u, v)` (not an element average). It does not
+//! interpolate across patches: the value is the one leaf's.
 
 use std::path::Path;
 
