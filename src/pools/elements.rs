@@ -9,6 +9,7 @@
 //! more children.
 
 use bytemuck::{Pod, Zeroable};
+use glam::DVec3;
 
 use super::column::{Column, Storage};
 use super::ids::ElementId;
@@ -18,7 +19,8 @@ use crate::{Error, Result};
 #[repr(u8)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ElementKind {
-    /// A group of patches (bounding box in `geom.corners[0..2]`).
+    /// A group of patches (bounding box in `geom.corners[0..2]`, area centroid in
+    /// `geom.corners[2]`).
     Cluster = 0,
     /// A parametric sub-domain of one patch.
     Surface = 1,
@@ -48,8 +50,10 @@ const _: () = assert!(std::mem::size_of::<Node>() == 16);
 ///
 /// Surface: world corners (3 or 4) counter-clockwise seen from the front, their
 /// parameter-space positions, the unit normal, the area. Cluster: `corners[0]` and
-/// `corners[1]` are the box's min and max, `area` the summed area of its patches,
-/// `normal` zero.
+/// `corners[1]` are the box's min and max, `corners[2]` the area centroid of its
+/// patches (where a cluster estimate places the cluster), `area` the summed area of
+/// its patches, `normal` zero, and `uv` the cone that holds its patches' normals
+/// ([`Geom::cluster_cone`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Geom {
@@ -68,6 +72,51 @@ pub struct Geom {
 }
 
 const _: () = assert!(std::mem::size_of::<Geom>() == 168);
+
+impl Geom {
+    /// A cluster's normal cone: a unit axis and the cosine of the half-angle
+    /// within which every normal of its patches lies (`-1`: any direction), kept
+    /// in `uv` (`[ax, ay], [az, cos]`), which a cluster has no use for otherwise.
+    pub fn cluster_cone(&self) -> (DVec3, f64) {
+        let [[x, y], [z, cos], ..] = self.uv;
+        (DVec3::new(x as f64, y as f64, z as f64), cos as f64)
+    }
+
+    /// Sets [`Geom::cluster_cone`]; the cosine is rounded down, so that the cone
+    /// stored in `f32` still holds every normal.
+    pub fn set_cluster_cone(&mut self, axis: DVec3, cos: f64) {
+        let cos = if cos > -1.0 {
+            (cos - 1e-6).max(-1.0)
+        } else {
+            -1.0
+        };
+        self.uv[0] = [axis.x as f32, axis.y as f32];
+        self.uv[1] = [axis.z as f32, cos as f32];
+    }
+}
+
+/// The cone holding the cones `(axis, cos half-angle)` of `parts`, each weighted by
+/// its area for the axis: the area-weighted mean axis, and the widest part's angle
+/// from it plus its own half-angle (cosine `-1` where that passes `π`, or where the
+/// axes cancel).
+pub fn merge_cones(parts: impl Iterator<Item = (DVec3, f64, f64)> + Clone) -> (DVec3, f64) {
+    let sum: DVec3 = parts.clone().map(|(a, _, w)| a * w).sum();
+    let len = sum.length();
+    if !(len > 1e-12) {
+        return (DVec3::Z, -1.0);
+    }
+    let axis = sum / len;
+    let mut widest = 0.0f64;
+    for (a, cos, _) in parts {
+        let angle = axis.dot(a).clamp(-1.0, 1.0).acos() + cos.clamp(-1.0, 1.0).acos();
+        widest = widest.max(angle);
+    }
+    if widest >= std::f64::consts::PI {
+        (axis, -1.0)
+    } else {
+        (axis, widest.cos())
+    }
+}
 
 /// How an element's power leaves it by direction, summed over its surfaces (`B̄` a
 /// surface's largest channel, `A` its area, `n` its unit normal). `repr(C)`, Pod,

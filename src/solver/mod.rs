@@ -189,7 +189,7 @@ use rayon::prelude::*;
 use crate::Result;
 use crate::geometry::{Patches, SceneBvh, cosine_direction, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
-use crate::pools::elements::{Geom, Node};
+use crate::pools::elements::{Geom, Node, merge_cones};
 use crate::pools::links::{Ends, Transport};
 use crate::pools::{
     ElementId, ElementKind, ElementPool, Emission, LinkId, LinkPool, LinkState, Storage,
@@ -280,6 +280,9 @@ const SPLIT_PASSES: usize = 2;
 /// final gather is evaluated.
 pub const CORNER_INSET: f64 = 1e-3;
 
+/// Default [`SolveOptions::cluster_open_ratio`].
+pub const CLUSTER_OPEN_RATIO: f64 = 0.2;
+
 /// Settings of a solve.
 #[derive(Clone, Debug)]
 pub struct SolveOptions {
@@ -353,6 +356,11 @@ pub struct SolveOptions {
     /// never). Gathering big sources' average radiosity lost 2.8% of the light of a
     /// closed room lit by a small lamp (module docs, "Sources larger than they look").
     pub row_open_ratio: f64,
+    /// Leaf rows and final gather: a cluster source whose bounding sphere's radius
+    /// exceeds this times its distance from a point is opened into its children,
+    /// down to surfaces, whose factors are exact; farther clusters take the cluster
+    /// estimate, which overstates a flat source seen close (`Solver::cluster_parts`).
+    pub cluster_open_ratio: f64,
     /// Final gather: a non-emitting source that can hand a point less than this
     /// times the RMS radiosity takes its link's visibility instead of rays (0: rays
     /// always).
@@ -407,6 +415,7 @@ impl Default for SolveOptions {
             leaf_shapes: 0.0,
             near_gap: 0.0,
             row_open_ratio: 0.25,
+            cluster_open_ratio: CLUSTER_OPEN_RATIO,
         }
     }
 }
@@ -436,6 +445,7 @@ impl SolveOptions {
                 ("open_ratio", Some(self.open_ratio)),
                 ("open_spread", Some(self.open_spread)),
                 ("row_open_ratio", Some(self.row_open_ratio)),
+                ("cluster_open_ratio", Some(self.cluster_open_ratio)),
                 ("faint_source", Some(self.faint_source)),
                 ("--split-spread", Some(self.split_spread)),
                 ("--leaf-shapes", Some(self.leaf_shapes)),
@@ -523,6 +533,8 @@ pub struct Solver<'a> {
     row_start: Vec<u32>,
     row_sources: Vec<u32>,
     row_coefs: Vec<f64>,
+    /// Per leaf, how many entries at the end of its row come from cluster sources.
+    row_clusters: Vec<u32>,
     /// In a closed scene, each leaf row's scale `r_i` and each leaf's gain as a
     /// source `g_ℓ` ([`Solver::balance_rows`]; empty elsewhere): the leaf system
     /// transports `r_i K_ij (pull g B)_j`.
@@ -670,6 +682,7 @@ impl<'a> Solver<'a> {
             row_start: Vec::new(),
             row_sources: Vec::new(),
             row_coefs: Vec::new(),
+            row_clusters: Vec::new(),
             row_scale: Vec::new(),
             leaf_gain: Vec::new(),
             balancing: false,
@@ -1399,6 +1412,7 @@ impl<'a> Solver<'a> {
             let node = self.elems.nodes.as_slice()[e];
             let mut lo = DVec3::splat(f64::INFINITY);
             let mut hi = DVec3::splat(f64::NEG_INFINITY);
+            let (mut area, mut moment) = (0.0, DVec3::ZERO);
             for c in node.first_child..node.first_child + node.child_count {
                 let gc = &geoms[c as usize];
                 let k = if gc.patch == u32::MAX {
@@ -1406,14 +1420,40 @@ impl<'a> Solver<'a> {
                 } else {
                     gc.n as usize
                 };
-                for p in &gc.corners[..k] {
-                    lo = lo.min(DVec3::from_array(*p));
-                    hi = hi.max(DVec3::from_array(*p));
+                let corners = gc.corners.map(DVec3::from_array);
+                for &p in &corners[..k] {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
                 }
+                let centroid = if gc.patch == u32::MAX {
+                    corners[2]
+                } else {
+                    crate::geometry::centroid_of(&corners[..k])
+                };
+                area += gc.area;
+                moment += gc.area * centroid;
             }
+            let (axis, cos) = merge_cones(
+                (node.first_child..node.first_child + node.child_count).map(|c| {
+                    let gc = &geoms[c as usize];
+                    if gc.patch == u32::MAX {
+                        let (a, cos) = gc.cluster_cone();
+                        (a, cos, gc.area)
+                    } else {
+                        (DVec3::from_array(gc.normal), 1.0, gc.area)
+                    }
+                }),
+            );
             let g = &mut self.elems.geoms.as_mut_slice()[e];
             g.corners[0] = lo.to_array();
             g.corners[1] = hi.to_array();
+            let centroid = if area > 0.0 {
+                moment / area
+            } else {
+                (lo + hi) * 0.5
+            };
+            g.corners[2] = centroid.to_array();
+            g.set_cluster_cone(axis, cos);
         }
         self.bvh.place(self.scene, t);
         self.moving_now = self.bvh.moving_boxes();
@@ -1555,14 +1595,18 @@ impl<'a> Solver<'a> {
             let gs = &geoms[s as usize];
             let mut f = [0.0f64; 4];
             if gs.patch == u32::MAX {
-                if t.spread >= f32::MAX {
-                    f[..q.count].fill(t.f as f64);
-                } else if t.f > 0.0 {
-                    let k = self.cluster_kernels(&q, n, s);
-                    for (fi, ki) in f.iter_mut().zip(k).take(q.count) {
-                        *fi = ki * t.visibility as f64;
-                    }
+                if t.f > 0.0 {
+                    let vis = t.visibility as f64;
+                    self.cluster_parts(&q, n, s, &mut |e, k| {
+                        let be = b[e as usize];
+                        for (hi, ki) in h.iter_mut().zip(k).take(q.count) {
+                            for c in 0..3 {
+                                hi[c] += ki * vis * be[c] as f64;
+                            }
+                        }
+                    });
                 }
+                continue;
             } else {
                 let ps = oracle::poly(gs);
                 let ns = DVec3::from_array(gs.normal);
@@ -1711,30 +1755,6 @@ fn any_patch_under(elems: &ElementPool, patch_holds: impl Fn(usize) -> bool) -> 
         };
     }
     out
-}
-
-fn b_of(elems: &ElementPool, e: usize) -> f64 {
-    elems.radiosities.as_slice()[e]
-        .iter()
-        .copied()
-        .fold(0.0f32, f32::max) as f64
-}
-
-/// The unoccluded cluster estimate of the factor from point `x` (normal `n`) to
-/// cluster `gs` (centre `c`, bounding radius `r`, directional power `dir`,
-/// radiosity `bs`): Sillion 1995 with the cluster's directional emission
-/// ([`oracle::cluster_emission`]). The receiver's cosine is the bounding sphere's
-/// part above `x`'s horizon ([`clipped_cosine`]), not the centre's: a wall point
-/// level with the centre of a cluster of ceiling and upper walls saw all of it at a
-/// cosine near 0 (the 32 × 32 clutter of `tests/scale.rs` absorbed 0.982 of what it
-/// emits with the centre's cosine, 0.985 with the clipped one).
-fn cluster_kernel(gs: &Geom, c: DVec3, r: f64, dir: &Emission, bs: f64, x: DVec3, n: DVec3) -> f64 {
-    let d = c - x;
-    let d2 = d.length_squared().max(f64::MIN_POSITIVE);
-    let u = d / d2.sqrt();
-    let cos = clipped_cosine(n.dot(u), r * r / d2);
-    let cs = oracle::cluster_emission(gs, dir, bs, -u, SOURCES_BY_POWER);
-    gs.area * cs * cos / (std::f64::consts::PI * d2)
 }
 
 /// The receiver's cosine toward a sphere of angular radius `asin(sqrt(sin2))`

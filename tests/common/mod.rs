@@ -182,3 +182,4 @@ pub fn random_moving_flat_scene(
     }
     Some(scene)
 }
+pub mod shapes;
