@@ -111,6 +111,35 @@ fn the_last_window_is_solved_again_on_resume_from_the_one_before() {
     assert_same_chunks(&a, &b);
 }
 
+/// Regression (issue 46): the journal's fingerprint was spelt out by hand and left
+/// out `--near-gap`, so resuming with another `--near-gap` silently mixed windows
+/// solved under two settings. It is refused now, the setting named, the journal
+/// kept; what changes no result (the thread count, the storage) may change, and the
+/// resumed file has the leaves of the uninterrupted solve.
+#[test]
+fn resume_refuses_another_near_gap_and_takes_other_threads_and_storage() {
+    let dir = tempfile::tempdir().unwrap();
+    let (full, cut) = (dir.path().join("full.rhier"), dir.path().join("cut.rhier"));
+    solve_ok(&full, &["--threads", "2"]);
+    let out = solve(&cut, &["--threads", "1", "--stop-after-windows", "2"]);
+    assert_eq!(out.status.code(), Some(1));
+    let journal = rhier::store::journal::journal_dir(&cut);
+    let out = solve(&cut, &["--resume", "--near-gap", "0.1"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("different solve") && err.contains("near_gap"),
+        "{err}"
+    );
+    assert!(journal.join("window-00001.bin").exists());
+    solve_ok(&cut, &["--resume", "--threads", "2", "--storage", "ram"]);
+    assert!(!journal.exists());
+    assert_same_chunks(
+        &rhier::store::Reader::open(&full).unwrap(),
+        &rhier::store::Reader::open(&cut).unwrap(),
+    );
+}
+
 #[test]
 fn out_of_core_by_default_with_the_leaves_of_ram_and_no_scratch_left() {
     // A space-time solve pages its pools, kept terms and leaves through files in

@@ -1,14 +1,15 @@
-//! Command-line interface: clap derive, one file per subcommand. Error context (anyhow)
-//! is added here and only here; the library returns [`rhier::Error`].
+//! Command-line interface: clap derive, one module per subcommand (`solve` is a
+//! folder: its three ways of solving share one module of arguments, see
+//! [`solve`]). Modules import in one direction: `inspect` and `play` use `probe`'s
+//! printing, `solve`'s modes its `common`, and nothing imports back. Error context
+//! (anyhow) is added here and only here; the library returns [`rhier::Error`].
 
 mod flatland;
 mod inspect;
-mod per_frame;
 mod play;
 mod probe;
 mod reference;
 mod solve;
-mod spacetime;
 
 use clap::{Parser, Subcommand};
 
@@ -23,7 +24,21 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Solve a scene (native JSON, glTF, OBJ; none = the embedded Cornell box).
-    /// (Boxed: its arguments are many times the size of the others'.)
+    ///
+    /// A static scene is refined and solved in rounds, each printed with its cost
+    /// and estimated error, then reconstructed as a mesh of cells whose corners carry
+    /// a final gather. A scene with motion is solved over its whole time domain, in
+    /// time windows that share what does not move (space-time), or frame by frame
+    /// with `--per-frame`. The answer goes to a `.rhier` file that `rhier probe`,
+    /// `play` and `inspect` read back.
+    ///
+    /// The last line of a static solve says how much of the emitted power the
+    /// solution absorbs: no exact answer absorbs more, and a closed scene absorbs all
+    /// of it. A closed scene whose leaf system is off by more than 2% is balanced
+    /// (`leaf system balanced`); what stays off by more than that is warned about. A
+    /// setting outside its domain (`--eps 0`, a NaN) exits with status 1, naming the
+    /// flag, before any work starts. `-h` lists the flags, `--help` explains them.
+    // Boxed: its arguments are many times the size of the others'.
     Solve(Box<solve::Args>),
     /// Radiosity at points from a stored `.rhier` solution.
     Probe(probe::Args),

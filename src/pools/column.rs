@@ -16,7 +16,7 @@ use memmap2::MmapMut;
 use crate::{Error, Result};
 
 /// Where new columns live.
-#[derive(Clone, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Debug, PartialEq, Eq, Default, serde::Serialize)]
 pub enum Storage {
     /// Plain heap memory.
     #[default]

@@ -284,7 +284,7 @@ pub const CORNER_INSET: f64 = 1e-3;
 pub const CLUSTER_OPEN_RATIO: f64 = 0.2;
 
 /// Settings of a solve.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct SolveOptions {
     /// Where the pools live; the default is RAM unless [`Storage::ENV`] says
     /// otherwise.

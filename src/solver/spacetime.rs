@@ -162,7 +162,7 @@ use crate::pools::Column;
 use crate::scene::Scene;
 
 /// Settings of the time dimension.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct SpaceTimeOptions {
     /// Frames per second: the times at which radiosity is solved.
     pub fps: f64,

@@ -3,74 +3,17 @@
 //! chunk per window, with a journal (`OUT.rhier.partial/`) that `--resume` continues
 //! from.
 
-use std::io::IsTerminal;
-use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
 use rhier::playback::{probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
-use rhier::solver::spacetime::{FrameRecord, SpaceTime, SpaceTimeOptions};
+use rhier::solver::spacetime::{FrameRecord, SpaceTime};
 use rhier::solver::{SolveOptions, SolveStats};
-use rhier::store::journal::Journal;
+use rhier::store::journal::{Journal, fingerprint};
 use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
 
-use super::solve::{Args, storage};
-
-/// The time settings the arguments ask for, checked ([`SpaceTimeOptions::validate`]).
-fn options(args: &Args) -> anyhow::Result<SpaceTimeOptions> {
-    let st = SpaceTimeOptions {
-        fps: args.fps,
-        window: args.window,
-        merge_tol: args.merge_tol,
-        kept_budget: args.budget,
-        key_stride: args.key_stride,
-        key_motion: args.key_motion,
-        interp_tol: args.interp_tol,
-        interp_motion: args.interp_motion,
-        moving_power_tol: args.moving_power_tol,
-        direct_apart: !args.whole_light_between,
-    };
-    st.validate()?;
-    Ok(st)
-}
-
-/// What makes two solves produce the same windows: the scene and every setting that
-/// changes a result (not the storage, thread count being part of determinism).
-fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> String {
-    let settings = format!(
-        "eps {} min_size {} power_size {} rays {} corner_rays {} open {} rounds {} tol {} seed {} recon {} {:?} {} contact {} fps {} window {:?} merge {} keys {:?} key motion {} interp {} interp motion {} moving power {} direct apart {} threads {}",
-        opts.eps,
-        opts.min_size,
-        opts.power_size,
-        opts.rays_per_point,
-        opts.corner_rays,
-        opts.open_ratio,
-        opts.max_rounds,
-        opts.tolerance,
-        opts.seed,
-        opts.recon_tol,
-        opts.recon_tol_moving,
-        opts.recon_min_size,
-        opts.contact_meshing,
-        st.fps,
-        st.window,
-        st.merge_tol,
-        st.key_stride,
-        st.key_motion,
-        st.interp_tol,
-        st.interp_motion,
-        st.moving_power_tol,
-        st.direct_apart,
-        rayon::current_num_threads(),
-    );
-    let scene_text = rhier::scene::to_json_string(scene);
-    format!(
-        "rhier space-time journal 3\n{settings}\nscene crc32 {:#010x}, {} bytes\n",
-        crc32fast::hash(scene_text.as_bytes()),
-        scene_text.len()
-    )
-}
+use super::common::Args;
 
 /// Runs the space-time solve of a moving scene.
 pub fn run(
@@ -80,37 +23,35 @@ pub fn run(
     opts: SolveOptions,
     start: Instant,
 ) -> anyhow::Result<()> {
-    let st = options(args)?;
+    let (output, animation) = (&args.output, &args.animation);
+    let st = args.space_time_options()?;
     rhier::solver::spacetime::static_only(&opts)?;
-    if args.reference.is_some() {
+    if output.reference.is_some() {
         anyhow::bail!(
             "--reference measures one static solve; for an animation compare probes at every frame (tools/spacetime_bench.py)"
         );
     }
-    if args.keep_links {
+    if output.keep_links {
         anyhow::bail!(
             "--keep-links: a space-time solve releases each window's links when the window is written; nothing to keep"
         );
     }
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("{stem}.rhier")));
-    let probes = args.probe.as_deref().map(read_probe_points).transpose()?;
-    let key = fingerprint(scene, &opts, &st);
+    let out = output.out_path(stem);
+    let probes = output.probe.as_deref().map(read_probe_points).transpose()?;
+    let key = fingerprint(scene, &opts, &st)?;
     // A device or FIFO (`-o /dev/null`) is written in place at the end (see the
     // store's writer): nothing could be resumed into it, so it gets no journal beside
     // it (which, next to /dev/null, a user could not even create).
     let device = rhier::store::writer::writes_in_place(&out);
     let (journal, done) = if device {
-        if args.resume {
+        if animation.resume {
             anyhow::bail!(
                 "--resume: {} is not a regular file, so no journal was kept for it",
                 out.display()
             );
         }
         (None, 0)
-    } else if args.resume {
+    } else if animation.resume {
         let (j, done) = Journal::resume(&out, &key)?;
         (Some(j), done as usize)
     } else {
@@ -120,18 +61,13 @@ pub fn run(
     // files in the journal directory, beside the output on its file system (a
     // system temp directory may be a RAM-backed tmpfs) and removed with it.
     let opts = SolveOptions {
-        storage: storage(args, true, journal.as_ref().map(|j| j.dir())),
+        storage: args
+            .resources
+            .storage(true, journal.as_ref().map(|j| j.dir())),
         ..opts
     };
-    let quiet = args.quiet;
-    let show_progress =
-        !quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
-    let bar = show_progress.then(|| {
-        let b = indicatif::ProgressBar::new_spinner();
-        b.set_message("shared part");
-        b.enable_steady_tick(std::time::Duration::from_millis(120));
-        b
-    });
+    let quiet = output.quiet;
+    let bar = output.progress("shared part");
     let say = |line: String| match &bar {
         Some(b) => b.println(line),
         None if !quiet => eprintln!("{line}"),
@@ -176,7 +112,7 @@ pub fn run(
     }
     let mut last_residual = 0.0;
     for wi in done..n_windows {
-        if args.stop_after_windows.is_some_and(|k| wi as u32 >= k) {
+        if animation.stop_after_windows.is_some_and(|k| wi as u32 >= k) {
             anyhow::bail!(
                 "stopped after {wi} windows as asked (--stop-after-windows); resume with --resume"
             );
@@ -207,7 +143,7 @@ pub fn run(
                 journal.drop_kept(before)?;
             }
         }
-        if let Some(budget) = args.budget
+        if let Some(budget) = args.resources.budget
             && run.stats.peak_pool_bytes > budget
         {
             say(format!(
@@ -231,7 +167,7 @@ pub fn run(
     writer
         .finish(&stats)
         .with_context(|| format!("writing {}", out.display()))?;
-    if let Some(path) = &args.report {
+    if let Some(path) = &output.report {
         let mut csv = String::from(
             "frame,window,t,seconds,cells,gathered,interpolated,elements,links,varying_links,rays,bytes_pools,bytes_kept,residual\n",
         );
@@ -258,7 +194,7 @@ pub fn run(
         }
         std::fs::write(path, csv).with_context(|| format!("writing {}", path.display()))?;
     }
-    if let (Some(points), Some(path)) = (&probes, &args.probe_out) {
+    if let (Some(points), Some(path)) = (&probes, &output.probe_out) {
         let reader = Reader::open(&out)?;
         let values = probe(&reader, points, scene.time.start)?;
         write_probe_results(path, &values)?;
@@ -277,7 +213,7 @@ pub fn run(
             out.display()
         );
     }
-    if args.stats {
+    if output.stats {
         let mut m = MemoryReport::for_run(stem);
         m.add_pool(
             "shared elements",
