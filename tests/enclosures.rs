@@ -79,25 +79,25 @@ fn closed_shapes_reach_e_over_one_minus_rho_up_to_rho_0_999() {
         "icosphere 2",
         &shapes::icosphere(c, 1.0, 2, true, M),
         &rhos,
-        1.0,
+        0.01,
     );
     check_uniform(
         "icosphere 3",
         &shapes::icosphere(c, 1.0, 3, true, M),
         &rhos,
-        1.0,
+        0.01,
     );
     check_uniform(
         "cylinder",
         &shapes::cylinder(1.0, 2.0, 24, 3, M),
         &rhos,
-        1.0,
+        0.01,
     );
     check_uniform(
         "L-shaped room",
         &shapes::l_room(3.0, 2.5, Tiling::Quads(3), M),
         &rhos,
-        1.0,
+        0.01,
     );
 }
 

@@ -74,47 +74,82 @@ pub struct Geom {
 const _: () = assert!(std::mem::size_of::<Geom>() == 168);
 
 impl Geom {
-    /// A cluster's normal cone: a unit axis and the cosine of the half-angle
-    /// within which every normal of its patches lies (`-1`: any direction), kept
-    /// in `uv` (`[ax, ay], [az, cos]`), which a cluster has no use for otherwise.
-    pub fn cluster_cone(&self) -> (DVec3, f64) {
-        let [[x, y], [z, cos], ..] = self.uv;
-        (DVec3::new(x as f64, y as f64, z as f64), cos as f64)
+    /// A cluster's normal cone ([`Cone`]), kept in `uv` (`[ax, ay], [az, cos],
+    /// [coherence, 0]`), which a cluster has no use for otherwise.
+    pub fn cluster_cone(&self) -> Cone {
+        let [[x, y], [z, cos], [coherence, _], _] = self.uv;
+        Cone {
+            axis: DVec3::new(x as f64, y as f64, z as f64),
+            cos: cos as f64,
+            coherence: coherence as f64,
+        }
     }
 
     /// Sets [`Geom::cluster_cone`]; the cosine is rounded down, so that the cone
     /// stored in `f32` still holds every normal.
-    pub fn set_cluster_cone(&mut self, axis: DVec3, cos: f64) {
-        let cos = if cos > -1.0 {
-            (cos - 1e-6).max(-1.0)
+    pub fn set_cluster_cone(&mut self, c: &Cone) {
+        let cos = if c.cos > -1.0 {
+            (c.cos - 1e-6).max(-1.0)
         } else {
             -1.0
         };
-        self.uv[0] = [axis.x as f32, axis.y as f32];
-        self.uv[1] = [axis.z as f32, cos as f32];
+        self.uv[0] = [c.axis.x as f32, c.axis.y as f32];
+        self.uv[1] = [c.axis.z as f32, cos as f32];
+        self.uv[2] = [c.coherence as f32, 0.0];
     }
 }
 
-/// The cone holding the cones `(axis, cos half-angle)` of `parts`, each weighted by
-/// its area for the axis: the area-weighted mean axis, and the widest part's angle
-/// from it plus its own half-angle (cosine `-1` where that passes `π`, or where the
-/// axes cancel).
-pub fn merge_cones(parts: impl Iterator<Item = (DVec3, f64, f64)> + Clone) -> (DVec3, f64) {
-    let sum: DVec3 = parts.clone().map(|(a, _, w)| a * w).sum();
-    let len = sum.length();
-    if !(len > 1e-12) {
-        return (DVec3::Z, -1.0);
+/// The normals of a set of surfaces ([`Geom::cluster_cone`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cone {
+    /// Unit axis: the direction of the summed vector area `Σ A n`.
+    pub axis: DVec3,
+    /// Cosine of the half-angle about `axis` that holds every normal (`-1`: any).
+    pub cos: f64,
+    /// `|Σ A n| / Σ A`, in `[0, 1]` (1 for coplanar surfaces facing one way), so
+    /// that `area · coherence · axis` is the summed vector area.
+    pub coherence: f64,
+}
+
+impl Cone {
+    /// The cone of one surface of unit normal `n`.
+    pub fn of_normal(n: DVec3) -> Self {
+        Cone {
+            axis: n,
+            cos: 1.0,
+            coherence: 1.0,
+        }
     }
-    let axis = sum / len;
-    let mut widest = 0.0f64;
-    for (a, cos, _) in parts {
-        let angle = axis.dot(a).clamp(-1.0, 1.0).acos() + cos.clamp(-1.0, 1.0).acos();
-        widest = widest.max(angle);
-    }
-    if widest >= std::f64::consts::PI {
-        (axis, -1.0)
-    } else {
-        (axis, widest.cos())
+
+    /// The cone holding the cones of `parts`, each with its area: the axis of the
+    /// summed vector area, the widest part's angle from it plus its own half-angle
+    /// (cosine `-1` where that passes `π`, or where the vector areas cancel).
+    pub fn merge(parts: impl Iterator<Item = (Cone, f64)> + Clone) -> Self {
+        let sum: DVec3 = parts.clone().map(|(c, a)| c.axis * c.coherence * a).sum();
+        let area: f64 = parts.clone().map(|(_, a)| a).sum();
+        let len = sum.length();
+        if !(len > 1e-12 * area) {
+            return Cone {
+                axis: DVec3::Z,
+                cos: -1.0,
+                coherence: 0.0,
+            };
+        }
+        let axis = sum / len;
+        let mut widest = 0.0f64;
+        for (c, _) in parts {
+            let angle = axis.dot(c.axis).clamp(-1.0, 1.0).acos() + c.cos.clamp(-1.0, 1.0).acos();
+            widest = widest.max(angle);
+        }
+        Cone {
+            axis,
+            cos: if widest >= std::f64::consts::PI {
+                -1.0
+            } else {
+                widest.cos()
+            },
+            coherence: (len / area).min(1.0),
+        }
     }
 }
 

@@ -16,7 +16,7 @@ use glam::DVec3;
 
 use crate::Result;
 use crate::geometry::{Patches, Poly};
-use crate::pools::elements::{Geom, Node, merge_cones};
+use crate::pools::elements::{Cone, Geom, Node};
 use crate::pools::{ElementId, ElementKind, ElementPool};
 
 /// Builds the cluster tree and patch roots into an empty pool; returns the root
@@ -119,12 +119,12 @@ fn push_cluster(
         patch: u32::MAX,
         n: 2,
     };
-    let (axis, cos) = merge_cones(
-        members
-            .iter()
-            .map(|&m| (patches.normals[m as usize], 1.0, patches.areas[m as usize])),
-    );
-    geom.set_cluster_cone(axis, cos);
+    geom.set_cluster_cone(&Cone::merge(members.iter().map(|&m| {
+        (
+            Cone::of_normal(patches.normals[m as usize]),
+            patches.areas[m as usize],
+        )
+    })));
     let node = Node {
         parent,
         first_child: 0,

@@ -189,7 +189,7 @@ use rayon::prelude::*;
 use crate::Result;
 use crate::geometry::{Patches, SceneBvh, cosine_direction, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
-use crate::pools::elements::{Geom, Node, merge_cones};
+use crate::pools::elements::{Cone, Geom, Node};
 use crate::pools::links::{Ends, Transport};
 use crate::pools::{
     ElementId, ElementKind, ElementPool, Emission, LinkId, LinkPool, LinkState, Storage,
@@ -533,8 +533,6 @@ pub struct Solver<'a> {
     row_start: Vec<u32>,
     row_sources: Vec<u32>,
     row_coefs: Vec<f64>,
-    /// Per leaf, how many entries at the end of its row come from cluster sources.
-    row_clusters: Vec<u32>,
     /// In a closed scene, each leaf row's scale `r_i` and each leaf's gain as a
     /// source `g_ℓ` ([`Solver::balance_rows`]; empty elsewhere): the leaf system
     /// transports `r_i K_ij (pull g B)_j`.
@@ -682,7 +680,6 @@ impl<'a> Solver<'a> {
             row_start: Vec::new(),
             row_sources: Vec::new(),
             row_coefs: Vec::new(),
-            row_clusters: Vec::new(),
             row_scale: Vec::new(),
             leaf_gain: Vec::new(),
             balancing: false,
@@ -1433,17 +1430,17 @@ impl<'a> Solver<'a> {
                 area += gc.area;
                 moment += gc.area * centroid;
             }
-            let (axis, cos) = merge_cones(
-                (node.first_child..node.first_child + node.child_count).map(|c| {
+            let cone = Cone::merge((node.first_child..node.first_child + node.child_count).map(
+                |c| {
                     let gc = &geoms[c as usize];
-                    if gc.patch == u32::MAX {
-                        let (a, cos) = gc.cluster_cone();
-                        (a, cos, gc.area)
+                    let cone = if gc.patch == u32::MAX {
+                        gc.cluster_cone()
                     } else {
-                        (DVec3::from_array(gc.normal), 1.0, gc.area)
-                    }
-                }),
-            );
+                        Cone::of_normal(DVec3::from_array(gc.normal))
+                    };
+                    (cone, gc.area)
+                },
+            ));
             let g = &mut self.elems.geoms.as_mut_slice()[e];
             g.corners[0] = lo.to_array();
             g.corners[1] = hi.to_array();
@@ -1453,7 +1450,7 @@ impl<'a> Solver<'a> {
                 (lo + hi) * 0.5
             };
             g.corners[2] = centroid.to_array();
-            g.set_cluster_cone(axis, cos);
+            g.set_cluster_cone(&cone);
         }
         self.bvh.place(self.scene, t);
         self.moving_now = self.bvh.moving_boxes();

@@ -49,8 +49,6 @@ pub(super) enum RowMasks {
 struct LeafRow {
     /// The row's entries `(source, coefficient)`.
     row: Vec<(u32, f64)>,
-    /// How many of them, at its end, come from cluster sources.
-    clusters: u32,
     /// New constant-link coefficients for [`Window::rows`].
     fresh: Vec<((u32, u32), (f32, f32))>,
     /// A static solve's coefficients by link, for the next round.
@@ -131,9 +129,9 @@ impl Solver<'_> {
     /// - one whose patches all face every point, and whose bounding sphere subtends
     ///   a half-angle below [`SolveOptions::cluster_open_ratio`] (radius over
     ///   distance), is taken whole: its projected area toward the point is then
-    ///   exactly `N · v` (`N` its power-weighted normal, [`Emission::normal`]), and
-    ///   the estimate placed at its area centroid errs to second order in `r/d`
-    ///   (Sillion 1995's cluster estimate with the cosines it can know);
+    ///   exactly `N · v` (`N` its summed vector area, [`Cone`]), and the estimate
+    ///   placed at its area centroid errs to second order in `r/d` (Sillion
+    ///   1995's cluster estimate with the cosines it can know);
     /// - any other is opened into its children, down to surfaces, which get their
     ///   exact point-to-polygon factor.
     ///
@@ -162,7 +160,8 @@ impl Solver<'_> {
             return;
         }
         let (c, r) = oracle::sphere(gs);
-        let (axis, cos_a) = gs.cluster_cone();
+        let cone = gs.cluster_cone();
+        let (axis, cos_a) = (cone.axis, cone.cos);
         let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
         let ratio = self.opts.cluster_open_ratio;
         // Per point: 1 if every patch faces it, -1 if every patch faces away, 0
@@ -199,11 +198,9 @@ impl Solver<'_> {
             }
             return;
         }
-        // Projected area toward the point per unit area, weighted by power (the
-        // axis powers sum to it); the cone's axis for a cluster that sends nothing.
-        let dir = &elems.directions.as_slice()[s as usize];
-        let power: f64 = dir.axes.iter().map(|&x| x as f64).sum();
-        let nn = DVec3::from_array(dir.normal.map(f64::from));
+        // The patches' vector area seen along `v`: their projected area, since
+        // every one faces the point.
+        let vector_area = gs.area * cone.coherence * axis;
         for (i, (ki, &x)) in k.iter_mut().zip(&q.points).take(q.count).enumerate() {
             if sides[i] < 0 {
                 continue;
@@ -211,50 +208,80 @@ impl Solver<'_> {
             let w = x - c;
             let d2 = w.length_squared();
             let v = w / d2.sqrt();
-            let projected = if power > 0.0 {
-                (nn.dot(v) / power).max(0.0)
-            } else {
-                axis.dot(v).max(0.0)
-            };
+            let projected = vector_area.dot(v).max(0.0);
             let cos = clipped_cosine(-n.dot(v), r * r / d2);
-            *ki = gs.area * projected * cos / (std::f64::consts::PI * d2);
+            *ki = projected * cos / (std::f64::consts::PI * d2);
         }
         part(s, k);
     }
 
-    /// A leaf's row entries for the chain link `t` to cluster `s`: the parts of
-    /// [`Solver::cluster_parts`] with the link's visibility (a surface part opened
-    /// further as [`Solver::push_opened`] opens surface sources). A link too close
-    /// for the cluster estimate carries a Monte Carlo factor averaged over its
-    /// receiver ([`oracle::close_cluster_factor`]); the leaf opens it the same way,
-    /// with that link's visibility. Returns the coefficients' sum.
+    /// A leaf's row entries for the chain link `l` to cluster `s`: the parts of
+    /// [`Solver::cluster_parts`], each a row entry of its own (a surface part
+    /// opened further as [`Solver::push_opened`] opens surface sources). Where the
+    /// link sees its source whole or not at all, so do the parts; where it sees it
+    /// in part, each part's visibility is cast from the leaf's own points (a
+    /// surface as [`Solver::hidden_row_coef`], a cluster as the final gather does,
+    /// [`oracle::point_cluster_visibility`]): the link's fraction is an average
+    /// over its receiver and its whole source, which in an L-shaped room or
+    /// beside a pillar is no part's. A link too close for the cluster estimate
+    /// ([`oracle::close_cluster_factor`]) is opened the same way.
     fn push_cluster(
         &self,
+        leaf: ElementId,
+        l: u32,
         q: &oracle::Samples,
         n: DVec3,
         s: u32,
-        t: &Transport,
         row: &mut Vec<(u32, f64)>,
-    ) -> f64 {
+    ) {
+        let t = &self.links.transports.as_slice()[l as usize];
         let vis = t.visibility as f64;
         if t.f <= 0.0 || vis <= 0.0 {
-            return 0.0;
+            return;
         }
+        let whole = vis >= 1.0;
         let geoms = self.elems.geoms.as_slice();
-        let mut sum = 0.0;
+        let patch = geoms[leaf.ix()].patch;
         self.cluster_parts(q, n, s, &mut |e, k| {
-            let coef: f64 = (0..q.count).map(|i| q.weights[i] * k[i]).sum::<f64>() * vis;
+            let coef: f64 = (0..q.count).map(|i| q.weights[i] * k[i]).sum::<f64>();
             if coef <= 0.0 {
                 return;
             }
-            sum += coef;
-            if geoms[e as usize].patch == u32::MAX {
-                row.push((e, coef));
+            if geoms[e as usize].patch != u32::MAX {
+                let (coef, v) = if whole {
+                    (coef, 1.0)
+                } else {
+                    self.hidden_row_coef(leaf, l, e, q, n, RowMasks::None).0
+                };
+                self.push_opened(q, n, e, coef, v, row, None);
+                return;
+            }
+            let v = if whole {
+                1.0
             } else {
-                self.push_opened(q, n, e, coef, vis, row, None);
+                let m = (self.opts.cluster_rays / q.count as u32).max(1);
+                let key = oracle::hash3(self.opts.seed ^ 0xc105, e as u64, patch as u64);
+                (0..q.count)
+                    .map(|i| {
+                        let (v, _) = oracle::point_cluster_visibility(
+                            &self.elems,
+                            &self.bvh,
+                            q.points[i],
+                            n,
+                            patch,
+                            ElementId(e),
+                            m,
+                            oracle::hash3(key, i as u64, 3),
+                            SOURCES_BY_POWER,
+                        );
+                        q.weights[i] * v
+                    })
+                    .sum()
+            };
+            if v > 0.0 {
+                row.push((e, coef * v));
             }
         });
-        sum
     }
 
     /// A leaf's row coefficient for the partly hidden chain link `l` to surface
@@ -617,15 +644,12 @@ impl Solver<'_> {
                     kept,
                     fresh: Vec::new(),
                 });
-                // Entries from cluster sources go last, apart, so that they can be
-                // made again from the new radiosity (`refresh_cluster_rows`).
-                let mut cluster_row = Vec::new();
                 for l in self.chain_links(leaf) {
                     let t = &tr[l as usize];
                     let s = ends[l as usize].source;
                     let gs = &geoms[s as usize];
                     if gs.patch == u32::MAX {
-                        self.push_cluster(&q, n, s, t, &mut cluster_row);
+                        self.push_cluster(leaf, l, &q, n, s, &mut row);
                         continue;
                     }
                     if let Some(k) = before
@@ -755,11 +779,8 @@ impl Solver<'_> {
                     self.push_opened(&q, n, s, coef, vis, &mut row, memo.as_mut());
                 }
                 kept.sort_unstable_by_key(|x| x.link);
-                let clusters = cluster_row.len() as u32;
-                row.append(&mut cluster_row);
                 LeafRow {
                     row,
-                    clusters,
                     fresh,
                     kept,
                     opened: fresh_opened,
@@ -780,7 +801,6 @@ impl Solver<'_> {
         for (&leaf, out) in leaves.iter().zip(rows) {
             let LeafRow {
                 row,
-                clusters,
                 fresh,
                 kept,
                 opened: fresh_opened,
@@ -823,7 +843,7 @@ impl Solver<'_> {
             if keep_rows {
                 self.row_cache.insert(leaf.0, kept);
             }
-            self.push_row(row, clusters);
+            self.push_row(row);
         }
         self.leaves = leaves;
         self.pass_rows.sort_unstable_by_key(|e| e.0);
@@ -835,17 +855,14 @@ impl Solver<'_> {
         self.row_start.clear();
         self.row_sources.clear();
         self.row_coefs.clear();
-        self.row_clusters.clear();
         self.row_start.push(0);
     }
 
-    /// Appends the next leaf's row, whose last `clusters` entries come from cluster
-    /// sources.
-    fn push_row(&mut self, row: Vec<(u32, f64)>, clusters: u32) {
+    /// Appends the next leaf's row.
+    fn push_row(&mut self, row: Vec<(u32, f64)>) {
         self.row_sources.extend(row.iter().map(|e| e.0));
         self.row_coefs.extend(row.iter().map(|e| e.1));
         self.row_start.push(self.row_sources.len() as u32);
-        self.row_clusters.push(clusters);
     }
 
     /// Applies `A = I − ρ·(rows ∘ pull)` to leaf radiosities `x` (3 per leaf), with
@@ -880,26 +897,14 @@ impl Solver<'_> {
             });
     }
 
-    /// Builds the leaf rows and solves the leaf system; returns the residual.
-    ///
-    /// A cluster source's coefficient follows the cluster's radiosity (its
-    /// directional emission, [`oracle::cluster_emission`]), so rows built before the
-    /// solve carry the radiosity of the hierarchy before this round's refinement:
-    /// on the Cornell blocks that left some cluster coefficients 2% off and the
-    /// leaves up to 1.5e-3 from the fixed point. With cluster sources in the rows,
-    /// their entries are recomputed once from the new radiosity and the system solved
-    /// again (no ray is cast, every other entry is kept); one step reaches the fixed
-    /// point to f32 on that scene (measured: the next step changes nothing).
+    /// Builds the leaf rows and solves the leaf system; returns the residual. The
+    /// rows depend on the geometry and the links only (a cluster's estimate on its
+    /// vector area, not on its radiosity), so one build serves the solve.
     pub(super) fn solve_rows(&mut self) -> Result<f64> {
         self.compute_leaf_rows();
         if !self.balance_fixed {
             self.balancing = false;
         }
-        let residual = self.solve_balanced()?;
-        if !self.rows_have_clusters() {
-            return Ok(residual);
-        }
-        self.refresh_cluster_rows();
         self.solve_balanced()
     }
 
@@ -1087,45 +1092,6 @@ impl Solver<'_> {
         true
     }
 
-    /// Recomputes the cluster-source entries of the leaf rows from the current
-    /// radiosity, as [`Solver::compute_leaf_rows`] makes them, keeping every other
-    /// entry.
-    fn refresh_cluster_rows(&mut self) {
-        let geoms = self.elems.geoms.as_slice();
-        let ends = self.links.ends.as_slice();
-        let tr = self.links.transports.as_slice();
-        let rows: Vec<(Vec<(u32, f64)>, u32)> = self
-            .leaves
-            .par_iter()
-            .enumerate()
-            .map(|(li, &leaf)| {
-                let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
-                let r1 = r1 - self.row_clusters[li] as usize;
-                let mut row: Vec<(u32, f64)> = self.row_sources[r0..r1]
-                    .iter()
-                    .zip(&self.row_coefs[r0..r1])
-                    .map(|(&s, &c)| (s, c))
-                    .collect();
-                let surfaces = row.len();
-                let g = &geoms[leaf.ix()];
-                let q = oracle::samples(g);
-                let n = DVec3::from_array(g.normal);
-                for l in self.chain_links(leaf) {
-                    let s = ends[l as usize].source;
-                    if geoms[s as usize].patch == u32::MAX {
-                        self.push_cluster(&q, n, s, &tr[l as usize], &mut row);
-                    }
-                }
-                let clusters = (row.len() - surfaces) as u32;
-                (row, clusters)
-            })
-            .collect();
-        self.clear_rows();
-        for (row, clusters) in rows {
-            self.push_row(row, clusters);
-        }
-    }
-
     /// The power the leaves absorb over the power the scene emits (`NaN` with no
     /// emission or no leaf system yet), from the leaf system as last solved:
     /// `Σ_i A_i (1 − ρ_i) H_i` over `Σ_i A_i E_i`, summed over the channels,
@@ -1191,11 +1157,6 @@ impl Solver<'_> {
                 (geoms[leaf.ix()].area, self.row_coefs[r0..r1].iter().sum())
             })
             .collect()
-    }
-
-    /// True if some leaf row gathers from a cluster.
-    fn rows_have_clusters(&self) -> bool {
-        self.row_clusters.iter().any(|&c| c > 0)
     }
 
     /// Solves the leaf system with GMRES from the current radiosities; writes the
