@@ -3,6 +3,10 @@
 reference (`rhier reference`). Writes a CSV and prints a table.
 
 usage: tools/cornell_error_vs_time.py RHIER_BINARY OUT_DIR [--paths N] [--threads T]
+                                        [-- SOLVE_ARGS...]
+
+Arguments after `--` go to every `rhier solve` (e.g. `-- --recon-tol 0.02
+--no-contact-meshing`, to measure a setting against the default).
 
 Probe points: a 3 x 3 grid on every published polygon (inset, triangles strictly
 inside), plus, with the
@@ -15,6 +19,7 @@ import json
 import math
 import os
 import subprocess
+import sys
 import time
 
 
@@ -80,7 +85,11 @@ def main():
     ap.add_argument("out")
     ap.add_argument("--paths", type=int, default=100000)
     ap.add_argument("--threads", type=int, default=2)
-    args = ap.parse_args()
+    argv, solve_args = sys.argv[1:], []
+    if "--" in argv:
+        i = argv.index("--")
+        argv, solve_args = argv[:i], argv[i + 1:]
+    args = ap.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
     here = os.path.dirname(os.path.abspath(__file__))
     rows = []
@@ -106,7 +115,7 @@ def main():
             out = os.path.join(args.out, "probe.json")
             flag = ["--blocks"] if blocks else []
             cmd = [args.rhier, "solve", *flag, "--eps", str(eps), "--threads", str(args.threads), "--quiet",
-                   "--probe", ppath, "--probe-out", out, "-o", os.path.join(args.out, "tmp.rhier")]
+                   "--probe", ppath, "--probe-out", out, "-o", os.path.join(args.out, "tmp.rhier"), *solve_args]
             best = None
             for _ in range(3):
                 t0 = time.perf_counter()

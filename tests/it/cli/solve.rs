@@ -1,0 +1,297 @@
+//! The real `rhier` binary: the default job, solve's probe against `rhier probe` on
+//! the file it wrote, `--keep-links`, `--report`, exit codes.
+
+use std::process::Command;
+
+use crate::common::rhier;
+
+/// Runs `cmd` and fails the test with its standard error unless it succeeds.
+fn succeed(cmd: &mut Command) -> std::process::Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+#[test]
+fn default_job_writes_the_cornell_box() {
+    let dir = tempfile::tempdir().unwrap();
+    succeed(rhier().current_dir(dir.path()).arg("--help"));
+    succeed(rhier().current_dir(dir.path()));
+    let file = dir.path().join("cornell.rhier");
+    let reader = rhier::store::Reader::open(&file).unwrap();
+    assert_eq!(reader.patches().len(), 10);
+    assert!(reader.stats().links_active > 0);
+}
+
+#[test]
+fn solve_probe_equals_file_probe_and_report_has_rounds() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = dir.path().join("p.json");
+    std::fs::write(&pts, r#"[{"p":[278,0,278],"n":[0,1,0]},{"p":[0,274,278],"n":[1,0,0]},{"p":[278,548.8,278],"n":[0,-1,0]}]"#).unwrap();
+    let (vals, file, csv) = (
+        dir.path().join("v.json"),
+        dir.path().join("b.rhier"),
+        dir.path().join("r.csv"),
+    );
+    succeed(
+        rhier()
+            .args(["solve", "--blocks", "-q", "--keep-links", "--probe"])
+            .arg(&pts)
+            .arg("--probe-out")
+            .arg(&vals)
+            .arg("--report")
+            .arg(&csv)
+            .arg("-o")
+            .arg(&file),
+    );
+    let from_solve: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&vals).unwrap()).unwrap();
+    let out = succeed(rhier().arg("probe").arg(&file).arg("--points").arg(&pts));
+    let from_file: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (a, b) = (
+        from_solve.as_array().unwrap(),
+        from_file.as_array().unwrap(),
+    );
+    assert_eq!(a.len(), 3);
+    for (x, y) in a.iter().zip(b) {
+        for k in 0..3 {
+            let (x, y) = (x["B"][k].as_f64().unwrap(), y["B"][k].as_f64().unwrap());
+            assert!((x - y).abs() <= 1e-12 * x.abs().max(1.0), "{x} vs {y}");
+        }
+    }
+    // The lamp point reads at least its exitance; the floor under the lamp is lit.
+    assert!(a[2]["B"][0].as_f64().unwrap() >= 17.0);
+    assert!(a[0]["B"][0].as_f64().unwrap() > 0.1);
+    // Links kept: every link of the run, active and passive.
+    let reader = rhier::store::Reader::open(&file).unwrap();
+    let links = reader.links().unwrap();
+    let stats = reader.stats();
+    assert_eq!(links.len() as u64, stats.links_active + stats.links_passive);
+    assert_eq!(
+        links.iter().filter(|l| l.active == 1).count() as u64,
+        stats.links_active
+    );
+    let csv = std::fs::read_to_string(&csv).unwrap();
+    assert!(csv.starts_with("round,seconds,elements"));
+    assert!(csv.lines().count() >= 2);
+}
+
+#[test]
+fn bad_input_exits_1_and_bad_usage_exits_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.json");
+    std::fs::write(&bad, r#"{"rhier_scene": 1, "materials": {}, "objects": [{"name": "o", "polygons": [{"vertices": [[0,0,0],[1,0,0],[0,1,0]], "material": "nope"}]}]}"#).unwrap();
+    let out = rhier()
+        .arg("solve")
+        .arg(&bad)
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.json") && err.contains("nope"), "{err}");
+    assert!(!dir.path().join("bad.rhier").exists());
+    let out = rhier().args(["solve", "--eps"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let out = rhier()
+        .args(["solve", "/nonexistent/scene.json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+}
+
+#[test]
+fn mmap_storage_creates_its_scratch_directory_and_gives_the_ram_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let scratch = dir.path().join("not").join("yet");
+    let pts = dir.path().join("p.json");
+    std::fs::write(
+        &pts,
+        r#"[{"p":[278,0,278],"n":[0,1,0]},{"p":[0,274,278],"n":[1,0,0]}]"#,
+    )
+    .unwrap();
+    let run = |extra: &[&str], name: &str| {
+        let vals = dir.path().join(name);
+        succeed(
+            rhier()
+                .current_dir(dir.path())
+                .args([
+                    "solve",
+                    "--builtin",
+                    "cornell",
+                    "-q",
+                    "--threads",
+                    "1",
+                    "--probe",
+                ])
+                .arg(&pts)
+                .arg("--probe-out")
+                .arg(&vals)
+                .args(extra),
+        );
+        std::fs::read_to_string(vals).unwrap()
+    };
+    let mapped = run(
+        &["--storage", "mmap", "--scratch", scratch.to_str().unwrap()],
+        "m.json",
+    );
+    assert!(scratch.is_dir());
+    assert_eq!(mapped, run(&["--storage", "ram"], "r.json"));
+}
+
+/// `RHIER_STORAGE` picks the default backend (CI runs the whole suite once with
+/// `mmap`): a directory that does not exist fails the solve on its first scratch
+/// file, named; a value that names no backend is refused before any work;
+/// `--storage ram` overrides it.
+#[test]
+fn the_storage_variable_names_the_default_backend() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing");
+    let out = dir.path().join("x.rhier");
+    let solve = |env: &str, extra: &[&str]| {
+        rhier()
+            .env("RHIER_STORAGE", env)
+            .args(["solve", "-q", "--eps", "2", "-o"])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = solve(&format!("mmap:{}", missing.display()), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&*missing.to_string_lossy()) && err.contains(".col"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = solve("disk", &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("RHIER_STORAGE: expected ram, mmap or mmap:DIR, found \"disk\""),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = solve(
+        &format!("mmap:{}", missing.display()),
+        &["--storage", "ram"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.exists());
+}
+
+/// `--power-size` reaches the solver: at half the Cornell box's diameter every
+/// receiver is below the power area, refined on power only, and the solve ends
+/// with far fewer links than at the default (measured 429 against 3 670).
+#[test]
+fn power_size_sets_which_receivers_refine_on_power() {
+    let dir = tempfile::tempdir().unwrap();
+    let links = |extra: &[&str]| {
+        let csv = dir.path().join("r.csv");
+        succeed(
+            rhier()
+                .args(["solve", "--blocks", "-q", "-o"])
+                .arg(dir.path().join("b.rhier"))
+                .arg("--report")
+                .arg(&csv)
+                .args(extra),
+        );
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        let col = header.iter().position(|&h| h == "links_active").unwrap();
+        let last = text.lines().last().unwrap();
+        last.split(',').nth(col).unwrap().parse::<u64>().unwrap()
+    };
+    let default = links(&[]);
+    let coarse = links(&["--power-size", "0.5"]);
+    assert!(
+        coarse * 4 < default,
+        "links at --power-size 0.5: {coarse}, at the default: {default}"
+    );
+}
+
+/// Every solver setting is checked before any work: a value outside its domain is
+/// an error (exit 1) naming the flag and the domain, and no output is left. Before
+/// the check, `--eps=-1` refined without end and `--max-rounds 0` ran no round and
+/// wrote an unsolved file. Values that are not numbers stay clap's usage errors (2).
+#[test]
+fn solver_settings_out_of_their_domain_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.rhier");
+    for (arg, code, needle) in [
+        ("--eps=-1", 1, "--eps: expected a finite number > 0"),
+        ("--eps=0", 1, "--eps: expected a finite number > 0"),
+        ("--eps=inf", 1, "--eps: expected a finite number > 0"),
+        (
+            "--min-size=0",
+            1,
+            "--min-size: expected a finite number > 0",
+        ),
+        (
+            "--recon-tol=nan",
+            1,
+            "--recon-tol: expected a finite number > 0",
+        ),
+        (
+            "--power-size=-1",
+            1,
+            "--power-size: expected a finite number >= 0",
+        ),
+        (
+            "--power-size=inf",
+            1,
+            "--power-size: expected a finite number >= 0",
+        ),
+        (
+            "--max-rounds=0",
+            1,
+            "--max-rounds: expected a whole number >= 1",
+        ),
+        (
+            "--split-spread=-0.1",
+            1,
+            "--split-spread: expected a finite number >= 0",
+        ),
+        (
+            "--leaf-shapes=nan",
+            1,
+            "--leaf-shapes: expected a finite number >= 0",
+        ),
+        (
+            "--target-error=0",
+            1,
+            "--target-error: expected a finite number > 0",
+        ),
+        (
+            "--time-budget=-1",
+            1,
+            "--time-budget: expected a finite number >= 0",
+        ),
+        ("--eps=small", 2, "--eps"),
+    ] {
+        // The check comes before the mode is chosen: the same for a static scene,
+        // a moving one (space-time) and the per-frame baseline.
+        for mode in [
+            &["--blocks"][..],
+            &["--builtin", "actor"],
+            &["--builtin", "actor", "--per-frame"],
+        ] {
+            let o = rhier()
+                .args(["solve", "-q", "-o"])
+                .arg(&out)
+                .args(mode)
+                .arg(arg)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(code), "{arg} {mode:?}: {err}");
+            assert!(err.contains(needle), "{arg} {mode:?}: {err}");
+            assert!(!out.exists(), "{arg} {mode:?} left {}", out.display());
+        }
+    }
+}

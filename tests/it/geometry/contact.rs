@@ -1,0 +1,198 @@
+//! Contact meshing on the Cornell box with blocks: the floor is cut along the block
+//! bases, the pieces under the blocks are dropped, and what remains of the floor has
+//! exactly the floor's area minus the two footprints.
+
+use glam::DVec3;
+use rhier::geometry::{Patches, split_at_contacts};
+use rhier::scene::{Material, Object, Scene};
+
+use crate::common;
+
+fn footprint_area(patches: &Patches, floor_y: f64) -> f64 {
+    // Block tops are horizontal quads above the floor facing up; their footprint is
+    // their projection (the Cornell blocks are prisms).
+    (0..patches.len())
+        .filter(|&i| {
+            patches.normals[i].y > 0.99
+                && patches.polys[i].v[0].y > floor_y + 1.0
+                && patches.polys[i].v[0].y < 500.0
+        })
+        .map(|i| patches.areas[i])
+        .sum()
+}
+
+#[test]
+fn floor_is_cut_at_the_block_bases_and_hidden_pieces_dropped() {
+    let scene = rhier::scene::cornell_box(true);
+    let before = Patches::at_time(&scene, 0.0);
+    let (after, stats) = split_at_contacts(&scene, &before, 0.0);
+    assert!(stats.patches_cut >= 1, "{stats:?}");
+    assert!(stats.pieces_hidden >= 2, "{stats:?}");
+    let floor = |p: &Patches| -> f64 {
+        (0..p.len())
+            .filter(|&i| p.normals[i].y > 0.99 && p.polys[i].v[0].y.abs() < 1e-6)
+            .map(|i| p.areas[i])
+            .sum()
+    };
+    let expected = floor(&before) - footprint_area(&before, 0.0);
+    let got = floor(&after);
+    assert!(
+        (got - expected).abs() / expected < 1e-9,
+        "floor area {got} vs {expected}"
+    );
+    // Every piece is a planar triangle or quad facing like its patch.
+    for i in 0..after.len() {
+        assert!(after.polys[i].n == 3 || after.polys[i].n == 4);
+        assert!(after.areas[i] > 0.0);
+    }
+    // Nothing else changed: the walls are not cut (their contacts run along their edges).
+    let walls = |p: &Patches| {
+        (0..p.len())
+            .filter(|&i| p.normals[i].x.abs() > 0.99)
+            .count()
+    };
+    assert_eq!(walls(&before), walls(&after));
+}
+
+/// A 10 × 4 × 10 room with a 3 × 3 grid of boxes on its floor (as
+/// `tools/gen_cubes.py 3`), and a thin two-sided panel (two coincident quads facing
+/// opposite ways) floating at y = 2.
+fn boxes_and_panel() -> Scene {
+    let mut polys = common::closed_box(DVec3::ZERO, DVec3::new(10.0, 4.0, 10.0), 1, |_| 0);
+    let pitch = 3.0;
+    for i in 0..3 {
+        for j in 0..3 {
+            let lo = DVec3::new(0.5 + i as f64 * pitch, 0.0, 0.5 + j as f64 * pitch);
+            let h = 0.05 + 0.3 * (((i * 7 + j * 13) % 11) as f64 / 10.0);
+            let mut faces = common::closed_box(lo, lo + DVec3::new(1.8, h, 1.8), 1, |_| 0);
+            // closed_box faces inwards; a solid's faces look out.
+            for f in &mut faces {
+                f.vertices.reverse();
+            }
+            polys.extend(faces);
+        }
+    }
+    let panel = |flip: bool| {
+        let mut v = vec![
+            DVec3::new(4.0, 2.0, 4.0),
+            DVec3::new(6.0, 2.0, 4.0),
+            DVec3::new(6.0, 2.0, 6.0),
+            DVec3::new(4.0, 2.0, 6.0),
+        ];
+        if flip {
+            v.reverse();
+        }
+        rhier::scene::Polygon {
+            vertices: v,
+            material: rhier::scene::MaterialId(0),
+        }
+    };
+    polys.push(panel(false));
+    polys.push(panel(true));
+    Scene {
+        materials: vec![Material {
+            name: "white".into(),
+            rho: [0.7; 3],
+            emission: [0.0; 3],
+        }],
+        objects: vec![Object {
+            name: "room".into(),
+            polygons: polys,
+            motion: None,
+        }],
+        ..Default::default()
+    }
+}
+
+/// Every box's footprint and its bottom are dropped, whatever the triangulation of
+/// the box top above the footprint's centre (the test ray once ran along the top's
+/// diagonal and missed it for some boxes); the floating two-sided panel is kept.
+#[test]
+fn every_box_on_a_floor_loses_its_footprint_and_its_bottom() {
+    let scene = boxes_and_panel();
+    let before = Patches::at_time(&scene, 0.0);
+    let (after, stats) = split_at_contacts(&scene, &before, 0.0);
+    assert_eq!(stats.pieces_hidden, 18, "{stats:?}");
+    let floor_area: f64 = (0..after.len())
+        .filter(|&i| after.normals[i].y > 0.99 && after.polys[i].v[0].y.abs() < 1e-9)
+        .map(|i| after.areas[i])
+        .sum();
+    let expected = 100.0 - 9.0 * 1.8 * 1.8;
+    assert!(
+        (floor_area - expected).abs() < 1e-9,
+        "floor area {floor_area} vs {expected}"
+    );
+    // The boxes' 6 x and 6 z edge lines (each met by three boxes in a row, and by a
+    // box's bottom and its sides) cut the floor into 7 × 7 rectangles; the 9 under
+    // the boxes are dropped.
+    let floor: Vec<usize> = (0..after.len())
+        .filter(|&i| after.normals[i].y > 0.99 && after.polys[i].v[0].y.abs() < 1e-9)
+        .collect();
+    assert_eq!(floor.len(), 49 - 9);
+    for &i in &floor {
+        let c = after.polys[i].corners();
+        assert_eq!(c.len(), 4, "floor piece {i} is not a rectangle");
+        let (lo, hi) = c
+            .iter()
+            .fold((c[0], c[0]), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        assert!(
+            ((hi.x - lo.x) * (hi.z - lo.z) - after.areas[i]).abs() < 1e-9,
+            "floor piece {i} is not axis-aligned"
+        );
+    }
+    let bottoms = (0..after.len())
+        .filter(|&i| after.normals[i].y < -0.99 && after.polys[i].v[0].y.abs() < 1e-9)
+        .count();
+    assert_eq!(bottoms, 0, "box bottoms left on the floor");
+    let panel_faces = (0..after.len())
+        .filter(|&i| (after.polys[i].v[0].y - 2.0).abs() < 1e-9 && after.normals[i].y.abs() > 0.99)
+        .count();
+    assert_eq!(panel_faces, 2, "the two-sided panel lost a face");
+}
+
+/// The room of `tests/data/hung_lamp_room.json` with its lamp hung `gap` under the
+/// ceiling (y = 4).
+fn hung_lamp_room(gap: f64) -> Scene {
+    let path = std::path::Path::new("tests/data/hung_lamp_room.json");
+    let mut scene = rhier::scene::load(path).unwrap();
+    for v in &mut scene.objects[1].polygons[0].vertices {
+        v.y = 4.0 - gap;
+    }
+    scene
+}
+
+/// A lamp hung 1 cm under a ceiling, its back to it: the ceiling is cut along the
+/// lamp's outline (a covered region, almost unlit, apart from the rest of the
+/// ceiling) and the covered piece is kept, not dropped as the footprint of a solid
+/// would be (a probe there must find the ceiling, not the lamp). Hung lower, where
+/// light reaches under it, the ceiling is left whole.
+#[test]
+fn a_lamp_hung_just_under_the_ceiling_cuts_it_along_its_outline() {
+    let ceiling = |p: &Patches| -> Vec<usize> {
+        (0..p.len())
+            .filter(|&i| p.normals[i].y < -0.99 && (p.polys[i].v[0].y - 4.0).abs() < 1e-9)
+            .collect()
+    };
+    let scene = hung_lamp_room(0.01);
+    let before = Patches::at_time(&scene, 0.0);
+    let (after, stats) = split_at_contacts(&scene, &before, 0.0);
+    assert_eq!(stats.pieces_hidden, 0, "{stats:?}");
+    let pieces = ceiling(&after);
+    assert_eq!(
+        pieces.len(),
+        9,
+        "the lamp's four edges cut the ceiling in a 3 × 3 grid"
+    );
+    let area: f64 = pieces.iter().map(|&i| after.areas[i]).sum();
+    assert!((area - 100.0).abs() < 1e-9, "ceiling area {area}");
+    let covered = pieces.iter().filter(|&&i| {
+        let c = after.polys[i].centroid();
+        (after.areas[i] - 4.0).abs() < 1e-9 && (c.x - 5.0).abs() < 1e-9 && (c.z - 5.0).abs() < 1e-9
+    });
+    assert_eq!(covered.count(), 1, "no piece is exactly the lamp's outline");
+
+    let scene = hung_lamp_room(0.5);
+    let before = Patches::at_time(&scene, 0.0);
+    let (after, _) = split_at_contacts(&scene, &before, 0.0);
+    assert_eq!(ceiling(&after).len(), 1);
+}

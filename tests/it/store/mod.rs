@@ -1,0 +1,8 @@
+//! The `.rhier` file: round trips, committed samples of every version and
+//! corruption, the real solver's output, and no panic or large allocation on any
+//! mutation.
+
+mod fuzz;
+mod roundtrip;
+mod samples;
+mod solve;
