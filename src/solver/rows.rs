@@ -79,11 +79,13 @@ struct FactorMemo<'m> {
 
 /// A closed scene's leaf system is balanced once it absorbs more or less than the
 /// power emitted by this fraction (`Solver::solve_balanced`; the solver module
-/// docs): the factors' few percent then show. ACTOR's room at its own reflectances
-/// absorbs 0.99–1.01 at its last rounds (1.02–1.03 at the first, coarse ones, which
-/// are balanced); with every reflectance 0.9 it absorbs 1.03, at 0.99 1.4–1.7.
+/// docs). With exact surface factors and cluster estimates only where they hold,
+/// what is left is quadrature and visibility noise that reflectance near 1
+/// amplifies by `ρ/(1 − ρ)`: a closed room lit by a lamp hung under its ceiling
+/// absorbs 0.984 at `ρ = 0.99`, a 1.6% deficit the answer carries everywhere, so
+/// the trigger sits at the 1% the known-answer tests hold the answer to.
 /// The CLI warns at the same level.
-pub const BALANCE_TRIGGER: f64 = 0.02;
+pub const BALANCE_TRIGGER: f64 = 0.01;
 /// Most passes of [`Solver::balance_rows`] (a column pass, then a row pass).
 const BALANCE_PASSES: usize = 200;
 /// A row summing to less than this, or more than its inverse, is not scaled.
@@ -239,7 +241,9 @@ impl Solver<'_> {
         if t.f <= 0.0 || vis <= 0.0 {
             return;
         }
-        let whole = vis >= 1.0;
+        let linkvis = std::env::var_os("RHIER_LINKVIS").is_some();
+        let whole = vis >= 1.0 || linkvis;
+        let vis_whole = if linkvis { vis } else { 1.0 };
         let geoms = self.elems.geoms.as_slice();
         let patch = geoms[leaf.ix()].patch;
         self.cluster_parts(q, n, s, &mut |e, k| {
@@ -249,7 +253,7 @@ impl Solver<'_> {
             }
             if geoms[e as usize].patch != u32::MAX {
                 let (coef, v) = if whole {
-                    (coef, 1.0)
+                    (coef * vis_whole, vis_whole)
                 } else {
                     self.hidden_row_coef(leaf, l, e, q, n, RowMasks::None).0
                 };
@@ -257,13 +261,16 @@ impl Solver<'_> {
                 return;
             }
             let v = if whole {
-                1.0
+                vis_whole
             } else {
                 let m = (self.opts.cluster_rays / q.count as u32).max(1);
                 let key = oracle::hash3(self.opts.seed ^ 0xc105, e as u64, patch as u64);
+                // A point whose rays all fall below its horizon or on faces
+                // turned away counts none: it takes the link's fraction, not 0
+                // (the estimate still gives it the part of the sphere above).
                 (0..q.count)
                     .map(|i| {
-                        let (v, _) = oracle::point_cluster_visibility(
+                        let (v, rays) = oracle::point_cluster_visibility(
                             &self.elems,
                             &self.bvh,
                             q.points[i],
@@ -274,7 +281,7 @@ impl Solver<'_> {
                             oracle::hash3(key, i as u64, 3),
                             SOURCES_BY_POWER,
                         );
-                        q.weights[i] * v
+                        q.weights[i] * if rays > 0 { v } else { vis }
                     })
                     .sum()
             };
