@@ -34,6 +34,10 @@ pub enum Error {
     /// A request that cannot be carried out with the given arguments.
     #[error("{0}")]
     Usage(String),
+    /// A solve whose answer cannot be right (its power balance or its linear solve
+    /// says so); the message gives the measures.
+    #[error("{0}")]
+    Unsound(String),
 }
 
 /// Shorthand for results of this crate.

@@ -189,7 +189,7 @@ use rayon::prelude::*;
 use crate::Result;
 use crate::geometry::{Patches, SceneBvh, cosine_direction, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
-use crate::pools::elements::{Geom, Node};
+use crate::pools::elements::{Cone, Geom, Node};
 use crate::pools::links::{Ends, Transport};
 use crate::pools::{
     ElementId, ElementKind, ElementPool, Emission, LinkId, LinkPool, LinkState, Storage,
@@ -280,6 +280,18 @@ const SPLIT_PASSES: usize = 2;
 /// final gather is evaluated.
 pub const CORNER_INSET: f64 = 1e-3;
 
+/// A solve whose leaf system absorbs more than this fraction over the power the
+/// scene emits is refused (`Solver::check_sound`): the CLI warns from
+/// [`BALANCE_TRIGGER`] on, and a closed scene past that is balanced first.
+pub const POWER_EXCESS_MAX: f64 = 0.05;
+/// A solve whose last linear solve stopped above this relative residual is
+/// refused (`Solver::check_sound`): GMRES reaches [`SolveOptions::tolerance`]
+/// (1e-6) on every sound leaf system.
+pub const RESIDUAL_MAX: f64 = 1e-3;
+
+/// Default [`SolveOptions::cluster_open_ratio`].
+pub const CLUSTER_OPEN_RATIO: f64 = 0.2;
+
 /// Settings of a solve.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SolveOptions {
@@ -353,6 +365,11 @@ pub struct SolveOptions {
     /// never). Gathering big sources' average radiosity lost 2.8% of the light of a
     /// closed room lit by a small lamp (module docs, "Sources larger than they look").
     pub row_open_ratio: f64,
+    /// Leaf rows and final gather: a cluster source whose bounding sphere's radius
+    /// exceeds this times its distance from a point is opened into its children,
+    /// down to surfaces, whose factors are exact; farther clusters take the cluster
+    /// estimate, which overstates a flat source seen close (`Solver::cluster_parts`).
+    pub cluster_open_ratio: f64,
     /// Final gather: a non-emitting source that can hand a point less than this
     /// times the RMS radiosity takes its link's visibility instead of rays (0: rays
     /// always).
@@ -407,6 +424,7 @@ impl Default for SolveOptions {
             leaf_shapes: 0.0,
             near_gap: 0.0,
             row_open_ratio: 0.25,
+            cluster_open_ratio: CLUSTER_OPEN_RATIO,
         }
     }
 }
@@ -436,6 +454,7 @@ impl SolveOptions {
                 ("open_ratio", Some(self.open_ratio)),
                 ("open_spread", Some(self.open_spread)),
                 ("row_open_ratio", Some(self.row_open_ratio)),
+                ("cluster_open_ratio", Some(self.cluster_open_ratio)),
                 ("faint_source", Some(self.faint_source)),
                 ("--split-spread", Some(self.split_spread)),
                 ("--leaf-shapes", Some(self.leaf_shapes)),
@@ -885,7 +904,42 @@ impl<'a> Solver<'a> {
         if self.opts.leaf_shapes > 0.0 && !self.has_motion() {
             self.shapes = self.leaf_shapes();
         }
+        if let Some(last) = records.last() {
+            self.check_sound(last.residual)?;
+        }
         Ok(records)
+    }
+
+    /// Refuses an answer that cannot be right: a leaf system that absorbs more
+    /// power than the scene emits by over [`POWER_EXCESS_MAX`] (no exact answer
+    /// absorbs more than is emitted), a closed scene's that absorbs under half of
+    /// it, or a linear solve that stopped with a relative residual over
+    /// [`RESIDUAL_MAX`] (at `ρ = 0.999` an operator whose rows summed 0.13% over 1
+    /// had a spectral radius above 1, and GMRES returned a vector of zeros). The
+    /// error names the measured balance and residual.
+    fn check_sound(&self, residual: f64) -> Result<()> {
+        let balance = self.power_balance();
+        let closed = self.closed == Some(true);
+        let excess = balance > 1.0 + POWER_EXCESS_MAX;
+        let lost = closed && balance < 0.5;
+        if excess || lost || !(residual <= RESIDUAL_MAX) {
+            return Err(crate::Error::Unsound(format!(
+                "the solve cannot be right: its leaf system absorbs {balance:.4} of the \
+                 power the scene emits{} (at most {:.2} is possible{}), and its linear solve \
+                 stopped at a relative residual of {residual:.1e} (at most {RESIDUAL_MAX:.0e} \
+                 expected); no file is written. Reflectances near 1 amplify a small \
+                 error in the form factors: a finer --eps, or reflectances further from 1, \
+                 may help",
+                if closed { " in a closed scene" } else { "" },
+                1.0 + POWER_EXCESS_MAX,
+                if closed {
+                    ", and a closed scene absorbs all of it"
+                } else {
+                    ""
+                },
+            )));
+        }
+        Ok(())
     }
 
     /// The record of round `round` of a run begun at `start`, with the ray and
@@ -994,9 +1048,15 @@ impl<'a> Solver<'a> {
                 let u1 = (h & 0xffff_ffff) as f64 / 4294967296.0;
                 let u2 = (h >> 32) as f64 / 4294967296.0;
                 let dir = cosine_direction(n, u1, u2);
+                // A ray that grazes its own (planar) patch meets it again by
+                // round-off: that is no opening (an icosphere of 320 triangles read
+                // open for one such ray in 8 192, and was never balanced).
                 self.bvh
                     .intersect(smp.x, dir * diam * 2.0, 1e-6, 1.0)
-                    .is_some_and(|hit| self.patches.normals[hit.patch as usize].dot(dir) < 0.0)
+                    .is_some_and(|hit| {
+                        hit.patch == smp.patch
+                            || self.patches.normals[hit.patch as usize].dot(dir) < 0.0
+                    })
             })
         })
     }
@@ -1399,6 +1459,7 @@ impl<'a> Solver<'a> {
             let node = self.elems.nodes.as_slice()[e];
             let mut lo = DVec3::splat(f64::INFINITY);
             let mut hi = DVec3::splat(f64::NEG_INFINITY);
+            let (mut area, mut moment) = (0.0, DVec3::ZERO);
             for c in node.first_child..node.first_child + node.child_count {
                 let gc = &geoms[c as usize];
                 let k = if gc.patch == u32::MAX {
@@ -1406,14 +1467,40 @@ impl<'a> Solver<'a> {
                 } else {
                     gc.n as usize
                 };
-                for p in &gc.corners[..k] {
-                    lo = lo.min(DVec3::from_array(*p));
-                    hi = hi.max(DVec3::from_array(*p));
+                let corners = gc.corners.map(DVec3::from_array);
+                for &p in &corners[..k] {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
                 }
+                let centroid = if gc.patch == u32::MAX {
+                    corners[2]
+                } else {
+                    crate::geometry::centroid_of(&corners[..k])
+                };
+                area += gc.area;
+                moment += gc.area * centroid;
             }
+            let cone = Cone::merge((node.first_child..node.first_child + node.child_count).map(
+                |c| {
+                    let gc = &geoms[c as usize];
+                    let cone = if gc.patch == u32::MAX {
+                        gc.cluster_cone()
+                    } else {
+                        Cone::of_normal(DVec3::from_array(gc.normal))
+                    };
+                    (cone, gc.area)
+                },
+            ));
             let g = &mut self.elems.geoms.as_mut_slice()[e];
             g.corners[0] = lo.to_array();
             g.corners[1] = hi.to_array();
+            let centroid = if area > 0.0 {
+                moment / area
+            } else {
+                (lo + hi) * 0.5
+            };
+            g.corners[2] = centroid.to_array();
+            g.set_cluster_cone(&cone);
         }
         self.bvh.place(self.scene, t);
         self.moving_now = self.bvh.moving_boxes();
@@ -1555,14 +1642,18 @@ impl<'a> Solver<'a> {
             let gs = &geoms[s as usize];
             let mut f = [0.0f64; 4];
             if gs.patch == u32::MAX {
-                if t.spread >= f32::MAX {
-                    f[..q.count].fill(t.f as f64);
-                } else if t.f > 0.0 {
-                    let k = self.cluster_kernels(&q, n, s);
-                    for (fi, ki) in f.iter_mut().zip(k).take(q.count) {
-                        *fi = ki * t.visibility as f64;
-                    }
+                if t.f > 0.0 {
+                    let vis = t.visibility as f64;
+                    self.cluster_parts(&q, n, s, &mut |e, k| {
+                        let be = b[e as usize];
+                        for (hi, ki) in h.iter_mut().zip(k).take(q.count) {
+                            for c in 0..3 {
+                                hi[c] += ki * vis * be[c] as f64;
+                            }
+                        }
+                    });
                 }
+                continue;
             } else {
                 let ps = oracle::poly(gs);
                 let ns = DVec3::from_array(gs.normal);
@@ -1694,7 +1785,6 @@ pub fn solve(scene: &Scene, opts: SolveOptions) -> Result<(Solution, Vec<RoundRe
     Ok((sol, records))
 }
 
-/// Largest channel of element `e`'s radiosity.
 /// Per element of the pool: true if `patch_holds` is true of some patch under it
 /// (its own for a surface). Children come after their parent in the pool, so one
 /// backward pass suffices.
@@ -1711,30 +1801,6 @@ fn any_patch_under(elems: &ElementPool, patch_holds: impl Fn(usize) -> bool) -> 
         };
     }
     out
-}
-
-fn b_of(elems: &ElementPool, e: usize) -> f64 {
-    elems.radiosities.as_slice()[e]
-        .iter()
-        .copied()
-        .fold(0.0f32, f32::max) as f64
-}
-
-/// The unoccluded cluster estimate of the factor from point `x` (normal `n`) to
-/// cluster `gs` (centre `c`, bounding radius `r`, directional power `dir`,
-/// radiosity `bs`): Sillion 1995 with the cluster's directional emission
-/// ([`oracle::cluster_emission`]). The receiver's cosine is the bounding sphere's
-/// part above `x`'s horizon ([`clipped_cosine`]), not the centre's: a wall point
-/// level with the centre of a cluster of ceiling and upper walls saw all of it at a
-/// cosine near 0 (the 32 × 32 clutter of `tests/it/solver/scale.rs` absorbed 0.982 of what it
-/// emits with the centre's cosine, 0.985 with the clipped one).
-fn cluster_kernel(gs: &Geom, c: DVec3, r: f64, dir: &Emission, bs: f64, x: DVec3, n: DVec3) -> f64 {
-    let d = c - x;
-    let d2 = d.length_squared().max(f64::MIN_POSITIVE);
-    let u = d / d2.sqrt();
-    let cos = clipped_cosine(n.dot(u), r * r / d2);
-    let cs = oracle::cluster_emission(gs, dir, bs, -u, SOURCES_BY_POWER);
-    gs.area * cs * cos / (std::f64::consts::PI * d2)
 }
 
 /// The receiver's cosine toward a sphere of angular radius `asin(sqrt(sin2))`

@@ -90,6 +90,7 @@ pub fn uniform_enclosure(rho: f64, e: f64, scale: f64, n: usize) -> Scene {
 #[cfg(unix)]
 pub mod fifo;
 pub mod probe;
+pub mod shapes;
 
 /// Deterministic pseudo-random numbers in [0, 1) (a 64-bit LCG, the high 53 bits).
 pub struct Lcg(pub u64);

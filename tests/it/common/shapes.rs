@@ -1,0 +1,322 @@
+//! Closed shapes and tiled rooms built in code, for known-answer tests: every one is
+//! a closed enclosure (each ray leaving a surface meets a front face), so with one
+//! material of exitance `E` and reflectance `ρ` everywhere the exact radiosity is
+//! `E / (1 − ρ)` at every point, whatever the tiling.
+
+use glam::DVec3;
+use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
+
+/// How a rectangle is cut into polygons.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tiling {
+    /// `n × n` equal quads.
+    Quads(usize),
+    /// `n × n` cells of unequal widths (a geometric progression), each cut into two
+    /// triangles along alternating diagonals.
+    UnequalTriangles(usize),
+    /// `n × n` equal quads, every other row of cells halved again along one edge
+    /// only, so that the rows meet in T-junctions.
+    TJunctions(usize),
+}
+
+/// Breakpoints of `[0, 1]` in `n` steps; `unequal`: widths in the ratio 1 : 1.6 : 1.6² ….
+fn steps(n: usize, unequal: bool) -> Vec<f64> {
+    let w: Vec<f64> = (0..n)
+        .map(|i| if unequal { 1.6f64.powi(i as i32) } else { 1.0 })
+        .collect();
+    let total: f64 = w.iter().sum();
+    let mut at = vec![0.0];
+    for x in &w {
+        at.push(at.last().copied().unwrap_or(0.0) + x / total);
+    }
+    at[n] = 1.0;
+    at
+}
+
+/// The rectangle `o + a u + b v` (`a, b ∈ [0, 1]`, front side `u × v`) cut as `tiling` says.
+pub fn tiled_rect(o: DVec3, u: DVec3, v: DVec3, tiling: Tiling, m: MaterialId) -> Vec<Polygon> {
+    let at = |a: f64, b: f64| o + a * u + b * v;
+    let poly = |vertices: Vec<DVec3>| Polygon {
+        vertices,
+        material: m,
+    };
+    let mut out = Vec::new();
+    match tiling {
+        Tiling::Quads(n) | Tiling::UnequalTriangles(n) => {
+            let tri = matches!(tiling, Tiling::UnequalTriangles(_));
+            let (sa, sb) = (steps(n, tri), steps(n, tri));
+            for i in 0..n {
+                for j in 0..n {
+                    let (a0, a1, b0, b1) = (sa[i], sa[i + 1], sb[j], sb[j + 1]);
+                    let [p00, p10, p11, p01] = [at(a0, b0), at(a1, b0), at(a1, b1), at(a0, b1)];
+                    if !tri {
+                        out.push(poly(vec![p00, p10, p11, p01]));
+                    } else if (i + j) % 2 == 0 {
+                        out.push(poly(vec![p00, p10, p11]));
+                        out.push(poly(vec![p00, p11, p01]));
+                    } else {
+                        out.push(poly(vec![p00, p10, p01]));
+                        out.push(poly(vec![p10, p11, p01]));
+                    }
+                }
+            }
+        }
+        Tiling::TJunctions(n) => {
+            let s = steps(n, false);
+            for j in 0..n {
+                let (b0, b1) = (s[j], s[j + 1]);
+                // Odd rows: each cell halved along `u`, so their corners meet the
+                // even rows' edges in the middle (T-junctions).
+                let cuts: Vec<f64> = if j % 2 == 1 {
+                    steps(2 * n, false)
+                } else {
+                    s.clone()
+                };
+                for w in cuts.windows(2) {
+                    out.push(poly(vec![
+                        at(w[0], b0),
+                        at(w[1], b0),
+                        at(w[1], b1),
+                        at(w[0], b1),
+                    ]));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// An axis-aligned box `[lo, hi]` whose six faces face inwards (`inward`) or
+/// outwards, each tiled as `tiling` says.
+pub fn tiled_box(
+    lo: DVec3,
+    hi: DVec3,
+    tiling: Tiling,
+    inward: bool,
+    m: MaterialId,
+) -> Vec<Polygon> {
+    let d = hi - lo;
+    let (x, y, z) = (DVec3::X * d.x, DVec3::Y * d.y, DVec3::Z * d.z);
+    // Origin, u, v with u × v pointing inwards.
+    let faces = [
+        (lo, x, y),
+        (lo + z, y, x),
+        (lo, y, z),
+        (lo + x, z, y),
+        (lo, z, x),
+        (lo + y, x, z),
+    ];
+    faces
+        .iter()
+        .flat_map(|&(o, u, v)| {
+            if inward {
+                tiled_rect(o, u, v, tiling, m)
+            } else {
+                tiled_rect(o, v, u, tiling, m)
+            }
+        })
+        .collect()
+}
+
+/// An icosphere of radius `r` about `c`: the icosahedron with each triangle cut
+/// into four `level` times (20 · 4^level triangles), vertices on the sphere,
+/// facing inwards (`inward`) or outwards.
+pub fn icosphere(c: DVec3, r: f64, level: u32, inward: bool, m: MaterialId) -> Vec<Polygon> {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let v = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .map(|(a, b, c)| DVec3::new(a, b, c).normalize());
+    let f: [[usize; 3]; 20] = [
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    // Counter-clockwise seen from outside.
+    let mut tris: Vec<[DVec3; 3]> = f.iter().map(|t| t.map(|i| v[i])).collect();
+    for _ in 0..level {
+        tris = tris
+            .iter()
+            .flat_map(|&[a, b, c]| {
+                let (ab, bc, ca) = (
+                    (a + b).normalize(),
+                    (b + c).normalize(),
+                    (c + a).normalize(),
+                );
+                [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+            })
+            .collect();
+    }
+    tris.iter()
+        .map(|t| {
+            let mut vertices: Vec<DVec3> = t.iter().map(|&p| c + r * p).collect();
+            if inward {
+                vertices.reverse();
+            }
+            Polygon {
+                vertices,
+                material: m,
+            }
+        })
+        .collect()
+}
+
+/// A closed cylinder about the `y` axis (radius `r`, height `h`, base at `y = 0`):
+/// `k` quads around, each cut into `rings` along the height, and two caps of `k`
+/// triangles; facing inwards.
+pub fn cylinder(r: f64, h: f64, k: usize, rings: usize, m: MaterialId) -> Vec<Polygon> {
+    let at = |i: usize, y: f64| {
+        let a = std::f64::consts::TAU * i as f64 / k as f64;
+        DVec3::new(r * a.cos(), y, -r * a.sin())
+    };
+    let poly = |vertices: Vec<DVec3>| Polygon {
+        vertices,
+        material: m,
+    };
+    let mut out = Vec::new();
+    for i in 0..k {
+        for j in 0..rings {
+            let (y0, y1) = (
+                h * j as f64 / rings as f64,
+                h * (j + 1) as f64 / rings as f64,
+            );
+            // Counter-clockwise seen from the axis.
+            out.push(poly(vec![
+                at(i, y0),
+                at(i, y1),
+                at(i + 1, y1),
+                at(i + 1, y0),
+            ]));
+        }
+        let (b, top) = (DVec3::ZERO, DVec3::new(0.0, h, 0.0));
+        out.push(poly(vec![b, at(i, 0.0), at(i + 1, 0.0)]));
+        out.push(poly(vec![top, at(i + 1, h), at(i, h)]));
+    }
+    out
+}
+
+/// An L-shaped room of height `h`: the square `[0, 2a]²` less the quarter
+/// `[a, 2a] × [a, 2a]` in `x, z`; floor and ceiling in three `a × a` squares,
+/// each tiled as `tiling` says, walls in `a`-wide panels; facing inwards.
+pub fn l_room(a: f64, h: f64, tiling: Tiling, m: MaterialId) -> Vec<Polygon> {
+    let (x, y, z) = (DVec3::X * a, DVec3::Y * h, DVec3::Z * a);
+    let mut out = Vec::new();
+    for (i, j) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)] {
+        let o = i * x + j * z;
+        out.extend(tiled_rect(o, z, x, tiling, m)); // floor, +y
+        out.extend(tiled_rect(o + y, x, z, tiling, m)); // ceiling, -y
+    }
+    // The outline, counter-clockwise seen from above (+y): each wall panel faces
+    // inwards.
+    let outline = [
+        DVec3::ZERO,
+        2.0 * z,
+        2.0 * z + x,
+        x + z,
+        2.0 * x + z,
+        2.0 * x,
+    ];
+    for i in 0..outline.len() {
+        let (p, q) = (outline[i], outline[(i + 1) % outline.len()]);
+        let panels = ((q - p).length() / a).round() as usize;
+        for s in 0..panels {
+            let (p0, p1) = (
+                p + (q - p) * s as f64 / panels as f64,
+                p + (q - p) * (s + 1) as f64 / panels as f64,
+            );
+            out.extend(tiled_rect(p0, y, p1 - p0, tiling, m));
+        }
+    }
+    out
+}
+
+/// A room `[0, 6] × [0, 3] × [0, 6]` (faces tiled as `tiling` says) with a pillar
+/// `[1, 1.8] × [0, 3] × [1, 1.8]` from floor to ceiling (the floor and ceiling
+/// left whole under it: the pillar's ends are inside it, the pillar's four sides
+/// face out) and a floating box `[3.5, 4.5] × [1, 2] × [3.5, 4.5]` facing out.
+pub fn room_with_pillar_and_box(tiling: Tiling, m: MaterialId) -> Vec<Polygon> {
+    let mut out = tiled_box(DVec3::ZERO, DVec3::new(6.0, 3.0, 6.0), tiling, true, m);
+    let pillar = tiled_box(
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(1.8, 3.0, 1.8),
+        Tiling::Quads(2),
+        false,
+        m,
+    );
+    // Its sides only (the ends lie on the floor and ceiling, facing into the solid).
+    out.extend(pillar.into_iter().filter(|p| {
+        let n = p.area_vector();
+        n.y.abs() < 1e-9 * n.length()
+    }));
+    out.extend(tiled_box(
+        DVec3::new(3.5, 1.0, 3.5),
+        DVec3::new(4.5, 2.0, 4.5),
+        Tiling::Quads(2),
+        false,
+        m,
+    ));
+    out
+}
+
+/// Triangles and quads mixed: a box whose faces alternate between the tilings.
+pub fn mixed_box(lo: DVec3, hi: DVec3, n: usize, m: MaterialId) -> Vec<Polygon> {
+    let quads = tiled_box(lo, hi, Tiling::Quads(n), true, m);
+    let tris = tiled_box(lo, hi, Tiling::UnequalTriangles(n), true, m);
+    let per = |v: &[Polygon]| v.len() / 6;
+    let (q, t) = (per(&quads), per(&tris));
+    (0..6)
+        .flat_map(|f| {
+            if f % 2 == 0 {
+                quads[f * q..(f + 1) * q].to_vec()
+            } else {
+                tris[f * t..(f + 1) * t].to_vec()
+            }
+        })
+        .collect()
+}
+
+/// One object of `polygons` in one material of exitance `e` and reflectance `rho`
+/// (grey).
+pub fn uniform_scene(polygons: Vec<Polygon>, rho: f64, e: f64) -> Scene {
+    Scene {
+        materials: vec![Material {
+            name: "m".into(),
+            rho: [rho; 3],
+            emission: [e; 3],
+        }],
+        objects: vec![Object {
+            name: "enclosure".into(),
+            polygons,
+            motion: None,
+        }],
+        ..Default::default()
+    }
+}
