@@ -379,6 +379,19 @@ impl Solver<'_> {
                 weights: [1.0, 0.0, 0.0, 0.0],
                 count: 1,
             };
+            if std::env::var_os("RHIER_OLDGATHER").is_some() {
+                let dir = &self.elems.directions.as_slice()[s];
+                let (c0, r0) = {
+                    let lo = DVec3::from_array(gs.corners[0]);
+                    let hi = DVec3::from_array(gs.corners[1]);
+                    ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
+                };
+                let f = cluster_kernel(gs, c0, r0, dir, b_of(&self.elems, s), x, n) * vis;
+                if f > 0.0 {
+                    out.fixed.push((s as u32, f));
+                }
+                return;
+            }
             self.cluster_parts(&at, n, s as u32, &mut |e, k| {
                 if k[0] > 0.0 {
                     out.fixed.push((e, k[0] * vis));

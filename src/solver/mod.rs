@@ -1803,6 +1803,32 @@ fn any_patch_under(elems: &ElementPool, patch_holds: impl Fn(usize) -> bool) -> 
     out
 }
 
+#[allow(dead_code)]
+fn b_of(elems: &ElementPool, e: usize) -> f64 {
+    elems.radiosities.as_slice()[e]
+        .iter()
+        .copied()
+        .fold(0.0f32, f32::max) as f64
+}
+
+/// The unoccluded cluster estimate of the factor from point `x` (normal `n`) to
+/// cluster `gs` (centre `c`, bounding radius `r`, directional power `dir`,
+/// radiosity `bs`): Sillion 1995 with the cluster's directional emission
+/// ([`oracle::cluster_emission`]). The receiver's cosine is the bounding sphere's
+/// part above `x`'s horizon ([`clipped_cosine`]), not the centre's: a wall point
+/// level with the centre of a cluster of ceiling and upper walls saw all of it at a
+/// cosine near 0 (the 32 × 32 clutter of `tests/scale.rs` absorbed 0.982 of what it
+/// emits with the centre's cosine, 0.985 with the clipped one).
+#[allow(dead_code)]
+fn cluster_kernel(gs: &Geom, c: DVec3, r: f64, dir: &Emission, bs: f64, x: DVec3, n: DVec3) -> f64 {
+    let d = c - x;
+    let d2 = d.length_squared().max(f64::MIN_POSITIVE);
+    let u = d / d2.sqrt();
+    let cos = clipped_cosine(n.dot(u), r * r / d2);
+    let cs = oracle::cluster_emission(gs, dir, bs, -u, SOURCES_BY_POWER);
+    gs.area * cs * cos / (std::f64::consts::PI * d2)
+}
+
 /// The receiver's cosine toward a sphere of angular radius `asin(sqrt(sin2))`
 /// whose centre is at cosine `cos` from the normal, as the factor of a point
 /// source: `cos` while the whole sphere is above the horizon, else the part above

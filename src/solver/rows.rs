@@ -165,7 +165,7 @@ impl Solver<'_> {
         let cone = gs.cluster_cone();
         let (axis, cos_a) = (cone.axis, cone.cos);
         let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
-        let ratio = self.opts.cluster_open_ratio;
+        let ratio = std::env::var("RHIER_TAU").ok().and_then(|v| v.parse().ok()).unwrap_or(self.opts.cluster_open_ratio);
         // Per point: 1 if every patch faces it, -1 if every patch faces away, 0
         // if the cone and the box cannot tell, or the cluster is near.
         let side = |x: DVec3| -> i32 {
@@ -242,7 +242,7 @@ impl Solver<'_> {
             return;
         }
         let linkvis = std::env::var_os("RHIER_LINKVIS").is_some();
-        let whole = vis >= 1.0 || linkvis;
+        let whole = (vis >= 1.0 && std::env::var_os("RHIER_OWNALL").is_none()) || linkvis;
         let vis_whole = if linkvis { vis } else { 1.0 };
         let geoms = self.elems.geoms.as_slice();
         let patch = geoms[leaf.ix()].patch;
