@@ -241,6 +241,10 @@ impl Solver<'_> {
         if t.f <= 0.0 || vis <= 0.0 {
             return;
         }
+        if t.spread >= f32::MAX && std::env::var_os("RHIER_OLDCLOSE").is_some() {
+            row.push((s, t.f as f64));
+            return;
+        }
         let linkvis = std::env::var_os("RHIER_LINKVIS").is_some();
         let whole = (vis >= 1.0 && std::env::var_os("RHIER_OWNALL").is_none()) || linkvis;
         let vis_whole = if linkvis { vis } else { 1.0 };
