@@ -40,6 +40,7 @@
 //! drives the windows and [`per_frame`] is the frame-by-frame baseline.
 
 mod between;
+pub mod frames;
 mod gather;
 pub mod gmres;
 pub mod hierarchy;

@@ -4,12 +4,8 @@
 //! radiosity algorithm, for each frame, using the same spatial refinement
 //! parameters"), and a reference for it.
 //!
-//! How it works: [`frame_times`] places frame `i` at `t_i = start + i/F`, `i = 0 ..=
-//! floor((end − start)·F)`, and gives it the interval of the times nearer to it than to
-//! any other frame, `[t_i − 1/(2F), t_i + 1/(2F)]` clipped to the time domain (the last
-//! frame's interval reaches the domain's end, so that every time of the domain is
-//! covered by exactly one frame; consecutive intervals share their bounds, computed
-//! once, so that [`crate::solution::Leaf::is_live`] picks exactly one frame at a bound). Each frame is
+//! How it works: [`frame_times`] places the frames and their intervals (the same
+//! frames as space-time's, [`super::frames`]). Each frame is
 //! placed by [`Solver::at_time`] with its leaves labelled with that interval, frozen
 //! ([`Solver::freeze_motion`]: solved as a static scene is, with every shortcut a
 //! static solve takes), run to completion and reconstructed; [`solve_per_frame`]
@@ -25,8 +21,9 @@
 use std::path::Path;
 use std::time::Instant;
 
+pub use super::frames::frame_times;
 use super::{Solution, SolveOptions, SolveStats, Solver};
-use crate::scene::{Scene, TimeDomain};
+use crate::scene::Scene;
 use crate::store::{SolutionHeader, WriteOptions, Writer};
 use crate::{Error, Result};
 
@@ -104,41 +101,6 @@ pub struct PerFrameStats {
     /// frames, the other counters the largest of any frame (what one frame holds in
     /// memory), errors the worst frame's.
     pub stats: SolveStats,
-}
-
-/// Frame times and intervals of `time` at `fps` frames per second (module header).
-/// A static domain (`start == end`) has the single frame `start` over `[start, start]`.
-/// An error if `fps` is not a positive finite number or the domain is not finite.
-pub fn frame_times(time: TimeDomain, fps: f64) -> Result<Vec<(f64, [f64; 2])>> {
-    let (start, end) = (time.start, time.end);
-    if !(fps.is_finite() && fps > 0.0) {
-        return Err(Error::Usage(format!(
-            "--fps: expected a positive number of frames per second, found {fps}"
-        )));
-    }
-    if !(start.is_finite() && end.is_finite() && end >= start) {
-        return Err(Error::Usage(format!(
-            "per-frame solve: expected a finite time domain with start <= end, found [{start}, {end}]"
-        )));
-    }
-    // Tolerate round-off in (end - start) * fps (0.3 s at 10 fps is 3 frames, not 2).
-    let last = ((end - start) * fps + 1e-9).floor();
-    if last > u32::MAX as f64 - 1.0 {
-        return Err(Error::Usage(format!(
-            "per-frame solve: {last} frames at {fps} fps is too many"
-        )));
-    }
-    let n = last as u32 + 1;
-    let t = |i: u32| start + i as f64 / fps;
-    // Bound between frame i and i + 1, computed once for both.
-    let bound = |i: u32| (start + (i as f64 + 0.5) / fps).clamp(start, end);
-    Ok((0..n)
-        .map(|i| {
-            let t0 = if i == 0 { start } else { bound(i - 1) };
-            let t1 = if i + 1 == n { end } else { bound(i) };
-            (t(i).min(end), [t0, t1])
-        })
-        .collect())
 }
 
 /// Solves every frame of `scene` at `fps` (see the module header) with `opts`,
@@ -251,6 +213,7 @@ pub fn write_per_frame(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::TimeDomain;
 
     fn domain(start: f64, end: f64) -> TimeDomain {
         TimeDomain { start, end }

@@ -46,6 +46,8 @@ use std::time::Instant;
 use bytemuck::Zeroable;
 use glam::DVec3;
 
+pub use super::frames::frame_instants;
+use super::frames::frame_range;
 use super::{
     Between, FrameCost, FrameRows, KeyValues, Leaf, RoundRecord, SharedRadiosity, SolveOptions,
     Solver, TimeRange,
@@ -358,24 +360,6 @@ pub struct SpaceTimeStats {
     pub rounds: Vec<RoundRecord>,
     /// RMS reflected radiosity of the shared solution (the error scale).
     pub b_ref: f64,
-}
-
-/// Frame times `start + i / fps`, `i = 0 ..= floor((end − start) · fps)`.
-pub fn frame_times(start: f64, end: f64, fps: f64) -> Vec<f64> {
-    let n = ((end - start) * fps + 1e-9).floor().max(0.0) as u64;
-    (0..=n).map(|i| start + i as f64 / fps).collect()
-}
-
-/// Time range frame `i` (at `start + i / fps`) holds for: half a frame either side,
-/// clipped to the domain. The bounds are computed from the index, so consecutive
-/// frames' ranges meet exactly.
-pub fn frame_range(i: usize, fps: f64, start: f64, end: f64) -> [f64; 2] {
-    let lo = if i == 0 {
-        start
-    } else {
-        start + (i as f64 - 0.5) / fps
-    };
-    [lo.max(start), (start + (i as f64 + 0.5) / fps).min(end)]
 }
 
 /// How far the moving objects of `scene` move between consecutive frames, as a
@@ -784,7 +768,7 @@ impl<'a> SpaceTime<'a> {
         static_only(&opts)?;
         let start = Instant::now();
         let (t_start, t_end) = (scene.time.start, scene.time.end);
-        let times = frame_times(t_start, t_end, st.fps);
+        let times = frame_instants(scene.time, st.fps)?;
         let mut solver = Solver::at_time(scene, opts, t_start, [t_start as f32, t_end as f32])?;
         let motion = frame_motion(scene, &times, solver.patches.diameter);
         let windows = time_layout(&times, &motion, &st);
@@ -884,7 +868,6 @@ impl<'a> SpaceTime<'a> {
         mut on_frame: impl FnMut(&FrameRecord),
     ) -> Result<WindowOutput> {
         let scene = self.solver.scene;
-        let (t_start, t_end) = (scene.time.start, scene.time.end);
         let fps = self.st.fps;
         let WindowPlan {
             times: frames,
@@ -893,8 +876,9 @@ impl<'a> SpaceTime<'a> {
         let first = self.first_frame(wi);
         let b_ref = self.stats.b_ref;
         let tol = self.st.merge_tol * b_ref;
-        let w0 = frame_range(first as usize, fps, t_start, t_end)[0];
-        let w1 = frame_range(first as usize + frames.len() - 1, fps, t_start, t_end)[1];
+        let n = self.windows.iter().map(|w| w.times.len()).sum();
+        let w0 = frame_range(first as usize, n, scene.time, fps)[0];
+        let w1 = frame_range(first as usize + frames.len() - 1, n, scene.time, fps)[1];
         let solver = &mut self.solver;
         solver.set_time(frames[0]);
         solver.begin_window([w0, w1], b_ref)?;
@@ -1036,7 +1020,7 @@ impl<'a> SpaceTime<'a> {
             let n_cells = cells.len() as u64;
             pending.insert(k, cells);
             while let Some(cells) = pending.remove(&next_merge) {
-                let [f0, _] = frame_range(first as usize + next_merge, fps, t_start, t_end);
+                let [f0, _] = frame_range(first as usize + next_merge, n, scene.time, fps);
                 merge.push_frame(&cells, next_merge as u32, f0)?;
                 next_merge += 1;
             }
@@ -1135,6 +1119,11 @@ pub fn solve(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The frame instants of `[start, end]` at `fps`.
+    fn instants(start: f64, end: f64, fps: f64) -> Vec<f64> {
+        frame_instants(crate::scene::TimeDomain { start, end }, fps).unwrap()
+    }
     use crate::pools::Storage;
     use crate::scene::{MaterialId, MotionKey, MotionTrack, Object, Polygon, cornell_box};
 
@@ -1435,7 +1424,7 @@ mod tests {
 
     #[test]
     fn a_short_tail_joins_the_last_window() {
-        let times = frame_times(0.0, 3.0, 25.0);
+        let times = instants(0.0, 3.0, 25.0);
         assert_eq!(times.len(), 76);
         let sizes = |n, window| layout(n, 0.0, Some(window), Some(8)).0;
         assert_eq!(sizes(76, 1.0), [25, 25, 26]);
@@ -1551,7 +1540,7 @@ mod tests {
     fn frame_motion_bounds_what_a_moving_point_travels() {
         use crate::scene::actor_scene;
         let scene = actor_scene(75);
-        let times = frame_times(0.0, 3.0, 25.0);
+        let times = instants(0.0, 3.0, 25.0);
         let diameter = crate::geometry::Patches::at_time(&scene, 0.0).diameter;
         let motion = frame_motion(&scene, &times, diameter);
         assert_eq!(motion.len(), 75);
@@ -1578,7 +1567,7 @@ mod tests {
                 k.t *= 2.0;
             }
         }
-        let slow_times = frame_times(0.0, 6.0, 25.0);
+        let slow_times = instants(0.0, 6.0, 25.0);
         let slow_motion = frame_motion(&slow, &slow_times, diameter);
         let st = SpaceTimeOptions::default();
         let fast = time_layout(&times, &motion, &st);

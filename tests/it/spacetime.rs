@@ -3,12 +3,12 @@
 use glam::{DQuat, DVec3};
 use rhier::geometry::{Patches, SceneBvh};
 use rhier::playback::{ProbePoint, probe};
-use rhier::scene::{MotionKey, MotionTrack, Scene, cornell_box};
+use rhier::scene::{MotionKey, MotionTrack, Scene, TimeDomain, cornell_box};
 use rhier::shafts::Shaft;
 use rhier::solution::relative_rms;
 use rhier::solution::{Leaf, Solution, SolveStats};
 use rhier::solver::spacetime::{
-    self, SpaceTime, SpaceTimeOptions, WindowOutput, frame_times, swept_boxes,
+    self, SpaceTime, SpaceTimeOptions, WindowOutput, frame_instants, swept_boxes,
 };
 use rhier::solver::{SolveOptions, Solver};
 
@@ -168,7 +168,18 @@ fn each_frame_is_as_accurate_as_the_static_solve_of_that_frame() {
     // (another seed): one that shares the coarse solve's rays flatters it.
     let scene = sliding_block(-60.0, 0.8);
     let windows = solve_all(&scene, &st(5.0, 0.4));
-    assert_eq!(frame_times(0.0, 0.8, 5.0).len(), 5);
+    assert_eq!(
+        frame_instants(
+            TimeDomain {
+                start: 0.0,
+                end: 0.8
+            },
+            5.0
+        )
+        .unwrap()
+        .len(),
+        5
+    );
     assert_eq!(
         windows.len(),
         3,
@@ -1025,7 +1036,18 @@ fn frames_closer_in_motion_than_interp_motion_take_the_line() {
         .unwrap()
         .patches
         .diameter;
-    let motion = spacetime::frame_motion(&scene, &frame_times(0.0, 0.8, 10.0), diameter);
+    let motion = spacetime::frame_motion(
+        &scene,
+        &frame_instants(
+            TimeDomain {
+                start: 0.0,
+                end: 0.8,
+            },
+            10.0,
+        )
+        .unwrap(),
+        diameter,
+    );
     let two = motion[0] + motion[1];
     assert!((two - 0.0156).abs() < 1e-3, "{two}");
     let keyed = |fps: f64, stride: u32, interp_motion: f64| {

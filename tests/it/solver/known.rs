@@ -443,7 +443,15 @@ fn a_stiff_closed_room_in_motion_keeps_its_light_at_every_frame() {
         area += patches.areas[p];
     }
     let exact = ae / ((1.0 - rho) * area);
-    for t in spacetime::frame_times(0.0, 1.0, 5.0) {
+    for t in spacetime::frame_instants(
+        rhier::scene::TimeDomain {
+            start: 0.0,
+            end: 1.0,
+        },
+        5.0,
+    )
+    .unwrap()
+    {
         let (mut ab, mut covered) = (0.0, 0.0);
         for l in leaves
             .iter()
