@@ -804,18 +804,18 @@ impl<'a> Solver<'a> {
         if excess || lost || residual.is_nan() || residual > RESIDUAL_MAX {
             return Err(crate::Error::Unsound(format!(
                 "the solve cannot be right: its leaf system absorbs {balance:.4} of the \
-                 power the scene emits{} (at most {:.2} is possible{}), and its linear solve \
-                 stopped at a relative residual of {residual:.1e} (at most {RESIDUAL_MAX:.0e} \
-                 expected); no file is written. Reflectances near 1 amplify a small \
-                 error in the form factors: a finer --eps, or reflectances further from 1, \
-                 may help",
+                 power the scene emits{} (no answer absorbs more than all of it{}; \
+                 {:.2} is tolerated), and its linear solve stopped at a relative residual \
+                 of {residual:.1e} (at most {RESIDUAL_MAX:.0e} expected); no file is \
+                 written. Reflectances near 1 amplify a small error in the form factors: \
+                 a finer --eps, or reflectances further from 1, may help",
                 if closed { " in a closed scene" } else { "" },
-                1.0 + POWER_EXCESS_MAX,
                 if closed {
                     ", and a closed scene absorbs all of it"
                 } else {
                     ""
                 },
+                1.0 + POWER_EXCESS_MAX,
             )));
         }
         Ok(())
