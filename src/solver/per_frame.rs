@@ -9,23 +9,20 @@
 //! placed by [`Solver::at_time`] with its leaves labelled with that interval, frozen
 //! ([`Solver::freeze_motion`]: solved as a static scene is, with every shortcut a
 //! static solve takes), run to completion and reconstructed; [`solve_per_frame`]
-//! hands each frame's [`Solution`] to a callback and drops it, and
-//! [`write_per_frame`] streams the frames' leaves into a `.rhier` file as one chunk
-//! per frame, in time order, through the store's [`Writer`], so memory holds one
-//! frame whatever the animation's length.
+//! hands each frame's [`Solution`] to a callback and drops it, so memory holds one
+//! frame whatever the animation's length (`rhier solve --per-frame` hands each to
+//! the store's `FrameWriter`, one chunk per frame).
 //!
 //! What it does not do: share anything between frames (that is the space-time
 //! solver's job), or interpolate between frames: playback at `t` shows the frame
 //! whose interval holds `t`.
 
-use std::path::Path;
 use std::time::Instant;
 
 pub use super::frames::frame_times;
 use super::{Solution, SolveOptions, SolveStats, Solver};
+use crate::Result;
 use crate::scene::Scene;
-use crate::store::{SolutionHeader, WriteOptions, Writer};
-use crate::{Error, Result};
 
 /// One frame of a per-frame solve: its time, interval and what the solve cost.
 #[derive(Clone, Debug, PartialEq)]
@@ -154,60 +151,6 @@ pub fn solve_per_frame(
         on_frame(&report, &solution)?;
     }
     Ok(total)
-}
-
-/// [`solve_per_frame`] streamed into the `.rhier` file `path`: one chunk per frame
-/// (its interval, its leaves), in time order; `on_frame` sees each frame after its
-/// chunk is written. The file appears only when every frame is written.
-pub fn write_per_frame(
-    path: &Path,
-    scene: &Scene,
-    opts: &SolveOptions,
-    fps: f64,
-    write: WriteOptions,
-    mut on_frame: impl FnMut(&FrameReport, &Solution) -> Result<()>,
-) -> Result<PerFrameStats> {
-    let mut writer: Option<Writer> = None;
-    let mut patch_count = 0;
-    let stats = solve_per_frame(scene, opts, fps, |report, solution| {
-        let w = match &mut writer {
-            Some(w) => {
-                // The patch set does not depend on t (Solver::at_time); a change
-                // would make earlier chunks' patch numbers wrong.
-                if solution.patches.len() != patch_count {
-                    return Err(Error::invalid(
-                        path,
-                        format!("frame {} at t = {}", report.index, report.t),
-                        format!("the {patch_count} patches of frame 0"),
-                        format!("{} patches", solution.patches.len()),
-                    ));
-                }
-                w
-            }
-            None => {
-                patch_count = solution.patches.len();
-                writer.insert(Writer::create(
-                    path,
-                    &SolutionHeader {
-                        scene,
-                        patches: &solution.patches,
-                    },
-                    write,
-                )?)
-            }
-        };
-        w.write_chunk(report.range[0], report.range[1], &solution.leaves)?;
-        on_frame(report, solution)
-    })?;
-    match writer {
-        Some(w) => w.finish(&stats.stats)?,
-        None => {
-            return Err(Error::Usage(
-                "per-frame solve: no frame was solved".to_string(),
-            ));
-        }
-    }
-    Ok(stats)
 }
 
 #[cfg(test)]

@@ -24,4 +24,6 @@ pub use format::{Codec, Header, SectionEntry, SectionKind};
 pub use memory::MemoryReport;
 pub use reader::{Reader, StoredObject};
 pub use records::LinkRecord;
-pub use writer::{SolutionHeader, WriteOptions, Writer, encode_solution, write_solution};
+pub use writer::{
+    FrameWriter, SolutionHeader, WriteOptions, Writer, encode_solution, write_solution,
+};

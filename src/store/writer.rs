@@ -656,6 +656,71 @@ fn whole_domain(solution: &Solution) -> (f64, f64) {
     (solution.scene.time.start, solution.scene.time.end)
 }
 
+/// A `.rhier` file written one frame at a time, as a per-frame solve produces
+/// them: created at the first frame from its patches, each frame one chunk over its
+/// interval, in time order; the file appears only when [`FrameWriter::finish`] is
+/// called after every frame. Memory holds one frame whatever the animation's length.
+pub struct FrameWriter<'p> {
+    path: &'p Path,
+    options: WriteOptions,
+    /// The writer and the patch count of the first frame, once it is in.
+    open: Option<(Writer, usize)>,
+}
+
+impl<'p> FrameWriter<'p> {
+    /// A writer of `path`; nothing is created before the first frame.
+    pub fn new(path: &'p Path, options: WriteOptions) -> Self {
+        FrameWriter {
+            path,
+            options,
+            open: None,
+        }
+    }
+
+    /// Writes frame `index` (at time `t`, holding over `range`) of `scene`. Every
+    /// frame must have the first frame's patches: the chunks' patch numbers refer
+    /// to them.
+    pub fn push(
+        &mut self,
+        scene: &Scene,
+        (index, t, range): (u32, f64, [f64; 2]),
+        solution: &Solution,
+    ) -> Result<()> {
+        let w = match &mut self.open {
+            Some((w, patch_count)) => {
+                if solution.patches.len() != *patch_count {
+                    return Err(Error::invalid(
+                        self.path,
+                        format!("frame {index} at t = {t}"),
+                        format!("the {patch_count} patches of frame 0"),
+                        format!("{} patches", solution.patches.len()),
+                    ));
+                }
+                w
+            }
+            None => {
+                let header = SolutionHeader {
+                    scene,
+                    patches: &solution.patches,
+                };
+                let w = Writer::create(self.path, &header, self.options)?;
+                &mut self.open.insert((w, solution.patches.len())).0
+            }
+        };
+        w.write_chunk(range[0], range[1], &solution.leaves)
+    }
+
+    /// Finishes the file with `stats`; an error if no frame was pushed.
+    pub fn finish(self, stats: &SolveStats) -> Result<()> {
+        match self.open {
+            Some((w, _)) => w.finish(stats),
+            None => Err(Error::Usage(
+                "per-frame solve: no frame was solved".to_string(),
+            )),
+        }
+    }
+}
+
 /// Writes a complete solution as one chunk (a static solve, or a space-time solution
 /// already in memory).
 pub fn write_solution(path: &Path, solution: &Solution, options: WriteOptions) -> Result<()> {

@@ -14,7 +14,7 @@ use rhier::scene::Scene;
 use rhier::solution::Solution;
 use rhier::solver::SolveOptions;
 use rhier::solver::per_frame::{FrameReport, PerFrameStats, solve_per_frame};
-use rhier::store::{SolutionHeader, WriteOptions, Writer};
+use rhier::store::{FrameWriter, WriteOptions};
 
 use super::common::Args;
 
@@ -97,41 +97,11 @@ fn write_frames(
     fps: f64,
     mut on_frame: impl FnMut(&FrameReport) -> rhier::Result<()>,
 ) -> rhier::Result<PerFrameStats> {
-    let mut writer: Option<(Writer, usize)> = None;
-    let stats = solve_per_frame(scene, opts, fps, |report, solution: &Solution| {
-        let w = match &mut writer {
-            Some((w, patch_count)) => {
-                // The patch set does not depend on t (Solver::at_time); a change
-                // would make earlier chunks' patch numbers wrong.
-                if solution.patches.len() != *patch_count {
-                    return Err(Error::invalid(
-                        path,
-                        format!("frame {} at t = {}", report.index, report.t),
-                        format!("the {patch_count} patches of frame 0"),
-                        format!("{} patches", solution.patches.len()),
-                    ));
-                }
-                w
-            }
-            None => {
-                let header = SolutionHeader {
-                    scene,
-                    patches: &solution.patches,
-                };
-                let w = Writer::create(path, &header, WriteOptions::default())?;
-                &mut writer.insert((w, solution.patches.len())).0
-            }
-        };
-        w.write_chunk(report.range[0], report.range[1], &solution.leaves)?;
-        on_frame(report)
+    let mut file = FrameWriter::new(path, WriteOptions::default());
+    let stats = solve_per_frame(scene, opts, fps, |r, solution: &Solution| {
+        file.push(scene, (r.index, r.t, r.range), solution)?;
+        on_frame(r)
     })?;
-    match writer {
-        Some((w, _)) => w.finish(&stats.stats)?,
-        None => {
-            return Err(Error::Usage(
-                "per-frame solve: no frame was solved".to_string(),
-            ));
-        }
-    }
+    file.finish(&stats.stats)?;
     Ok(stats)
 }

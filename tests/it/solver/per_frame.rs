@@ -10,9 +10,9 @@ use glam::DVec3;
 use rhier::playback::{ProbePoint, probe};
 use rhier::scene::{self, MotionKey, MotionTrack, Scene, TimeDomain};
 use rhier::solution::Solution;
-use rhier::solver::per_frame::{FrameReport, frame_times, write_per_frame};
+use rhier::solver::per_frame::{FrameReport, frame_times, solve_per_frame};
 use rhier::solver::{SolveOptions, Solver};
-use rhier::store::{Reader, WriteOptions};
+use rhier::store::{FrameWriter, Reader, WriteOptions};
 
 use crate::common::rhier;
 
@@ -86,18 +86,14 @@ fn solve_to_file(
     path: &Path,
 ) -> (Vec<FrameReport>, Vec<Solution>, Reader) {
     let mut frames = Vec::new();
-    let stats = write_per_frame(
-        path,
-        scene,
-        &coarse(),
-        fps,
-        WriteOptions::default(),
-        |r, s| {
-            frames.push((r.clone(), s.clone()));
-            Ok(())
-        },
-    )
+    let mut file = FrameWriter::new(path, WriteOptions::default());
+    let stats = solve_per_frame(scene, &coarse(), fps, |r, s| {
+        file.push(scene, (r.index, r.t, r.range), s)?;
+        frames.push((r.clone(), s.clone()));
+        Ok(())
+    })
     .unwrap();
+    file.finish(&stats.stats).unwrap();
     assert_eq!(stats.frames as usize, frames.len());
     assert_eq!(
         stats.leaves,
