@@ -406,7 +406,7 @@ impl Solver<'_> {
             Some(sw) if r.m <= 64 && !point_shaft_clear(x, n, gs, sw) => {
                 // The static mask, its visibility and, where a moving object is now
                 // between the point and the source, the visibility now: one pass.
-                let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                let near = !point_shaft_clear(x, n, gs, &self.motion.moving_now);
                 let rays = oracle::masked_rays(&self.bvh, &r, None, near);
                 if rays.mask == 0 {
                     // Hidden by static geometry whatever moves.
@@ -569,6 +569,7 @@ impl Solver<'_> {
         let valid = self.outside_solids(x, n);
         let b = self.elems.radiosities.as_slice();
         let window = self
+            .st
             .window
             .as_ref()
             .filter(|_| !once && !self.elem_moving(leaf));
@@ -586,7 +587,7 @@ impl Solver<'_> {
         // A varying link's visibility and shaft test hold at the time it was
         // evaluated; a frame between keyframes that skips its solve gathers from
         // links evaluated at another time.
-        let links_now = self.links_at == self.now;
+        let links_now = self.st.links_at == self.motion.now;
         for l in self.chain_links(leaf) {
             let t = &tr[l as usize];
             let s = ends[l as usize].source as usize;
@@ -608,7 +609,7 @@ impl Solver<'_> {
                 for t in masked {
                     let gs = &geoms[t.elem as usize];
                     // Rays are only cast where a moving object is now.
-                    let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                    let near = !point_shaft_clear(x, n, gs, &self.motion.moving_now);
                     let v = if near {
                         let ps = oracle::poly(gs);
                         let r = self.gather_rays(x, n, p as u32, gs, &ps, u64::from(t.key));

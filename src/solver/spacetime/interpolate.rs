@@ -4,7 +4,7 @@
 //! time range; here the values are linear over the range).
 //!
 //! Three records of a solved frame, each kept while a frame still to be solved
-//! brackets it ([`super::spacetime`] decides which):
+//! brackets it ([`super`] decides which):
 //! - [`FrameRows`]: the leaf-row entries with a moving end, sorted by what they
 //!   stand for; a frame solved between two takes an entry on the line between
 //!   their values where its light changes by at most a tolerance ([`TimeRange`]).
@@ -23,10 +23,10 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::{ElementId, Emission, Leaf, PointKey, Solver, hierarchy};
 use crate::geometry::{Poly, point_to_polygon};
 use crate::oracle;
 use crate::pools::elements::Geom;
+use crate::solver::{ElementId, Emission, Leaf, PointKey, Solver, hierarchy};
 
 /// The leaf-row entries with a moving end (a moving leaf, or a moving source) of
 /// one solved frame of a space-time window, keyed by what they stand for (the
@@ -35,10 +35,10 @@ use crate::pools::elements::Geom;
 /// range of the frames solved between ([`TimeRange`]). Sorted by key, 24 bytes an
 /// entry.
 #[derive(Clone, Debug, Default)]
-pub struct FrameRows(pub(super) Vec<TimedEntry>);
+pub struct FrameRows(pub(in crate::solver) Vec<TimedEntry>);
 
 /// One entry of [`FrameRows`]: `((leaf, link), (F, visible fraction))`.
-pub(super) type TimedEntry = ((u64, u64), (f32, f32));
+pub(in crate::solver) type TimedEntry = ((u64, u64), (f32, f32));
 
 impl FrameRows {
     /// Number of entries.
@@ -52,7 +52,7 @@ impl FrameRows {
     }
 
     /// Entry `key`, widened.
-    pub(super) fn get(&self, key: &(u64, u64)) -> Option<(f64, f64)> {
+    pub(in crate::solver) fn get(&self, key: &(u64, u64)) -> Option<(f64, f64)> {
         let i = self.0.binary_search_by_key(key, |e| e.0).ok()?;
         let (f, v) = self.0[i].1;
         Some((f64::from(f), f64::from(v)))
@@ -67,7 +67,7 @@ impl FrameRows {
 /// `[a, b]`: the frame takes it on the line between the two (`alpha` of the way
 /// from `a`), instead of its exact factors and rays; any other entry is split in
 /// time at this frame and computed here, and the frame's entries become an end
-/// for the frames between it and `a` or `b` ([`super::spacetime::solve_order`] bisects).
+/// for the frames between it and `a` or `b` ([`super::solve_order`] bisects).
 /// Linear rather than the paper's constant-in-time basis, as the frames between
 /// keyframes are ([`Between`]). Entries between two static ends are never taken:
 /// a moving object in the shaft between them (they are computed per frame only
@@ -88,7 +88,7 @@ pub struct TimeRange {
 impl TimeRange {
     /// Entry `key` on the line between `a` and `b`, if both have it and its light
     /// (`weight · F`) changes by at most `tol` between them.
-    pub(super) fn value(&self, key: &(u64, u64), weight: f64) -> Option<(f64, f64)> {
+    pub(in crate::solver) fn value(&self, key: &(u64, u64), weight: f64) -> Option<(f64, f64)> {
         let (fa, va) = self.a.get(key)?;
         let (fb, vb) = self.b.get(key)?;
         ((fa - fb).abs() * weight <= self.tol)
@@ -100,10 +100,10 @@ impl TimeRange {
 /// ([`Solver::shared_radiosity`]).
 #[derive(Clone, Debug, Default)]
 pub struct SharedRadiosity {
-    pub(super) b: Vec<[f32; 3]>,
-    pub(super) dir: Vec<Emission>,
+    pub(in crate::solver) b: Vec<[f32; 3]>,
+    pub(in crate::solver) dir: Vec<Emission>,
     /// Power (area × max channel) of each moving surface element, in id order.
-    pub(super) moving_power: Vec<f64>,
+    pub(in crate::solver) moving_power: Vec<f64>,
 }
 
 impl SharedRadiosity {
@@ -146,7 +146,9 @@ pub struct KeyValues {
 
 impl KeyValues {
     /// The values gathered at `points` (in any order).
-    pub(super) fn from_points(points: impl Iterator<Item = (PointKey, [f64; 3], bool)>) -> Self {
+    pub(in crate::solver) fn from_points(
+        points: impl Iterator<Item = (PointKey, [f64; 3], bool)>,
+    ) -> Self {
         let mut points: Vec<_> = points
             .map(|(pk, b, ok)| (pk, b.map(|x| x as f32), ok))
             .collect();
@@ -159,7 +161,7 @@ impl KeyValues {
     }
 
     /// Adds the direct light of the points on moving surfaces (in any order).
-    pub(super) fn with_direct(mut self, mut direct: Vec<(PointKey, [f32; 3])>) -> Self {
+    pub(in crate::solver) fn with_direct(mut self, mut direct: Vec<(PointKey, [f32; 3])>) -> Self {
         direct.sort_unstable_by_key(|p| p.0);
         self.direct = direct;
         self
@@ -167,14 +169,14 @@ impl KeyValues {
 
     /// The direct light point `pk` reflected at the frame, if it is on a moving
     /// surface.
-    pub(super) fn direct(&self, pk: &PointKey) -> Option<[f64; 3]> {
+    pub(in crate::solver) fn direct(&self, pk: &PointKey) -> Option<[f64; 3]> {
         let i = self.direct.binary_search_by_key(pk, |p| p.0).ok()?;
         Some(self.direct[i].1.map(f64::from))
     }
 
     /// The value the frame gave point `pk` (gathered or interpolated) and whether it
     /// lay outside every solid.
-    pub(super) fn known(&self, pk: &PointKey) -> Option<([f64; 3], bool)> {
+    pub(in crate::solver) fn known(&self, pk: &PointKey) -> Option<([f64; 3], bool)> {
         let i = self.points.binary_search_by_key(pk, |p| p.0).ok()?;
         let (_, b, ok) = self.points[i];
         Some((b.map(f64::from), ok))
@@ -191,7 +193,7 @@ impl KeyValues {
     /// solids), else the frame's cell holding it, interpolated over its corners'
     /// values less their direct light; `None` if a value or a direct light is
     /// missing.
-    pub(super) fn indirect_at(&self, pk: &PointKey) -> Option<[f64; 3]> {
+    pub(in crate::solver) fn indirect_at(&self, pk: &PointKey) -> Option<[f64; 3]> {
         if let Some((v, ok)) = self.known(pk) {
             let d = self.direct(pk).filter(|_| ok)?;
             return Some(std::array::from_fn(|k| v[k] - d[k]));
@@ -211,7 +213,7 @@ impl KeyValues {
 
     /// The value at point `pk` outside every solid: the frame's own if it had the
     /// point (and it lay outside the solids then), else the frame's cell holding it.
-    pub(super) fn at(&self, pk: &PointKey) -> Option<[f64; 3]> {
+    pub(in crate::solver) fn at(&self, pk: &PointKey) -> Option<[f64; 3]> {
         if let Some((v, true)) = self.known(pk) {
             return Some(v);
         }
@@ -228,12 +230,12 @@ impl KeyValues {
 }
 
 /// A point key's coordinate for the parameter `x` ([`VertexCache::register`]).
-pub(super) fn point_coord(x: f32) -> u32 {
+pub(in crate::solver) fn point_coord(x: f32) -> u32 {
     (x as f64 * (1u64 << 24) as f64).round() as u32
 }
 
 /// The parameter a point key's coordinate stands for ([`VertexCache::register`]).
-pub(super) fn point_param(q: u32) -> f64 {
+pub(in crate::solver) fn point_param(q: u32) -> f64 {
     q as f64 / (1u64 << 24) as f64
 }
 
@@ -281,7 +283,7 @@ pub type Keyframe<'k> = (f64, &'k KeyValues);
 /// interval instead of stepping.
 #[derive(Clone, Copy, Debug)]
 pub struct Between<'k> {
-    /// The moving objects travel less than [`super::spacetime::SpaceTimeOptions::interp_motion`]
+    /// The moving objects travel less than [`super::SpaceTimeOptions::interp_motion`]
     /// between `a` and `b`: a point both know (with the same validity) takes the
     /// line between them whatever its values.
     pub free: bool,
@@ -309,7 +311,7 @@ impl Between<'_> {
     /// [`Solver::direct_light`]): where the frames hold its direct light too, the
     /// line (and the tests above) are over the rest of its light, and its direct
     /// light now is added, else over its whole light.
-    pub(super) fn value(
+    pub(in crate::solver) fn value(
         &self,
         pk: &PointKey,
         outside_now: impl Fn() -> bool,
@@ -388,19 +390,19 @@ struct Missing;
 
 /// An emitting patch as placed at the current time: its index, geometry, polygon
 /// and emission ([`Solver::direct_light`]).
-pub(super) type Emitter = (u32, Geom, Poly, [f64; 3]);
+pub(in crate::solver) type Emitter = (u32, Geom, Poly, [f64; 3]);
 
 /// Most emitting patches [`Solver::direct_light`] is computed over. Each costs a
 /// factor and the final gather's rays to an emitter (32 by default) at every point
 /// on a moving surface at every frame; a scene lit by more (an emissive mesh of many
 /// triangles) takes the line over the whole light of its moving points, as with
-/// [`super::spacetime::SpaceTimeOptions::direct_apart`] off, rather than pay that.
-pub(super) const MAX_DIRECT_EMITTERS: usize = 16;
+/// [`super::SpaceTimeOptions::direct_apart`] off, rather than pay that.
+pub(in crate::solver) const MAX_DIRECT_EMITTERS: usize = 16;
 
 impl Solver<'_> {
     /// The emitting patches as placed now, for [`Solver::direct_light`]; `None` if
     /// there are more than [`MAX_DIRECT_EMITTERS`].
-    pub(super) fn emitters_now(&self) -> Option<Vec<Emitter>> {
+    pub(in crate::solver) fn emitters_now(&self) -> Option<Vec<Emitter>> {
         let lit: Vec<usize> = (0..self.patches.len())
             .filter(|&p| self.patches.emissions[p].iter().any(|&e| e > 0.0))
             .take(MAX_DIRECT_EMITTERS + 1)
@@ -425,7 +427,7 @@ impl Solver<'_> {
     /// passes a lamp (a panel sliding 45 cm in front of one: the inverse square and
     /// the cosines); a frame between two solved frames takes the line over the rest
     /// only ([`Between::value`]).
-    pub(super) fn direct_light(
+    pub(in crate::solver) fn direct_light(
         &self,
         x: DVec3,
         n: DVec3,
@@ -470,14 +472,14 @@ impl Solver<'_> {
     /// moving end those frames take where they hold ([`TimeRange`]); `None`: every
     /// entry is computed (a keyframe).
     pub fn set_time_range(&mut self, range: Option<TimeRange>) {
-        self.time_range = range;
+        self.st.time_range = range;
     }
 
     /// The row entries with a moving end of the frame solved last (computed, or
     /// taken from its [`TimeRange`]), for the frames to be solved between it and
     /// another.
     pub fn take_frame_rows(&mut self) -> FrameRows {
-        let mut rows = std::mem::take(&mut self.frame_rows);
+        let mut rows = std::mem::take(&mut self.st.frame_rows);
         rows.0.sort_unstable_by_key(|e| e.0);
         rows.0.shrink_to_fit();
         rows
@@ -489,7 +491,7 @@ impl Solver<'_> {
     /// `B_a + alpha · (B_b − B_a)` between two solved frames' values `a` and `b`
     /// ([`Solver::shared_radiosity`]; the solved frames nearest `t` on either
     /// side). The elements the last frame solved refined keep its values. For the
-    /// gathers of a frame between two keyframes ([`super::spacetime`]).
+    /// gathers of a frame between two keyframes ([`super`]).
     pub fn place_between(&mut self, t: f64, a: &SharedRadiosity, b: &SharedRadiosity, alpha: f64) {
         let n = a.b.len().min(b.b.len()).min(self.elems.len());
         let lerp =
@@ -513,6 +515,7 @@ impl Solver<'_> {
     /// the current window shares, as solved now.
     pub fn shared_radiosity(&self) -> SharedRadiosity {
         let n = self
+            .st
             .window
             .as_ref()
             .map_or(self.elems.len(), |w| w.frame.elems_len);
@@ -802,7 +805,7 @@ mod tests {
         let scene = crate::scene::cornell_box(false);
         let s = Solver::at_time(
             &scene,
-            super::super::SolveOptions::default(),
+            crate::solver::SolveOptions::default(),
             0.0,
             [0.0, 0.0],
         )
@@ -870,7 +873,7 @@ mod tests {
                 .collect();
             let s = Solver::at_time(
                 &scene,
-                super::super::SolveOptions::default(),
+                crate::solver::SolveOptions::default(),
                 0.0,
                 [0.0, 0.0],
             )

@@ -4,7 +4,7 @@
 //! object can come between them).
 //!
 //! **What is kept.** For each point, per source of the point's chain (keyed
-//! `source << 1 | clear`, see [`super::Solver::gather_point`]): the terms whose
+//! `source << 1 | clear`, see [`crate::solver::Solver::gather_point`]): the terms whose
 //! visibility holds over the window ([`FixedTerm`]: element and factor, visibility
 //! included) and the terms whose rays a moving object may cross ([`MaskedTerm`]: the
 //! static part of each ray's visibility as a mask, re-cast against the moving
@@ -40,10 +40,10 @@ use std::ops::Range;
 
 use bytemuck::{Pod, Zeroable};
 
-use super::gather::Terms;
-use super::{FastMap, PointKey};
 use crate::Result;
 use crate::pools::{Column, Storage};
+use crate::solver::gather::Terms;
+use crate::solver::{FastMap, PointKey};
 
 /// Reconstructions (frames) after which a point no reconstruction registered is
 /// dropped. A reconstruction registers every point it meshes, gathered or
