@@ -53,7 +53,7 @@ use rows::{KeptCoef, RowEntries};
 use spacetime::SpaceTimeState;
 use spacetime::interpolate::TimedEntry;
 pub use spacetime::interpolate::{
-    Between, FrameRows, KeyValues, Keyframe, SharedRadiosity, TimeRange,
+    FrameBetween, FrameRows, FrameValues, Keyframe, SharedRadiosity, TimeRange,
 };
 use spacetime::kept_terms::{MaskedTerm, PointCache};
 pub use spacetime::window::FrameCost;
@@ -388,7 +388,9 @@ pub struct Solver<'a> {
     /// ([`Solver::is_closed`]; `None` before a run).
     closed: Option<bool>,
     time: [f32; 2],
-    eps_len: f64,
+    /// A point within this distance of a surface element's plane counts as on it
+    /// (the oracle's behind-the-plane cull): 1e-9 of the scene's diameter.
+    plane_tol: f64,
     min_area: f64,
     /// `A_p` of [`SolveOptions::power_size`] (0: off).
     power_area: f64,
@@ -399,7 +401,7 @@ pub struct Solver<'a> {
     /// Leaves (surface elements without children), in id order.
     leaves: Vec<ElementId>,
     /// Leaf index of each element (`u32::MAX` for inner elements).
-    leaf_of: Vec<u32>,
+    leaf_index: Vec<u32>,
     /// Active links by receiver.
     link_index: LinkIndex,
     /// Leaf rows (CSR over leaves): sources of the leaf's chain links and their
@@ -520,7 +522,7 @@ impl<'a> Solver<'a> {
             .fold(0.0, f64::max);
         let mut s = Solver {
             scene,
-            eps_len: diam * 1e-9,
+            plane_tol: diam * 1e-9,
             min_area: (opts.min_size * diam).powi(2),
             power_area: (opts.power_size * diam).powi(2),
             opts,
@@ -535,7 +537,7 @@ impl<'a> Solver<'a> {
             rho_max,
             emits_under: Vec::new(),
             leaves: Vec::new(),
-            leaf_of: Vec::new(),
+            leaf_index: Vec::new(),
             link_index: LinkIndex::default(),
             row_start: Vec::new(),
             row_sources: Vec::new(),
@@ -658,7 +660,7 @@ impl<'a> Solver<'a> {
                     root,
                     [u64::from(root.0); 2],
                     &self.settings(),
-                    self.eps_len,
+                    self.plane_tol,
                 );
                 let id = self.links.push(root, root, ev.transport)?;
                 self.refine(vec![id], thr)?;
@@ -1084,7 +1086,7 @@ impl<'a> Solver<'a> {
                 .map(|&(r, s)| {
                     let ids = [this.ray_id(r.0), this.ray_id(s.0)];
                     let ev =
-                        oracle::evaluate(&this.elems, &this.bvh, r, s, ids, &set, this.eps_len);
+                        oracle::evaluate(&this.elems, &this.bvh, r, s, ids, &set, this.plane_tol);
                     (ev, this.varying(r, s))
                 })
                 .collect();
@@ -1343,10 +1345,10 @@ impl<'a> Solver<'a> {
     fn index_links(&mut self) {
         let n = self.elems.len();
         self.leaves.clear();
-        self.leaf_of = vec![u32::MAX; n];
+        self.leaf_index = vec![u32::MAX; n];
         for (i, node) in self.elems.nodes.as_slice().iter().enumerate() {
             if node.child_count == 0 && node.kind == ElementKind::Surface as u8 {
-                self.leaf_of[i] = self.leaves.len() as u32;
+                self.leaf_index[i] = self.leaves.len() as u32;
                 self.leaves.push(ElementId(i as u32));
             }
         }

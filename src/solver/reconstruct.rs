@@ -8,8 +8,8 @@
 //! long enough ([`Cell::split_dirs`]), and the cells that stop are stored with
 //! their corner values (bilinear within the cell). In a space-time window the
 //! points a frame between two solved frames may take on the line between theirs
-//! are not gathered ([`super::Between`]), and every point's value comes back for
-//! later frames to interpolate ([`super::KeyValues`]), with the direct light of the
+//! are not gathered ([`super::FrameBetween`]), and every point's value comes back for
+//! later frames to interpolate ([`super::FrameValues`]), with the direct light of the
 //! points on moving surfaces apart (`Solver::direct_light`).
 
 use glam::DVec3;
@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use super::spacetime::interpolate::point_coord;
 use super::{
-    Between, CORNER_INSET, ElementId, FastMap, KeyValues, Leaf, Patches, PointKey, Solution,
+    CORNER_INSET, ElementId, FastMap, FrameBetween, FrameValues, Leaf, Patches, PointKey, Solution,
     SolveStats, Solver, hierarchy,
 };
 
@@ -36,7 +36,7 @@ pub struct Reconstruction {
     pub leaves: Vec<Leaf>,
     /// The value at every point, gathered or interpolated, for later frames of a
     /// space-time window to interpolate (empty outside a window).
-    pub values: KeyValues,
+    pub values: FrameValues,
     /// Points gathered by a final gather.
     pub gathered: u64,
     /// Points interpolated between keyframes.
@@ -275,10 +275,10 @@ impl Solver<'_> {
     }
 
     /// [`Solver::reconstruct`], with the points of a frame between two solved
-    /// frames interpolated where those agree (see [`Between`]); `None` gathers
+    /// frames interpolated where those agree (see [`FrameBetween`]); `None` gathers
     /// every point (a keyframe). In a space-time window the values of every point
     /// come back too.
-    pub fn reconstruct_between(&self, between: Option<&Between>) -> Reconstruction {
+    pub fn reconstruct_between(&self, between: Option<&FrameBetween>) -> Reconstruction {
         let geoms = self.elems.geoms.as_slice();
         let interpolated = std::sync::atomic::AtomicU64::new(0);
         // The window's kept terms, locked for the whole reconstruction: the
@@ -454,13 +454,13 @@ impl Solver<'_> {
         // Later frames of a window interpolate this one's values; a solve
         // outside a window has no use for them.
         let values = if self.st.window.is_some() {
-            KeyValues::from_points(cache.index.iter().map(|(&pk, &i)| {
+            FrameValues::from_points(cache.index.iter().map(|(&pk, &i)| {
                 let (b, ok) = cache.values[i];
                 (pk, b, ok)
             }))
             .with_direct(std::mem::take(&mut cache.direct))
         } else {
-            KeyValues::default()
+            FrameValues::default()
         };
         Reconstruction {
             leaves,

@@ -12,9 +12,9 @@
 //!   share, and the power each moving surface hands on; a frame between two solved
 //!   frames whose moving light holds skips its solve and takes the shared
 //!   radiosity on the line between them ([`Solver::place_between`]).
-//! - [`KeyValues`]: the value of every reconstruction point; a frame between two
+//! - [`FrameValues`]: the value of every reconstruction point; a frame between two
 //!   solved frames takes a point's value on the line between theirs where they
-//!   agree or the point's light is linear in time ([`Between`]), and gathers it
+//!   agree or the point's light is linear in time ([`FrameBetween`]), and gathers it
 //!   otherwise. A point on a moving surface also keeps the direct light it
 //!   reflects ([`Solver::direct_light`]): the line is over the rest of its light,
 //!   and the frame between adds its own direct light.
@@ -69,7 +69,7 @@ impl FrameRows {
 /// time at this frame and computed here, and the frame's entries become an end
 /// for the frames between it and `a` or `b` ([`super::solve_order`] bisects).
 /// Linear rather than the paper's constant-in-time basis, as the frames between
-/// keyframes are ([`Between`]). Entries between two static ends are never taken:
+/// keyframes are ([`FrameBetween`]). Entries between two static ends are never taken:
 /// a moving object in the shaft between them (they are computed per frame only
 /// then) may block it at this frame and at neither end, the transient blocker the
 /// paper's shaft test forces a time split for (§5.2).
@@ -121,9 +121,9 @@ impl SharedRadiosity {
 
 /// The values a frame's reconstruction gave its points, gathered or interpolated
 /// (radiosity, and whether the point lies outside every solid), by point key: what
-/// the frames between two solved frames interpolate ([`Between`]).
+/// the frames between two solved frames interpolate ([`FrameBetween`]).
 ///
-/// With [`KeyValues::with_cells`], a point the keyframe did not gather takes the
+/// With [`FrameValues::with_cells`], a point the keyframe did not gather takes the
 /// value of the keyframe's cell that holds it (the stored interpolant), so a frame
 /// that meshes a cell differently can still interpolate its new points.
 ///
@@ -132,7 +132,7 @@ impl SharedRadiosity {
 /// held 2.4 MB of ACTOR's out-of-core peak for four); the direct light of those on
 /// moving surfaces is a second sorted array, of 24-byte records.
 #[derive(Clone, Debug, Default)]
-pub struct KeyValues {
+pub struct FrameValues {
     /// (point, radiosity, outside every solid), sorted by point.
     points: Vec<(PointKey, [f32; 3], bool)>,
     /// The direct light the points on moving surfaces reflect ([`Solver::direct_light`]),
@@ -144,7 +144,7 @@ pub struct KeyValues {
     cells: std::sync::Arc<[Leaf]>,
 }
 
-impl KeyValues {
+impl FrameValues {
     /// The values gathered at `points` (in any order).
     pub(in crate::solver) fn from_points(
         points: impl Iterator<Item = (PointKey, [f64; 3], bool)>,
@@ -153,7 +153,7 @@ impl KeyValues {
             .map(|(pk, b, ok)| (pk, b.map(|x| x as f32), ok))
             .collect();
         points.sort_unstable_by_key(|p| p.0);
-        KeyValues {
+        FrameValues {
             points,
             direct: Vec::new(),
             cells: Default::default(),
@@ -188,7 +188,7 @@ impl KeyValues {
         self
     }
 
-    /// [`KeyValues::at`] less the direct light, for a point on a moving surface: the
+    /// [`FrameValues::at`] less the direct light, for a point on a moving surface: the
     /// frame's own value less its direct light if it had the point (outside the
     /// solids), else the frame's cell holding it, interpolated over its corners'
     /// values less their direct light; `None` if a value or a direct light is
@@ -240,8 +240,8 @@ pub(in crate::solver) fn point_param(q: u32) -> f64 {
 }
 
 /// A solved frame of a space-time window: its position (frame index, or any time
-/// unit shared by the frames of a [`Between`]) and the values it gave its points.
-pub type Keyframe<'k> = (f64, &'k KeyValues);
+/// unit shared by the frames of a [`FrameBetween`]) and the values it gave its points.
+pub type Keyframe<'k> = (f64, &'k FrameValues);
 
 /// A frame at `t` between two solved frames `a` and `b` of a space-time window (two
 /// keyframes, or a keyframe and the midpoint of a bisection, see
@@ -282,7 +282,7 @@ pub type Keyframe<'k> = (f64, &'k KeyValues);
 /// "stains" (§5.2): a moving shadow's edge fades over the distance of one free
 /// interval instead of stepping.
 #[derive(Clone, Copy, Debug)]
-pub struct Between<'k> {
+pub struct FrameBetween<'k> {
     /// The moving objects travel less than [`super::SpaceTimeOptions::interp_motion`]
     /// between `a` and `b`: a point both know (with the same validity) takes the
     /// line between them whatever its values.
@@ -300,12 +300,12 @@ pub struct Between<'k> {
     pub tol: f64,
 }
 
-impl Between<'_> {
+impl FrameBetween<'_> {
     /// The interpolated value of point `pk` and whether it lies outside every
     /// solid, if the solved frames allow it. A point both frames had keeps their
     /// validity (they must agree on it); any other point asks `outside_now` (one
     /// ray, no gather) and, if outside the solids, interpolates the frames' cells
-    /// ([`KeyValues::with_cells`]).
+    /// ([`FrameValues::with_cells`]).
     ///
     /// A point on a moving surface comes with its direct light now (`direct_now`,
     /// [`Solver::direct_light`]): where the frames hold its direct light too, the
@@ -325,7 +325,7 @@ impl Between<'_> {
         }
     }
 
-    /// [`Between::value`], the line over the light less `direct_now` (`None`: the
+    /// [`FrameBetween::value`], the line over the light less `direct_now` (`None`: the
     /// whole light); `Err` if the frames lack a value or a direct light the line
     /// needs.
     fn value_less(
@@ -339,11 +339,11 @@ impl Between<'_> {
         let minus = |(v, ok): ([f64; 3], bool), d: [f64; 3]| -> ([f64; 3], bool) {
             (std::array::from_fn(|k| v[k] - d[k]), ok)
         };
-        let known = |kv: &KeyValues| match direct_now {
+        let known = |kv: &FrameValues| match direct_now {
             Some(_) => kv.known(pk).zip(kv.direct(pk)).map(|(v, d)| minus(v, d)),
             None => kv.known(pk),
         };
-        let at = |kv: &KeyValues| match direct_now {
+        let at = |kv: &FrameValues| match direct_now {
             Some(_) => kv.indirect_at(pk),
             None => kv.at(pk),
         };
@@ -384,7 +384,7 @@ impl Between<'_> {
     }
 }
 
-/// The frames lack a value or a direct light ([`Between::value_less`]).
+/// The frames lack a value or a direct light ([`FrameBetween::value_less`]).
 #[derive(Clone, Copy, Debug)]
 struct Missing;
 
@@ -426,7 +426,7 @@ impl Solver<'_> {
     /// On a moving surface this is the part of the light that changes fastest as it
     /// passes a lamp (a panel sliding 45 cm in front of one: the inverse square and
     /// the cosines); a frame between two solved frames takes the line over the rest
-    /// only ([`Between::value`]).
+    /// only ([`FrameBetween::value`]).
     pub(in crate::solver) fn direct_light(
         &self,
         x: DVec3,
@@ -564,8 +564,8 @@ mod tests {
         assert_eq!(range.value(&(3, 1), 0.0), None);
     }
 
-    fn values(points: &[(u32, [f64; 3], bool)]) -> KeyValues {
-        KeyValues::from_points(points.iter().map(|&(i, v, ok)| ((0, i, 0), v, ok)))
+    fn values(points: &[(u32, [f64; 3], bool)]) -> FrameValues {
+        FrameValues::from_points(points.iter().map(|&(i, v, ok)| ((0, i, 0), v, ok)))
     }
 
     fn grey(v: f64) -> [f64; 3] {
@@ -593,7 +593,7 @@ mod tests {
             (4, grey(0.5), true),
             (5, grey(0.9), true),
         ]);
-        let between = Between {
+        let between = FrameBetween {
             free: false,
             before: Some((0.0, &p)),
             a: (4.0, &a),
@@ -613,7 +613,7 @@ mod tests {
         assert_eq!(at(4), None, "inside a solid at a only");
         assert_eq!(at(5), None, "the keyframe before does not hold point 5");
         // Without a keyframe before the interval only agreement counts.
-        let bare = Between {
+        let bare = FrameBetween {
             before: None,
             ..between
         };
@@ -622,7 +622,7 @@ mod tests {
         // Brackets closer in motion than `interp_motion`: a point both hold takes
         // the line whatever its values (the shadow edge of point 2 fades over the
         // interval); one they do not both hold, or with another validity, does not.
-        let free = Between { free: true, ..bare };
+        let free = FrameBetween { free: true, ..bare };
         let (v2, ok2) = free
             .value(&(0, 2, 0), || true, None)
             .expect("free: the line");
@@ -633,7 +633,7 @@ mod tests {
         // Equal values come back bit for bit (where nothing changes, consecutive
         // frames are equal and the store merges them).
         let same = values(&[(0, [0.1, 0.2, 0.3], true)]);
-        let flat = Between {
+        let flat = FrameBetween {
             free: false,
             before: None,
             a: (0.0, &same),
@@ -684,9 +684,9 @@ mod tests {
             uv: [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
             b: [1.0, 2.0, 2.0, 1.0].map(|v| [v + lift; 3]),
         };
-        let a = KeyValues::default().with_cells([cell(0.0)].into());
-        let b = KeyValues::default().with_cells([cell(0.005)].into());
-        let between = Between {
+        let a = FrameValues::default().with_cells([cell(0.0)].into());
+        let b = FrameValues::default().with_cells([cell(0.005)].into());
+        let between = FrameBetween {
             free: false,
             before: None,
             a: (0.0, &a),
@@ -711,7 +711,7 @@ mod tests {
         // frames 0, 4, 8 (a line), its direct light 2, 6, 3 (a bump the line cannot
         // follow). Point 2 lacks its direct light at `b`.
         let frame = |v: &[(u32, f64, f64)], lacking: Option<u32>| {
-            KeyValues::from_points(v.iter().map(|&(i, b, d)| ((0, i, 0), grey(b + d), true)))
+            FrameValues::from_points(v.iter().map(|&(i, b, d)| ((0, i, 0), grey(b + d), true)))
                 .with_direct(
                     v.iter()
                         .filter(|p| Some(p.0) != lacking)
@@ -722,7 +722,7 @@ mod tests {
         let p = frame(&[(1, 1.0, 2.0), (2, 1.0, 2.0)], None);
         let a = frame(&[(1, 1.2, 6.0), (2, 1.2, 6.0)], None);
         let b = frame(&[(1, 1.4, 3.0), (2, 1.4, 3.0)], Some(2));
-        let between = Between {
+        let between = FrameBetween {
             free: false,
             before: Some((0.0, &p)),
             a: (4.0, &a),
@@ -742,7 +742,7 @@ mod tests {
         // Without the direct light at `b`, point 2 is tested on its whole light:
         // gathered here, and on the line between `a` and `b` when free.
         assert_eq!(between.value(&(0, 2, 0), || true, Some(grey(5.5))), None);
-        let free = Between {
+        let free = FrameBetween {
             free: true,
             ..between
         };
@@ -766,7 +766,7 @@ mod tests {
                 uv: corners,
                 b: direct.map(|d| [rest + d; 3]),
             };
-            KeyValues::default()
+            FrameValues::default()
                 .with_direct(
                     corners
                         .iter()
@@ -779,10 +779,10 @@ mod tests {
         let a = frame(1.0, [4.0, 0.0, 0.0, 4.0]);
         let b = frame(2.0, [0.0, 8.0, 8.0, 0.0]);
         let pk = (7, q(0.25), q(0.5));
-        let rest = |kv: &KeyValues| kv.indirect_at(&pk).map(|v| v[0]);
+        let rest = |kv: &FrameValues| kv.indirect_at(&pk).map(|v| v[0]);
         assert!((rest(&a).unwrap() - 1.0).abs() < 1e-6);
         assert!((rest(&b).unwrap() - 2.0).abs() < 1e-6);
-        let between = Between {
+        let between = FrameBetween {
             free: true,
             before: None,
             a: (0.0, &a),
@@ -793,7 +793,7 @@ mod tests {
         let (v, _) = between.value(&pk, || true, Some(grey(3.0))).unwrap();
         assert!((v[0] - 4.25).abs() < 1e-6, "{v:?}");
         // A corner without its direct light: no rest to take.
-        let lacking = KeyValues::default().with_cells(a.cells.clone());
+        let lacking = FrameValues::default().with_cells(a.cells.clone());
         assert_eq!(lacking.indirect_at(&pk), None);
     }
 

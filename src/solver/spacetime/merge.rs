@@ -12,7 +12,7 @@ use crate::solution::Leaf;
 
 /// A leaf being extended over consecutive frames, 112 bytes (its patch and corners
 /// are its key in [`TimeMerge::runs`]: a window keeps thousands open).
-struct Run {
+struct OpenLeaf {
     sum: [[f64; 3]; 4],
     /// Start of its time range.
     start: f32,
@@ -22,9 +22,9 @@ struct Run {
     last: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<Run>() == 112);
+const _: () = assert!(std::mem::size_of::<OpenLeaf>() == 112);
 
-impl Run {
+impl OpenLeaf {
     fn mean(&self) -> [[f64; 3]; 4] {
         self.sum.map(|c| c.map(|v| v / self.frames.max(1) as f64))
     }
@@ -45,7 +45,7 @@ type CellKey = (u32, [[u32; 2]; 4]);
 /// Consecutive frames' cells merged into leaves with longer time ranges while their
 /// corners hold within `tol` of the running mean (the module docs): where nothing changes, a window stores each cell once.
 pub(super) struct TimeMerge {
-    runs: crate::solver::FastMap<CellKey, Run>,
+    runs: crate::solver::FastMap<CellKey, OpenLeaf>,
     /// Closed leaves, in the order their runs closed: on the pools' storage, so out
     /// of core on `--storage mmap` ([`in_file_order`] sorts them).
     done: Column<Leaf>,
@@ -94,7 +94,7 @@ impl TimeMerge {
         for cell in cells {
             let key = cell_key(cell);
             let vals = cell.b.map(|c| c.map(f64::from));
-            let fresh = Run {
+            let fresh = OpenLeaf {
                 sum: vals,
                 start: f0 as f32,
                 corners: cell.corners,

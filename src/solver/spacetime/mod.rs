@@ -59,8 +59,8 @@ pub use plan::{
 pub use super::frames::frame_instants;
 use super::frames::frame_range;
 use super::{
-    Between, FrameCost, FrameRows, KeyValues, Leaf, RoundRecord, SharedRadiosity, SolveOptions,
-    Solver, TimeRange,
+    FrameBetween, FrameCost, FrameRows, FrameValues, Leaf, RoundRecord, SharedRadiosity,
+    SolveOptions, Solver, TimeRange,
 };
 use crate::Result;
 use crate::pools::Column;
@@ -87,7 +87,7 @@ pub struct SpaceTimeOptions {
     /// Every `key_stride`-th frame of a window (and its first and last) is a
     /// keyframe, reconstructed by final gathers at every point; the frames between
     /// two keyframes, taken by bisection ([`solve_order`]), interpolate the points
-    /// where the solved frames around allow it ([`Between`]). 1: every frame is a
+    /// where the solved frames around allow it ([`FrameBetween`]). 1: every frame is a
     /// keyframe. `None`: keyframes are spaced by motion, `key_motion` apart
     /// ([`time_layout`]).
     pub key_stride: Option<u32>,
@@ -99,13 +99,13 @@ pub struct SpaceTimeOptions {
     /// A point is interpolated between two solved frames when their values differ by
     /// at most this fraction of the RMS reflected radiosity in every channel, or the
     /// earlier lies within it of the line through the frame as far before and the
-    /// later ([`Between`]).
+    /// later ([`FrameBetween`]).
     pub interp_tol: f64,
     /// A frame between two solved frames over which no moving object travels more
     /// than this fraction of the scene's diameter ([`frame_motion`]) takes the line
     /// between them at every point both know, without the test of `interp_tol`,
     /// and skips its leaf solve: the shortest time a light change is resolved
-    /// over, in motion, not in frames ([`Between::free`]). 0: never, every frame
+    /// over, in motion, not in frames ([`FrameBetween::free`]). 0: never, every frame
     /// between is tested.
     pub interp_motion: f64,
     /// A frame between two solved frames skips its leaf solve, and takes the
@@ -115,7 +115,7 @@ pub struct SpaceTimeOptions {
     pub moving_power_tol: f64,
     /// The points on moving surfaces keep their direct light apart: a frame
     /// between two solved frames computes it anew and takes the line over the rest
-    /// of their light only (`Solver::direct_light`, [`Between`]). A panel
+    /// of their light only (`Solver::direct_light`, [`FrameBetween`]). A panel
     /// sliding past a lamp is lit along a curve the line cannot follow; its
     /// inter-reflections with what it passes follow it less steeply. `false`: the
     /// line over the whole light, as in a scene lit by more than 16 emitting
@@ -516,7 +516,7 @@ impl<'a> SpaceTime<'a> {
         // solved so far and the frames before it a bisection step looks back to),
         // the shared radiosity of the interval's solved frames, and finished frames
         // waiting for the ones before them to be merged in time order.
-        let mut values: HashMap<usize, KeyValues> = HashMap::new();
+        let mut values: HashMap<usize, FrameValues> = HashMap::new();
         let mut rad: HashMap<usize, SharedRadiosity> = HashMap::new();
         // The row entries with a moving end of the same solved frames.
         let mut rows_at: HashMap<usize, Arc<FrameRows>> = HashMap::new();
@@ -527,7 +527,7 @@ impl<'a> SpaceTime<'a> {
             let t = frames[k];
             let (cost, r) = match step.brackets {
                 None => {
-                    let cost = solver.frame(t, b_ref)?;
+                    let cost = solver.solve_frame(t, b_ref)?;
                     rad.insert(k, solver.shared_radiosity());
                     // Where the moving light holds between this keyframe and the
                     // one before, the frames between skip their solve: the one
@@ -570,7 +570,7 @@ impl<'a> SpaceTime<'a> {
                     let sa = rad.keys().filter(|&&f| f < k).max().copied();
                     let sb = rad.keys().filter(|&&f| f > k).min().copied();
                     // Brackets closer in motion than `interp_motion`: the frame
-                    // takes the line at every point (`Between::free`), and its
+                    // takes the line at every point (`FrameBetween::free`), and its
                     // gathers (cells the brackets lack) need no solve.
                     let (f0, f1) = (first as usize + lo, first as usize + hi);
                     let travel: f64 = self.motion[f0..f1].iter().sum();
@@ -606,7 +606,7 @@ impl<'a> SpaceTime<'a> {
                                 })
                             });
                             solver.set_time_range(range);
-                            let cost = solver.frame(t, b_ref);
+                            let cost = solver.solve_frame(t, b_ref);
                             solver.set_time_range(None);
                             let cost = cost?;
                             rad.insert(k, solver.shared_radiosity());
@@ -615,14 +615,16 @@ impl<'a> SpaceTime<'a> {
                         }
                     };
                     let known = |f: Option<usize>| Some((f? as f64, values.get(&f?)?));
-                    let between = known(Some(lo)).zip(known(Some(hi))).map(|(a, b)| Between {
-                        free,
-                        before: known(before(lo, hi)),
-                        a,
-                        b,
-                        t: k as f64,
-                        tol: interp_tol,
-                    });
+                    let between = known(Some(lo))
+                        .zip(known(Some(hi)))
+                        .map(|(a, b)| FrameBetween {
+                            free,
+                            before: known(before(lo, hi)),
+                            a,
+                            b,
+                            t: k as f64,
+                            tol: interp_tol,
+                        });
                     (cost, solver.reconstruct_between(between.as_ref()))
                 }
             };

@@ -51,7 +51,7 @@ pub struct Step {
 /// between the two keyframes, then the midpoints of both halves between the
 /// keyframe and that midpoint, and so on (the paper's time split at the midpoint,
 /// §4.3, applied to the reconstruction). A frame interpolates its brackets where
-/// they allow it ([`Between`]), so a point gathered at the midpoint because a
+/// they allow it ([`FrameBetween`]), so a point gathered at the midpoint because a
 /// shadow passed in one half need not be gathered in the other.
 pub fn solve_order(keys: &[usize]) -> Vec<Step> {
     fn halves(lo: usize, hi: usize, out: &mut Vec<Step>) {
@@ -79,7 +79,7 @@ pub fn solve_order(keys: &[usize]) -> Vec<Step> {
 }
 
 /// The frame whose values tell whether a frame between `lo` and `hi` lies on a
-/// line through time ([`Between::before`]): as far before `lo` as `hi` is after.
+/// line through time ([`FrameBetween::before`]): as far before `lo` as `hi` is after.
 pub(super) fn before(lo: usize, hi: usize) -> Option<usize> {
     lo.checked_sub(hi - lo)
 }

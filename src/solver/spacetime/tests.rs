@@ -514,7 +514,7 @@ fn keyframes_come_before_the_frames_between_them() {
             match (keys.binary_search(&f), step.brackets) {
                 (Ok(_), None) => {}
                 (Err(k), Some((lo, hi))) => {
-                    // Between the keyframes of its interval, after both...
+                    // FrameBetween the keyframes of its interval, after both...
                     assert!(keys[k - 1] <= lo && lo < f && f < hi && hi <= keys[k]);
                     assert!(at(lo) < i && at(hi) < i, "n {n}, stride {stride}: {f}");
                     // ...and the nearest frames solved so far on either side.
@@ -679,7 +679,7 @@ fn row_terms_kept_over_a_window_are_the_ones_computed_afresh() {
         )
     };
     for t in [0.0, 0.04, 0.08] {
-        s.frame(t, b_ref).unwrap();
+        s.solve_frame(t, b_ref).unwrap();
     }
     // Kept entries this frame reuses (none of them under its refinement).
     let reused = s.st.window.as_ref().map_or(0, |w| {
@@ -821,7 +821,7 @@ fn an_element_a_frame_makes_again_keeps_its_keys_under_another_id() {
     let (mut s, b_ref) = light_window(&scene, 0.5, 1.0);
     type Keys = HashMap<Vec<u64>, (u32, u64, u32)>;
     let frame_keys = |s: &mut Solver, t: f64| -> Keys {
-        s.frame(t, b_ref).unwrap();
+        s.solve_frame(t, b_ref).unwrap();
         s.intern_frame_elements();
         let base = s.st.window.as_ref().map_or(0, |w| w.frame.elems_len);
         (base..s.elems.len())
@@ -875,11 +875,11 @@ fn a_frame_between_takes_the_moving_rows_that_hold_and_solves_as_without() {
     let scene = crate::scene::light_scene(75);
     let (mut s, b_ref) = light_window(&scene, 1.0, 0.5);
     let (ta, t, tb) = (0.0, 0.16, 0.32);
-    s.frame(ta, b_ref).unwrap();
+    s.solve_frame(ta, b_ref).unwrap();
     let a = Arc::new(s.take_frame_rows());
-    s.frame(tb, b_ref).unwrap();
+    s.solve_frame(tb, b_ref).unwrap();
     let b = Arc::new(s.take_frame_rows());
-    let fresh_cost = s.frame(t, b_ref).unwrap();
+    let fresh_cost = s.solve_frame(t, b_ref).unwrap();
     let fresh = s.shared_radiosity();
     let tol = 0.01 * b_ref;
     s.set_time_range(Some(TimeRange {
@@ -888,7 +888,7 @@ fn a_frame_between_takes_the_moving_rows_that_hold_and_solves_as_without() {
         alpha: (t - ta) / (tb - ta),
         tol,
     }));
-    let cost = s.frame(t, b_ref).unwrap();
+    let cost = s.solve_frame(t, b_ref).unwrap();
     s.set_time_range(None);
     let taken = s.shared_radiosity();
     eprintln!(

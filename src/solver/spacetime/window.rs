@@ -5,7 +5,7 @@
 //! **Pools.** [`Solver::begin_window`] re-classifies the shared part's links
 //! against the boxes the moving objects sweep during the window and refines those
 //! that became constant (the window's base, a [`Snapshot`]); each
-//! [`Solver::frame`] places the objects, re-evaluates and refines the varying links
+//! [`Solver::solve_frame`] places the objects, re-evaluates and refines the varying links
 //! and solves the leaf system warm-started from the previous frame;
 //! [`Solver::release_window`] truncates the pools back to the shared part and
 //! restores what the window changed in older records (links made passive, elements
@@ -265,7 +265,7 @@ impl Solver<'_> {
         let t = self.motion.now;
         let b_ref = self.b_ref();
         self.begin_window_in(span, swept.clone(), b_ref)?;
-        self.frame(t, b_ref)?;
+        self.solve_frame(t, b_ref)?;
         let shared = self.st.window.as_ref().map_or(0, |w| w.base.elems_len);
         let b = self.elems.radiosities.as_slice()[..shared].to_vec();
         self.release_window();
@@ -438,7 +438,7 @@ impl Solver<'_> {
                     ElementId(e.source),
                     [this.ray_id(e.receiver), this.ray_id(e.source)],
                     &set,
-                    this.eps_len,
+                    this.plane_tol,
                 )
             })
             .collect();
@@ -484,7 +484,7 @@ impl Solver<'_> {
     /// refined against `eps · b_ref`, and the leaf system solved again, warm-started
     /// from the previous frame. Constant links keep their coefficients, leaf rows
     /// and final-gather terms from earlier frames of the window.
-    pub fn frame(&mut self, t: f64, b_ref: f64) -> Result<FrameCost> {
+    pub fn solve_frame(&mut self, t: f64, b_ref: f64) -> Result<FrameCost> {
         let rays0 = self.rays;
         self.reset_frame();
         self.set_time(t);
