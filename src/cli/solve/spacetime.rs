@@ -10,7 +10,7 @@ use rhier::playback::{probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
 use rhier::solution::SolveStats;
 use rhier::solver::SolveOptions;
-use rhier::solver::spacetime::{FrameRecord, SpaceTime};
+use rhier::solver::spacetime::{FrameRecord, SpaceTime, result_settings};
 use rhier::store::journal::{Journal, fingerprint};
 use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
 
@@ -39,7 +39,7 @@ pub fn run(
     }
     let out = output.out_path(stem);
     let probes = output.probe.as_deref().map(read_probe_points).transpose()?;
-    let key = fingerprint(scene, &opts, &st)?;
+    let key = fingerprint(scene, &result_settings(&opts, &st)?)?;
     // A device or FIFO (`-o /dev/null`) is written in place at the end (see the
     // store's writer): nothing could be resumed into it, so it gets no journal beside
     // it (which, next to /dev/null, a user could not even create).

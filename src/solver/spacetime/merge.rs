@@ -152,7 +152,7 @@ pub(super) fn in_file_order(
     closed: Column<Leaf>,
     storage: &crate::pools::Storage,
 ) -> Result<Column<Leaf>> {
-    let block = crate::store::writer::LEAF_BLOCK;
+    let block = crate::solution::LEAF_BLOCK;
     let mut starts: Vec<(f32, usize)> = Vec::new();
     for l in closed.iter() {
         match starts.binary_search_by(|(t, _)| t.total_cmp(&l.time[0])) {

@@ -163,6 +163,54 @@ impl Default for SpaceTimeOptions {
     }
 }
 
+/// Fields of [`SolveOptions`] left out of [`result_settings`], because they change
+/// how a solve runs but not the windows it writes. Every other field is in.
+pub const SOLVE_OPTIONS_NOT_IN_KEY: &[&str] = &[
+    // RAM or memory-mapped files hold the same numbers (the test suite runs on
+    // both; tests/it/cli/spacetime.rs compares the files), and a space-time solve's
+    // default, files in the journal directory, names the output's directory.
+    "storage",
+];
+
+/// Fields of [`SpaceTimeOptions`] left out of [`result_settings`]: none.
+/// `kept_budget` is in: a term dropped under the budget is gathered again, and the
+/// value moves a little where the frame has opened a source into finer children
+/// than when the term was kept (tests/it/spacetime.rs,
+/// `a_budget_on_kept_terms_bounds_them_and_keeps_the_result`), so a file resumed
+/// under another budget would match neither solve.
+pub const SPACE_TIME_OPTIONS_NOT_IN_KEY: &[&str] = &[];
+
+/// The settings that decide the windows a space-time solve writes, as JSON objects
+/// named `solve` and `space_time`: every field of `opts` and `st`, serialized whole,
+/// but for those [`SOLVE_OPTIONS_NOT_IN_KEY`] and [`SPACE_TIME_OPTIONS_NOT_IN_KEY`]
+/// name. A setting added to either struct is therefore in them unless it is left
+/// out there on purpose. What a resume journal is keyed by
+/// (`store::journal::fingerprint`).
+pub fn result_settings(
+    opts: &SolveOptions,
+    st: &SpaceTimeOptions,
+) -> Result<Vec<(&'static str, serde_json::Value)>> {
+    Ok(vec![
+        ("solve", settings_of(opts, SOLVE_OPTIONS_NOT_IN_KEY)?),
+        (
+            "space_time",
+            settings_of(st, SPACE_TIME_OPTIONS_NOT_IN_KEY)?,
+        ),
+    ])
+}
+
+/// The fields of `options` as a JSON object, without those `left_out` names.
+fn settings_of(options: &impl serde::Serialize, left_out: &[&str]) -> Result<serde_json::Value> {
+    let mut value = serde_json::to_value(options)
+        .map_err(|e| crate::Error::Usage(format!("journal fingerprint: {e}")))?;
+    if let Some(fields) = value.as_object_mut() {
+        for name in left_out {
+            fields.remove(*name);
+        }
+    }
+    Ok(value)
+}
+
 /// Default [`SpaceTimeOptions::interp_motion`]: 3% of the scene's diameter, under
 /// two thirds of the default `key_motion`, so the bisection of a key interval tests
 /// its midpoint and takes the line over each half below it (ACTOR: keyframes 8
