@@ -4,7 +4,7 @@
 //! a source whose radiosity varies opened into its children.
 //!
 //! In a space-time window a static point keeps what holds of its terms from static
-//! sources ([`super::kept`]; paper 001 §5.2's shortcut applied to the final
+//! sources ([`super::spacetime::kept_terms`]; paper 001 §5.2's shortcut applied to the final
 //! gather): terms no moving object can come between are kept with their
 //! visibility, the others with the static part of each ray as a mask, cast again at
 //! the moving objects only when one is between the point and the source

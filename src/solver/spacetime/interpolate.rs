@@ -229,12 +229,12 @@ impl FrameValues {
     }
 }
 
-/// A point key's coordinate for the parameter `x` ([`VertexCache::register`]).
+/// A point key's coordinate for the parameter `x` (`VertexCache::register` in `reconstruct.rs`).
 pub(in crate::solver) fn point_coord(x: f32) -> u32 {
     (x as f64 * (1u64 << 24) as f64).round() as u32
 }
 
-/// The parameter a point key's coordinate stands for ([`VertexCache::register`]).
+/// The parameter a point key's coordinate stands for (`VertexCache::register` in `reconstruct.rs`).
 pub(in crate::solver) fn point_param(q: u32) -> f64 {
     q as f64 / (1u64 << 24) as f64
 }

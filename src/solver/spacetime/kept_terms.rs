@@ -49,14 +49,13 @@ use crate::solver::{FastMap, PointKey};
 /// dropped. A reconstruction registers every point it meshes, gathered or
 /// interpolated, so what goes is the points of cells no frame has meshed for that
 /// long (where a moving shadow was). Frames are solved keyframe first, then the
-/// frames between (see `spacetime::solve_order`): 8 is ACTOR's key interval. 16
-/// (ACTOR played twice as slowly has keyframes 16 frames apart) kept 2.7 MB more
-/// and measured no faster.
+/// frames between (see `spacetime::solve_order`): 8 is ACTOR's key interval, and a
+/// longer wait keeps more points without making the frames faster.
 pub const STALE_AFTER: u32 = 8;
 
 /// Bytes a compaction slides before it hands the pages of mapped arenas back
-/// (each slide touches its source and its destination pages: at 4 MiB, ACTOR's
-/// compactions out of core put 6 MB more in the peak resident size than at 1 MiB).
+/// (each slide touches its source and its destination pages, so a longer slide
+/// puts more of them in the peak resident size).
 const RELEASE_EVERY: usize = 1 << 20;
 
 /// A final-gather term from a static source to a static point whose rays a moving

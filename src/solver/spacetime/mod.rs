@@ -11,24 +11,24 @@
 //! The solve runs in three stages:
 //! 1. *Shared part* ([`Solver::run_shared`]): the usual rounds at the start time,
 //!    links classified over the whole animation and only constant links refined.
-//! 2. *Windows*, earliest first, with keyframes spaced by motion ([`plan`]). A window
+//! 2. *Windows*, earliest first, with keyframes spaced by motion (`plan.rs`). A window
 //!    re-classifies the links against the boxes swept during it; each frame places
 //!    the moving objects, refines its varying links and solves the leaf system
-//!    ([`window`]). What holds over the window is kept: constant links' coefficients,
-//!    leaf-row entries and final-gather terms ([`kept_terms`]). Keyframes gather at
+//!    (`window.rs`). What holds over the window is kept: constant links' coefficients,
+//!    leaf-row entries and final-gather terms (`kept_terms.rs`). Keyframes gather at
 //!    every point; the frames between, solved by bisection (§4.3's time split at the
 //!    midpoint), take on the line between the solved frames around them what they
-//!    allow ([`interpolate`]).
+//!    allow (`interpolate.rs`).
 //! 3. *Release* ([`Solver::release_window`]): the window's leaves go to the output,
 //!    the pools are restored to the shared part, so memory does not grow with the
 //!    animation's length; the final-gather terms that still hold are the only state
 //!    handed to the next window (and journaled beside it).
 //!
 //! **Elements with time ranges.** A cell whose corners hold over consecutive frames
-//! becomes one leaf with a longer time range ([`merge`]; §4.3, eq. 8–9).
+//! becomes one leaf with a longer time range (`merge.rs`; §4.3, eq. 8–9).
 //!
-//! **State.** The solver's space-time fields are one [`SpaceTimeState`]; this module
-//! and its children are the only ones that set them.
+//! **State.** The solver's space-time fields are one `SpaceTimeState` (its field
+//! `st`): set by this folder, and by the leaf rows of a window's frame (`rows.rs`).
 //!
 //! **How this departs from the paper.** It splits *elements* in time and keeps every
 //! time level in one hierarchy (§6); here varying links are evaluated per frame,
@@ -213,35 +213,19 @@ fn settings_of(options: &impl serde::Serialize, left_out: &[&str]) -> Result<ser
 
 /// Default [`SpaceTimeOptions::interp_motion`]: 3% of the scene's diameter, under
 /// two thirds of the default `key_motion`, so the bisection of a key interval tests
-/// its midpoint and takes the line over each half below it (ACTOR: keyframes 8
-/// frames apart, the actors travel 2.5% in four frames).
-///
-/// Measured (BENCHMARKS.md, "Frames between on the line over half a key
-/// interval"), against the reference's probes at every reference time, two threads:
-/// - ACTOR `--eps 1 --recon-tol 0.08 --recon-tol-moving 0.08`: 2.89% (worst time
-///   3.29%) in 7.8–8.7 s; at 0.015 `--recon-tol 0.10` gave 3.03% (worst 3.34%) in
-///   9.5–10.9 s. Per-frame's `--eps 0.35` is at 3.15% (worst 3.64%).
-/// - LIGHT `--eps 0.5 --recon-tol 0.06`: 3.52% (worst 4.45%, the board 0.94%) in
-///   6.6–6.9 s, against 3.51% (4.48%, 0.94%) in about 10 s at 0.015.
-///
-/// Further out the line leaves stains: ACTOR with keyframes 10% apart and 0.05
-/// here (the halves of 8 frames free) is at 3.18% over all times but 4.52% at its
-/// worst, and LIGHT's board went from 0.94% to 6.5%.
+/// its midpoint and takes the line over each half below it. Further out the line
+/// leaves stains where shadows move; what each value costs and gains on ACTOR and
+/// LIGHT is in BENCHMARKS.md, "Frames between on the line over half a key interval".
 pub const INTERP_MOTION: f64 = 0.03;
 
 /// Default [`SpaceTimeOptions::moving_power_tol`]. Frames between two keyframes
 /// skip their leaf solve when no moving surface's power changes by more than this
 /// fraction of the moving surfaces' total between the two nearest solved frames
 /// (the shared radiosity is then taken on the line between them,
-/// [`Solver::place_between`]). What the two scenes' midpoints measure
-/// (BENCHMARKS.md, "Midpoints skip their solve where the actors' light holds"):
-/// ACTOR's change by 1.1–2.4% over their key interval (actors walking through the
-/// room's light), LIGHT's by 6.5–54% (the board passing its lamp). At 0.03 every
-/// midpoint of ACTOR skips its solve, 8.35 s against 9.08 s at 0.01 (five
-/// alternated runs each), at the same error (2.887%, worst time 3.29%; actors
-/// 6.49% against 6.39%), and LIGHT solves the frames it solved at 0.01. Skipping
-/// every one, LIGHT's error is 6.2% against 3.5% (worst time 10.6%): points beside
-/// the lamp the panel slides over.
+/// [`Solver::place_between`]). Actors walking through a room's light change their
+/// power little over a key interval and skip; a panel passing its lamp changes it
+/// much and is solved. Measured in BENCHMARKS.md, "Midpoints skip their solve where
+/// the actors' light holds".
 pub const MOVING_POWER_TOL: f64 = 0.03;
 
 /// What one frame cost.

@@ -14,20 +14,13 @@ use crate::scene::Scene;
 
 /// Key intervals per window when `--window` is not given ([`time_layout`]).
 ///
-/// A window's start costs about a keyframe more than a keyframe: the window before
-/// ends on a keyframe and this one starts on the next frame, and the first one
-/// gathers with the terms handed on only (ACTOR: 0.81–0.89 s against 0.32–0.44 s,
-/// two threads). A longer window sweeps larger boxes, so more of its links vary,
-/// but on ACTOR and LIGHT that costs less than the starts it saves, and its peak
-/// RSS is the same (the kept terms go stale and are dropped; the leaves are on the
-/// pools' storage). Measured (BENCHMARKS.md, "Longer windows"), two threads, at
-/// 3 / 6 / 9 / 12 intervals: ACTOR 11.5 / 10.6–10.8 / 10.1–10.6 / 9.4–10.5 s at
-/// 3.01–3.03% error; ACTOR750 (30 s) 109.9 s against 92.8 s at 12, 29.9 against
-/// 29.8 MB. LIGHT's one window reconstructs against its first frame's radiosity
-/// scale, lower than its second window's was, so it meshes finer (3.44% against
-/// 3.49% at `--recon-tol 0.04`, 13.7 s against 11.4 s); at `--recon-tol 0.05` it is
-/// at the old error (3.49%) in the old time (11.2 s). At most `WINDOW_KEYS ·
-/// MAX_KEY_FRAMES + 1` frames are lost when a solve is interrupted.
+/// A window's start costs more than a keyframe (the window before ends on a
+/// keyframe, this one starts on the next frame, and its first frame gathers with
+/// the terms handed on only), while a longer window sweeps larger boxes, so more of
+/// its links vary; on ACTOR and LIGHT the starts saved outweigh that, at the same
+/// peak memory (BENCHMARKS.md, "Longer windows; hull planes made one at a time"). At
+/// most `WINDOW_KEYS · MAX_KEY_FRAMES + 1` frames are lost when a solve is
+/// interrupted.
 pub const WINDOW_KEYS: usize = 12;
 
 /// Most frames from one keyframe to the next when keyframes are spaced by motion
@@ -51,7 +44,7 @@ pub struct Step {
 /// between the two keyframes, then the midpoints of both halves between the
 /// keyframe and that midpoint, and so on (the paper's time split at the midpoint,
 /// §4.3, applied to the reconstruction). A frame interpolates its brackets where
-/// they allow it ([`FrameBetween`]), so a point gathered at the midpoint because a
+/// they allow it ([`FrameBetween`](crate::solver::FrameBetween)), so a point gathered at the midpoint because a
 /// shadow passed in one half need not be gathered in the other.
 pub fn solve_order(keys: &[usize]) -> Vec<Step> {
     fn halves(lo: usize, hi: usize, out: &mut Vec<Step>) {
@@ -79,7 +72,7 @@ pub fn solve_order(keys: &[usize]) -> Vec<Step> {
 }
 
 /// The frame whose values tell whether a frame between `lo` and `hi` lies on a
-/// line through time ([`FrameBetween::before`]): as far before `lo` as `hi` is after.
+/// line through time ([`FrameBetween::before`](crate::solver::FrameBetween::before)): as far before `lo` as `hi` is after.
 pub(super) fn before(lo: usize, hi: usize) -> Option<usize> {
     lo.checked_sub(hi - lo)
 }

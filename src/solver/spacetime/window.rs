@@ -83,7 +83,7 @@ pub(in crate::solver) struct Window {
     /// entries of varying links between static ends, keyed as [`Window::hidden`],
     /// at frames with a moving object's box in the shaft between the ends (which
     /// [`Window::hidden`] cannot keep): bit `i·m + j` is set where nothing static
-    /// blocks ray `j` of point `i` (`m` rays a point, [`RowMasks`]). The static
+    /// blocks ray `j` of point `i` (`m` rays a point, [`RowMasks`](crate::solver::rows::RowMasks)). The static
     /// geometry and the rays' keys hold over the window, so a later frame casts
     /// only the rays a mask leaves clear, at the moving objects only, and gets the
     /// value casting every ray would give, bit for bit (the final gather's
