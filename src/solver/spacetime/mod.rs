@@ -59,8 +59,8 @@ pub use plan::{
 pub use super::frames::frame_instants;
 use super::frames::frame_range;
 use super::{
-    FrameBetween, FrameCost, FrameRows, FrameValues, Leaf, RoundRecord, SharedRadiosity,
-    SolveOptions, Solver, TimeRange,
+    FrameBetween, FrameCost, FrameRows, FrameValues, Leaf, Reconstruction, RoundRecord,
+    SharedRadiosity, SolveOptions, Solver, TimeRange,
 };
 use crate::Result;
 use crate::pools::Column;
@@ -524,188 +524,253 @@ impl<'a> SpaceTime<'a> {
         wi: usize,
         mut on_frame: impl FnMut(&FrameRecord),
     ) -> Result<WindowOutput> {
-        let scene = self.solver.scene;
-        let fps = self.st.fps;
         let WindowPlan {
             times: frames,
             keys,
         } = self.windows[wi].clone();
         let first = self.first_frame(wi);
         let b_ref = self.stats.b_ref;
+        let [w0, w1] = self.window_span(wi);
+        self.solver.set_time(frames[0]);
+        self.solver.begin_window([w0, w1], b_ref)?;
         let tol = self.st.merge_tol * b_ref;
-        let n = self.windows.iter().map(|w| w.times.len()).sum();
-        let w0 = frame_range(first as usize, n, scene.time, fps)[0];
-        let w1 = frame_range(first as usize + frames.len() - 1, n, scene.time, fps)[1];
-        let solver = &mut self.solver;
-        solver.set_time(frames[0]);
-        solver.begin_window([w0, w1], b_ref)?;
-        let mut merge = TimeMerge::new(&solver.opts.storage, tol)?;
+        let mut merge = InTimeOrder {
+            merge: TimeMerge::new(&self.solver.opts.storage, tol)?,
+            pending: Default::default(),
+            next: 0,
+            first: first as usize,
+        };
         let mut frame_cells = 0u64;
-        let interp_tol = self.st.interp_tol * b_ref;
         let order = solve_order(&keys);
-        // The values of the frames that later frames interpolate (about 0.9 MB each
-        // on ACTOR: the keyframes around the interval being solved, its frames
-        // solved so far and the frames before it a bisection step looks back to),
-        // the shared radiosity of the interval's solved frames, and finished frames
-        // waiting for the ones before them to be merged in time order.
-        let mut values: HashMap<usize, FrameValues> = HashMap::new();
-        let mut rad: HashMap<usize, SharedRadiosity> = HashMap::new();
-        // The row entries with a moving end of the same solved frames.
-        let mut rows_at: HashMap<usize, Arc<FrameRows>> = HashMap::new();
-        let mut pending: std::collections::BTreeMap<usize, Arc<[Leaf]>> = Default::default();
-        let mut next_merge = 0;
+        let mut solved = SolvedFrames::default();
         for (at, step) in order.iter().enumerate() {
             let k = step.frame;
             let t = frames[k];
             let (cost, r) = match step.brackets {
-                None => {
-                    let cost = solver.solve_frame(t, b_ref)?;
-                    rad.insert(k, solver.shared_radiosity());
-                    // Where the moving light holds between this keyframe and the
-                    // one before, the frames between skip their solve: the one
-                    // before ends no range of rows any more, and this one is
-                    // kept only if the light did not hold (the next interval
-                    // likely does as this one did; ACTOR's mostly hold, LIGHT's
-                    // never).
-                    let i = keys.partition_point(|&f| f < k);
-                    let prev = i.checked_sub(1).map(|i| keys[i]);
-                    let held = prev.and_then(|p| rad.get(&p)).is_some_and(|ra| {
-                        SharedRadiosity::moving_power_holds(ra, &rad[&k], self.st.moving_power_tol)
-                    });
-                    let rows = solver.take_frame_rows();
-                    if let Some(p) = prev.filter(|_| held) {
-                        rows_at.remove(&p);
-                    } else {
-                        rows_at.insert(k, Arc::new(rows));
-                    }
-                    (cost, solver.reconstruct_between(None))
-                }
-                Some((lo, hi)) => {
-                    // The keyframe starting the interval (`solve_order` solves the
-                    // one ending it just before the frames in it).
-                    let a = keys[keys.partition_point(|&f| f < k) - 1];
-                    // What the rest of the window still reads: the brackets and
-                    // look-back frames of the steps to come.
-                    let to_come = || order[at..].iter().filter_map(|s| s.brackets);
-                    let brackets: std::collections::HashSet<usize> =
-                        to_come().flat_map(|(l, h)| [l, h]).collect();
-                    let looked_back: std::collections::HashSet<usize> =
-                        to_come().filter_map(|(l, h)| before(l, h)).collect();
-                    values.retain(|f, _| brackets.contains(f) || looked_back.contains(f));
-                    rad.retain(|&f, _| f >= a);
-                    // Rows end ranges only.
-                    rows_at.retain(|f, _| brackets.contains(f));
-                    // The solved frames nearest on either side (the keyframes, or
-                    // a midpoint that had to be solved): the moving surfaces' light
-                    // is checked, and the shared radiosity interpolated, between
-                    // them.
-                    let sa = rad.keys().filter(|&&f| f < k).max().copied();
-                    let sb = rad.keys().filter(|&&f| f > k).min().copied();
-                    // Brackets closer in motion than `interp_motion`: the frame
-                    // takes the line at every point (`FrameBetween::free`), and its
-                    // gathers (cells the brackets lack) need no solve.
-                    let (f0, f1) = (first as usize + lo, first as usize + hi);
-                    let travel: f64 = self.motion[f0..f1].iter().sum();
-                    let free = self.st.interp_motion > 0.0 && travel <= self.st.interp_motion;
-                    let holds = match (sa, sb) {
-                        (Some(sa), Some(sb)) => {
-                            let (ra, rb) = (&rad[&sa], &rad[&sb]);
-                            (free
-                                || SharedRadiosity::moving_power_holds(
-                                    ra,
-                                    rb,
-                                    self.st.moving_power_tol,
-                                ))
-                            .then_some((sa, ra, sb, rb))
-                        }
-                        _ => None,
+                None => self.solve_keyframe(&keys, k, t, &mut solved)?,
+                Some(brackets) => {
+                    let between = StepBetween {
+                        keys: &keys,
+                        to_come: &order[at..],
+                        first: first as usize,
+                        k,
+                        t,
+                        brackets,
                     };
-                    let cost = match holds {
-                        Some((sa, ra, sb, rb)) => {
-                            let alpha = (k - sa) as f64 / (sb - sa) as f64;
-                            solver.place_between(t, ra, rb, alpha);
-                            FrameCost::default()
-                        }
-                        None => {
-                            // Row entries with a moving end that hold over the
-                            // solved frames around are taken between them.
-                            let range = sa.zip(sb).and_then(|(sa, sb)| {
-                                Some(TimeRange {
-                                    a: rows_at.get(&sa)?.clone(),
-                                    b: rows_at.get(&sb)?.clone(),
-                                    alpha: (k - sa) as f64 / (sb - sa) as f64,
-                                    tol: interp_tol,
-                                })
-                            });
-                            solver.set_time_range(range);
-                            let cost = solver.solve_frame(t, b_ref);
-                            solver.set_time_range(None);
-                            let cost = cost?;
-                            rad.insert(k, solver.shared_radiosity());
-                            rows_at.insert(k, Arc::new(solver.take_frame_rows()));
-                            cost
-                        }
-                    };
-                    let known = |f: Option<usize>| Some((f? as f64, values.get(&f?)?));
-                    let between = known(Some(lo))
-                        .zip(known(Some(hi)))
-                        .map(|(a, b)| FrameBetween {
-                            free,
-                            before: known(before(lo, hi)),
-                            a,
-                            b,
-                            t: k as f64,
-                            tol: interp_tol,
-                        });
-                    (cost, solver.reconstruct_between(between.as_ref()))
+                    self.solve_between(between, &mut solved)?
                 }
             };
             let (gathered, interpolated) = (r.gathered, r.interpolated);
             // The frame's cells are shared by the time merge and its values (which
             // later frames interpolate where the frame did not gather).
             let cells: Arc<[Leaf]> = r.leaves.into();
-            values.insert(k, r.values.with_cells(cells.clone()));
+            solved.values.insert(k, r.values.with_cells(cells.clone()));
             // The frame's gathers leave the heaps fragmented (ACTOR, out of core:
             // 6 MB less resident at the end of a window); a frame that gathered
             // nothing allocated what the next one reuses.
             if gathered > 0 {
                 super::release_free_memory();
             }
-            frame_cells += cells.len() as u64;
             let n_cells = cells.len() as u64;
-            pending.insert(k, cells);
-            while let Some(cells) = pending.remove(&next_merge) {
-                let [f0, _] = frame_range(first as usize + next_merge, n, scene.time, fps);
-                merge.push_frame(&cells, next_merge as u32, f0)?;
-                next_merge += 1;
-            }
-            // Out of core: the closed leaves' pages go back to the scratch file.
-            merge.release_resident();
-            let bytes = (solver.elems.bytes() + solver.links.bytes()) as u64;
-            self.stats.peak_pool_bytes = self.stats.peak_pool_bytes.max(bytes);
-            let kept = solver.kept_bytes();
-            self.stats.peak_kept_bytes = self.stats.peak_kept_bytes.max(kept);
-            self.stats.frames += 1;
-            on_frame(&FrameRecord {
+            frame_cells += n_cells;
+            merge.push(k, cells, |f| self.frame_span(f)[0])?;
+            let record = FrameRecord {
                 frame: first + k as u32,
                 window: wi as u32,
                 t,
-                seconds: self.start.elapsed().as_secs_f64(),
                 cells: n_cells,
-                elements: solver.elems.len() as u64,
-                links: solver.links.len() as u64,
-                varying_links: cost.varying_links,
-                rays: cost.rays,
-                rows_between: cost.rows_between,
-                rows_moving: cost.rows_moving,
-                bytes_pools: bytes,
-                bytes_kept: kept,
-                residual: cost.residual,
                 gathered,
                 interpolated,
-            });
+                ..self.frame_record(&cost)
+            };
+            on_frame(&record);
         }
-        let closed = merge.finish(w1)?;
+        let closed = merge.merge.finish(w1)?;
+        self.restore_shared();
+        // Sorted once the window's memory is back (out of core the two columns are
+        // paged through a bucket at a time).
+        let leaves = in_file_order(closed, &self.solver.opts.storage)?;
+        self.stats.seconds = self.start.elapsed().as_secs_f64();
+        Ok(WindowOutput {
+            index: wi as u32,
+            t0: w0,
+            t1: w1,
+            leaves,
+            frame_cells,
+        })
+    }
+
+    /// The time range of frame `f` of the animation.
+    fn frame_span(&self, f: usize) -> [f64; 2] {
+        let n = self.windows.iter().map(|w| w.times.len()).sum();
+        frame_range(f, n, self.solver.scene.time, self.st.fps)
+    }
+
+    /// The time range of window `wi`: from its first frame's start to its last
+    /// frame's end.
+    fn window_span(&self, wi: usize) -> [f64; 2] {
+        let first = self.first_frame(wi) as usize;
+        let last = first + self.windows[wi].times.len() - 1;
+        [self.frame_span(first)[0], self.frame_span(last)[1]]
+    }
+
+    /// Solves keyframe `k` (at `t`) of the window with keyframes `keys`, and
+    /// reconstructs it by a final gather at every point.
+    fn solve_keyframe(
+        &mut self,
+        keys: &[usize],
+        k: usize,
+        t: f64,
+        solved: &mut SolvedFrames,
+    ) -> Result<(FrameCost, Reconstruction)> {
+        let solver = &mut self.solver;
+        let cost = solver.solve_frame(t, self.stats.b_ref)?;
+        let rad = &mut solved.rad;
+        rad.insert(k, solver.shared_radiosity());
+        // Where the moving light holds between this keyframe and the one before,
+        // the frames between skip their solve: the one before ends no range of
+        // rows any more, and this one is kept only if the light did not hold (the
+        // next interval likely does as this one did; ACTOR's mostly hold, LIGHT's
+        // never).
+        let i = keys.partition_point(|&f| f < k);
+        let prev = i.checked_sub(1).map(|i| keys[i]);
+        let held = prev.and_then(|p| rad.get(&p)).is_some_and(|ra| {
+            SharedRadiosity::moving_power_holds(ra, &rad[&k], self.st.moving_power_tol)
+        });
+        let rows = solver.take_frame_rows();
+        if let Some(p) = prev.filter(|_| held) {
+            solved.rows_at.remove(&p);
+        } else {
+            solved.rows_at.insert(k, Arc::new(rows));
+        }
+        Ok((cost, solver.reconstruct_between(None)))
+    }
+
+    /// Solves a frame between two solved frames: it takes the shared radiosity on
+    /// the line between the solved frames around where the moving light holds (and
+    /// skips its solve), else solves with the row entries that hold taken between
+    /// them; then reconstructs, taking on the line what its brackets allow.
+    fn solve_between(
+        &mut self,
+        at: StepBetween,
+        solved: &mut SolvedFrames,
+    ) -> Result<(FrameCost, Reconstruction)> {
+        let StepBetween {
+            keys,
+            to_come,
+            first,
+            k,
+            t,
+            brackets: (lo, hi),
+        } = at;
+        let b_ref = self.stats.b_ref;
+        let interp_tol = self.st.interp_tol * b_ref;
+        let SolvedFrames {
+            values,
+            rad,
+            rows_at,
+        } = solved;
+        // The keyframe starting the interval (`solve_order` solves the one ending
+        // it just before the frames in it).
+        let a = keys[keys.partition_point(|&f| f < k) - 1];
+        // What the rest of the window still reads: the brackets and look-back
+        // frames of the steps to come.
+        let to_come = || to_come.iter().filter_map(|s| s.brackets);
+        let brackets: std::collections::HashSet<usize> =
+            to_come().flat_map(|(l, h)| [l, h]).collect();
+        let looked_back: std::collections::HashSet<usize> =
+            to_come().filter_map(|(l, h)| before(l, h)).collect();
+        values.retain(|f, _| brackets.contains(f) || looked_back.contains(f));
+        rad.retain(|&f, _| f >= a);
+        // Rows end ranges only.
+        rows_at.retain(|f, _| brackets.contains(f));
+        // The solved frames nearest on either side (the keyframes, or a midpoint
+        // that had to be solved): the moving surfaces' light is checked, and the
+        // shared radiosity interpolated, between them.
+        let sa = rad.keys().filter(|&&f| f < k).max().copied();
+        let sb = rad.keys().filter(|&&f| f > k).min().copied();
+        // Brackets closer in motion than `interp_motion`: the frame takes the line
+        // at every point (`FrameBetween::free`), and its gathers (cells the
+        // brackets lack) need no solve.
+        let travel: f64 = self.motion[first + lo..first + hi].iter().sum();
+        let free = self.st.interp_motion > 0.0 && travel <= self.st.interp_motion;
+        let holds = match (sa, sb) {
+            (Some(sa), Some(sb)) => {
+                let (ra, rb) = (&rad[&sa], &rad[&sb]);
+                (free || SharedRadiosity::moving_power_holds(ra, rb, self.st.moving_power_tol))
+                    .then_some((sa, ra, sb, rb))
+            }
+            _ => None,
+        };
+        let solver = &mut self.solver;
+        let cost = match holds {
+            Some((sa, ra, sb, rb)) => {
+                let alpha = (k - sa) as f64 / (sb - sa) as f64;
+                solver.place_between(t, ra, rb, alpha);
+                FrameCost::default()
+            }
+            None => {
+                // Row entries with a moving end that hold over the solved frames
+                // around are taken between them.
+                let range = sa.zip(sb).and_then(|(sa, sb)| {
+                    Some(TimeRange {
+                        a: rows_at.get(&sa)?.clone(),
+                        b: rows_at.get(&sb)?.clone(),
+                        alpha: (k - sa) as f64 / (sb - sa) as f64,
+                        tol: interp_tol,
+                    })
+                });
+                solver.set_time_range(range);
+                let cost = solver.solve_frame(t, b_ref);
+                solver.set_time_range(None);
+                let cost = cost?;
+                rad.insert(k, solver.shared_radiosity());
+                rows_at.insert(k, Arc::new(solver.take_frame_rows()));
+                cost
+            }
+        };
+        let known = |f: Option<usize>| Some((f? as f64, values.get(&f?)?));
+        let between = known(Some(lo))
+            .zip(known(Some(hi)))
+            .map(|(a, b)| FrameBetween {
+                free,
+                before: known(before(lo, hi)),
+                a,
+                b,
+                t: k as f64,
+                tol: interp_tol,
+            });
+        Ok((cost, solver.reconstruct_between(between.as_ref())))
+    }
+
+    /// A frame's record but for what its reconstruction tells (frame, time, cells,
+    /// points), with the peaks of the totals brought up to date.
+    fn frame_record(&mut self, cost: &FrameCost) -> FrameRecord {
+        let solver = &self.solver;
+        let bytes = (solver.elems.bytes() + solver.links.bytes()) as u64;
+        self.stats.peak_pool_bytes = self.stats.peak_pool_bytes.max(bytes);
+        let kept = solver.kept_bytes();
+        self.stats.peak_kept_bytes = self.stats.peak_kept_bytes.max(kept);
+        self.stats.frames += 1;
+        FrameRecord {
+            seconds: self.start.elapsed().as_secs_f64(),
+            elements: solver.elems.len() as u64,
+            links: solver.links.len() as u64,
+            varying_links: cost.varying_links,
+            rays: cost.rays,
+            rows_between: cost.rows_between,
+            rows_moving: cost.rows_moving,
+            bytes_pools: bytes,
+            bytes_kept: kept,
+            residual: cost.residual,
+            ..FrameRecord::default()
+        }
+    }
+
+    /// Releases the window and puts back the shared part's coefficients,
+    /// radiosities and directional power.
+    fn restore_shared(&mut self) {
+        let solver = &mut self.solver;
         solver.release_window();
         solver
             .links
@@ -722,17 +787,61 @@ impl<'a> SpaceTime<'a> {
             .directions
             .as_mut_slice()
             .copy_from_slice(&self.shared_dir);
-        // Sorted once the window's memory is back (out of core the two columns are
-        // paged through a bucket at a time).
-        let leaves = in_file_order(closed, &solver.opts.storage)?;
-        self.stats.seconds = self.start.elapsed().as_secs_f64();
-        Ok(WindowOutput {
-            index: wi as u32,
-            t0: w0,
-            t1: w1,
-            leaves,
-            frame_cells,
-        })
+    }
+}
+
+/// What a window's solve keeps of its solved frames for the frames still to come:
+/// the values of the frames later frames interpolate (about 0.9 MB each on ACTOR:
+/// the keyframes around the interval being solved, its frames solved so far and the
+/// frames before it a bisection step looks back to), the shared radiosity of the
+/// interval's solved frames, and the row entries with a moving end of the same.
+#[derive(Default)]
+struct SolvedFrames {
+    values: HashMap<usize, FrameValues>,
+    rad: HashMap<usize, SharedRadiosity>,
+    rows_at: HashMap<usize, Arc<FrameRows>>,
+}
+
+/// A frame between two solved frames, as [`SpaceTime::solve_between`] takes it.
+struct StepBetween<'o> {
+    /// The window's keyframes.
+    keys: &'o [usize],
+    /// The steps of the window's solve order from this frame's on.
+    to_come: &'o [Step],
+    /// Index in the animation of the window's first frame.
+    first: usize,
+    /// The frame (in the window) and its time.
+    k: usize,
+    t: f64,
+    /// The solved frames just before and after it.
+    brackets: (usize, usize),
+}
+
+/// Finished frames handed to the time merge in time order: a frame between two
+/// solved frames finishes after the later one, so frames wait for those before
+/// them.
+struct InTimeOrder {
+    merge: TimeMerge,
+    pending: std::collections::BTreeMap<usize, Arc<[Leaf]>>,
+    /// The next frame (in the window) the merge takes.
+    next: usize,
+    /// Index in the animation of the window's first frame.
+    first: usize,
+}
+
+impl InTimeOrder {
+    /// Adds the cells of frame `k` and merges every frame now in order; `start`
+    /// gives the start time of a frame of the animation.
+    fn push(&mut self, k: usize, cells: Arc<[Leaf]>, start: impl Fn(usize) -> f64) -> Result<()> {
+        self.pending.insert(k, cells);
+        while let Some(cells) = self.pending.remove(&self.next) {
+            let f0 = start(self.first + self.next);
+            self.merge.push_frame(&cells, self.next as u32, f0)?;
+            self.next += 1;
+        }
+        // Out of core: the closed leaves' pages go back to the scratch file.
+        self.merge.release_resident();
+        Ok(())
     }
 }
 
