@@ -411,7 +411,7 @@ impl<'s> Dynamic<'s> {
         let mut touched: HashSet<(u32, u32)> = HashSet::new();
         let mut deltas: Vec<((u32, u32), f64, f64)> = Vec::new();
         for &v in dirty {
-            let (new, edges) = contributions(&geom1, &self.topo, v, &self.views[v as usize]);
+            let (new, edges) = contributions(geom1, &self.topo, v, &self.views[v as usize]);
             rep.edges_visited += edges;
             let old = std::mem::replace(&mut self.contrib[v as usize], new);
             let new = &self.contrib[v as usize];
