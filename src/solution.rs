@@ -20,6 +20,12 @@ use bytemuck::{Pod, Zeroable};
 
 pub use crate::geometry::{PatchGeometry, param_point};
 
+/// Leaves handled at a time by whoever pages a column of them: the store checks,
+/// compresses and hands back a chunk's leaves in blocks of this many, and a
+/// space-time window sorts its leaves into file order releasing pages as often
+/// (8192 leaves, 768 KiB).
+pub const LEAF_BLOCK: usize = 8192;
+
 /// Shape of a patch or leaf domain.
 #[repr(u32)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -273,66 +273,15 @@ impl<'s> Dynamic<'s> {
             let moving_points: Vec<u32> = (0..self.views.len() as u32)
                 .filter(|&i| moving.contains(&traj.object[i as usize]))
                 .collect();
-            let mut gm = self.geom.clone();
             let mut changed = vec![false; self.views.len()];
-            let mut k = 0;
-            while k < events.len() {
-                let mut j = k + 1;
-                while j < events.len() && (events[j].time - events[j - 1].time).abs() <= tol {
-                    j += 1;
-                }
-                rep.event_groups += 1;
-                let next = events.get(j).map_or(t1, |e| e.time);
-                let tm = 0.5 * (events[j - 1].time + next);
-                // The views read only the points' positions: move the moving ones.
-                for &i in &moving_points {
-                    gm.points[i as usize] = traj.point(self.scene, i, tm);
-                }
-                let mut ends: Vec<u32> = events[k..j].iter().flat_map(|e| e.ends).collect();
-                ends.sort_unstable();
-                let once: Vec<u32> = ends
-                    .iter()
-                    .copied()
-                    .filter(|v| ends.iter().filter(|w| *w == v).count() == 1)
-                    .collect();
-                ends.dedup();
-                let mut group_changed: Vec<u32> = Vec::new();
-                for v in ends {
-                    // Local splice when v takes part in one event of the group only.
-                    let local = if once.contains(&v) {
-                        events[k..j]
-                            .iter()
-                            .find(|e| e.ends.contains(&v))
-                            .and_then(|e| {
-                                let other = if e.ends[0] == v { e.ends[1] } else { e.ends[0] };
-                                splice_event(&gm, &self.topo, &self.views, v, e.mid, other)
-                            })
-                    } else {
-                        None
-                    };
-                    let view = match local {
-                        Some(Splice::Unchanged) => continue,
-                        Some(Splice::New(view)) => {
-                            rep.views_spliced += 1;
-                            view
-                        }
-                        None => {
-                            rep.views_reswept += 1;
-                            view_of(&gm, &self.topo, v).0
-                        }
-                    };
-                    if view != self.views[v as usize] {
-                        self.views[v as usize] = view;
-                        changed[v as usize] = true;
-                        group_changed.push(v);
-                    }
-                }
-                rep.events += events[k..j]
-                    .iter()
-                    .filter(|e| e.ends.iter().any(|v| group_changed.contains(v)))
-                    .count();
-                k = j;
-            }
+            let events = EventsToApply {
+                events: &events,
+                traj: &traj,
+                moving_points: &moving_points,
+                t1,
+                tol,
+            };
+            self.apply_events(events, &mut changed, &mut rep);
             // Triples collinear at t1 or sliding along a line: views re-swept at t1.
             let mut slid: Vec<u32> = queue.at_end.iter().flatten().copied().collect();
             slid.sort_unstable();
@@ -363,70 +312,8 @@ impl<'s> Dynamic<'s> {
                 .map(|v| v as u32)
                 .collect();
             rep.points_evaluated = dirty.len();
-            // Re-evaluate; a pair's measure is recomputed only where one of its terms
-            // (per point, summed in a fixed order) differs from the stored one.
-            let mut visited: HashSet<(u32, u32)> = HashSet::new();
-            let mut touched: HashSet<(u32, u32)> = HashSet::new();
-            let mut deltas: Vec<((u32, u32), f64, f64)> = Vec::new();
-            for &v in &dirty {
-                let (new, edges) = contributions(&geom1, &self.topo, v, &self.views[v as usize]);
-                rep.edges_visited += edges;
-                let old = std::mem::replace(&mut self.contrib[v as usize], new);
-                let new = &self.contrib[v as usize];
-                visited.extend(new.iter().map(|x| x.0));
-                let (mut a, mut b) = (0, 0);
-                while a < old.len() || b < new.len() {
-                    let ka = old.get(a).map(|x| x.0);
-                    let kb = new.get(b).map(|x| x.0);
-                    let (key, xo, xn) = match (ka, kb) {
-                        (Some(p), Some(q)) if p == q => {
-                            a += 1;
-                            b += 1;
-                            (p, old[a - 1].1, new[b - 1].1)
-                        }
-                        (Some(p), Some(q)) if p < q => {
-                            a += 1;
-                            (p, old[a - 1].1, 0.0)
-                        }
-                        (Some(p), None) => {
-                            a += 1;
-                            (p, old[a - 1].1, 0.0)
-                        }
-                        (_, Some(q)) => {
-                            b += 1;
-                            (q, 0.0, new[b - 1].1)
-                        }
-                        (None, None) => break,
-                    };
-                    if xo != xn {
-                        touched.insert(key);
-                        deltas.push((key, xo, xn));
-                    }
-                }
-            }
-            let before: HashSet<(u32, u32)> = touched
-                .iter()
-                .filter(|k| self.mu.contains_key(k))
-                .copied()
-                .collect();
-            for (key, xo, xn) in deltas {
-                *self.mu.entry(key).or_insert(0.0) += xn - xo;
-            }
-            // Pairs whose terms cancel (destroyed faces) are zero to round-off.
-            let scale = geom1.elements.iter().map(|e| e.len).fold(0.0, f64::max);
-            for key in &touched {
-                if self.mu.get(key).is_some_and(|&x| x <= TINY * scale) {
-                    self.mu.remove(key);
-                }
-                match (before.contains(key), self.mu.contains_key(key)) {
-                    (false, true) => rep.pairs_appeared += 1,
-                    (true, false) => rep.pairs_vanished += 1,
-                    _ => {}
-                }
-            }
+            self.update_measure(&geom1, &dirty, &mut rep);
             rep.seconds_measure = lap.elapsed().as_secs_f64();
-            rep.faces_visited = visited.len();
-            rep.ff_recomputed = touched.iter().map(|k| if k.0 == k.1 { 1 } else { 2 }).sum();
         }
         self.geom = geom1;
         self.t = t1;
@@ -439,6 +326,162 @@ impl<'s> Dynamic<'s> {
         rep.seconds = start.elapsed().as_secs_f64();
         rep
     }
+
+    /// Applies `events` (sorted in the direction of the step) group by group: the
+    /// events of one time are applied together, with the moving points placed just
+    /// after them; each view an event's outer point has is spliced locally where the
+    /// point takes part in one event of the group, and re-swept otherwise. Views that
+    /// change are marked in `changed`.
+    fn apply_events(&mut self, at: EventsToApply, changed: &mut [bool], rep: &mut StepReport) {
+        let EventsToApply {
+            events,
+            traj,
+            moving_points,
+            t1,
+            tol,
+        } = at;
+        let mut gm = self.geom.clone();
+        let mut k = 0;
+        while k < events.len() {
+            let mut j = k + 1;
+            while j < events.len() && (events[j].time - events[j - 1].time).abs() <= tol {
+                j += 1;
+            }
+            rep.event_groups += 1;
+            let next = events.get(j).map_or(t1, |e| e.time);
+            let tm = 0.5 * (events[j - 1].time + next);
+            // The views read only the points' positions: move the moving ones.
+            for &i in moving_points {
+                gm.points[i as usize] = traj.point(self.scene, i, tm);
+            }
+            let mut ends: Vec<u32> = events[k..j].iter().flat_map(|e| e.ends).collect();
+            ends.sort_unstable();
+            let once: Vec<u32> = ends
+                .iter()
+                .copied()
+                .filter(|v| ends.iter().filter(|w| *w == v).count() == 1)
+                .collect();
+            ends.dedup();
+            let mut group_changed: Vec<u32> = Vec::new();
+            for v in ends {
+                // Local splice when v takes part in one event of the group only.
+                let local = if once.contains(&v) {
+                    events[k..j]
+                        .iter()
+                        .find(|e| e.ends.contains(&v))
+                        .and_then(|e| {
+                            let other = if e.ends[0] == v { e.ends[1] } else { e.ends[0] };
+                            splice_event(&gm, &self.topo, &self.views, v, e.mid, other)
+                        })
+                } else {
+                    None
+                };
+                let view = match local {
+                    Some(Splice::Unchanged) => continue,
+                    Some(Splice::New(view)) => {
+                        rep.views_spliced += 1;
+                        view
+                    }
+                    None => {
+                        rep.views_reswept += 1;
+                        view_of(&gm, &self.topo, v).0
+                    }
+                };
+                if view != self.views[v as usize] {
+                    self.views[v as usize] = view;
+                    changed[v as usize] = true;
+                    group_changed.push(v);
+                }
+            }
+            rep.events += events[k..j]
+                .iter()
+                .filter(|e| e.ends.iter().any(|v| group_changed.contains(v)))
+                .count();
+            k = j;
+        }
+    }
+
+    /// Re-evaluates the contributions of the `dirty` points at the step's end
+    /// (geometry `geom1`) and updates the measure of every pair one of whose terms
+    /// (per point, summed in a fixed order) differs from the stored one.
+    fn update_measure(&mut self, geom1: &FlatGeometry, dirty: &[u32], rep: &mut StepReport) {
+        // Re-evaluate; a pair's measure is recomputed only where one of its terms
+        // (per point, summed in a fixed order) differs from the stored one.
+        let mut visited: HashSet<(u32, u32)> = HashSet::new();
+        let mut touched: HashSet<(u32, u32)> = HashSet::new();
+        let mut deltas: Vec<((u32, u32), f64, f64)> = Vec::new();
+        for &v in dirty {
+            let (new, edges) = contributions(geom1, &self.topo, v, &self.views[v as usize]);
+            rep.edges_visited += edges;
+            let old = std::mem::replace(&mut self.contrib[v as usize], new);
+            let new = &self.contrib[v as usize];
+            visited.extend(new.iter().map(|x| x.0));
+            let (mut a, mut b) = (0, 0);
+            while a < old.len() || b < new.len() {
+                let ka = old.get(a).map(|x| x.0);
+                let kb = new.get(b).map(|x| x.0);
+                let (key, xo, xn) = match (ka, kb) {
+                    (Some(p), Some(q)) if p == q => {
+                        a += 1;
+                        b += 1;
+                        (p, old[a - 1].1, new[b - 1].1)
+                    }
+                    (Some(p), Some(q)) if p < q => {
+                        a += 1;
+                        (p, old[a - 1].1, 0.0)
+                    }
+                    (Some(p), None) => {
+                        a += 1;
+                        (p, old[a - 1].1, 0.0)
+                    }
+                    (_, Some(q)) => {
+                        b += 1;
+                        (q, 0.0, new[b - 1].1)
+                    }
+                    (None, None) => break,
+                };
+                if xo != xn {
+                    touched.insert(key);
+                    deltas.push((key, xo, xn));
+                }
+            }
+        }
+        let before: HashSet<(u32, u32)> = touched
+            .iter()
+            .filter(|k| self.mu.contains_key(k))
+            .copied()
+            .collect();
+        for (key, xo, xn) in deltas {
+            *self.mu.entry(key).or_insert(0.0) += xn - xo;
+        }
+        // Pairs whose terms cancel (destroyed faces) are zero to round-off.
+        let scale = geom1.elements.iter().map(|e| e.len).fold(0.0, f64::max);
+        for key in &touched {
+            if self.mu.get(key).is_some_and(|&x| x <= TINY * scale) {
+                self.mu.remove(key);
+            }
+            match (before.contains(key), self.mu.contains_key(key)) {
+                (false, true) => rep.pairs_appeared += 1,
+                (true, false) => rep.pairs_vanished += 1,
+                _ => {}
+            }
+        }
+        rep.faces_visited = visited.len();
+        rep.ff_recomputed = touched.iter().map(|k| if k.0 == k.1 { 1 } else { 2 }).sum();
+    }
+}
+
+/// The events of one step, as [`Dynamic::apply_events`] takes them.
+struct EventsToApply<'e> {
+    /// Sorted in the direction of the step.
+    events: &'e [super::events::Event],
+    traj: &'e Trajectories,
+    /// The points of the moving objects.
+    moving_points: &'e [u32],
+    /// The step's end time.
+    t1: f64,
+    /// Events closer in time than this are one group.
+    tol: f64,
 }
 
 /// Whether each segment (global order) emits in any channel.

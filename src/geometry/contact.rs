@@ -76,105 +76,12 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
             continue;
         }
         let n = patches.normals[i];
-        let d = n.dot(poly.v[0]);
-        // Contact lines: (point, in-plane direction).
-        let mut lines: Vec<(DVec3, DVec3)> = Vec::new();
-        // Coplanar polygons facing the other way (faces resting face to face).
-        let mut facing: Vec<usize> = Vec::new();
-        // Polygons hanging just in front, parallel, their back to the patch.
-        let mut covering: Vec<usize> = Vec::new();
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for &c in poly.corners() {
-            lo = lo.min(c);
-            hi = hi.max(c);
-        }
-        let pad = DVec3::splat(tol * 2.0 + near_gap);
-        // In first-met order, each once (a floor under a field of boxes meets
-        // every box: a linear `contains` made this quadratic).
-        let mut seen = Vec::new();
-        bvh.for_each_triangle_in_box(lo - pad, hi + pad, |j, _| {
-            let j = j as usize;
-            if j != i && !moving(j) {
-                seen.push(j);
-            }
-            true
-        });
-        let mut met = std::collections::HashSet::with_capacity(seen.len());
-        seen.retain(|&j| met.insert(j));
-        for &j in &seen {
-            let other = &patches.polys[j];
-            let nj = patches.normals[j];
-            let dist: Vec<f64> = other.corners().iter().map(|&v| n.dot(v) - d).collect();
-            let coplanar = dist.iter().all(|x| x.abs() <= tol);
-            let k = other.n;
-            if coplanar {
-                if n.dot(nj) < -0.99 {
-                    facing.push(j);
-                    for e in 0..k {
-                        lines.push((other.v[e], other.v[(e + 1) % k] - other.v[e]));
-                    }
-                }
-                continue;
-            }
-            if dist.iter().any(|&x| x < -tol) {
-                continue; // not standing on the front side
-            }
-            let gap = dist.iter().copied().fold(0.0, f64::max);
-            if n.dot(nj) > 0.99 && gap <= near_gap && gap <= NEAR_GAP_OF_SIZE * other.area().sqrt()
-            {
-                covering.push(j);
-                for e in 0..k {
-                    let (a, b) = (other.v[e], other.v[(e + 1) % k]);
-                    lines.push((a - n * (n.dot(a) - d), b - a));
-                }
-                continue;
-            }
-            for e in 0..k {
-                let (a, b) = (e, (e + 1) % k);
-                if dist[a].abs() <= tol && dist[b].abs() <= tol {
-                    lines.push((other.v[a], other.v[b] - other.v[a]));
-                }
-            }
-        }
-        // Cut by each line that crosses the polygon's interior. A line met again
-        // (boxes in a row share their edges' lines; a box's bottom and its sides
-        // give each edge twice) cuts nothing the first did not, but slivers within
-        // the tolerance: skipped, the first of each kept in order (the pieces of
-        // the generated cube rooms are bit for bit those of cutting by all).
-        let mut pieces = vec![poly];
-        let mut next = Vec::new();
-        let mut cut_lines = std::collections::HashSet::new();
-        for (p0, dir) in lines {
-            let cut_n = n.cross(dir);
-            let len = cut_n.length();
-            if len <= 0.0 {
-                continue;
-            }
-            let cut_n = cut_n / len;
-            if !cut_lines.insert(line_key(cut_n, cut_n.dot(p0), tol)) {
-                continue;
-            }
-            next.clear();
-            for &piece in &pieces {
-                let mut s = [0.0f64; super::polygon::MAX_CORNERS];
-                for (x, &v) in s.iter_mut().zip(piece.corners()) {
-                    *x = cut_n.dot(v - p0);
-                }
-                let s = &s[..piece.n];
-                let crosses = s.iter().any(|&x| x > tol) && s.iter().any(|&x| x < -tol);
-                if !crosses {
-                    next.push(piece);
-                    continue;
-                }
-                for side in [cut_n, -cut_n] {
-                    let half = piece.clip_front(p0, side);
-                    if half.n >= 3 && half.area() > tol * tol {
-                        next.push(half);
-                    }
-                }
-            }
-            std::mem::swap(&mut pieces, &mut next);
-        }
+        let Contacts {
+            lines,
+            facing,
+            covering,
+        } = contacts(patches, &bvh, i, &moving, tol, near_gap);
+        let pieces = cut_by_lines(poly, n, lines, tol);
         // Hidden: inside the solid resting on the patch (the first thing straight
         // above is a back face), or a face resting face to face on a coplanar
         // polygon with its own solid behind it (a box's bottom on the floor: the
@@ -243,6 +150,140 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
     }
     out.finish();
     (out, stats)
+}
+
+/// What meets static patch `i` (see the module docs): the contact lines, the
+/// coplanar polygons facing it and those hanging just in front of it.
+struct Contacts {
+    /// Contact lines: (point, in-plane direction).
+    lines: Vec<(DVec3, DVec3)>,
+    /// Coplanar polygons facing the other way (faces resting face to face).
+    facing: Vec<usize>,
+    /// Polygons hanging just in front, parallel, their back to the patch.
+    covering: Vec<usize>,
+}
+
+/// The [`Contacts`] of patch `i` with the static patches near it (`moving` tells
+/// the others), within `tol` of its plane or, parallel and facing away, within
+/// `near_gap` in front of it.
+fn contacts(
+    patches: &Patches,
+    bvh: &SceneBvh,
+    i: usize,
+    moving: &impl Fn(usize) -> bool,
+    tol: f64,
+    near_gap: f64,
+) -> Contacts {
+    let poly = patches.polys[i];
+    let n = patches.normals[i];
+    let d = n.dot(poly.v[0]);
+    // Contact lines: (point, in-plane direction).
+    let mut lines: Vec<(DVec3, DVec3)> = Vec::new();
+    // Coplanar polygons facing the other way (faces resting face to face).
+    let mut facing: Vec<usize> = Vec::new();
+    // Polygons hanging just in front, parallel, their back to the patch.
+    let mut covering: Vec<usize> = Vec::new();
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for &c in poly.corners() {
+        lo = lo.min(c);
+        hi = hi.max(c);
+    }
+    let pad = DVec3::splat(tol * 2.0 + near_gap);
+    // In first-met order, each once (a floor under a field of boxes meets
+    // every box: a linear `contains` made this quadratic).
+    let mut seen = Vec::new();
+    bvh.for_each_triangle_in_box(lo - pad, hi + pad, |j, _| {
+        let j = j as usize;
+        if j != i && !moving(j) {
+            seen.push(j);
+        }
+        true
+    });
+    let mut met = std::collections::HashSet::with_capacity(seen.len());
+    seen.retain(|&j| met.insert(j));
+    for &j in &seen {
+        let other = &patches.polys[j];
+        let nj = patches.normals[j];
+        let dist: Vec<f64> = other.corners().iter().map(|&v| n.dot(v) - d).collect();
+        let coplanar = dist.iter().all(|x| x.abs() <= tol);
+        let k = other.n;
+        if coplanar {
+            if n.dot(nj) < -0.99 {
+                facing.push(j);
+                for e in 0..k {
+                    lines.push((other.v[e], other.v[(e + 1) % k] - other.v[e]));
+                }
+            }
+            continue;
+        }
+        if dist.iter().any(|&x| x < -tol) {
+            continue; // not standing on the front side
+        }
+        let gap = dist.iter().copied().fold(0.0, f64::max);
+        if n.dot(nj) > 0.99 && gap <= near_gap && gap <= NEAR_GAP_OF_SIZE * other.area().sqrt() {
+            covering.push(j);
+            for e in 0..k {
+                let (a, b) = (other.v[e], other.v[(e + 1) % k]);
+                lines.push((a - n * (n.dot(a) - d), b - a));
+            }
+            continue;
+        }
+        for e in 0..k {
+            let (a, b) = (e, (e + 1) % k);
+            if dist[a].abs() <= tol && dist[b].abs() <= tol {
+                lines.push((other.v[a], other.v[b] - other.v[a]));
+            }
+        }
+    }
+    Contacts {
+        lines,
+        facing,
+        covering,
+    }
+}
+
+/// `poly` (normal `n`) cut by each of `lines` that crosses its interior.
+fn cut_by_lines(poly: Poly, n: DVec3, lines: Vec<(DVec3, DVec3)>, tol: f64) -> Vec<Poly> {
+    // Cut by each line that crosses the polygon's interior. A line met again
+    // (boxes in a row share their edges' lines; a box's bottom and its sides
+    // give each edge twice) cuts nothing the first did not, but slivers within
+    // the tolerance: skipped, the first of each kept in order (the pieces of
+    // the generated cube rooms are bit for bit those of cutting by all).
+    let mut pieces = vec![poly];
+    let mut next = Vec::new();
+    let mut cut_lines = std::collections::HashSet::new();
+    for (p0, dir) in lines {
+        let cut_n = n.cross(dir);
+        let len = cut_n.length();
+        if len <= 0.0 {
+            continue;
+        }
+        let cut_n = cut_n / len;
+        if !cut_lines.insert(line_key(cut_n, cut_n.dot(p0), tol)) {
+            continue;
+        }
+        next.clear();
+        for &piece in &pieces {
+            let mut s = [0.0f64; super::polygon::MAX_CORNERS];
+            for (x, &v) in s.iter_mut().zip(piece.corners()) {
+                *x = cut_n.dot(v - p0);
+            }
+            let s = &s[..piece.n];
+            let crosses = s.iter().any(|&x| x > tol) && s.iter().any(|&x| x < -tol);
+            if !crosses {
+                next.push(piece);
+                continue;
+            }
+            for side in [cut_n, -cut_n] {
+                let half = piece.clip_front(p0, side);
+                if half.n >= 3 && half.area() > tol * tol {
+                    next.push(half);
+                }
+            }
+        }
+        std::mem::swap(&mut pieces, &mut next);
+    }
+    pieces
 }
 
 /// The infinite line `{x : m·x = off}` (unit `m`, in the patch's plane) as a key:

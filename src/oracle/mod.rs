@@ -317,6 +317,8 @@ fn cluster_factor(area_s: f64, cr: f64, cs: f64, d2: f64) -> f64 {
 /// bound, and is refined (down to surface links, whose shafts and rays decide)
 /// whenever the light it could carry matters. A link whose ends are too close for
 /// the estimate has an unbounded spread: it is opened wherever its error counts.
+/// `plane_tol` is the distance within which a point counts as on an element's
+/// plane.
 pub fn evaluate(
     elems: &ElementPool,
     bvh: &SceneBvh,
@@ -324,7 +326,7 @@ pub fn evaluate(
     s: ElementId,
     ids: [u64; 2],
     set: &EvalSettings,
-    eps_len: f64,
+    plane_tol: f64,
 ) -> LinkEval {
     let gr = &elems.geoms.as_slice()[r.ix()];
     let gs = &elems.geoms.as_slice()[s.ix()];
@@ -343,7 +345,9 @@ pub fn evaluate(
     let (pr, ps) = (element_points(gr), element_points(gs));
     // Exact culls: a receiver entirely behind the source, or a source entirely behind
     // the receiver, exchanges nothing (and a patch with itself is coplanar).
-    if (s_surface && all_behind(gs, &pr, eps_len)) || (r_surface && all_behind(gr, &ps, eps_len)) {
+    if (s_surface && all_behind(gs, &pr, plane_tol))
+        || (r_surface && all_behind(gr, &ps, plane_tol))
+    {
         return empty;
     }
     if r_surface && s_surface {

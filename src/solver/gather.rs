@@ -4,7 +4,7 @@
 //! a source whose radiosity varies opened into its children.
 //!
 //! In a space-time window a static point keeps what holds of its terms from static
-//! sources ([`super::kept`]; paper 001 §5.2's shortcut applied to the final
+//! sources ([`super::spacetime::kept_terms`]; paper 001 §5.2's shortcut applied to the final
 //! gather): terms no moving object can come between are kept with their
 //! visibility, the others with the static part of each ray as a mask, cast again at
 //! the moving objects only when one is between the point and the source
@@ -406,7 +406,7 @@ impl Solver<'_> {
             Some(sw) if r.m <= 64 && !point_shaft_clear(x, n, gs, sw) => {
                 // The static mask, its visibility and, where a moving object is now
                 // between the point and the source, the visibility now: one pass.
-                let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                let near = !point_shaft_clear(x, n, gs, &self.motion.moving_now);
                 let rays = oracle::masked_rays(&self.bvh, &r, None, near);
                 if rays.mask == 0 {
                     // Hidden by static geometry whatever moves.
@@ -569,6 +569,7 @@ impl Solver<'_> {
         let valid = self.outside_solids(x, n);
         let b = self.elems.radiosities.as_slice();
         let window = self
+            .st
             .window
             .as_ref()
             .filter(|_| !once && !self.elem_moving(leaf));
@@ -586,7 +587,7 @@ impl Solver<'_> {
         // A varying link's visibility and shaft test hold at the time it was
         // evaluated; a frame between keyframes that skips its solve gathers from
         // links evaluated at another time.
-        let links_now = self.links_at == self.now;
+        let links_now = self.st.links_at == self.motion.now;
         for l in self.chain_links(leaf) {
             let t = &tr[l as usize];
             let s = ends[l as usize].source as usize;
@@ -608,7 +609,7 @@ impl Solver<'_> {
                 for t in masked {
                     let gs = &geoms[t.elem as usize];
                     // Rays are only cast where a moving object is now.
-                    let near = !point_shaft_clear(x, n, gs, &self.moving_now);
+                    let near = !point_shaft_clear(x, n, gs, &self.motion.moving_now);
                     let v = if near {
                         let ps = oracle::poly(gs);
                         let r = self.gather_rays(x, n, p as u32, gs, &ps, u64::from(t.key));

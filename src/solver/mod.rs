@@ -34,30 +34,30 @@
 //! **Where the code lies.** This module holds the [`Solver`] (pools, options, rounds,
 //! the error estimate) and the kernel helpers both gathers share; each file below
 //! adds an `impl Solver` block: `rows.rs` (the leaf system), `gather.rs` (the final
-//! gather at one point), `reconstruct.rs` (the cells the gathers mesh), `window.rs`
-//! (a space-time window on the pools), `kept.rs` (the final-gather terms a window
-//! keeps), `between.rs` (what a window carries to the frames between); [`spacetime`]
-//! drives the windows and [`per_frame`] is the frame-by-frame baseline.
+//! gather at one point), `reconstruct.rs` (the cells the gathers mesh).
+//! [`spacetime`] (a folder with its own state) drives animations in windows and
+//! [`per_frame`] is the frame-by-frame baseline.
 
-mod between;
 pub mod frames;
 mod gather;
 pub mod gmres;
 pub mod hierarchy;
-mod kept;
 pub mod per_frame;
 mod reconstruct;
 pub mod report;
 mod rows;
 pub mod spacetime;
-mod window;
 
-use between::TimedEntry;
-pub use between::{Between, FrameRows, KeyValues, Keyframe, SharedRadiosity, TimeRange};
 pub use reconstruct::Reconstruction;
 use rows::{KeptCoef, RowEntries};
-pub use window::FrameCost;
-use window::Window;
+use spacetime::SpaceTimeState;
+use spacetime::interpolate::TimedEntry;
+pub use spacetime::interpolate::{
+    FrameBetween, FrameRows, FrameValues, Keyframe, SharedRadiosity, TimeRange,
+};
+use spacetime::kept_terms::{MaskedTerm, PointCache};
+pub use spacetime::window::FrameCost;
+use spacetime::window::Window;
 
 use std::collections::HashMap;
 use std::time::Instant;
@@ -75,7 +75,6 @@ use crate::pools::{
 };
 use crate::scene::Scene;
 use crate::shafts::meets_any;
-use kept::{MaskedTerm, PointCache};
 
 use crate::solution::{Leaf, PatchGeometry, Solution, SolveStats};
 pub use report::RoundRecord;
@@ -389,7 +388,9 @@ pub struct Solver<'a> {
     /// ([`Solver::is_closed`]; `None` before a run).
     closed: Option<bool>,
     time: [f32; 2],
-    eps_len: f64,
+    /// A point within this distance of a surface element's plane counts as on it
+    /// (the oracle's behind-the-plane cull): 1e-9 of the scene's diameter.
+    plane_tol: f64,
     min_area: f64,
     /// `A_p` of [`SolveOptions::power_size`] (0: off).
     power_area: f64,
@@ -400,10 +401,9 @@ pub struct Solver<'a> {
     /// Leaves (surface elements without children), in id order.
     leaves: Vec<ElementId>,
     /// Leaf index of each element (`u32::MAX` for inner elements).
-    leaf_of: Vec<u32>,
-    /// Active links by receiver (CSR over element ids).
-    csr_start: Vec<u32>,
-    csr_links: Vec<u32>,
+    leaf_index: Vec<u32>,
+    /// Active links by receiver.
+    link_index: LinkIndex,
     /// Leaf rows (CSR over leaves): sources of the leaf's chain links and their
     /// coefficients re-integrated over the leaf.
     row_start: Vec<u32>,
@@ -414,10 +414,8 @@ pub struct Solver<'a> {
     /// transports `r_i K_ij (pull g B)_j`.
     row_scale: Vec<f64>,
     leaf_gain: Vec<f64>,
-    /// Whether the leaf system is balanced ([`Solver::solve_balanced`]), and
-    /// whether that is fixed (space-time windows keep the shared part's choice).
+    /// Whether the leaf system is balanced ([`Solver::solve_balanced`]).
     balancing: bool,
-    balance_fixed: bool,
     /// Static solve: each leaf's row coefficients by chain link (`(link, coef)`,
     /// sorted by link), reused by the next round for links that did not change.
     row_cache: FastMap<u32, Vec<KeptCoef>>,
@@ -428,44 +426,33 @@ pub struct Solver<'a> {
     shapes: HashMap<u32, [f32; 4]>,
     rays: u64,
     shaft_clear: u64,
+    /// What moves and where it stands now.
+    motion: Motion,
+    /// The state of a space-time solve (all empty in a static solve).
+    st: SpaceTimeState,
+}
+
+/// What moves in the scene and where it stands now: per patch and per cluster
+/// whether it moves, and the moving objects' boxes at the time they are placed at.
+#[derive(Default)]
+struct Motion {
     /// Per patch: its object moves somewhere in the time domain.
     moving_patch: Vec<bool>,
     /// Per element built by the cluster tree (clusters and patch roots): it contains
     /// a moving patch. Surface elements below take their patch's flag.
     tree_moving: Vec<bool>,
-    /// Space-time state of the current time window (`None` in a static solve).
-    window: Option<Window>,
-    /// Solving the part shared by all windows: varying links are not refined.
-    shared_phase: bool,
     /// World boxes of the moving objects at the current time.
     moving_now: Vec<(DVec3, DVec3)>,
     /// The time the moving objects are placed at.
     now: f64,
-    /// Time the varying links were last evaluated at: their visibility (and shaft
-    /// test) holds at `now` only when the two are equal ([`Solver::place_between`]
-    /// moves the objects without evaluating them).
-    links_at: f64,
-    /// Most bytes a window keeps in final-gather terms (`None`: no bound).
-    kept_budget: Option<usize>,
-    /// [`Solver::set_direct_apart`].
-    direct_apart: bool,
-    /// The final-gather terms the last window kept on the shared part's elements,
-    /// handed to the next window ([`Solver::release_window`], [`Solver::begin_window`]).
-    carried: Option<PointCache>,
-    /// The solved frames around a frame solved between them, whose row entries
-    /// with a moving end this frame may take ([`TimeRange`]).
-    time_range: Option<TimeRange>,
-    /// The row entries with a moving end the last leaf rows of a window's frame
-    /// computed or took ([`Solver::take_frame_rows`]).
-    frame_rows: FrameRows,
-    /// Row entries the last leaf rows took from [`Solver::time_range`].
-    rows_between: u64,
-    /// Row coefficients a window's frame computed, `(leaf, link) → (F, visible
-    /// fraction)`, for its next refine-and-solve pass: within a frame the geometry
-    /// and the ids hold, so a leaf whose chain link did not change gets the same
-    /// coefficient bit for bit (LIGHT computed its rows 1.8 times a frame).
-    /// Emptied when the frame's passes end. Sorted by key, 24 bytes an entry.
-    pass_rows: Vec<((u32, u32), (f64, f64))>,
+}
+
+/// Active links by receiver (CSR over element ids): the links of element `e` are
+/// `links[start[e]..start[e + 1]]`.
+#[derive(Default)]
+struct LinkIndex {
+    start: Vec<u32>,
+    links: Vec<u32>,
 }
 
 /// Hands the heap pages freed by a collection, a released window or a frame's
@@ -535,7 +522,7 @@ impl<'a> Solver<'a> {
             .fold(0.0, f64::max);
         let mut s = Solver {
             scene,
-            eps_len: diam * 1e-9,
+            plane_tol: diam * 1e-9,
             min_area: (opts.min_size * diam).powi(2),
             power_area: (opts.power_size * diam).powi(2),
             opts,
@@ -550,36 +537,25 @@ impl<'a> Solver<'a> {
             rho_max,
             emits_under: Vec::new(),
             leaves: Vec::new(),
-            leaf_of: Vec::new(),
-            csr_start: Vec::new(),
-            csr_links: Vec::new(),
+            leaf_index: Vec::new(),
+            link_index: LinkIndex::default(),
             row_start: Vec::new(),
             row_sources: Vec::new(),
             row_coefs: Vec::new(),
             row_scale: Vec::new(),
             leaf_gain: Vec::new(),
             balancing: false,
-            balance_fixed: false,
             row_cache: FastMap::default(),
             shapes: HashMap::new(),
             rays: 0,
             shaft_clear: 0,
-            moving_patch: Vec::new(),
-            tree_moving: Vec::new(),
-            window: None,
-            shared_phase: false,
-            moving_now: Vec::new(),
-            now: t,
-            links_at: t,
-            kept_budget: None,
-            direct_apart: false,
-            carried: None,
-            time_range: None,
-            frame_rows: FrameRows::default(),
-            rows_between: 0,
-            pass_rows: Vec::new(),
+            motion: Motion {
+                now: t,
+                ..Motion::default()
+            },
+            st: SpaceTimeState::new(t),
         };
-        s.moving_patch = (0..s.patches.len())
+        s.motion.moving_patch = (0..s.patches.len())
             .map(|i| {
                 scene
                     .objects
@@ -587,9 +563,9 @@ impl<'a> Solver<'a> {
                     .is_some_and(|o| o.is_moving())
             })
             .collect();
-        s.moving_now = s.bvh.moving_boxes();
-        if s.moving_patch.iter().any(|&m| m) {
-            s.tree_moving = any_patch_under(&s.elems, |p| s.moving_patch[p]);
+        s.motion.moving_now = s.bvh.moving_boxes();
+        if s.motion.moving_patch.iter().any(|&m| m) {
+            s.motion.tree_moving = any_patch_under(&s.elems, |p| s.motion.moving_patch[p]);
         }
         s.emits_under = any_patch_under(&s.elems, |p| {
             s.patches.emissions[p].iter().any(|&e| e > 0.0)
@@ -684,7 +660,7 @@ impl<'a> Solver<'a> {
                     root,
                     [u64::from(root.0); 2],
                     &self.settings(),
-                    self.eps_len,
+                    self.plane_tol,
                 );
                 let id = self.links.push(root, root, ev.transport)?;
                 self.refine(vec![id], thr)?;
@@ -1064,7 +1040,8 @@ impl<'a> Solver<'a> {
                 // cluster link): left whole they would carry no light, and the
                 // rounds' B_ref would be zero.
                 let forced = no_estimate(ends, &t);
-                if !self.needs_refining(l, thr) || (self.shared_phase && t.varying() && !forced) {
+                if !self.needs_refining(l, thr) || (self.st.shared_phase && t.varying() && !forced)
+                {
                     continue;
                 }
                 let split = match oracle::choose_split(&self.elems, r, s, self.min_area) {
@@ -1072,7 +1049,7 @@ impl<'a> Solver<'a> {
                     Split::Receiver => r,
                     Split::Source => s,
                 };
-                if let Some(w) = &mut self.window {
+                if let Some(w) = &mut self.st.window {
                     let snap = if w.in_frame {
                         &mut w.frame
                     } else {
@@ -1109,7 +1086,7 @@ impl<'a> Solver<'a> {
                 .map(|&(r, s)| {
                     let ids = [this.ray_id(r.0), this.ray_id(s.0)];
                     let ev =
-                        oracle::evaluate(&this.elems, &this.bvh, r, s, ids, &set, this.eps_len);
+                        oracle::evaluate(&this.elems, &this.bvh, r, s, ids, &set, this.plane_tol);
                     (ev, this.varying(r, s))
                 })
                 .collect();
@@ -1143,11 +1120,11 @@ impl<'a> Solver<'a> {
 
     /// True if element `e` holds a moving patch.
     fn elem_moving(&self, e: ElementId) -> bool {
-        if let Some(&m) = self.tree_moving.get(e.ix()) {
+        if let Some(&m) = self.motion.tree_moving.get(e.ix()) {
             return m;
         }
         let p = self.elems.geoms.as_slice()[e.ix()].patch;
-        p != u32::MAX && self.moving_patch[p as usize]
+        p != u32::MAX && self.motion.moving_patch[p as usize]
     }
 
     /// True if the link `r ← s` changes within the current window: an end moves, or
@@ -1163,7 +1140,7 @@ impl<'a> Solver<'a> {
     /// with another motion can come between them: such a link is constant
     /// ([`Solver::moves_as_one_and_clear`]).
     fn varying(&self, r: ElementId, s: ElementId) -> bool {
-        let Some(w) = &self.window else {
+        let Some(w) = &self.st.window else {
             return false;
         };
         let (mr, ms) = (self.elem_moving(r), self.elem_moving(s));
@@ -1202,7 +1179,7 @@ impl<'a> Solver<'a> {
     /// a corner at distance `r` from the object's origin strays from the chord of
     /// its path by at most the sagitta `r (1 - cos(φ/2))` of the angle `φ` turned,
     /// and the box is padded by that.
-    fn moves_as_one_and_clear(&self, r: ElementId, s: ElementId, w: &window::Window) -> bool {
+    fn moves_as_one_and_clear(&self, r: ElementId, s: ElementId, w: &Window) -> bool {
         let geoms = self.elems.geoms.as_slice();
         let (gr, gs) = (&geoms[r.ix()], &geoms[s.ix()]);
         if gr.patch == u32::MAX || gs.patch == u32::MAX {
@@ -1221,7 +1198,7 @@ impl<'a> Solver<'a> {
             return false;
         }
         // The corners in object space: the placement at the current time undone.
-        let undo = track.at(self.now).inverse();
+        let undo = track.at(self.motion.now).inverse();
         let corners: Vec<DVec3> = [gr, gs]
             .iter()
             .flat_map(|g| g.corners[..g.n as usize].iter())
@@ -1268,13 +1245,13 @@ impl<'a> Solver<'a> {
         }
         // Static geometry: stopped at the first static triangle whose box meets it.
         self.bvh.for_each_triangle_in_box(lo, hi, |patch, _| {
-            self.moving_patch.get(patch as usize) == Some(&true)
+            self.motion.moving_patch.get(patch as usize) == Some(&true)
         })
     }
 
     /// True if the scene has moving patches.
     pub fn has_motion(&self) -> bool {
-        !self.tree_moving.is_empty()
+        !self.motion.tree_moving.is_empty()
     }
 
     /// Treats the scene as it stands now as a static one: no object counts as
@@ -1290,9 +1267,9 @@ impl<'a> Solver<'a> {
             return;
         }
         self.bvh = SceneBvh::build_static(&self.patches);
-        self.moving_patch.iter_mut().for_each(|m| *m = false);
-        self.tree_moving.clear();
-        self.moving_now.clear();
+        self.motion.moving_patch.iter_mut().for_each(|m| *m = false);
+        self.motion.tree_moving.clear();
+        self.motion.moving_now.clear();
     }
 
     /// Places the moving objects at time `t`: their patches, their elements (corners
@@ -1303,7 +1280,7 @@ impl<'a> Solver<'a> {
             return;
         }
         for i in 0..self.patches.len() {
-            if !self.moving_patch[i] {
+            if !self.motion.moving_patch[i] {
                 continue;
             }
             let m = self.scene.objects[self.patches.objects[i] as usize].to_world(t);
@@ -1320,7 +1297,7 @@ impl<'a> Solver<'a> {
         let n = self.elems.len();
         for e in 0..n {
             let g = self.elems.geoms.as_slice()[e];
-            if g.patch == u32::MAX || !self.moving_patch[g.patch as usize] {
+            if g.patch == u32::MAX || !self.motion.moving_patch[g.patch as usize] {
                 continue;
             }
             let placed =
@@ -1330,9 +1307,9 @@ impl<'a> Solver<'a> {
                 ..placed
             };
         }
-        for e in (0..self.tree_moving.len()).rev() {
+        for e in (0..self.motion.tree_moving.len()).rev() {
             let geoms = self.elems.geoms.as_slice();
-            if !self.tree_moving[e] || geoms[e].patch != u32::MAX {
+            if !self.motion.tree_moving[e] || geoms[e].patch != u32::MAX {
                 continue;
             }
             let node = self.elems.nodes.as_slice()[e];
@@ -1355,8 +1332,8 @@ impl<'a> Solver<'a> {
             g.corners[1] = hi.to_array();
         }
         self.bvh.place(self.scene, t);
-        self.moving_now = self.bvh.moving_boxes();
-        self.now = t;
+        self.motion.moving_now = self.bvh.moving_boxes();
+        self.motion.now = t;
     }
 
     /// The radiosity scale `B_ref` errors are measured against (see `b_ref`).
@@ -1368,10 +1345,10 @@ impl<'a> Solver<'a> {
     fn index_links(&mut self) {
         let n = self.elems.len();
         self.leaves.clear();
-        self.leaf_of = vec![u32::MAX; n];
+        self.leaf_index = vec![u32::MAX; n];
         for (i, node) in self.elems.nodes.as_slice().iter().enumerate() {
             if node.child_count == 0 && node.kind == ElementKind::Surface as u8 {
-                self.leaf_of[i] = self.leaves.len() as u32;
+                self.leaf_index[i] = self.leaves.len() as u32;
                 self.leaves.push(ElementId(i as u32));
             }
         }
@@ -1395,12 +1372,13 @@ impl<'a> Solver<'a> {
                 fill[r] += 1;
             }
         }
-        self.csr_start = start;
-        self.csr_links = list;
+        self.link_index.start = start;
+        self.link_index.links = list;
     }
 
     fn links_of(&self, e: usize) -> &[u32] {
-        &self.csr_links[self.csr_start[e] as usize..self.csr_start[e + 1] as usize]
+        &self.link_index.links
+            [self.link_index.start[e] as usize..self.link_index.start[e + 1] as usize]
     }
 
     /// The links of `leaf` and of each of its ancestors, the leaf's first: the links
@@ -1820,398 +1798,7 @@ fn with_power_error(change: f64, balance: f64, closed: Option<bool>) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
-
-    use super::gather::Terms;
-    use super::rows::RowMasks;
-    use super::window::FRAME_SID;
     use super::*;
-
-    /// LIGHT's shared part solved at `eps`, and a window over `[start, end]` begun:
-    /// the solver and its radiosity scale.
-    fn light_window(scene: &Scene, eps: f64, end: f64) -> (Solver<'_>, f64) {
-        let opts = SolveOptions {
-            eps,
-            ..SolveOptions::default()
-        };
-        let (t0, t1) = (scene.time.start, scene.time.end);
-        let mut s = Solver::at_time(scene, opts, t0, [t0 as f32, t1 as f32]).unwrap();
-        s.run_shared([t0, t1], |_, _| {}).unwrap();
-        let b_ref = s.radiosity_scale();
-        s.begin_window([t0, end], b_ref).unwrap();
-        (s, b_ref)
-    }
-
-    #[test]
-    fn a_carried_term_holds_unless_a_moving_object_may_come_between() {
-        // A static point on the floor of the Cornell box keeps three sources'
-        // terms: fixed terms (visibility included) from the light, masked terms
-        // from the back wall, and unoccluded terms keyed clear from the ceiling.
-        // A window whose moving object sweeps a box on the segment from the point
-        // to the light drops the light's terms only; one whose object stays out of
-        // the box around the point and the light keeps all three.
-        let scene = crate::scene::cornell_box(true);
-        let s = Solver::new(&scene, SolveOptions::default()).unwrap();
-        let geoms = s.elems.geoms.as_slice();
-        let find = |pred: &dyn Fn(&Geom) -> bool| {
-            (0..geoms.len())
-                .find(|&e| geoms[e].patch != u32::MAX && pred(&geoms[e]))
-                .unwrap()
-        };
-        let normal = |g: &Geom| DVec3::from_array(g.normal);
-        let light = find(&|g| s.patches.emissions[g.patch as usize][0] > 0.0);
-        let floor = find(&|g| normal(g).y > 0.9 && s.patches.emissions[g.patch as usize][0] == 0.0);
-        let ceiling =
-            find(&|g| normal(g).y < -0.9 && s.patches.emissions[g.patch as usize][0] == 0.0);
-        let back = find(&|g| normal(g).z > 0.9);
-        let q = |x: f64| (x * (1u64 << 24) as f64) as u32;
-        let pk = (geoms[floor].patch, q(0.5), q(0.5));
-        let x = s.patches.point(pk.0 as usize, 0.5, 0.5);
-        let masked = |elem: usize| MaskedTerm {
-            mask: 0b1011,
-            key: 7,
-            elem: elem as u32,
-            f: 0.1,
-            vis_static: 0.75,
-        };
-        let mut cache = PointCache::new(&crate::pools::Storage::Ram, None).unwrap();
-        let src = |e: usize| (e as u32) << 1;
-        cache.add(
-            pk,
-            vec![
-                (
-                    src(light),
-                    Terms {
-                        fixed: vec![(light as u32, 0.2)],
-                        masked: vec![],
-                    },
-                ),
-                (
-                    src(back),
-                    Terms {
-                        fixed: vec![],
-                        masked: vec![(masked(back), 0.75)],
-                    },
-                ),
-                (
-                    src(ceiling) | 1,
-                    Terms {
-                        fixed: vec![(ceiling as u32, 0.3)],
-                        masked: vec![],
-                    },
-                ),
-            ],
-        );
-        let (lo, hi) = geom_box(&geoms[light]);
-        let between = x.lerp((lo + hi) * 0.5, 0.5);
-        let kept = |swept: &[(DVec3, DVec3)]| {
-            let c = s.revalidated(&cache, swept).unwrap();
-            let view = c.get(&pk);
-            [src(light), src(back), src(ceiling) | 1]
-                .map(|k| view.is_some_and(|v| v.get(k).is_some()))
-        };
-        let small = DVec3::splat(10.0);
-        assert_eq!(
-            kept(&[(between - small, between + small)]),
-            [false, true, true]
-        );
-        // Beside the point, off the box around it and the light (the box of the
-        // light's corners and the point, padded by a hair).
-        let aside = DVec3::new(hi.x + 50.0, x.y + 20.0, x.z);
-        assert_eq!(kept(&[(aside - small, aside + small)]), [true, true, true]);
-        assert_eq!(kept(&[]), [true, true, true]);
-        // Where no moving object can come between, a masked term becomes the
-        // fixed term a fresh gather makes (factor times the static visibility);
-        // near one it stays masked.
-        let c = s.revalidated(&cache, &[]).unwrap();
-        let view = c.get(&pk).unwrap();
-        assert_eq!(
-            view.get(src(back)).unwrap(),
-            (
-                &[kept::FixedTerm {
-                    elem: back as u32,
-                    f: 0.1 * 0.75
-                }][..],
-                &[][..]
-            )
-        );
-        let (lo, hi) = geom_box(&geoms[back]);
-        let on_back = (lo + hi) * 0.5;
-        let c = s
-            .revalidated(&cache, &[(on_back - small, on_back + small)])
-            .unwrap();
-        assert_eq!(
-            c.get(&pk).unwrap().get(src(back)).unwrap().1,
-            &[masked(back)]
-        );
-        assert_eq!(
-            view.get(src(light)).unwrap().0,
-            &[kept::FixedTerm {
-                elem: light as u32,
-                f: 0.2
-            }]
-        );
-    }
-
-    #[test]
-    fn row_terms_kept_over_a_window_are_the_ones_computed_afresh() {
-        // LIGHT's first frames: the window keeps the row entries cached
-        // coefficients open into, the hidden coefficients of varying links
-        // between static ends, and the factors from static leaves to the static
-        // elements their sources open into, and reuses them from the third frame
-        // on. The rows built with them must be the rows built without, bit for bit.
-        // (End to end, LIGHT and ACTOR write the same files with and without.)
-        let scene = crate::scene::light_scene(75);
-        let (mut s, b_ref) = light_window(&scene, 1.0, 0.5);
-        let rows = |s: &Solver| {
-            (
-                s.row_start.clone(),
-                s.row_sources.clone(),
-                s.row_coefs.clone(),
-            )
-        };
-        for t in [0.0, 0.04, 0.08] {
-            s.frame(t, b_ref).unwrap();
-        }
-        // Kept entries this frame reuses (none of them under its refinement).
-        let reused = s.window.as_ref().map_or(0, |w| {
-            w.opened
-                .values()
-                .filter(|e| s.opened_settled(e))
-                .map(|e| e.len())
-                .sum::<usize>()
-        });
-        assert!(reused > 1000, "{reused} opened entries reused");
-        // Hidden row coefficients of varying links this frame reuses (no moving
-        // object in the shaft between the ends now; measured 32 k, and 38 k opened
-        // entries). Of those, the ones whose box of both ends meets the board's box
-        // are cleared by the shaft's planes alone (measured 2.0 k).
-        let geoms = s.elems.geoms.as_slice();
-        let in_box = |a: &Geom, b: &Geom| {
-            let ((alo, ahi), (blo, bhi)) = (geom_box(a), geom_box(b));
-            meets_any(alo.min(blo), ahi.max(bhi), &s.moving_now)
-        };
-        let (steady, by_planes) = s.window.as_ref().map_or((0, 0), |w| {
-            let reused: Vec<(&Geom, &Geom)> = w
-                .hidden
-                .keys()
-                .filter(|&&(leaf, l)| leaf < FRAME_SID && (l as usize) < w.frame.links_len)
-                .map(|&(leaf, l)| {
-                    let src = s.links.ends.as_slice()[l as usize].source;
-                    (&geoms[leaf as usize], &geoms[src as usize])
-                })
-                .filter(|&(a, b)| s.clear_of_moving(a, b))
-                .collect();
-            let by_planes = reused.iter().filter(|&&(a, b)| in_box(a, b)).count();
-            (reused.len(), by_planes)
-        });
-        assert!(steady > 1000, "{steady} hidden coefficients reused");
-        assert!(by_planes > 100, "{by_planes} cleared by the shaft's planes");
-        // Factors from static leaves to the static elements their sources open into
-        // (measured 58 k).
-        let factors = s.window.as_ref().map_or(0, |w| w.factors.len());
-        eprintln!(
-            "reused: {reused} opened entries, {steady} hidden coefficients ({by_planes} by the shaft's planes), {factors} factors"
-        );
-        assert!(factors > 1000, "{factors} opened factors kept");
-        // Entries kept for the leaves this frame's refinement made (keyed by their
-        // place under the window's base, made again by each frame with other ids).
-        let (own, own_hit) = s.window.as_ref().map_or((0, 0), |w| {
-            let now: std::collections::HashSet<u32> =
-                w.sids.iter().copied().filter(|&x| x != u32::MAX).collect();
-            let kept = w.rows.keys().chain(w.hidden.keys());
-            (now.len(), kept.filter(|k| now.contains(&k.0)).count())
-        });
-        eprintln!("this frame's own leaves: {own}, with {own_hit} kept coefficients");
-        assert!(own_hit > 300, "{own_hit} kept coefficients of frame leaves");
-        // Static masks of the entries with the board's box in the shaft now (which
-        // `hidden` cannot keep), on the window's base leaves and links: the
-        // coefficient from them is the one casting every ray gives, bit for bit,
-        // and the masks made again are the ones kept.
-        let mut masked_now = 0;
-        if let Some(w) = s.window.as_ref() {
-            for (&(leaf, l), &bits) in &w.masks {
-                if leaf >= FRAME_SID || l as usize >= w.frame.links_len {
-                    continue;
-                }
-                let src = s.links.ends.as_slice()[l as usize].source;
-                let (g, gs) = (&geoms[leaf as usize], &geoms[src as usize]);
-                assert!(gs.patch != u32::MAX && !s.elem_moving(ElementId(src)));
-                if s.clear_of_moving(g, gs) {
-                    continue;
-                }
-                masked_now += 1;
-                let q = oracle::samples(g);
-                let n = DVec3::from_array(g.normal);
-                let coef = |how| s.hidden_row_coef(ElementId(leaf), l, src, &q, n, how);
-                let (all, _) = coef(RowMasks::None);
-                let (known, _) = coef(RowMasks::Known(bits));
-                let (made, again) = coef(RowMasks::Make);
-                assert_eq!(again, bits, "leaf {leaf} link {l}");
-                for (a, b) in [(all, known), (all, made)] {
-                    assert_eq!(a.0.to_bits(), b.0.to_bits(), "leaf {leaf} link {l}");
-                    assert_eq!(a.1.to_bits(), b.1.to_bits(), "leaf {leaf} link {l}");
-                }
-            }
-        }
-        eprintln!("{masked_now} masked entries with the board in the shaft now");
-        assert!(masked_now > 100, "{masked_now} masked entries");
-        // At one state (the rows a frame solved with are one step behind its end:
-        // cluster sources' coefficients follow the radiosity the solve gave).
-        s.compute_leaf_rows();
-        let with = rows(&s);
-        if let Some(w) = s.window.as_mut() {
-            w.opened.clear();
-            w.opened_entries = 0;
-            w.hidden.clear();
-            w.masks.clear();
-            w.factors.clear();
-        }
-        s.compute_leaf_rows();
-        let without = rows(&s);
-        assert_eq!(with.0, without.0);
-        assert_eq!(with.1, without.1);
-        let bits = |c: &[f64]| c.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&with.2), bits(&without.2));
-        // A frame's next pass takes the entries the last one computed (those no
-        // window cache keeps): the same rows as computing them again.
-        let passed = s.pass_rows.len();
-        eprintln!("{passed} entries for the next pass");
-        assert!(passed > 1000, "{passed} entries for the next pass");
-        s.compute_leaf_rows();
-        let again = rows(&s);
-        s.pass_rows.clear();
-        s.compute_leaf_rows();
-        let afresh = rows(&s);
-        assert_eq!(again.1, afresh.1);
-        assert_eq!(bits(&again.2), bits(&afresh.2));
-        assert_eq!(bits(&again.2), bits(&with.2));
-        // The constant links' coefficients too (kept as f32, so equal to f32's
-        // rounding): a coefficient kept for a leaf a frame made is the one its
-        // leaf gets afresh.
-        if let Some(w) = s.window.as_mut() {
-            w.rows.clear();
-        }
-        s.compute_leaf_rows();
-        let fresh = rows(&s);
-        assert_eq!(with.1, fresh.1);
-        for (i, (a, b)) in with.2.iter().zip(&fresh.2).enumerate() {
-            assert!(
-                (a - b).abs() <= 1e-6 * b.abs(),
-                "entry {i}: kept {a}, fresh {b}"
-            );
-        }
-    }
-
-    #[test]
-    fn an_element_a_frame_makes_again_keeps_its_keys_under_another_id() {
-        // LIGHT: frames far apart refine around the board where it is, so the
-        // elements they both make (the same split of the same element) get other
-        // ids. What the rays and the caches key them by must not change, and
-        // different elements must not share it.
-        let scene = crate::scene::light_scene(75);
-        let (mut s, b_ref) = light_window(&scene, 0.5, 1.0);
-        type Keys = HashMap<Vec<u64>, (u32, u64, u32)>;
-        let frame_keys = |s: &mut Solver, t: f64| -> Keys {
-            s.frame(t, b_ref).unwrap();
-            s.intern_frame_elements();
-            let base = s.window.as_ref().map_or(0, |w| w.frame.elems_len);
-            (base..s.elems.len())
-                .map(|e| {
-                    let g = &s.elems.geoms.as_slice()[e];
-                    let shape: Vec<u64> = g.corners[..g.n as usize]
-                        .iter()
-                        .flatten()
-                        .map(|c| c.to_bits())
-                        .chain([u64::from(g.patch)])
-                        .collect();
-                    let e = e as u32;
-                    (shape, (e, s.ray_id(e), s.stable_id(e)))
-                })
-                .collect()
-        };
-        let a = frame_keys(&mut s, 0.0);
-        let b = frame_keys(&mut s, 0.9);
-        let (mut same, mut moved) = (0, 0);
-        for (shape, &(ea, ra, sa)) in &a {
-            if let Some(&(eb, rb, sb)) = b.get(shape) {
-                same += 1;
-                moved += usize::from(ea != eb);
-                assert_eq!(
-                    (ra, sa),
-                    (rb, sb),
-                    "elements {ea} and {eb}: same place, other keys"
-                );
-            }
-        }
-        eprintln!(
-            "{} and {} frame elements, {same} in both, {moved} of them under another id",
-            a.len(),
-            b.len()
-        );
-        assert!(moved > 10, "{moved} elements made again under another id");
-        for keys in [&a, &b] {
-            let rays: std::collections::HashSet<u64> = keys.values().map(|k| k.1).collect();
-            let sids: std::collections::HashSet<u32> = keys.values().map(|k| k.2).collect();
-            assert_eq!(rays.len(), keys.len(), "two elements share a ray key");
-            assert_eq!(sids.len(), keys.len(), "two elements share a cache id");
-        }
-    }
-
-    #[test]
-    fn a_frame_between_takes_the_moving_rows_that_hold_and_solves_as_without() {
-        // LIGHT's first frames: frame 4 solved between frames 0 and 8 takes the row
-        // entries with a moving end (the board's leaves, and the leaves that see
-        // the board) whose light holds over [0, 8] on the line between them. Its
-        // solve must stay with the solve that computes every entry at frame 4.
-        let scene = crate::scene::light_scene(75);
-        let (mut s, b_ref) = light_window(&scene, 1.0, 0.5);
-        let (ta, t, tb) = (0.0, 0.16, 0.32);
-        s.frame(ta, b_ref).unwrap();
-        let a = Arc::new(s.take_frame_rows());
-        s.frame(tb, b_ref).unwrap();
-        let b = Arc::new(s.take_frame_rows());
-        let fresh_cost = s.frame(t, b_ref).unwrap();
-        let fresh = s.shared_radiosity();
-        let tol = 0.01 * b_ref;
-        s.set_time_range(Some(TimeRange {
-            a: a.clone(),
-            b: b.clone(),
-            alpha: (t - ta) / (tb - ta),
-            tol,
-        }));
-        let cost = s.frame(t, b_ref).unwrap();
-        s.set_time_range(None);
-        let taken = s.shared_radiosity();
-        eprintln!(
-            "moving rows {} at 0, {} at 8, {} at 4: {} taken between",
-            a.len(),
-            b.len(),
-            cost.rows_moving,
-            cost.rows_between
-        );
-        assert_eq!(fresh_cost.rows_between, 0);
-        assert!(cost.rows_moving > 1000, "{} moving rows", cost.rows_moving);
-        assert!(
-            2 * cost.rows_between > cost.rows_moving,
-            "{} of {} taken",
-            cost.rows_between,
-            cost.rows_moving
-        );
-        // The frame's radiosity, element by element of the window's base.
-        let (mut d2, mut r2) = (0.0, 0.0);
-        for (x, y) in taken.b.iter().zip(&fresh.b) {
-            for c in 0..3 {
-                d2 += f64::from(x[c] - y[c]).powi(2);
-                r2 += f64::from(y[c]).powi(2);
-            }
-        }
-        let apart = (d2 / r2).sqrt();
-        // Measured 0.031% (every entry computed against 2.2 k of 3.4 k taken);
-        // taking every entry both ends have, whatever its change, gave 0.110%.
-        eprintln!("radiosity {:.4}% apart", apart * 100.0);
-        assert!(apart < 6e-4, "radiosity {apart} apart");
-    }
 
     #[test]
     fn parameter_points_fall_in_the_domains_that_hold_them() {

@@ -8,16 +8,16 @@
 //! long enough ([`Cell::split_dirs`]), and the cells that stop are stored with
 //! their corner values (bilinear within the cell). In a space-time window the
 //! points a frame between two solved frames may take on the line between theirs
-//! are not gathered ([`super::Between`]), and every point's value comes back for
-//! later frames to interpolate ([`super::KeyValues`]), with the direct light of the
+//! are not gathered ([`super::FrameBetween`]), and every point's value comes back for
+//! later frames to interpolate ([`super::FrameValues`]), with the direct light of the
 //! points on moving surfaces apart (`Solver::direct_light`).
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::between::point_coord;
+use super::spacetime::interpolate::point_coord;
 use super::{
-    Between, CORNER_INSET, ElementId, FastMap, KeyValues, Leaf, Patches, PointKey, Solution,
+    CORNER_INSET, ElementId, FastMap, FrameBetween, FrameValues, Leaf, Patches, PointKey, Solution,
     SolveStats, Solver, hierarchy,
 };
 
@@ -36,7 +36,7 @@ pub struct Reconstruction {
     pub leaves: Vec<Leaf>,
     /// The value at every point, gathered or interpolated, for later frames of a
     /// space-time window to interpolate (empty outside a window).
-    pub values: KeyValues,
+    pub values: FrameValues,
     /// Points gathered by a final gather.
     pub gathered: u64,
     /// Points interpolated between keyframes.
@@ -275,21 +275,22 @@ impl Solver<'_> {
     }
 
     /// [`Solver::reconstruct`], with the points of a frame between two solved
-    /// frames interpolated where those agree (see [`Between`]); `None` gathers
+    /// frames interpolated where those agree (see [`FrameBetween`]); `None` gathers
     /// every point (a keyframe). In a space-time window the values of every point
     /// come back too.
-    pub fn reconstruct_between(&self, between: Option<&Between>) -> Reconstruction {
+    pub fn reconstruct_between(&self, between: Option<&FrameBetween>) -> Reconstruction {
         let geoms = self.elems.geoms.as_slice();
         let interpolated = std::sync::atomic::AtomicU64::new(0);
         // The window's kept terms, locked for the whole reconstruction: the
         // parallel gathers read them, the batches' fresh terms are added between.
         let mut guard = self
+            .st
             .window
             .as_ref()
             .map(|w| w.points.lock().unwrap_or_else(|e| e.into_inner()));
         let mut known = guard.as_mut().and_then(|g| g.as_mut());
         // A window's frames share one scale (see `Window::b_ref`).
-        let b_ref = match self.window.as_ref().and_then(|w| w.b_ref) {
+        let b_ref = match self.st.window.as_ref().and_then(|w| w.b_ref) {
             Some(b) => b,
             None => self.rms_radiosity(),
         };
@@ -300,10 +301,11 @@ impl Solver<'_> {
         let mut cache = VertexCache::default();
         // In a space-time window the points on moving surfaces keep their direct
         // light apart, for the frames between to interpolate the rest only.
-        let emitters =
-            (self.direct_apart && self.window.is_some() && self.moving_patch.contains(&true))
-                .then(|| self.emitters_now())
-                .flatten();
+        let emitters = (self.st.direct_apart
+            && self.st.window.is_some()
+            && self.motion.moving_patch.contains(&true))
+        .then(|| self.emitters_now())
+        .flatten();
         let mut cells: Vec<Cell> = self
             .leaves
             .iter()
@@ -346,7 +348,7 @@ impl Solver<'_> {
                         let outside = || self.outside_solids(x, n);
                         let direct = emitters
                             .as_ref()
-                            .filter(|_| self.moving_patch[pk.0 as usize])
+                            .filter(|_| self.motion.moving_patch[pk.0 as usize])
                             .map(|em| self.direct_light(x, n, pk.0, &pk, em));
                         if let Some((b, valid)) =
                             between.and_then(|bw| bw.value(&pk, outside, direct))
@@ -389,7 +391,7 @@ impl Solver<'_> {
                 let off = (0..3)
                     .map(|k| (cv[k] - interp[k]).abs())
                     .fold(0.0, f64::max);
-                let cell_tol = if self.moving_patch.get(c.patch as usize) == Some(&true) {
+                let cell_tol = if self.motion.moving_patch.get(c.patch as usize) == Some(&true) {
                     tol_moving
                 } else {
                     tol
@@ -451,14 +453,14 @@ impl Solver<'_> {
         let interpolated = interpolated.into_inner();
         // Later frames of a window interpolate this one's values; a solve
         // outside a window has no use for them.
-        let values = if self.window.is_some() {
-            KeyValues::from_points(cache.index.iter().map(|(&pk, &i)| {
+        let values = if self.st.window.is_some() {
+            FrameValues::from_points(cache.index.iter().map(|(&pk, &i)| {
                 let (b, ok) = cache.values[i];
                 (pk, b, ok)
             }))
             .with_direct(std::mem::take(&mut cache.direct))
         } else {
-            KeyValues::default()
+            FrameValues::default()
         };
         Reconstruction {
             leaves,

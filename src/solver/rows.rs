@@ -362,7 +362,7 @@ impl Solver<'_> {
             row.push((s, coef));
             return;
         }
-        let base_len = self.window.as_ref().map_or(0, |w| w.frame.elems_len);
+        let base_len = self.st.window.as_ref().map_or(0, |w| w.frame.elems_len);
         for ch in node.first_child..node.first_child + node.child_count {
             let factor = || {
                 let ps = oracle::poly(&self.elems.geoms.as_slice()[ch as usize]);
@@ -394,7 +394,7 @@ impl Solver<'_> {
     /// ([`Solver::row_link_id`]). `None` outside a frame, for a moving leaf, or
     /// an element with no stable id.
     fn row_key(&self, leaf: ElementId, l: u32, s: u32) -> Option<(u32, u32)> {
-        let w = self.window.as_ref().filter(|w| w.in_frame)?;
+        let w = self.st.window.as_ref().filter(|w| w.in_frame)?;
         if self.elem_moving(leaf) {
             return None;
         }
@@ -425,7 +425,7 @@ impl Solver<'_> {
     /// the link's id for a link of the shared part, else its source's
     /// [`Solver::ray_id`] (a leaf's chain links have distinct sources).
     fn row_link_id(&self, l: u32, s: u32) -> u64 {
-        let shared = self.window.as_ref().map_or(0, |w| w.base.links_len);
+        let shared = self.st.window.as_ref().map_or(0, |w| w.base.links_len);
         if shared == 0 || (l as usize) < shared {
             u64::from(l)
         } else {
@@ -449,7 +449,7 @@ impl Solver<'_> {
             DVec3::from_array(a.normal),
             &pb[..b.n as usize],
             DVec3::from_array(b.normal),
-            &self.moving_now,
+            &self.motion.moving_now,
         )
     }
 
@@ -457,7 +457,7 @@ impl Solver<'_> {
     /// element of the window's base (a frame's refinement appends after them) with
     /// no children the frame refined ([`Window::opened`]).
     pub(super) fn opened_settled(&self, entries: &[(u32, f64)]) -> bool {
-        let base_len = self.window.as_ref().map_or(0, |w| w.frame.elems_len);
+        let base_len = self.st.window.as_ref().map_or(0, |w| w.frame.elems_len);
         let nodes = self.elems.nodes.as_slice();
         entries.iter().all(|&(e, _)| {
             let node = nodes[e as usize];
@@ -490,12 +490,13 @@ impl Solver<'_> {
         let geoms = elems.geoms.as_slice();
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
-        let cache = self.window.as_ref().map(|w| &w.rows);
-        let opened = self.window.as_ref().map(|w| &w.opened);
-        let hidden = self.window.as_ref().map(|w| &w.hidden);
-        let masks = self.window.as_ref().map(|w| &w.masks);
+        let cache = self.st.window.as_ref().map(|w| &w.rows);
+        let opened = self.st.window.as_ref().map(|w| &w.opened);
+        let hidden = self.st.window.as_ref().map(|w| &w.hidden);
+        let masks = self.st.window.as_ref().map(|w| &w.masks);
         let rays_per_point = self.opts.rays_per_point;
         let factors = self
+            .st
             .window
             .as_ref()
             .filter(|w| w.in_frame)
@@ -505,8 +506,8 @@ impl Solver<'_> {
         let keep_rows = !self.has_motion();
         // A window's frame records its entries with a moving end, and takes them
         // between the solved frames around it where they hold.
-        let timed = self.window.as_ref().is_some_and(|w| w.in_frame);
-        let passed = Some(&self.pass_rows).filter(|_| timed);
+        let timed = self.st.window.as_ref().is_some_and(|w| w.in_frame);
+        let passed = Some(&self.st.pass_rows).filter(|_| timed);
         let radiosities = self.elems.radiosities.as_slice();
         let rows: Vec<LeafRow> = self
             .leaves
@@ -590,7 +591,7 @@ impl Solver<'_> {
                         && (leaf_moving || self.elem_moving(ElementId(s))))
                     .then(|| (leaf_ray, self.row_link_id(l, s)));
                     let on_line = || {
-                        let (k, r) = tkey.zip(self.time_range.as_ref())?;
+                        let (k, r) = tkey.zip(self.st.time_range.as_ref())?;
                         let bs = radiosities[s as usize]
                             .iter()
                             .fold(0.0f32, |m, &x| m.max(x));
@@ -691,8 +692,8 @@ impl Solver<'_> {
             .collect();
         self.clear_rows();
         self.row_cache.clear();
-        self.frame_rows.0.clear();
-        self.rows_between = 0;
+        self.st.frame_rows.0.clear();
+        self.st.rows_between = 0;
         let leaves = std::mem::take(&mut self.leaves);
         for (&leaf, out) in leaves.iter().zip(rows) {
             let LeafRow {
@@ -707,10 +708,10 @@ impl Solver<'_> {
                 between,
                 passed,
             } = out;
-            self.frame_rows.0.extend(timed);
-            self.rows_between += between;
-            self.pass_rows.extend(passed);
-            if let Some(w) = &mut self.window
+            self.st.frame_rows.0.extend(timed);
+            self.st.rows_between += between;
+            self.st.pass_rows.extend(passed);
+            if let Some(w) = &mut self.st.window
                 && !(fresh.is_empty()
                     && fresh_opened.is_empty()
                     && fresh_hidden.is_empty()
@@ -742,8 +743,8 @@ impl Solver<'_> {
             self.push_row(row);
         }
         self.leaves = leaves;
-        self.pass_rows.sort_unstable_by_key(|e| e.0);
-        self.pass_rows.shrink_to_fit();
+        self.st.pass_rows.sort_unstable_by_key(|e| e.0);
+        self.st.pass_rows.shrink_to_fit();
     }
 
     /// Empties the leaf rows (CSR) before they are pushed again, leaf by leaf.
@@ -805,7 +806,7 @@ impl Solver<'_> {
     /// point to f32 on that scene (measured: the next step changes nothing).
     pub(super) fn solve_rows(&mut self) -> Result<f64> {
         self.compute_leaf_rows();
-        if !self.balance_fixed {
+        if !self.st.balance_fixed {
             self.balancing = false;
         }
         let residual = self.solve_balanced()?;
@@ -829,11 +830,11 @@ impl Solver<'_> {
     /// unscaled miss is lost, and the error estimate and the CLI's warning say so
     /// (BENCHMARKS.md, "Stiff scenes").
     fn solve_balanced(&mut self) -> Result<f64> {
-        if !self.balance_rows() && !self.balance_fixed {
+        if !self.balance_rows() && !self.st.balance_fixed {
             self.balancing = false;
         }
         let residual = self.solve_leaves()?;
-        if self.balancing || self.balance_fixed || self.closed != Some(true) {
+        if self.balancing || self.st.balance_fixed || self.closed != Some(true) {
             return Ok(residual);
         }
         // A `NaN` balance (nothing emits) balances nothing.

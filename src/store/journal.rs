@@ -25,9 +25,9 @@
 //!
 //! Each is written to a temporary name, fsynced and renamed, so a window file is
 //! either whole or absent. The file `solve.key` holds a fingerprint of the scene and
-//! the settings ([`fingerprint`]: the option structs serialized whole, so that a new
-//! setting is in it unless it is left out on purpose, with the reason, in
-//! [`SOLVE_OPTIONS_NOT_IN_KEY`]); `--resume` refuses a journal made by a different
+//! the settings ([`fingerprint`]: the caller's option structs serialized whole, so
+//! that a new setting is in it unless the solver leaves it out on purpose, with the
+//! reason, `solver::spacetime::result_settings`); `--resume` refuses a journal made by a different
 //! solve, naming the first setting that differs, counts
 //! the windows `0, 1, …` up to the first missing one and reads them back one at a
 //! time (memory stays at one window's leaves), checking every field and the CRC (a
@@ -43,8 +43,6 @@ use super::format::crc32;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use crate::solution::Leaf;
-use crate::solver::SolveOptions;
-use crate::solver::spacetime::SpaceTimeOptions;
 use bytemuck::Zeroable;
 
 const MAGIC: &[u8; 8] = b"RHIERWIN";
@@ -58,40 +56,23 @@ const KEPT_HEADER: usize = 32;
 /// refused as another solve's.
 const KEY_HEAD: &str = "rhier space-time journal 4";
 
-/// Fields of [`SolveOptions`] left out of the [`fingerprint`], because they change
-/// how a solve runs but not the windows it writes. Every other field is in.
-pub const SOLVE_OPTIONS_NOT_IN_KEY: &[&str] = &[
-    // RAM or memory-mapped files hold the same numbers (the test suite runs on
-    // both; tests/cli_spacetime.rs compares the files), and a space-time solve's
-    // default, files in the journal directory, names the output's directory.
-    "storage",
-];
-
-/// Fields of [`SpaceTimeOptions`] left out of the [`fingerprint`]: none.
-/// `kept_budget` is in: a term dropped under the budget is gathered again, and the
-/// value moves a little where the frame has opened a source into finer children
-/// than when the term was kept (tests/it/spacetime.rs,
-/// `a_budget_on_kept_terms_bounds_them_and_keeps_the_result`), so a file resumed
-/// under another budget would match neither solve.
-pub const SPACE_TIME_OPTIONS_NOT_IN_KEY: &[&str] = &[];
-
 /// What makes two space-time solves write the same windows, as the text `solve.key`
 /// holds: the version of rhier, the scene's content (CRC-32 and length of its
-/// native JSON) and every field of `opts` and `st`, serialized whole (as JSON, one
-/// field a line) but for the fields [`SOLVE_OPTIONS_NOT_IN_KEY`] and
-/// [`SPACE_TIME_OPTIONS_NOT_IN_KEY`] name. A setting added to either struct is
-/// therefore in the key unless it is left out there on purpose.
+/// native JSON) and `settings`, named JSON objects (one field a line) that the
+/// caller serializes from its option structs whole but for the fields that change
+/// how a solve runs and not what it writes (`solver::spacetime::result_settings`).
+/// The store reads no option struct itself: it keys what it is given.
 ///
 /// The thread count is not in it: the solver's parallel loops compute each item
 /// on its own and collect in order (rays are keyed by element, no sum is split
 /// across threads), so the windows do not depend on it, and a solve may be resumed
 /// on a machine with other cores.
-pub fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) -> Result<String> {
-    let settings = serde_json::json!({
-        "solve": settings_of(opts, SOLVE_OPTIONS_NOT_IN_KEY)?,
-        "space_time": settings_of(st, SPACE_TIME_OPTIONS_NOT_IN_KEY)?,
-    });
-    let settings = serde_json::to_string_pretty(&settings)
+pub fn fingerprint(scene: &Scene, settings: &[(&str, serde_json::Value)]) -> Result<String> {
+    let settings: serde_json::Map<String, serde_json::Value> = settings
+        .iter()
+        .map(|(name, value)| (name.to_string(), value.clone()))
+        .collect();
+    let settings = serde_json::to_string_pretty(&serde_json::Value::Object(settings))
         .map_err(|e| Error::Usage(format!("journal fingerprint: {e}")))?;
     let scene_text = crate::scene::to_json_string(scene);
     Ok(format!(
@@ -100,18 +81,6 @@ pub fn fingerprint(scene: &Scene, opts: &SolveOptions, st: &SpaceTimeOptions) ->
         crc32fast::hash(scene_text.as_bytes()),
         scene_text.len()
     ))
-}
-
-/// The fields of `options` as a JSON object, without those `left_out` names.
-fn settings_of(options: &impl serde::Serialize, left_out: &[&str]) -> Result<serde_json::Value> {
-    let mut value = serde_json::to_value(options)
-        .map_err(|e| Error::Usage(format!("journal fingerprint: {e}")))?;
-    if let Some(fields) = value.as_object_mut() {
-        for name in left_out {
-            fields.remove(*name);
-        }
-    }
-    Ok(value)
 }
 
 /// The first line where two fingerprints differ, as `"that" there, "this" here`
@@ -522,169 +491,6 @@ fn read_window(path: &Path, index: u32) -> Result<JournalWindow> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pools::Storage;
-    use std::collections::BTreeSet;
-
-    /// A change of one field of the option structs, still a valid setting.
-    type Change = fn(&mut SolveOptions, &mut SpaceTimeOptions);
-
-    /// Every field of [`SolveOptions`] and [`SpaceTimeOptions`] that changes the
-    /// windows a solve writes, as `solve.NAME` / `space_time.NAME`, with a change of
-    /// it. A field added to either struct fails
-    /// [`every_setting_that_changes_the_result_refuses_the_resume`] until it is put
-    /// here or left out of the key on purpose (`*_NOT_IN_KEY`, [`not_in_key`]).
-    fn in_key() -> Vec<(&'static str, Change)> {
-        vec![
-            ("solve.eps", |o, _| o.eps *= 0.5),
-            ("solve.min_size", |o, _| o.min_size *= 0.5),
-            ("solve.rays_per_point", |o, _| o.rays_per_point += 1),
-            ("solve.cluster_rays", |o, _| o.cluster_rays += 1),
-            ("solve.corner_rays", |o, _| o.corner_rays += 1),
-            ("solve.open_ratio", |o, _| o.open_ratio *= 0.5),
-            ("solve.open_spread", |o, _| o.open_spread += 0.25),
-            ("solve.max_rounds", |o, _| o.max_rounds += 1),
-            ("solve.target_error", |o, _| o.target_error = Some(0.01)),
-            ("solve.error_samples", |o, _| o.error_samples += 1),
-            ("solve.time_budget", |o, _| o.time_budget = Some(60.0)),
-            ("solve.tolerance", |o, _| o.tolerance *= 0.5),
-            ("solve.seed", |o, _| o.seed += 1),
-            ("solve.recon_tol", |o, _| o.recon_tol *= 0.5),
-            ("solve.recon_tol_moving", |o, _| {
-                o.recon_tol_moving = Some(0.01)
-            }),
-            ("solve.recon_min_size", |o, _| o.recon_min_size *= 0.5),
-            ("solve.contact_meshing", |o, _| o.contact_meshing ^= true),
-            ("solve.power_size", |o, _| o.power_size *= 0.5),
-            ("solve.row_open_ratio", |o, _| o.row_open_ratio *= 0.5),
-            ("solve.faint_source", |o, _| o.faint_source *= 0.5),
-            ("solve.split_spread", |o, _| o.split_spread += 0.15),
-            ("solve.leaf_shapes", |o, _| o.leaf_shapes += 0.1),
-            ("solve.near_gap", |o, _| o.near_gap += 0.1),
-            ("space_time.fps", |_, s| s.fps *= 2.0),
-            ("space_time.window", |_, s| s.window = Some(0.5)),
-            ("space_time.merge_tol", |_, s| s.merge_tol *= 0.5),
-            ("space_time.kept_budget", |_, s| {
-                s.kept_budget = Some(1 << 20)
-            }),
-            ("space_time.key_stride", |_, s| s.key_stride = Some(4)),
-            ("space_time.key_motion", |_, s| s.key_motion *= 0.5),
-            ("space_time.interp_tol", |_, s| s.interp_tol *= 0.5),
-            ("space_time.interp_motion", |_, s| s.interp_motion *= 0.5),
-            ("space_time.moving_power_tol", |_, s| {
-                s.moving_power_tol *= 0.5
-            }),
-            ("space_time.direct_apart", |_, s| s.direct_apart ^= true),
-        ]
-    }
-
-    /// The fields left out of the key, with a change of each: exactly those
-    /// [`SOLVE_OPTIONS_NOT_IN_KEY`] and [`SPACE_TIME_OPTIONS_NOT_IN_KEY`] name.
-    fn not_in_key() -> Vec<(&'static str, Change)> {
-        vec![("solve.storage", |o, _| {
-            o.storage = Storage::Mmap(std::env::temp_dir())
-        })]
-    }
-
-    /// The fields of both structs, as `solve.NAME` / `space_time.NAME`, with values.
-    fn fields(o: &SolveOptions, s: &SpaceTimeOptions) -> Vec<(String, serde_json::Value)> {
-        let mut all = Vec::new();
-        for (prefix, v) in [
-            ("solve", serde_json::to_value(o).unwrap()),
-            ("space_time", serde_json::to_value(s).unwrap()),
-        ] {
-            let map = v
-                .as_object()
-                .expect("an option struct serializes as an object");
-            all.extend(
-                map.iter()
-                    .map(|(k, v)| (format!("{prefix}.{k}"), v.clone())),
-            );
-        }
-        all
-    }
-
-    #[test]
-    fn every_setting_that_changes_the_result_refuses_the_resume() {
-        // The defaults, but in RAM whatever `RHIER_STORAGE` says.
-        let opts = SolveOptions {
-            storage: Storage::Ram,
-            ..SolveOptions::default()
-        };
-        let st = SpaceTimeOptions::default();
-        let names = |list: &[(&'static str, Change)]| -> BTreeSet<String> {
-            list.iter().map(|(n, _)| n.to_string()).collect()
-        };
-        let (inside, outside) = (in_key(), not_in_key());
-        // Every field of the two structs is decided, once.
-        let all: BTreeSet<String> = fields(&opts, &st).into_iter().map(|(n, _)| n).collect();
-        let decided: BTreeSet<String> = names(&inside).union(&names(&outside)).cloned().collect();
-        assert_eq!(
-            all, decided,
-            "every field of SolveOptions and SpaceTimeOptions must be decided: if it changes \
-             the windows a solve writes, add it to in_key(); if not, name it in \
-             SOLVE_OPTIONS_NOT_IN_KEY / SPACE_TIME_OPTIONS_NOT_IN_KEY with the reason, and \
-             in not_in_key()"
-        );
-        assert!(names(&inside).is_disjoint(&names(&outside)));
-        let excluded: BTreeSet<String> = (SOLVE_OPTIONS_NOT_IN_KEY.iter())
-            .map(|n| format!("solve.{n}"))
-            .chain(
-                SPACE_TIME_OPTIONS_NOT_IN_KEY
-                    .iter()
-                    .map(|n| format!("space_time.{n}")),
-            )
-            .collect();
-        assert_eq!(names(&outside), excluded);
-
-        let scene = crate::scene::cornell_box(false);
-        let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().join("a.rhier");
-        let key = fingerprint(&scene, &opts, &st).unwrap();
-        Journal::create(&out, &key).unwrap();
-        // The same solve resumes.
-        Journal::resume(&out, &fingerprint(&scene, &opts, &st).unwrap()).unwrap();
-        let changed = |change: &Change| {
-            let (mut o, mut s) = (opts.clone(), st);
-            change(&mut o, &mut s);
-            o.validate().unwrap();
-            s.validate().unwrap();
-            let before = fields(&opts, &st);
-            let moved: Vec<String> = fields(&o, &s)
-                .into_iter()
-                .zip(before)
-                .filter(|(a, b)| a != b)
-                .map(|(a, _)| a.0)
-                .collect();
-            (fingerprint(&scene, &o, &s).unwrap(), moved)
-        };
-        for (name, change) in &inside {
-            let (other, moved) = changed(change);
-            // The change is to the field it is listed under, alone.
-            assert_eq!(moved, [name.to_string()]);
-            let e = Journal::resume(&out, &other).unwrap_err().to_string();
-            let field = name.split_once('.').map_or(*name, |(_, f)| f);
-            assert!(
-                e.contains("different solve") && e.contains(&format!("\"{field}\"")),
-                "{name}: {e}"
-            );
-        }
-        for (name, change) in &outside {
-            let (other, moved) = changed(change);
-            assert_eq!(moved, [name.to_string()]);
-            assert_eq!(other, key, "{name} is not in the key");
-            Journal::resume(&out, &other).unwrap();
-        }
-        // Another scene is refused too, its content named.
-        let mut darker = scene.clone();
-        darker.materials[0].rho[0] *= 0.5;
-        let e = Journal::resume(&out, &fingerprint(&darker, &opts, &st).unwrap())
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("different solve") && e.contains("scene crc32"),
-            "{e}"
-        );
-    }
 
     fn leaf(patch: u32, t: f32) -> Leaf {
         Leaf {

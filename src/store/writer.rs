@@ -42,8 +42,8 @@ use crate::solution::{Leaf, PatchGeometry, Solution, SolveStats};
 pub const ZSTD_LEVEL: i32 = 3;
 
 /// Leaves a chunk is checked, compressed and handed back in at a time
-/// ([`Writer::write_chunk_paged`]): 768 KiB.
-pub const LEAF_BLOCK: usize = 8192;
+/// ([`Writer::write_chunk_paged`]).
+pub use crate::solution::LEAF_BLOCK;
 
 // A chunk's leaves are written as their bytes in memory, which are the archived
 // records' (little-endian fields, the same order and size).

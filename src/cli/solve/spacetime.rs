@@ -10,7 +10,7 @@ use rhier::playback::{probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
 use rhier::solution::SolveStats;
 use rhier::solver::SolveOptions;
-use rhier::solver::spacetime::{FrameRecord, SpaceTime};
+use rhier::solver::spacetime::{FrameRecord, SpaceTime, WindowOutput, result_settings};
 use rhier::store::journal::{Journal, fingerprint};
 use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
 
@@ -26,38 +26,11 @@ pub fn run(
 ) -> anyhow::Result<()> {
     let (output, animation) = (&args.output, &args.animation);
     let st = args.space_time_options()?;
-    rhier::solver::spacetime::static_only(&opts)?;
-    if output.reference.is_some() {
-        anyhow::bail!(
-            "--reference measures one static solve; for an animation compare probes at every frame (tools/spacetime_bench.py)"
-        );
-    }
-    if output.keep_links {
-        anyhow::bail!(
-            "--keep-links: a space-time solve releases each window's links when the window is written; nothing to keep"
-        );
-    }
+    refuse_static_only(args, &opts)?;
     let out = output.out_path(stem);
     let probes = output.probe.as_deref().map(read_probe_points).transpose()?;
-    let key = fingerprint(scene, &opts, &st)?;
-    // A device or FIFO (`-o /dev/null`) is written in place at the end (see the
-    // store's writer): nothing could be resumed into it, so it gets no journal beside
-    // it (which, next to /dev/null, a user could not even create).
-    let device = rhier::store::writer::writes_in_place(&out);
-    let (journal, done) = if device {
-        if animation.resume {
-            anyhow::bail!(
-                "--resume: {} is not a regular file, so no journal was kept for it",
-                out.display()
-            );
-        }
-        (None, 0)
-    } else if animation.resume {
-        let (j, done) = Journal::resume(&out, &key)?;
-        (Some(j), done as usize)
-    } else {
-        (Some(Journal::create(&out, &key)?), 0)
-    };
+    let key = fingerprint(scene, &result_settings(&opts, &st)?)?;
+    let (journal, done) = open_journal(&out, &key, animation.resume)?;
     // Out of core unless asked for RAM: the pools, kept terms and leaves page through
     // files in the journal directory, beside the output on its file system (a
     // system temp directory may be a RAM-backed tmpfs) and removed with it.
@@ -78,12 +51,7 @@ pub fn run(
         say(format!("shared {}", rec.summary()))
     })?;
     let n_windows = run.window_count();
-    if done > n_windows {
-        anyhow::bail!(
-            "{}: {done} windows journaled, but this solve has {n_windows}",
-            rhier::store::journal::journal_dir(&out).display(),
-        );
-    }
+    check_journaled(done, n_windows, &out)?;
     if done > 0 {
         say(format!(
             "resuming: {done} of {n_windows} windows already solved"
@@ -98,18 +66,7 @@ pub fn run(
     let mut frames: Vec<FrameRecord> = Vec::new();
     let (mut stored, mut frame_cells) = (0u64, 0u64);
     if let Some(journal) = &journal {
-        // The next window starts from the terms the last journaled one handed on.
-        if done > 0 {
-            journal.read_kept(done as u32 - 1, |r, len, path| {
-                run.decode_carried(r, len, path)
-            })?;
-        }
-        for wi in 0..done {
-            let w = journal.read(wi as u32)?;
-            writer.write_chunk(w.t0, w.t1, &w.leaves)?;
-            stored += w.leaves.len() as u64;
-            frame_cells += w.frame_cells;
-        }
+        (stored, frame_cells) = replay_journal(journal, done, &mut run, &mut writer)?;
     }
     let mut last_residual = 0.0;
     for wi in done..n_windows {
@@ -126,24 +83,12 @@ pub fn run(
             say(f.summary());
             frames.push(*f);
         })?;
-        // Out of core, the leaves are paged in a block at a time and handed back.
-        let leaves = &w.leaves;
-        writer.write_chunk_paged(w.t0, w.t1, leaves, || leaves.release_resident())?;
-        stored += leaves.len() as u64;
-        frame_cells += w.frame_cells;
         // The last window is not journaled: nothing comes after it to hand its
-        // terms to, and an interrupted solve is finished by solving it again
-        // (ACTOR's one window spent 0.11 s compressing terms no one reads).
-        if let Some(journal) = journal.as_ref().filter(|_| wi + 1 < n_windows) {
-            // The terms handed on first: a journaled window always has them.
-            journal.write_kept(w.index, |out| run.encode_carried(out))?;
-            journal.append_leaves(w.index, [w.t0, w.t1], w.frame_cells, leaves, || {
-                leaves.release_resident()
-            })?;
-            if let Some(before) = w.index.checked_sub(1) {
-                journal.drop_kept(before)?;
-            }
-        }
+        // terms to, and an interrupted solve is finished by solving it again.
+        let journal = journal.as_ref().filter(|_| wi + 1 < n_windows);
+        store_window(&w, &mut writer, journal, &run)?;
+        stored += w.leaves.len() as u64;
+        frame_cells += w.frame_cells;
         if let Some(budget) = args.resources.budget
             && run.stats.peak_pool_bytes > budget
         {
@@ -169,31 +114,7 @@ pub fn run(
         .finish(&stats)
         .with_context(|| format!("writing {}", out.display()))?;
     if let Some(path) = &output.report {
-        let mut csv = String::from(
-            "frame,window,t,seconds,cells,gathered,interpolated,elements,links,varying_links,rays,bytes_pools,bytes_kept,residual\n",
-        );
-        // Frames are solved keyframes first; the report lists them in time order.
-        frames.sort_by_key(|f| f.frame);
-        for f in &frames {
-            csv.push_str(&format!(
-                "{},{},{},{:.6},{},{},{},{},{},{},{},{},{},{:e}\n",
-                f.frame,
-                f.window,
-                f.t,
-                f.seconds,
-                f.cells,
-                f.gathered,
-                f.interpolated,
-                f.elements,
-                f.links,
-                f.varying_links,
-                f.rays,
-                f.bytes_pools,
-                f.bytes_kept,
-                f.residual
-            ));
-        }
-        std::fs::write(path, csv).with_context(|| format!("writing {}", path.display()))?;
+        write_report(path, &mut frames)?;
     }
     if let (Some(points), Some(path)) = (&probes, &output.probe_out) {
         let reader = Reader::open(&out)?;
@@ -201,43 +122,11 @@ pub fn run(
         write_probe_results(path, &values)?;
     }
     if !quiet {
-        eprintln!(
-            "solved {} frames ({} windows from the journal) of {} windows in {:.3} s ({:.3} s shared part): {} stored cells for {} frame cells ({:.1}x fewer); wrote {}",
-            run.stats.frames,
-            done,
-            n_windows,
-            stats.seconds,
-            run.stats.shared_seconds,
-            stored,
-            frame_cells,
-            frame_cells as f64 / stored.max(1) as f64,
-            out.display()
-        );
+        let cells = (stored, frame_cells);
+        eprintln!("{}", finish_line(&run, done, stats.seconds, cells, &out));
     }
     if output.stats {
-        let mut m = MemoryReport::for_run(stem);
-        m.add_pool(
-            "shared elements",
-            run.stats.shared_elements,
-            run.solver().elems.bytes() as u64,
-        );
-        m.add_pool(
-            "shared links",
-            run.stats.shared_links,
-            run.solver().links.bytes() as u64,
-        );
-        m.add_pool("peak pools (a window)", 0, run.stats.peak_pool_bytes);
-        m.add_pool(
-            "bvh",
-            run.solver().bvh.triangle_count() as u64,
-            run.solver().bvh.resident_bytes() as u64,
-        );
-        m.add_pool(
-            "stored cells",
-            stored,
-            stored * std::mem::size_of::<rhier::solution::Leaf>() as u64,
-        );
-        println!("{m}");
+        println!("{}", memory_report(&run, stem, stored));
     }
     // The pools' files live in the journal directory by default: closed first.
     drop(run);
@@ -245,4 +134,189 @@ pub fn run(
         journal.finish()?;
     }
     Ok(())
+}
+
+/// Refuses the settings a space-time solve has no use for: those of one static
+/// solve (`SpaceTime::new` checks them too, after the shared part; here before any
+/// output is made), `--reference` and `--keep-links`.
+fn refuse_static_only(args: &Args, opts: &SolveOptions) -> anyhow::Result<()> {
+    rhier::solver::spacetime::static_only(opts)?;
+    if args.output.reference.is_some() {
+        anyhow::bail!(
+            "--reference measures one static solve; for an animation compare probes at every frame (tools/spacetime_bench.py)"
+        );
+    }
+    if args.output.keep_links {
+        anyhow::bail!(
+            "--keep-links: a space-time solve releases each window's links when the window is written; nothing to keep"
+        );
+    }
+    Ok(())
+}
+
+/// The journal beside `out` keyed by `key`, fresh or (`resume`) the one an
+/// interrupted solve left, with the number of windows it holds; none for a device
+/// or FIFO.
+fn open_journal(
+    out: &std::path::Path,
+    key: &str,
+    resume: bool,
+) -> anyhow::Result<(Option<Journal>, usize)> {
+    // A device or FIFO (`-o /dev/null`) is written in place at the end (see the
+    // store's writer): nothing could be resumed into it, so it gets no journal beside
+    // it (which, next to /dev/null, a user could not even create).
+    if rhier::store::writer::writes_in_place(out) {
+        if resume {
+            anyhow::bail!(
+                "--resume: {} is not a regular file, so no journal was kept for it",
+                out.display()
+            );
+        }
+        Ok((None, 0))
+    } else if resume {
+        let (j, done) = Journal::resume(out, key)?;
+        Ok((Some(j), done as usize))
+    } else {
+        Ok((Some(Journal::create(out, key)?), 0))
+    }
+}
+
+/// Writes the `done` windows `journal` holds to `writer` and hands `run` the terms
+/// the last of them handed on; returns the stored cells and the frame cells.
+fn replay_journal(
+    journal: &Journal,
+    done: usize,
+    run: &mut SpaceTime,
+    writer: &mut Writer,
+) -> anyhow::Result<(u64, u64)> {
+    let (mut stored, mut frame_cells) = (0u64, 0u64);
+    // The next window starts from the terms the last journaled one handed on.
+    if done > 0 {
+        journal.read_kept(done as u32 - 1, |r, len, path| {
+            run.decode_carried(r, len, path)
+        })?;
+    }
+    for wi in 0..done {
+        let w = journal.read(wi as u32)?;
+        writer.write_chunk(w.t0, w.t1, &w.leaves)?;
+        stored += w.leaves.len() as u64;
+        frame_cells += w.frame_cells;
+    }
+    Ok((stored, frame_cells))
+}
+
+/// Writes the frames' records to the CSV file `path` (`--report`), in time order.
+fn write_report(path: &std::path::Path, frames: &mut [FrameRecord]) -> anyhow::Result<()> {
+    let mut csv = String::from(
+        "frame,window,t,seconds,cells,gathered,interpolated,elements,links,varying_links,rays,bytes_pools,bytes_kept,residual\n",
+    );
+    // Frames are solved keyframes first; the report lists them in time order.
+    frames.sort_by_key(|f| f.frame);
+    for f in frames.iter() {
+        csv.push_str(&format!(
+            "{},{},{},{:.6},{},{},{},{},{},{},{},{},{},{:e}\n",
+            f.frame,
+            f.window,
+            f.t,
+            f.seconds,
+            f.cells,
+            f.gathered,
+            f.interpolated,
+            f.elements,
+            f.links,
+            f.varying_links,
+            f.rays,
+            f.bytes_pools,
+            f.bytes_kept,
+            f.residual
+        ));
+    }
+    std::fs::write(path, csv).with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+/// What a space-time solve held (`--stats`): the shared part's pools, the peak of a
+/// window's, the BVH and the stored cells.
+fn memory_report(run: &SpaceTime, stem: &str, stored: u64) -> MemoryReport {
+    let mut m = MemoryReport::for_run(stem);
+    m.add_pool(
+        "shared elements",
+        run.stats.shared_elements,
+        run.solver().elems.bytes() as u64,
+    );
+    m.add_pool(
+        "shared links",
+        run.stats.shared_links,
+        run.solver().links.bytes() as u64,
+    );
+    m.add_pool("peak pools (a window)", 0, run.stats.peak_pool_bytes);
+    m.add_pool(
+        "bvh",
+        run.solver().bvh.triangle_count() as u64,
+        run.solver().bvh.resident_bytes() as u64,
+    );
+    m.add_pool(
+        "stored cells",
+        stored,
+        stored * std::mem::size_of::<rhier::solution::Leaf>() as u64,
+    );
+    m
+}
+
+/// Writes window `w` to `writer` and, with a `journal`, to the journal with the
+/// terms it hands the next window. Out of core, the leaves are paged in a block at a
+/// time and handed back.
+fn store_window(
+    w: &WindowOutput,
+    writer: &mut Writer,
+    journal: Option<&Journal>,
+    run: &SpaceTime,
+) -> anyhow::Result<()> {
+    let leaves = &w.leaves;
+    writer.write_chunk_paged(w.t0, w.t1, leaves, || leaves.release_resident())?;
+    if let Some(journal) = journal {
+        // The terms handed on first: a journaled window always has them.
+        journal.write_kept(w.index, |out| run.encode_carried(out))?;
+        journal.append_leaves(w.index, [w.t0, w.t1], w.frame_cells, leaves, || {
+            leaves.release_resident()
+        })?;
+        if let Some(before) = w.index.checked_sub(1) {
+            journal.drop_kept(before)?;
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a journal that holds more windows than this solve has.
+fn check_journaled(done: usize, n_windows: usize, out: &std::path::Path) -> anyhow::Result<()> {
+    if done > n_windows {
+        anyhow::bail!(
+            "{}: {done} windows journaled, but this solve has {n_windows}",
+            rhier::store::journal::journal_dir(out).display(),
+        );
+    }
+    Ok(())
+}
+
+/// The last line a solve prints: frames, windows, time, and the stored cells
+/// against the frame cells (`cells`).
+fn finish_line(
+    run: &SpaceTime,
+    done: usize,
+    seconds: f64,
+    (stored, frame_cells): (u64, u64),
+    out: &std::path::Path,
+) -> String {
+    format!(
+        "solved {} frames ({} windows from the journal) of {} windows in {:.3} s ({:.3} s shared part): {} stored cells for {} frame cells ({:.1}x fewer); wrote {}",
+        run.stats.frames,
+        done,
+        run.window_count(),
+        seconds,
+        run.stats.shared_seconds,
+        stored,
+        frame_cells,
+        frame_cells as f64 / stored.max(1) as f64,
+        out.display()
+    )
 }

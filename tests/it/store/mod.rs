@@ -3,6 +3,7 @@
 //! mutation.
 
 mod fuzz;
+mod resume_key;
 mod roundtrip;
 mod samples;
 mod solve;

@@ -4,7 +4,7 @@
 //! time range; here the values are linear over the range).
 //!
 //! Three records of a solved frame, each kept while a frame still to be solved
-//! brackets it ([`super::spacetime`] decides which):
+//! brackets it ([`super`] decides which):
 //! - [`FrameRows`]: the leaf-row entries with a moving end, sorted by what they
 //!   stand for; a frame solved between two takes an entry on the line between
 //!   their values where its light changes by at most a tolerance ([`TimeRange`]).
@@ -12,9 +12,9 @@
 //!   share, and the power each moving surface hands on; a frame between two solved
 //!   frames whose moving light holds skips its solve and takes the shared
 //!   radiosity on the line between them ([`Solver::place_between`]).
-//! - [`KeyValues`]: the value of every reconstruction point; a frame between two
+//! - [`FrameValues`]: the value of every reconstruction point; a frame between two
 //!   solved frames takes a point's value on the line between theirs where they
-//!   agree or the point's light is linear in time ([`Between`]), and gathers it
+//!   agree or the point's light is linear in time ([`FrameBetween`]), and gathers it
 //!   otherwise. A point on a moving surface also keeps the direct light it
 //!   reflects ([`Solver::direct_light`]): the line is over the rest of its light,
 //!   and the frame between adds its own direct light.
@@ -23,10 +23,10 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::{ElementId, Emission, Leaf, PointKey, Solver, hierarchy};
 use crate::geometry::{Poly, point_to_polygon};
 use crate::oracle;
 use crate::pools::elements::Geom;
+use crate::solver::{ElementId, Emission, Leaf, PointKey, Solver, hierarchy};
 
 /// The leaf-row entries with a moving end (a moving leaf, or a moving source) of
 /// one solved frame of a space-time window, keyed by what they stand for (the
@@ -35,10 +35,10 @@ use crate::pools::elements::Geom;
 /// range of the frames solved between ([`TimeRange`]). Sorted by key, 24 bytes an
 /// entry.
 #[derive(Clone, Debug, Default)]
-pub struct FrameRows(pub(super) Vec<TimedEntry>);
+pub struct FrameRows(pub(in crate::solver) Vec<TimedEntry>);
 
 /// One entry of [`FrameRows`]: `((leaf, link), (F, visible fraction))`.
-pub(super) type TimedEntry = ((u64, u64), (f32, f32));
+pub(in crate::solver) type TimedEntry = ((u64, u64), (f32, f32));
 
 impl FrameRows {
     /// Number of entries.
@@ -52,7 +52,7 @@ impl FrameRows {
     }
 
     /// Entry `key`, widened.
-    pub(super) fn get(&self, key: &(u64, u64)) -> Option<(f64, f64)> {
+    pub(in crate::solver) fn get(&self, key: &(u64, u64)) -> Option<(f64, f64)> {
         let i = self.0.binary_search_by_key(key, |e| e.0).ok()?;
         let (f, v) = self.0[i].1;
         Some((f64::from(f), f64::from(v)))
@@ -67,9 +67,9 @@ impl FrameRows {
 /// `[a, b]`: the frame takes it on the line between the two (`alpha` of the way
 /// from `a`), instead of its exact factors and rays; any other entry is split in
 /// time at this frame and computed here, and the frame's entries become an end
-/// for the frames between it and `a` or `b` ([`super::spacetime::solve_order`] bisects).
+/// for the frames between it and `a` or `b` ([`super::solve_order`] bisects).
 /// Linear rather than the paper's constant-in-time basis, as the frames between
-/// keyframes are ([`Between`]). Entries between two static ends are never taken:
+/// keyframes are ([`FrameBetween`]). Entries between two static ends are never taken:
 /// a moving object in the shaft between them (they are computed per frame only
 /// then) may block it at this frame and at neither end, the transient blocker the
 /// paper's shaft test forces a time split for (§5.2).
@@ -88,7 +88,7 @@ pub struct TimeRange {
 impl TimeRange {
     /// Entry `key` on the line between `a` and `b`, if both have it and its light
     /// (`weight · F`) changes by at most `tol` between them.
-    pub(super) fn value(&self, key: &(u64, u64), weight: f64) -> Option<(f64, f64)> {
+    pub(in crate::solver) fn value(&self, key: &(u64, u64), weight: f64) -> Option<(f64, f64)> {
         let (fa, va) = self.a.get(key)?;
         let (fb, vb) = self.b.get(key)?;
         ((fa - fb).abs() * weight <= self.tol)
@@ -100,10 +100,10 @@ impl TimeRange {
 /// ([`Solver::shared_radiosity`]).
 #[derive(Clone, Debug, Default)]
 pub struct SharedRadiosity {
-    pub(super) b: Vec<[f32; 3]>,
-    pub(super) dir: Vec<Emission>,
+    pub(in crate::solver) b: Vec<[f32; 3]>,
+    pub(in crate::solver) dir: Vec<Emission>,
     /// Power (area × max channel) of each moving surface element, in id order.
-    pub(super) moving_power: Vec<f64>,
+    pub(in crate::solver) moving_power: Vec<f64>,
 }
 
 impl SharedRadiosity {
@@ -121,9 +121,9 @@ impl SharedRadiosity {
 
 /// The values a frame's reconstruction gave its points, gathered or interpolated
 /// (radiosity, and whether the point lies outside every solid), by point key: what
-/// the frames between two solved frames interpolate ([`Between`]).
+/// the frames between two solved frames interpolate ([`FrameBetween`]).
 ///
-/// With [`KeyValues::with_cells`], a point the keyframe did not gather takes the
+/// With [`FrameValues::with_cells`], a point the keyframe did not gather takes the
 /// value of the keyframe's cell that holds it (the stored interpolant), so a frame
 /// that meshes a cell differently can still interpolate its new points.
 ///
@@ -132,7 +132,7 @@ impl SharedRadiosity {
 /// held 2.4 MB of ACTOR's out-of-core peak for four); the direct light of those on
 /// moving surfaces is a second sorted array, of 24-byte records.
 #[derive(Clone, Debug, Default)]
-pub struct KeyValues {
+pub struct FrameValues {
     /// (point, radiosity, outside every solid), sorted by point.
     points: Vec<(PointKey, [f32; 3], bool)>,
     /// The direct light the points on moving surfaces reflect ([`Solver::direct_light`]),
@@ -144,14 +144,16 @@ pub struct KeyValues {
     cells: std::sync::Arc<[Leaf]>,
 }
 
-impl KeyValues {
+impl FrameValues {
     /// The values gathered at `points` (in any order).
-    pub(super) fn from_points(points: impl Iterator<Item = (PointKey, [f64; 3], bool)>) -> Self {
+    pub(in crate::solver) fn from_points(
+        points: impl Iterator<Item = (PointKey, [f64; 3], bool)>,
+    ) -> Self {
         let mut points: Vec<_> = points
             .map(|(pk, b, ok)| (pk, b.map(|x| x as f32), ok))
             .collect();
         points.sort_unstable_by_key(|p| p.0);
-        KeyValues {
+        FrameValues {
             points,
             direct: Vec::new(),
             cells: Default::default(),
@@ -159,7 +161,7 @@ impl KeyValues {
     }
 
     /// Adds the direct light of the points on moving surfaces (in any order).
-    pub(super) fn with_direct(mut self, mut direct: Vec<(PointKey, [f32; 3])>) -> Self {
+    pub(in crate::solver) fn with_direct(mut self, mut direct: Vec<(PointKey, [f32; 3])>) -> Self {
         direct.sort_unstable_by_key(|p| p.0);
         self.direct = direct;
         self
@@ -167,14 +169,14 @@ impl KeyValues {
 
     /// The direct light point `pk` reflected at the frame, if it is on a moving
     /// surface.
-    pub(super) fn direct(&self, pk: &PointKey) -> Option<[f64; 3]> {
+    pub(in crate::solver) fn direct(&self, pk: &PointKey) -> Option<[f64; 3]> {
         let i = self.direct.binary_search_by_key(pk, |p| p.0).ok()?;
         Some(self.direct[i].1.map(f64::from))
     }
 
     /// The value the frame gave point `pk` (gathered or interpolated) and whether it
     /// lay outside every solid.
-    pub(super) fn known(&self, pk: &PointKey) -> Option<([f64; 3], bool)> {
+    pub(in crate::solver) fn known(&self, pk: &PointKey) -> Option<([f64; 3], bool)> {
         let i = self.points.binary_search_by_key(pk, |p| p.0).ok()?;
         let (_, b, ok) = self.points[i];
         Some((b.map(f64::from), ok))
@@ -186,12 +188,12 @@ impl KeyValues {
         self
     }
 
-    /// [`KeyValues::at`] less the direct light, for a point on a moving surface: the
+    /// [`FrameValues::at`] less the direct light, for a point on a moving surface: the
     /// frame's own value less its direct light if it had the point (outside the
     /// solids), else the frame's cell holding it, interpolated over its corners'
     /// values less their direct light; `None` if a value or a direct light is
     /// missing.
-    pub(super) fn indirect_at(&self, pk: &PointKey) -> Option<[f64; 3]> {
+    pub(in crate::solver) fn indirect_at(&self, pk: &PointKey) -> Option<[f64; 3]> {
         if let Some((v, ok)) = self.known(pk) {
             let d = self.direct(pk).filter(|_| ok)?;
             return Some(std::array::from_fn(|k| v[k] - d[k]));
@@ -211,7 +213,7 @@ impl KeyValues {
 
     /// The value at point `pk` outside every solid: the frame's own if it had the
     /// point (and it lay outside the solids then), else the frame's cell holding it.
-    pub(super) fn at(&self, pk: &PointKey) -> Option<[f64; 3]> {
+    pub(in crate::solver) fn at(&self, pk: &PointKey) -> Option<[f64; 3]> {
         if let Some((v, true)) = self.known(pk) {
             return Some(v);
         }
@@ -227,19 +229,19 @@ impl KeyValues {
     }
 }
 
-/// A point key's coordinate for the parameter `x` ([`VertexCache::register`]).
-pub(super) fn point_coord(x: f32) -> u32 {
+/// A point key's coordinate for the parameter `x` (`VertexCache::register` in `reconstruct.rs`).
+pub(in crate::solver) fn point_coord(x: f32) -> u32 {
     (x as f64 * (1u64 << 24) as f64).round() as u32
 }
 
-/// The parameter a point key's coordinate stands for ([`VertexCache::register`]).
-pub(super) fn point_param(q: u32) -> f64 {
+/// The parameter a point key's coordinate stands for (`VertexCache::register` in `reconstruct.rs`).
+pub(in crate::solver) fn point_param(q: u32) -> f64 {
     q as f64 / (1u64 << 24) as f64
 }
 
 /// A solved frame of a space-time window: its position (frame index, or any time
-/// unit shared by the frames of a [`Between`]) and the values it gave its points.
-pub type Keyframe<'k> = (f64, &'k KeyValues);
+/// unit shared by the frames of a [`FrameBetween`]) and the values it gave its points.
+pub type Keyframe<'k> = (f64, &'k FrameValues);
 
 /// A frame at `t` between two solved frames `a` and `b` of a space-time window (two
 /// keyframes, or a keyframe and the midpoint of a bisection, see
@@ -280,8 +282,8 @@ pub type Keyframe<'k> = (f64, &'k KeyValues);
 /// "stains" (§5.2): a moving shadow's edge fades over the distance of one free
 /// interval instead of stepping.
 #[derive(Clone, Copy, Debug)]
-pub struct Between<'k> {
-    /// The moving objects travel less than [`super::spacetime::SpaceTimeOptions::interp_motion`]
+pub struct FrameBetween<'k> {
+    /// The moving objects travel less than [`super::SpaceTimeOptions::interp_motion`]
     /// between `a` and `b`: a point both know (with the same validity) takes the
     /// line between them whatever its values.
     pub free: bool,
@@ -298,18 +300,18 @@ pub struct Between<'k> {
     pub tol: f64,
 }
 
-impl Between<'_> {
+impl FrameBetween<'_> {
     /// The interpolated value of point `pk` and whether it lies outside every
     /// solid, if the solved frames allow it. A point both frames had keeps their
     /// validity (they must agree on it); any other point asks `outside_now` (one
     /// ray, no gather) and, if outside the solids, interpolates the frames' cells
-    /// ([`KeyValues::with_cells`]).
+    /// ([`FrameValues::with_cells`]).
     ///
     /// A point on a moving surface comes with its direct light now (`direct_now`,
     /// [`Solver::direct_light`]): where the frames hold its direct light too, the
     /// line (and the tests above) are over the rest of its light, and its direct
     /// light now is added, else over its whole light.
-    pub(super) fn value(
+    pub(in crate::solver) fn value(
         &self,
         pk: &PointKey,
         outside_now: impl Fn() -> bool,
@@ -323,7 +325,7 @@ impl Between<'_> {
         }
     }
 
-    /// [`Between::value`], the line over the light less `direct_now` (`None`: the
+    /// [`FrameBetween::value`], the line over the light less `direct_now` (`None`: the
     /// whole light); `Err` if the frames lack a value or a direct light the line
     /// needs.
     fn value_less(
@@ -337,11 +339,11 @@ impl Between<'_> {
         let minus = |(v, ok): ([f64; 3], bool), d: [f64; 3]| -> ([f64; 3], bool) {
             (std::array::from_fn(|k| v[k] - d[k]), ok)
         };
-        let known = |kv: &KeyValues| match direct_now {
+        let known = |kv: &FrameValues| match direct_now {
             Some(_) => kv.known(pk).zip(kv.direct(pk)).map(|(v, d)| minus(v, d)),
             None => kv.known(pk),
         };
-        let at = |kv: &KeyValues| match direct_now {
+        let at = |kv: &FrameValues| match direct_now {
             Some(_) => kv.indirect_at(pk),
             None => kv.at(pk),
         };
@@ -382,25 +384,25 @@ impl Between<'_> {
     }
 }
 
-/// The frames lack a value or a direct light ([`Between::value_less`]).
+/// The frames lack a value or a direct light ([`FrameBetween::value_less`]).
 #[derive(Clone, Copy, Debug)]
 struct Missing;
 
 /// An emitting patch as placed at the current time: its index, geometry, polygon
 /// and emission ([`Solver::direct_light`]).
-pub(super) type Emitter = (u32, Geom, Poly, [f64; 3]);
+pub(in crate::solver) type Emitter = (u32, Geom, Poly, [f64; 3]);
 
 /// Most emitting patches [`Solver::direct_light`] is computed over. Each costs a
 /// factor and the final gather's rays to an emitter (32 by default) at every point
 /// on a moving surface at every frame; a scene lit by more (an emissive mesh of many
 /// triangles) takes the line over the whole light of its moving points, as with
-/// [`super::spacetime::SpaceTimeOptions::direct_apart`] off, rather than pay that.
-pub(super) const MAX_DIRECT_EMITTERS: usize = 16;
+/// [`super::SpaceTimeOptions::direct_apart`] off, rather than pay that.
+pub(in crate::solver) const MAX_DIRECT_EMITTERS: usize = 16;
 
 impl Solver<'_> {
     /// The emitting patches as placed now, for [`Solver::direct_light`]; `None` if
     /// there are more than [`MAX_DIRECT_EMITTERS`].
-    pub(super) fn emitters_now(&self) -> Option<Vec<Emitter>> {
+    pub(in crate::solver) fn emitters_now(&self) -> Option<Vec<Emitter>> {
         let lit: Vec<usize> = (0..self.patches.len())
             .filter(|&p| self.patches.emissions[p].iter().any(|&e| e > 0.0))
             .take(MAX_DIRECT_EMITTERS + 1)
@@ -424,8 +426,8 @@ impl Solver<'_> {
     /// On a moving surface this is the part of the light that changes fastest as it
     /// passes a lamp (a panel sliding 45 cm in front of one: the inverse square and
     /// the cosines); a frame between two solved frames takes the line over the rest
-    /// only ([`Between::value`]).
-    pub(super) fn direct_light(
+    /// only ([`FrameBetween::value`]).
+    pub(in crate::solver) fn direct_light(
         &self,
         x: DVec3,
         n: DVec3,
@@ -470,14 +472,14 @@ impl Solver<'_> {
     /// moving end those frames take where they hold ([`TimeRange`]); `None`: every
     /// entry is computed (a keyframe).
     pub fn set_time_range(&mut self, range: Option<TimeRange>) {
-        self.time_range = range;
+        self.st.time_range = range;
     }
 
     /// The row entries with a moving end of the frame solved last (computed, or
     /// taken from its [`TimeRange`]), for the frames to be solved between it and
     /// another.
     pub fn take_frame_rows(&mut self) -> FrameRows {
-        let mut rows = std::mem::take(&mut self.frame_rows);
+        let mut rows = std::mem::take(&mut self.st.frame_rows);
         rows.0.sort_unstable_by_key(|e| e.0);
         rows.0.shrink_to_fit();
         rows
@@ -489,7 +491,7 @@ impl Solver<'_> {
     /// `B_a + alpha · (B_b − B_a)` between two solved frames' values `a` and `b`
     /// ([`Solver::shared_radiosity`]; the solved frames nearest `t` on either
     /// side). The elements the last frame solved refined keep its values. For the
-    /// gathers of a frame between two keyframes ([`super::spacetime`]).
+    /// gathers of a frame between two keyframes ([`super`]).
     pub fn place_between(&mut self, t: f64, a: &SharedRadiosity, b: &SharedRadiosity, alpha: f64) {
         let n = a.b.len().min(b.b.len()).min(self.elems.len());
         let lerp =
@@ -513,6 +515,7 @@ impl Solver<'_> {
     /// the current window shares, as solved now.
     pub fn shared_radiosity(&self) -> SharedRadiosity {
         let n = self
+            .st
             .window
             .as_ref()
             .map_or(self.elems.len(), |w| w.frame.elems_len);
@@ -561,8 +564,8 @@ mod tests {
         assert_eq!(range.value(&(3, 1), 0.0), None);
     }
 
-    fn values(points: &[(u32, [f64; 3], bool)]) -> KeyValues {
-        KeyValues::from_points(points.iter().map(|&(i, v, ok)| ((0, i, 0), v, ok)))
+    fn values(points: &[(u32, [f64; 3], bool)]) -> FrameValues {
+        FrameValues::from_points(points.iter().map(|&(i, v, ok)| ((0, i, 0), v, ok)))
     }
 
     fn grey(v: f64) -> [f64; 3] {
@@ -590,7 +593,7 @@ mod tests {
             (4, grey(0.5), true),
             (5, grey(0.9), true),
         ]);
-        let between = Between {
+        let between = FrameBetween {
             free: false,
             before: Some((0.0, &p)),
             a: (4.0, &a),
@@ -610,7 +613,7 @@ mod tests {
         assert_eq!(at(4), None, "inside a solid at a only");
         assert_eq!(at(5), None, "the keyframe before does not hold point 5");
         // Without a keyframe before the interval only agreement counts.
-        let bare = Between {
+        let bare = FrameBetween {
             before: None,
             ..between
         };
@@ -619,7 +622,7 @@ mod tests {
         // Brackets closer in motion than `interp_motion`: a point both hold takes
         // the line whatever its values (the shadow edge of point 2 fades over the
         // interval); one they do not both hold, or with another validity, does not.
-        let free = Between { free: true, ..bare };
+        let free = FrameBetween { free: true, ..bare };
         let (v2, ok2) = free
             .value(&(0, 2, 0), || true, None)
             .expect("free: the line");
@@ -630,7 +633,7 @@ mod tests {
         // Equal values come back bit for bit (where nothing changes, consecutive
         // frames are equal and the store merges them).
         let same = values(&[(0, [0.1, 0.2, 0.3], true)]);
-        let flat = Between {
+        let flat = FrameBetween {
             free: false,
             before: None,
             a: (0.0, &same),
@@ -681,9 +684,9 @@ mod tests {
             uv: [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
             b: [1.0, 2.0, 2.0, 1.0].map(|v| [v + lift; 3]),
         };
-        let a = KeyValues::default().with_cells([cell(0.0)].into());
-        let b = KeyValues::default().with_cells([cell(0.005)].into());
-        let between = Between {
+        let a = FrameValues::default().with_cells([cell(0.0)].into());
+        let b = FrameValues::default().with_cells([cell(0.005)].into());
+        let between = FrameBetween {
             free: false,
             before: None,
             a: (0.0, &a),
@@ -708,7 +711,7 @@ mod tests {
         // frames 0, 4, 8 (a line), its direct light 2, 6, 3 (a bump the line cannot
         // follow). Point 2 lacks its direct light at `b`.
         let frame = |v: &[(u32, f64, f64)], lacking: Option<u32>| {
-            KeyValues::from_points(v.iter().map(|&(i, b, d)| ((0, i, 0), grey(b + d), true)))
+            FrameValues::from_points(v.iter().map(|&(i, b, d)| ((0, i, 0), grey(b + d), true)))
                 .with_direct(
                     v.iter()
                         .filter(|p| Some(p.0) != lacking)
@@ -719,7 +722,7 @@ mod tests {
         let p = frame(&[(1, 1.0, 2.0), (2, 1.0, 2.0)], None);
         let a = frame(&[(1, 1.2, 6.0), (2, 1.2, 6.0)], None);
         let b = frame(&[(1, 1.4, 3.0), (2, 1.4, 3.0)], Some(2));
-        let between = Between {
+        let between = FrameBetween {
             free: false,
             before: Some((0.0, &p)),
             a: (4.0, &a),
@@ -739,7 +742,7 @@ mod tests {
         // Without the direct light at `b`, point 2 is tested on its whole light:
         // gathered here, and on the line between `a` and `b` when free.
         assert_eq!(between.value(&(0, 2, 0), || true, Some(grey(5.5))), None);
-        let free = Between {
+        let free = FrameBetween {
             free: true,
             ..between
         };
@@ -763,7 +766,7 @@ mod tests {
                 uv: corners,
                 b: direct.map(|d| [rest + d; 3]),
             };
-            KeyValues::default()
+            FrameValues::default()
                 .with_direct(
                     corners
                         .iter()
@@ -776,10 +779,10 @@ mod tests {
         let a = frame(1.0, [4.0, 0.0, 0.0, 4.0]);
         let b = frame(2.0, [0.0, 8.0, 8.0, 0.0]);
         let pk = (7, q(0.25), q(0.5));
-        let rest = |kv: &KeyValues| kv.indirect_at(&pk).map(|v| v[0]);
+        let rest = |kv: &FrameValues| kv.indirect_at(&pk).map(|v| v[0]);
         assert!((rest(&a).unwrap() - 1.0).abs() < 1e-6);
         assert!((rest(&b).unwrap() - 2.0).abs() < 1e-6);
-        let between = Between {
+        let between = FrameBetween {
             free: true,
             before: None,
             a: (0.0, &a),
@@ -790,7 +793,7 @@ mod tests {
         let (v, _) = between.value(&pk, || true, Some(grey(3.0))).unwrap();
         assert!((v[0] - 4.25).abs() < 1e-6, "{v:?}");
         // A corner without its direct light: no rest to take.
-        let lacking = KeyValues::default().with_cells(a.cells.clone());
+        let lacking = FrameValues::default().with_cells(a.cells.clone());
         assert_eq!(lacking.indirect_at(&pk), None);
     }
 
@@ -802,7 +805,7 @@ mod tests {
         let scene = crate::scene::cornell_box(false);
         let s = Solver::at_time(
             &scene,
-            super::super::SolveOptions::default(),
+            crate::solver::SolveOptions::default(),
             0.0,
             [0.0, 0.0],
         )
@@ -870,7 +873,7 @@ mod tests {
                 .collect();
             let s = Solver::at_time(
                 &scene,
-                super::super::SolveOptions::default(),
+                crate::solver::SolveOptions::default(),
                 0.0,
                 [0.0, 0.0],
             )

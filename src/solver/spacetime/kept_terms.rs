@@ -4,7 +4,7 @@
 //! object can come between them).
 //!
 //! **What is kept.** For each point, per source of the point's chain (keyed
-//! `source << 1 | clear`, see [`super::Solver::gather_point`]): the terms whose
+//! `source << 1 | clear`, see [`crate::solver::Solver::gather_point`]): the terms whose
 //! visibility holds over the window ([`FixedTerm`]: element and factor, visibility
 //! included) and the terms whose rays a moving object may cross ([`MaskedTerm`]: the
 //! static part of each ray's visibility as a mask, re-cast against the moving
@@ -31,7 +31,7 @@
 //! **Carried.** A window's terms outlive it (`Solver::release_window` keeps the
 //! cache as it is): the next window starts from those on the shared part's
 //! elements that still hold against the boxes its own objects sweep, rebuilt once
-//! ([`PointCache::carried`]; which hold: `Solver::revalidated`). Between windows
+//! ([`PointCache::carried`]; which hold: `Solver::revalidated`). FrameBetween windows
 //! they can be written for a resumed solve's journal ([`PointCache::encode`],
 //! [`PointCache::decode`]); the rebuild goes over points in key order, so it makes
 //! the same cache from those as from the window's own.
@@ -40,23 +40,22 @@ use std::ops::Range;
 
 use bytemuck::{Pod, Zeroable};
 
-use super::gather::Terms;
-use super::{FastMap, PointKey};
 use crate::Result;
 use crate::pools::{Column, Storage};
+use crate::solver::gather::Terms;
+use crate::solver::{FastMap, PointKey};
 
 /// Reconstructions (frames) after which a point no reconstruction registered is
 /// dropped. A reconstruction registers every point it meshes, gathered or
 /// interpolated, so what goes is the points of cells no frame has meshed for that
 /// long (where a moving shadow was). Frames are solved keyframe first, then the
-/// frames between (see `spacetime::solve_order`): 8 is ACTOR's key interval. 16
-/// (ACTOR played twice as slowly has keyframes 16 frames apart) kept 2.7 MB more
-/// and measured no faster.
+/// frames between (see `spacetime::solve_order`): 8 is ACTOR's key interval, and a
+/// longer wait keeps more points without making the frames faster.
 pub const STALE_AFTER: u32 = 8;
 
 /// Bytes a compaction slides before it hands the pages of mapped arenas back
-/// (each slide touches its source and its destination pages: at 4 MiB, ACTOR's
-/// compactions out of core put 6 MB more in the peak resident size than at 1 MiB).
+/// (each slide touches its source and its destination pages, so a longer slide
+/// puts more of them in the peak resident size).
 const RELEASE_EVERY: usize = 1 << 20;
 
 /// A final-gather term from a static source to a static point whose rays a moving
@@ -167,7 +166,7 @@ fn as_slices(sources: &[SourceTerms]) -> Vec<SourceSlices<'_>> {
 
 /// One point's records as the arenas will hold them, made off the cache by
 /// [`PointCache::prepare`] and written by [`PointCache::commit`].
-pub struct Prepared {
+pub struct PreparedPoint {
     pk: PointKey,
     /// The point's slot when prepared (`None`: a new point).
     slot: Option<u32>,
@@ -262,7 +261,7 @@ impl PointCache {
     /// their points' records themselves and the thread between batches only
     /// copies them in ([`PointCache::commit`]; on ACTOR this was a quarter of
     /// the serial time between batches).
-    pub fn prepare(&self, pk: PointKey, links: Vec<(u32, Terms)>) -> Option<Prepared> {
+    pub fn prepare(&self, pk: PointKey, links: Vec<(u32, Terms)>) -> Option<PreparedPoint> {
         let slot = self.slots.get(&pk).copied();
         if !self.healthy || (slot.is_none() && !self.admits()) {
             return None;
@@ -281,7 +280,7 @@ impl PointCache {
             return None;
         }
         let n = old_index.len() + new.len();
-        let mut p = Prepared {
+        let mut p = PreparedPoint {
             pk,
             slot,
             from,
@@ -323,7 +322,7 @@ impl PointCache {
     /// the ones it was made from and it may still be kept (a batch's points are
     /// distinct and the cache changes between batches only, so they are; if not,
     /// nothing is written and the terms are gathered again when next needed).
-    pub fn commit(&mut self, p: Prepared) {
+    pub fn commit(&mut self, p: PreparedPoint) {
         let slot = self.slots.get(&p.pk).copied();
         let same = slot == p.slot && slot.is_none_or(|s| self.starts(s) == p.from);
         if !same || !self.healthy || (slot.is_none() && !self.admits()) {
@@ -886,7 +885,7 @@ mod tests {
         for (mut c, _dir) in caches() {
             let pk = (2, 0, 0);
             c.add(pk, vec![(2, terms(&[(1, 0.5)], &[]))]);
-            // Prepared from the point as it was, then the point is rewritten.
+            // PreparedPoint from the point as it was, then the point is rewritten.
             let stale = c.prepare(pk, vec![(4, terms(&[(5, 0.5)], &[]))]);
             let fresh = c.prepare(pk, vec![(6, terms(&[(7, 0.5)], &[]))]);
             assert!(stale.is_some() && fresh.is_some());

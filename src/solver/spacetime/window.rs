@@ -1,11 +1,11 @@
 //! A space-time window on the solver's pools: what it adds to the shared part and
 //! how it gives it back, and one frame's refine-and-solve inside it (the solver
-//! side of [`super::spacetime`]; Damez & Sillion, paper 001, §5.2–5.3).
+//! side of [`super`]; Damez & Sillion, paper 001, §5.2–5.3).
 //!
 //! **Pools.** [`Solver::begin_window`] re-classifies the shared part's links
 //! against the boxes the moving objects sweep during the window and refines those
 //! that became constant (the window's base, a [`Snapshot`]); each
-//! [`Solver::frame`] places the objects, re-evaluates and refines the varying links
+//! [`Solver::solve_frame`] places the objects, re-evaluates and refines the varying links
 //! and solves the leaf system warm-started from the previous frame;
 //! [`Solver::release_window`] truncates the pools back to the shared part and
 //! restores what the window changed in older records (links made passive, elements
@@ -18,24 +18,25 @@
 //! to frame.
 //!
 //! **What a window keeps** ([`Window`]): the final-gather terms of its static
-//! points ([`super::kept`]), and the leaf-row coefficients, opened entries, hidden
-//! coefficients and masks that hold over the window ([`super::rows`]). What holds of
+//! points ([`super::kept_terms`]), and the leaf-row coefficients, opened entries, hidden
+//! coefficients and masks that hold over the window ([`crate::solver::rows`]). What holds of
 //! the final-gather terms is handed to the next window (`Solver::revalidated`).
 
-use super::*;
+use super::kept_terms::{self, SourceTerms};
+use crate::solver::*;
 
 /// Pool lengths at some moment, and what was done since to older records (links
 /// made passive, elements subdivided): enough to restore the pools to that moment.
 #[derive(Default)]
-pub(super) struct Snapshot {
-    pub(super) elems_len: usize,
-    pub(super) links_len: usize,
-    pub(super) passivated: Vec<LinkId>,
-    pub(super) subdivided: Vec<ElementId>,
+pub(in crate::solver) struct Snapshot {
+    pub(in crate::solver) elems_len: usize,
+    pub(in crate::solver) links_len: usize,
+    pub(in crate::solver) passivated: Vec<LinkId>,
+    pub(in crate::solver) subdivided: Vec<ElementId>,
 }
 
 impl Snapshot {
-    pub(super) fn of(elems: &ElementPool, links: &LinkPool) -> Self {
+    pub(in crate::solver) fn of(elems: &ElementPool, links: &LinkPool) -> Self {
         Snapshot {
             elems_len: elems.len(),
             links_len: links.len(),
@@ -46,49 +47,49 @@ impl Snapshot {
 
 /// What a time window needs beyond the static solver (see [`spacetime`]).
 #[derive(Default)]
-pub(super) struct Window {
+pub(in crate::solver) struct Window {
     /// Boxes swept by the moving objects over the window, one per moving object in
-    /// scene order ([`super::spacetime::swept_boxes`]).
-    pub(super) swept: Vec<(DVec3, DVec3)>,
+    /// scene order ([`super::swept_boxes`]).
+    pub(in crate::solver) swept: Vec<(DVec3, DVec3)>,
     /// The time range `swept` covers (the window's, or the whole animation's in the
     /// shared part).
-    pub(super) span: [f64; 2],
+    pub(in crate::solver) span: [f64; 2],
     /// The shared part, as the window found it (restored when it is released).
-    pub(super) base: Snapshot,
+    pub(in crate::solver) base: Snapshot,
     /// The window's own base: the shared part plus the refinement of the links
     /// that are constant in this window (restored before each frame).
-    pub(super) frame: Snapshot,
+    pub(in crate::solver) frame: Snapshot,
     /// True once the window's base is built: refinement now belongs to a frame.
-    pub(super) in_frame: bool,
+    pub(in crate::solver) in_frame: bool,
     /// Leaf-row coefficients of constant links on static leaves: `(leaf, link) →
     /// (F, visible fraction)`, keyed as [`Solver::row_key`] keys them (the leaves
     /// and links a frame makes by what they stand for).
-    pub(super) rows: FastMap<(u32, u32), (f32, f32)>,
+    pub(in crate::solver) rows: FastMap<(u32, u32), (f32, f32)>,
     /// The row entries a cached coefficient of [`Window::rows`] opens into when its
     /// source is opened ([`Solver::push_opened`]): the same children and factors at
     /// every frame while none of them has children the frame refined, so they are
     /// computed once (the same values, bit for bit; LIGHT spent a fifth of its time
     /// on these factors, frame after frame).
-    pub(super) opened: FastMap<(u32, u32), RowEntries>,
+    pub(in crate::solver) opened: FastMap<(u32, u32), RowEntries>,
     /// Entries held by [`Window::opened`].
-    pub(super) opened_entries: usize,
+    pub(in crate::solver) opened_entries: usize,
     /// Leaf-row `(F, visible fraction)` of varying links between static ends (a
     /// static leaf or source a frame made too, [`Solver::row_key`]), computed at a
     /// frame with no moving object's box in the shaft between the ends
     /// ([`Solver::clear_of_moving`]): at any such frame their rays meet static
     /// geometry only, with the same keys, so the value is the same bit for bit.
-    pub(super) hidden: FastMap<(u32, u32), (f64, f64)>,
+    pub(in crate::solver) hidden: FastMap<(u32, u32), (f64, f64)>,
     /// The static part of the rays at a static leaf's quadrature points for row
     /// entries of varying links between static ends, keyed as [`Window::hidden`],
     /// at frames with a moving object's box in the shaft between the ends (which
     /// [`Window::hidden`] cannot keep): bit `i·m + j` is set where nothing static
-    /// blocks ray `j` of point `i` (`m` rays a point, [`RowMasks`]). The static
+    /// blocks ray `j` of point `i` (`m` rays a point, [`RowMasks`](crate::solver::rows::RowMasks)). The static
     /// geometry and the rays' keys hold over the window, so a later frame casts
     /// only the rays a mask leaves clear, at the moving objects only, and gets the
     /// value casting every ray would give, bit for bit (the final gather's
-    /// [`kept::MaskedTerm`] for rows; paper 001 §5.2: what a moving object cannot
+    /// [`kept_terms::MaskedTerm`] for rows; paper 001 §5.2: what a moving object cannot
     /// change is computed once).
-    pub(super) masks: FastMap<(u32, u32), u64>,
+    pub(in crate::solver) masks: FastMap<(u32, u32), u64>,
     /// Exact factors `Σ_q w_q F(x_q → e)` from a static leaf (keyed by
     /// [`Solver::stable_id`]) to a static element `e` of the window's base that a
     /// source of its row opens into ([`Solver::push_opened`]): the geometry of both
@@ -96,32 +97,32 @@ pub(super) struct Window {
     /// Those of a varying link's source were computed again at every solved frame
     /// (LIGHT: 5.0 M of them over its 76 frames), where [`Window::opened`] keeps
     /// only a constant link's entries.
-    pub(super) factors: FastMap<(u32, u32), f64>,
+    pub(in crate::solver) factors: FastMap<(u32, u32), f64>,
     /// Ids that the caches above key a frame's own elements by, which the next frame
     /// makes again with other ids: `(element of the window's base, path of child
     /// indices below it) → id` from [`FRAME_SID`] up ([`Solver::intern_frame_elements`]).
     /// A static leaf a frame's refinement makes has the same geometry and casts the
     /// same rays ([`Solver::ray_id`]) at every frame that makes it, so what the
     /// caches hold for it holds at all of them.
-    pub(super) stable: FastMap<(u32, u64), u32>,
+    pub(in crate::solver) stable: FastMap<(u32, u64), u32>,
     /// This frame's elements past the window's base: their ids in [`Window::stable`]
     /// (`u32::MAX`: too deep to key).
-    pub(super) sids: Vec<u32>,
+    pub(in crate::solver) sids: Vec<u32>,
     /// Final-gather terms that hold over the window at static reconstruction points.
     /// `None` in the shared part's rounds (nothing is reconstructed there).
-    pub(super) points: std::sync::Mutex<Option<PointCache>>,
+    pub(in crate::solver) points: std::sync::Mutex<Option<PointCache>>,
     /// The radiosity scale every frame of the window reconstructs against (cell
     /// tolerance, gather limits): the RMS reflected radiosity of the window's first
     /// solved frame. Each frame's own would move with the moving objects and change
     /// the decisions, hence the values, at static points; the shared part's (solved
     /// with the varying links coarse) is lower on LIGHT and made it 36% slower.
-    pub(super) b_ref: Option<f64>,
+    pub(in crate::solver) b_ref: Option<f64>,
 }
 
 impl Window {
     /// Bytes of the leaf-row cache: per entry the key, the value and the hash
     /// table's control byte, over its capacity.
-    pub(super) fn rows_bytes(&self) -> usize {
+    pub(in crate::solver) fn rows_bytes(&self) -> usize {
         self.rows.capacity() * (std::mem::size_of::<((u32, u32), (f32, f32))>() + 1)
             + self.opened.capacity() * (std::mem::size_of::<((u32, u32), RowEntries)>() + 1)
             + self.opened_entries * std::mem::size_of::<(u32, f64)>()
@@ -135,11 +136,11 @@ impl Window {
 /// First id [`Window::stable`] gives a frame's own elements: above every element id
 /// of a window's base (the pools hold far fewer), below the link keys' tag bit
 /// ([`Solver::row_key`]).
-pub(super) const FRAME_SID: u32 = 1 << 30;
+pub(in crate::solver) const FRAME_SID: u32 = 1 << 30;
 
 /// Levels below the window's base a frame's element may lie and still get an id
 /// in [`Window::stable`] (3 bits a level under a sentinel bit, in 64).
-pub(super) const MAX_FRAME_DEPTH: u32 = 20;
+pub(in crate::solver) const MAX_FRAME_DEPTH: u32 = 20;
 
 /// What one space-time frame cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -174,7 +175,7 @@ impl Solver<'_> {
     /// are the window's to start with, those that hold against the boxes the moving
     /// objects sweep over `span` (`Solver::revalidated`).
     pub fn begin_window(&mut self, span: [f64; 2], b_ref: f64) -> Result<()> {
-        let swept = super::spacetime::swept_boxes(self.scene, span[0], span[1]);
+        let swept = super::swept_boxes(self.scene, span[0], span[1]);
         self.begin_window_in(span, swept, b_ref)
     }
 
@@ -186,11 +187,11 @@ impl Solver<'_> {
         swept: Vec<(DVec3, DVec3)>,
         b_ref: f64,
     ) -> Result<()> {
-        let points = match self.carried.take() {
+        let points = match self.st.carried.take() {
             Some(c) => self.revalidated(&c, &swept)?,
-            None => PointCache::new(&self.opts.storage, self.kept_budget)?,
+            None => PointCache::new(&self.opts.storage, self.st.kept_budget)?,
         };
-        self.window = Some(Window {
+        self.st.window = Some(Window {
             swept,
             span,
             base: Snapshot::of(&self.elems, &self.links),
@@ -214,12 +215,12 @@ impl Solver<'_> {
             t.flags[2] = v as u8;
         }
         self.reevaluate(&stale);
-        self.shared_phase = true;
+        self.st.shared_phase = true;
         let refined = self.refine(stale, self.opts.eps * b_ref);
-        self.shared_phase = false;
+        self.st.shared_phase = false;
         refined?;
         let frame = Snapshot::of(&self.elems, &self.links);
-        if let Some(w) = self.window.as_mut() {
+        if let Some(w) = self.st.window.as_mut() {
             w.frame = frame;
             w.in_frame = true;
         }
@@ -241,19 +242,19 @@ impl Solver<'_> {
         span: [f64; 2],
         on_round: impl FnMut(&mut RoundRecord, &Solver),
     ) -> Result<Vec<RoundRecord>> {
-        let swept = super::spacetime::swept_boxes(self.scene, span[0], span[1]);
-        self.window = Some(Window {
+        let swept = super::swept_boxes(self.scene, span[0], span[1]);
+        self.st.window = Some(Window {
             swept: swept.clone(),
             span,
             ..Window::default()
         });
-        self.shared_phase = true;
+        self.st.shared_phase = true;
         let records = self.run(on_round);
-        self.shared_phase = false;
-        self.window = None;
+        self.st.shared_phase = false;
+        self.st.window = None;
         let records = records?;
         // Every frame balances its leaf system as the shared part's last round did.
-        self.balance_fixed = true;
+        self.st.balance_fixed = true;
         // The rounds' radiosity misses what the unrefined varying links carry, so the
         // constant links were refined against too little light. Solve the start time
         // with its varying links refined (in a window, released at once), take that
@@ -261,27 +262,27 @@ impl Solver<'_> {
         // of LIGHT's solved the start time again and refined nothing (the same
         // hierarchy and error, 3.516%; 0.15 s), and ACTOR's first refines nothing
         // already (BENCHMARKS.md, "Serial time").
-        let t = self.now;
+        let t = self.motion.now;
         let b_ref = self.b_ref();
         self.begin_window_in(span, swept.clone(), b_ref)?;
-        self.frame(t, b_ref)?;
-        let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
+        self.solve_frame(t, b_ref)?;
+        let shared = self.st.window.as_ref().map_or(0, |w| w.base.elems_len);
         let b = self.elems.radiosities.as_slice()[..shared].to_vec();
         self.release_window();
-        self.carried = None;
+        self.st.carried = None;
         self.elems.radiosities.as_mut_slice().copy_from_slice(&b);
         self.index_links();
         let b_ref = self.b_ref();
-        self.window = Some(Window {
+        self.st.window = Some(Window {
             swept,
             span,
             ..Window::default()
         });
-        self.shared_phase = true;
+        self.st.shared_phase = true;
         let active = self.active_links(false);
         let changed = self.refine(active, self.opts.eps * b_ref);
-        self.shared_phase = false;
-        self.window = None;
+        self.st.shared_phase = false;
+        self.st.window = None;
         if changed? {
             self.index_links();
             self.solve_rows()?;
@@ -301,8 +302,8 @@ impl Solver<'_> {
     /// leaves.
     pub fn release_window(&mut self) {
         self.reset_frame();
-        if let Some(mut w) = self.window.take() {
-            self.carried = w.points.get_mut().unwrap_or_else(|e| e.into_inner()).take();
+        if let Some(mut w) = self.st.window.take() {
+            self.st.carried = w.points.get_mut().unwrap_or_else(|e| e.into_inner()).take();
             self.restore(&mut w.base);
             drop(w);
             release_free_memory();
@@ -313,7 +314,7 @@ impl Solver<'_> {
     /// True if every element the source terms `src` name is one of the shared
     /// part's (which, between windows, is all the pools hold): the terms a window
     /// hands the next. Terms on the window's own elements go with them.
-    pub(super) fn on_shared_part(&self, src: &kept::SourceTerms) -> bool {
+    pub(in crate::solver) fn on_shared_part(&self, src: &SourceTerms) -> bool {
         let shared = self.elems.len() as u32;
         src.0 >> 1 < shared
             && src.1.iter().all(|t| t.elem < shared)
@@ -332,7 +333,7 @@ impl Solver<'_> {
     /// dropped and gathered afresh. A masked term whose own box meets no swept box
     /// becomes the fixed term a fresh gather would make (factor times the static
     /// visibility), which costs no shaft test at each frame.
-    pub(super) fn revalidated(
+    pub(in crate::solver) fn revalidated(
         &self,
         carried: &PointCache,
         swept: &[(DVec3, DVec3)],
@@ -342,7 +343,7 @@ impl Solver<'_> {
         // A point is gathered a hair inside its cell (`CORNER_INSET`).
         let pad = DVec3::splat(CORNER_INSET * self.patches.diameter);
         let q = 1.0 / (1u64 << 24) as f64;
-        carried.carried(&self.opts.storage, self.kept_budget, |pk, src| {
+        carried.carried(&self.opts.storage, self.st.kept_budget, |pk, src| {
             if !self.on_shared_part(src) {
                 return false;
             }
@@ -379,7 +380,7 @@ impl Solver<'_> {
                 }
                 let f = t.f * t.vis_static;
                 if f > 0.0 {
-                    fixed.push(kept::FixedTerm { elem: t.elem, f });
+                    fixed.push(kept_terms::FixedTerm { elem: t.elem, f });
                 }
                 false
             });
@@ -409,12 +410,12 @@ impl Solver<'_> {
     /// hierarchy near a moving object is as fine as this frame needs, not the union
     /// over the window.
     fn reset_frame(&mut self) {
-        self.pass_rows = Vec::new();
-        if let Some(mut w) = self.window.take() {
+        self.st.pass_rows = Vec::new();
+        if let Some(mut w) = self.st.window.take() {
             if w.in_frame {
                 self.restore(&mut w.frame);
             }
-            self.window = Some(w);
+            self.st.window = Some(w);
         }
     }
 
@@ -437,7 +438,7 @@ impl Solver<'_> {
                     ElementId(e.source),
                     [this.ray_id(e.receiver), this.ray_id(e.source)],
                     &set,
-                    this.eps_len,
+                    this.plane_tol,
                 )
             })
             .collect();
@@ -467,7 +468,7 @@ impl Solver<'_> {
     /// seen from its other surfaces, and LIGHT's panel hid the wall lamp from no
     /// coarse link (14% too bright at eps 0.5 while it covers the lamp; 8.4%
     /// against its reference over the shot, by power 3.6%).
-    pub(super) fn reevaluate_cluster_sources(&mut self, ids: &[LinkId]) {
+    pub(in crate::solver) fn reevaluate_cluster_sources(&mut self, ids: &[LinkId]) {
         let geoms = self.elems.geoms.as_slice();
         let ends = self.links.ends.as_slice();
         let clusters: Vec<LinkId> = ids
@@ -483,13 +484,13 @@ impl Solver<'_> {
     /// refined against `eps · b_ref`, and the leaf system solved again, warm-started
     /// from the previous frame. Constant links keep their coefficients, leaf rows
     /// and final-gather terms from earlier frames of the window.
-    pub fn frame(&mut self, t: f64, b_ref: f64) -> Result<FrameCost> {
+    pub fn solve_frame(&mut self, t: f64, b_ref: f64) -> Result<FrameCost> {
         let rays0 = self.rays;
         self.reset_frame();
         self.set_time(t);
         let varying = self.active_links(true);
         self.reevaluate(&varying);
-        self.links_at = t;
+        self.st.links_at = t;
         let n_varying = varying.len() as u64;
         let mut residual = 0.0;
         // Refine and solve again while refining changes something (radiosity moved
@@ -506,11 +507,11 @@ impl Solver<'_> {
             wave = self.active_links(true);
         }
         // Only the passes share them; the frame's gathers need the memory.
-        self.pass_rows = Vec::new();
+        self.st.pass_rows = Vec::new();
         // The window's reconstruction scale: the first solved frame's.
-        if self.window.as_ref().is_some_and(|w| w.b_ref.is_none()) {
+        if self.st.window.as_ref().is_some_and(|w| w.b_ref.is_none()) {
             let scale = self.rms_radiosity();
-            if let Some(w) = self.window.as_mut() {
+            if let Some(w) = self.st.window.as_mut() {
                 w.b_ref = Some(scale);
             }
         }
@@ -518,8 +519,8 @@ impl Solver<'_> {
             varying_links: n_varying,
             rays: self.rays - rays0,
             residual,
-            rows_between: self.rows_between,
-            rows_moving: self.frame_rows.len() as u64,
+            rows_between: self.st.rows_between,
+            rows_moving: self.st.frame_rows.len() as u64,
         })
     }
 
@@ -528,19 +529,19 @@ impl Solver<'_> {
     /// and new points are gathered afresh at every frame instead of kept. `None`
     /// keeps everything that holds over the window. Applies from the next window.
     pub fn set_kept_budget(&mut self, bytes: Option<u64>) {
-        self.kept_budget = bytes.map(|b| usize::try_from(b).unwrap_or(usize::MAX));
+        self.st.kept_budget = bytes.map(|b| usize::try_from(b).unwrap_or(usize::MAX));
     }
 
     /// Whether a window's reconstructions keep the direct light of the points on
-    /// moving surfaces apart ([`super::spacetime::SpaceTimeOptions::direct_apart`]).
+    /// moving surfaces apart ([`super::SpaceTimeOptions::direct_apart`]).
     pub fn set_direct_apart(&mut self, on: bool) {
-        self.direct_apart = on;
+        self.st.direct_apart = on;
     }
 
     /// Bytes of what the current window keeps: final-gather terms and leaf-row
     /// coefficients (0 outside a window).
     pub fn kept_bytes(&self) -> u64 {
-        self.window.as_ref().map_or(0, |w| {
+        self.st.window.as_ref().map_or(0, |w| {
             let points = w
                 .points
                 .lock()
@@ -576,8 +577,8 @@ impl Solver<'_> {
     /// same coefficients wherever nothing moves between it and its sources (the
     /// caches of [`Window`] can then keep them), and its jitter does not flicker
     /// from frame to frame.
-    pub(super) fn ray_id(&self, e: u32) -> u64 {
-        let shared = self.window.as_ref().map_or(0, |w| w.base.elems_len);
+    pub(in crate::solver) fn ray_id(&self, e: u32) -> u64 {
+        let shared = self.st.window.as_ref().map_or(0, |w| w.base.elems_len);
         if shared == 0 || (e as usize) < shared {
             return u64::from(e);
         }
@@ -587,8 +588,9 @@ impl Solver<'_> {
 
     /// Gives the elements a frame's refinement made (past the window's base) their
     /// ids in [`Window::stable`], for the caches of the leaf rows.
-    pub(super) fn intern_frame_elements(&mut self) {
+    pub(in crate::solver) fn intern_frame_elements(&mut self) {
         let Some(base) = self
+            .st
             .window
             .as_ref()
             .filter(|w| w.in_frame)
@@ -602,7 +604,7 @@ impl Solver<'_> {
                 (depth <= MAX_FRAME_DEPTH).then_some((ancestor, path))
             })
             .collect();
-        if let Some(w) = self.window.as_mut() {
+        if let Some(w) = self.st.window.as_mut() {
             // Over the kept budget no new id is given: nothing new would be kept
             // under it.
             let admits = w
@@ -624,8 +626,8 @@ impl Solver<'_> {
 
     /// The id the caches of a window key element `e` by: its own in the window's
     /// base, [`Window::stable`]'s for a frame's element (`u32::MAX`: none).
-    pub(super) fn stable_id(&self, e: u32) -> u32 {
-        match &self.window {
+    pub(in crate::solver) fn stable_id(&self, e: u32) -> u32 {
+        match &self.st.window {
             Some(w) if w.in_frame && (e as usize) >= w.frame.elems_len => w
                 .sids
                 .get(e as usize - w.frame.elems_len)
