@@ -22,6 +22,8 @@ mod gltf;
 mod json;
 mod model;
 mod obj;
+mod texture;
+mod triangulate;
 pub mod validate;
 
 use std::path::Path;
