@@ -22,6 +22,7 @@ mod gltf;
 mod json;
 mod model;
 mod obj;
+mod sides;
 mod texture;
 mod triangulate;
 pub mod validate;
@@ -35,6 +36,7 @@ pub use model::{
     Camera, Material, MaterialId, MotionKey, MotionTrack, Object, ObjectId, Polygon, Scene,
     TimeDomain,
 };
+pub use sides::{EMITTER_CLEARANCE, MAX_EMITTERS_CHECKED, emitters_facing_close, two_sided};
 
 use crate::{Error, Result};
 
@@ -66,6 +68,12 @@ pub fn load(path: &Path) -> Result<Scene> {
             },
         )),
     }
+}
+
+/// The perspective cameras of the glTF file at `path` by name, for `play --camera`;
+/// other formats have at most the one camera [`load`] gives.
+pub fn cameras(path: &Path) -> Result<Vec<(String, Camera)>> {
+    gltf::cameras(path)
 }
 
 /// Parses and validates native JSON scene `text`; `path` names it in messages.

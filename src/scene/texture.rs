@@ -63,12 +63,6 @@ pub(crate) fn mean_of_file(path: &Path) -> std::result::Result<[f64; 3], String>
     mean_of_image(&img)
 }
 
-/// Mean linear RGB of encoded PNG or JPEG `bytes`.
-pub(crate) fn mean_of_bytes(bytes: &[u8]) -> std::result::Result<[f64; 3], String> {
-    let img = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
-    mean_of_image(&img)
-}
-
 fn mean_of_image(img: &image::DynamicImage) -> std::result::Result<[f64; 3], String> {
     let rgb = img.to_rgb32f();
     mean_linear(rgb.as_raw().iter().map(|&v| f64::from(v)), 3)

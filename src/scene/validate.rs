@@ -21,7 +21,8 @@
 //! faces each receive and each send the light, and a Cornell box with its floor
 //! twice came out 22–73% too bright off the floor), objects left with no polygon
 //! are dropped, and a scene without an emitter gets the warning
-//! [`NO_EMITTER_WARNING`].
+//! [`NO_EMITTER_WARNING`]; an emitter facing a surface too close gets one too
+//! ([`super::sides`]).
 //!
 //! Every error is an [`Error::Invalid`] naming the file, the place (`object "room",
 //! polygon 3`, `material "lamp"`, `object "cube", motion key 2`), what was expected and
@@ -99,6 +100,8 @@ pub(crate) fn validate_sourced(
     if !scene.has_emitter() {
         scene.warnings.push(NO_EMITTER_WARNING.to_string());
     }
+    let close = super::sides::emitters_facing_close(&scene);
+    scene.warnings.extend(close);
     Ok(scene)
 }
 

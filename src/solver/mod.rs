@@ -78,7 +78,7 @@ use crate::shafts::meets_any;
 use kept::{MaskedTerm, PointCache};
 
 use crate::solution::{Leaf, PatchGeometry, Solution, SolveStats};
-pub use report::RoundRecord;
+pub use report::{RoundRecord, StopReason};
 pub use rows::BALANCE_TRIGGER;
 
 /// A hash map with aHash for the solver's hot tables, whose keys are small tuples
@@ -385,6 +385,11 @@ pub struct Solver<'a> {
     root: Option<ElementId>,
     /// The last round's estimated error ([`Solver::run`]; `NaN`: none).
     estimate: f64,
+    /// Why [`Solver::run`] stopped refining.
+    stop: StopReason,
+    /// Links of the last refinement pass that were above the threshold but could
+    /// not split: both ends at the `--min-size` floor.
+    floor_links: u64,
     /// Whether the scene is closed around 128 points spread by area
     /// ([`Solver::is_closed`]; `None` before a run).
     closed: Option<bool>,
@@ -545,6 +550,8 @@ impl<'a> Solver<'a> {
             links,
             root,
             estimate: f64::NAN,
+            stop: StopReason::NotRun,
+            floor_links: 0,
             closed: None,
             time,
             rho_max,
@@ -667,6 +674,7 @@ impl<'a> Solver<'a> {
         let mut round = 0;
         // After the first solve, see [`Solver::reevaluate_cluster_sources`].
         let mut clusters_reevaluated = false;
+        self.stop = StopReason::RoundLimit;
         while round < self.opts.max_rounds && idle <= self.opts.max_rounds {
             // The first level (`2 eps`) ends after two solved rounds.
             if at_level >= 2 && eps > self.opts.eps {
@@ -717,6 +725,13 @@ impl<'a> Solver<'a> {
                     .target_error
                     .is_some_and(|t| !samples.is_empty() && (estimate.is_nan() || estimate > t));
                 if !more {
+                    self.stop = if self.floor_links > 0 {
+                        StopReason::MinSize {
+                            links: self.floor_links,
+                        }
+                    } else {
+                        StopReason::Refined
+                    };
                     break;
                 }
                 eps /= 2.0;
@@ -745,11 +760,17 @@ impl<'a> Solver<'a> {
             at_level += 1;
             let mut rec = self.round_record(round, start, (rays0, clear0), estimate, residual);
             on_round(&mut rec, self);
-            let stop = self
+            let met = self
                 .opts
                 .target_error
-                .is_some_and(|t| rec.estimated_error <= t)
-                || self.opts.time_budget.is_some_and(|b| rec.seconds >= b);
+                .is_some_and(|t| rec.estimated_error <= t);
+            let out_of_time = self.opts.time_budget.is_some_and(|b| rec.seconds >= b);
+            if met {
+                self.stop = StopReason::TargetMet;
+            } else if out_of_time {
+                self.stop = StopReason::TimeBudget;
+            }
+            let stop = met || out_of_time;
             records.push(rec);
             round += 1;
             if stop {
@@ -948,6 +969,11 @@ impl<'a> Solver<'a> {
         self.closed
     }
 
+    /// Why the last [`Solver::run`] stopped refining ([`StopReason::NotRun`] before).
+    pub fn stop_reason(&self) -> StopReason {
+        self.stop
+    }
+
     /// Mean reflected radiosity a closed room with the scene's mean exitance and
     /// reflectance would have, max channel: the first round's radiosity scale.
     fn enclosure_estimate(&self) -> f64 {
@@ -1050,6 +1076,7 @@ impl<'a> Solver<'a> {
     /// Refines from the links `wave`; returns true if any link was split.
     fn refine(&mut self, mut wave: Vec<LinkId>, thr: f64) -> Result<bool> {
         let mut changed = false;
+        self.floor_links = 0;
         loop {
             let mut pairs: Vec<(ElementId, ElementId)> = Vec::new();
             for &l in &wave {
@@ -1068,7 +1095,10 @@ impl<'a> Solver<'a> {
                     continue;
                 }
                 let split = match oracle::choose_split(&self.elems, r, s, self.min_area) {
-                    Split::Keep => continue,
+                    Split::Keep => {
+                        self.floor_links += 1;
+                        continue;
+                    }
                     Split::Receiver => r,
                     Split::Source => s,
                 };

@@ -101,6 +101,16 @@ pub struct SceneArgs {
     /// the same motion back and forth. The same scenes are in formats/examples/.
     #[arg(long, value_enum, conflicts_with = "scene")]
     pub builtin: Option<Builtin>,
+    /// Make every surface reflect and emit on both of its sides.
+    ///
+    /// Polygons are one-sided: the side their vertices turn counter-clockwise
+    /// around reflects and emits, the back absorbs and stays black. Formats with no
+    /// side flag (OBJ, native JSON) often hold surfaces that are lit from behind (a
+    /// floor modelled facing down, a lamp facing into its fixture); this gives every
+    /// polygon a twin facing the other way, at twice the patches. glTF materials
+    /// marked `doubleSided` are two-sided without it.
+    #[arg(long)]
+    pub two_sided: bool,
 }
 
 /// Where the answer, the reports and the probes go.
@@ -486,6 +496,14 @@ impl Args {
 impl SceneArgs {
     /// The scene to solve and the stem of the default output name.
     pub fn load(&self) -> anyhow::Result<(Scene, String)> {
+        let (mut scene, stem) = self.load_as_is()?;
+        if self.two_sided {
+            rhier::scene::two_sided(&mut scene);
+        }
+        Ok((scene, stem))
+    }
+
+    fn load_as_is(&self) -> anyhow::Result<(Scene, String)> {
         if let Some(b) = self.builtin {
             use clap::ValueEnum;
             let name = b
