@@ -559,7 +559,7 @@ impl<'a> Reader<'a> {
                     }
                     Err(e) => warnings.push(format!(
                         "material \"{name}\": baseColorTexture {what} not read ({e}); the reflectance is baseColorFactor {}",
-                        validate::fmt3(rho)
+                        texture::fmt(rho)
                     )),
                 }
             }

@@ -75,7 +75,7 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
                 }
                 Err(e) => warnings.push(format!(
                     "material \"{name}\": texture map_Kd {file} not read ({e}); the reflectance is Kd {}",
-                    validate::fmt3(rho)
+                    texture::fmt(rho)
                 )),
             }
         }

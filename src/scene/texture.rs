@@ -81,7 +81,8 @@ pub(crate) fn note(material: &str, source: &str, mean: [f64; 3], factor: [f64; 3
     )
 }
 
-fn fmt(v: [f64; 3]) -> String {
+/// `[r, g, b]` to 4 decimals, for messages.
+pub(crate) fn fmt(v: [f64; 3]) -> String {
     format!("[{:.4}, {:.4}, {:.4}]", v[0], v[1], v[2])
 }
 
