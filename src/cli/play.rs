@@ -122,7 +122,7 @@ fn choose_camera(
         camera.fov_y = f.to_radians();
     }
     let d = camera.target - camera.eye;
-    if !(d.length() > 0.0) {
+    if d.length() == 0.0 || !d.is_finite() {
         anyhow::bail!(
             "--eye/--target: expected two different points, found both at {}",
             camera.eye

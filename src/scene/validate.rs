@@ -251,7 +251,10 @@ impl Sources<'_> {
     /// Polygon `i` of object `name` in a warning, with `room.obj:12` when known.
     fn name(&self, o: usize, i: usize, name: &str) -> String {
         match (self.line(o, i), self.path.file_name()) {
-            (Some(l), Some(f)) => format!("{}:{l} (object \"{name}\" polygon {i})", f.display()),
+            (Some(l), Some(f)) => format!(
+                "{}:{l} (object \"{name}\" polygon {i})",
+                f.to_string_lossy()
+            ),
             _ => format!("object \"{name}\" polygon {i}"),
         }
     }

@@ -120,9 +120,9 @@ fn obj_bent_and_concave_faces_are_split_and_messages_name_the_line() {
     let split: Vec<&String> = s.warnings.iter().filter(|w| w.contains("split")).collect();
     assert_eq!(
         split,
-        [&format!(
+        [
             "t.obj:18: split 3 face(s) into triangles: 1 non-planar quad(s) (a vertex off the plane by more than 0.0001 x diameter), 1 concave quad(s), 1 face(s) of 5 or more vertices (the first here)"
-        )]
+        ]
     );
 
     // A NaN vertex: the error names the face's line.
