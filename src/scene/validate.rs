@@ -22,7 +22,7 @@
 //! twice came out 22–73% too bright off the floor), objects left with no polygon
 //! are dropped, and a scene without an emitter gets the warning
 //! [`NO_EMITTER_WARNING`]; an emitter facing a surface too close gets one too
-//! ([`super::sides`]).
+//! ([`super::emitters_facing_close`]).
 //!
 //! Every error is an [`Error::Invalid`] naming the file, the place (`object "room",
 //! polygon 3`, `material "lamp"`, `object "cube", motion key 2`), what was expected and
