@@ -36,7 +36,7 @@ fn polygons(s: &Scene) -> usize {
 
 #[test]
 fn public_cornell_boxes_load_as_published() {
-    // McGuire's box: the left wall is 3 cm off planar (x from -0.99 to -1.02) and
+    // McGuire's box: the left wall is 5 mm off planar (x from -0.99 to -1.02) and
     // was refused; 2 faces repeat earlier ones (the file's own defect).
     let s = scene::load(&data("mcguire/CornellBox-Original.obj")).unwrap();
     // 5 walls (the bent one in 2 triangles), 2 boxes of 6 faces, the lamp; less
