@@ -168,6 +168,39 @@ pub const POWER_EXCESS_MAX: f64 = 0.05;
 /// (1e-6) on every sound leaf system.
 pub const RESIDUAL_MAX: f64 = 1e-3;
 
+/// An object's `--min-size` floor is taken relative to its own diameter, but no
+/// finer than this fraction of the scene's floor: a car in a 480-unit tunnel is
+/// meshed to the car's scale, a 1 mm screw in a house not to the screw's.
+pub const OBJECT_FLOOR_LIMIT: f64 = 1.0 / 16.0;
+
+/// The `--min-size` floor (smallest element area) of each object's elements:
+/// `(min_size · d)²` with `d` the object's bounding-box diagonal, at least
+/// [`OBJECT_FLOOR_LIMIT`] of the scene's diameter, at most the scene's.
+fn object_floors(patches: &Patches, min_size: f64) -> Vec<f64> {
+    let n = patches
+        .objects
+        .iter()
+        .map(|&o| o as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut bounds = vec![(DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)); n];
+    for (g, &o) in patches.geometry.iter().zip(&patches.objects) {
+        let b = &mut bounds[o as usize];
+        for v in &g.vertices[..g.corners as usize] {
+            b.0 = b.0.min(*v);
+            b.1 = b.1.max(*v);
+        }
+    }
+    let diam = patches.diameter;
+    bounds
+        .iter()
+        .map(|(lo, hi)| {
+            let d = if lo.x <= hi.x { lo.distance(*hi) } else { diam };
+            (min_size * d.clamp(OBJECT_FLOOR_LIMIT * diam, diam)).powi(2)
+        })
+        .collect()
+}
+
 /// Settings of a solve.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SolveOptions {
@@ -176,7 +209,8 @@ pub struct SolveOptions {
     pub storage: Storage,
     /// Refinement threshold relative to the scene's RMS radiosity.
     pub eps: f64,
-    /// Smallest element edge, as a fraction of the scene's diameter.
+    /// Smallest element edge, as a fraction of the diameter of the scene or of the
+    /// element's object, whichever is smaller (see [`OBJECT_FLOOR_LIMIT`]).
     pub min_size: f64,
     /// Rays per receiver quadrature point for partly hidden links.
     pub rays_per_point: u32,
@@ -395,7 +429,10 @@ pub struct Solver<'a> {
     closed: Option<bool>,
     time: [f32; 2],
     eps_len: f64,
+    /// The `--min-size` floor (element area) of the scene.
     min_area: f64,
+    /// The `--min-size` floor of each object's elements ([`object_floors`]).
+    object_min_area: Vec<f64>,
     /// `A_p` of [`SolveOptions::power_size`] (0: off).
     power_area: f64,
     rho_max: f64,
@@ -542,6 +579,7 @@ impl<'a> Solver<'a> {
             scene,
             eps_len: diam * 1e-9,
             min_area: (opts.min_size * diam).powi(2),
+            object_min_area: object_floors(&patches, opts.min_size),
             power_area: (opts.power_size * diam).powi(2),
             opts,
             patches,
@@ -969,6 +1007,25 @@ impl<'a> Solver<'a> {
         self.closed
     }
 
+    /// The `--min-size` floor of a link: the finer of its ends' objects' floors (a
+    /// cluster end counts as the scene's), so that a small object is meshed to its
+    /// own scale, and so are the shadows it casts on a large one.
+    fn link_floor(&self, r: ElementId, s: ElementId) -> f64 {
+        let geoms = self.elems.geoms.as_slice();
+        [r, s]
+            .iter()
+            .map(|e| {
+                let patch = geoms[e.ix()].patch;
+                self.patches
+                    .objects
+                    .get(patch as usize)
+                    .and_then(|&o| self.object_min_area.get(o as usize))
+                    .copied()
+                    .unwrap_or(self.min_area)
+            })
+            .fold(self.min_area, f64::min)
+    }
+
     /// Why the last [`Solver::run`] stopped refining ([`StopReason::NotRun`] before).
     pub fn stop_reason(&self) -> StopReason {
         self.stop
@@ -1094,7 +1151,7 @@ impl<'a> Solver<'a> {
                 if !self.needs_refining(l, thr) || (self.shared_phase && t.varying() && !forced) {
                     continue;
                 }
-                let split = match oracle::choose_split(&self.elems, r, s, self.min_area) {
+                let split = match oracle::choose_split(&self.elems, r, s, self.link_floor(r, s)) {
                     Split::Keep => {
                         self.floor_links += 1;
                         continue;

@@ -186,7 +186,15 @@ pub struct AccuracyArgs {
     /// solve the room's error often follows `--recon-tol` more than `--eps`.
     #[arg(long, default_value_t = SolveOptions::default().eps)]
     pub eps: f64,
-    /// Smallest element edge as a fraction of the scene's diameter.
+    /// Smallest element edge as a fraction of the scene's diameter, or of the
+    /// object's when that is smaller.
+    ///
+    /// A link above `--eps` whose ends are both at this floor stays whole; the last
+    /// line of the solve says so when that stopped it. The floor of an element is
+    /// taken relative to its object's diameter (bounding-box diagonal) as well as to
+    /// the scene's, the finer of the two, but no finer than 1/16 of the scene's: a
+    /// car in a long tunnel is meshed to the car's scale, and so is its shadow on the
+    /// tunnel.
     #[arg(long, default_value_t = SolveOptions::default().min_size)]
     pub min_size: f64,
     /// Reconstruction tolerance, relative to the RMS reflected radiosity.
