@@ -10,7 +10,9 @@
 //! `gltf.rs`, `obj.rs`); each reader maps its format onto the model (the mappings are
 //! specified in `formats/scene.md`) and then calls [`validate::validate`], which
 //! refuses bad input with an error naming the file, object, polygon, what was expected
-//! and what was found, and records repairs as [`Scene::warnings`]. [`cornell_box`] is
+//! and what was found, and records repairs as [`Scene::warnings`]. Beside the readers:
+//! `triangulate.rs` (faces other tools accept), `texture.rs` (a texture's mean colour)
+//! and `sides.rs` ([`two_sided`], emitters facing a close surface). [`cornell_box`] is
 //! the embedded default scene; [`actor_scene`] and [`light_scene`] the embedded
 //! animated scenes (after Damez & Sillion), [`builtin`] finds any of them by name.
 //! This module does not place geometry in world space and does not compute anything

@@ -3,18 +3,21 @@
 //! How it works (mapping specified in `formats/scene.md`, section "Wavefront OBJ"):
 //! `tobj` parses the file with faces kept as written; models with the same name (tobj
 //! splits an `o`/`g` group at each `usemtl`) are merged into one [`Object`] per OBJ
-//! object/group, in order of first appearance. Faces of 3 or 4 vertices are kept as
-//! they are (quads are checked for planarity by validation); faces of more vertices
-//! are fan-triangulated from their first vertex when planar and convex, refused
-//! otherwise. `Kd` = reflectance (a channel of exactly 1.0 is clamped to 0.999 with a
-//! warning), `Ke` = exitance (not multiplied by pi: OBJ has no radiometric convention,
-//! so `Ke` is taken in the units of the result, like native `emission`). Faces with no
-//! material use `default` (reflectance 0.8). Before `tobj` runs, the text is scanned
-//! for `usemtl` names missing from the MTL (tobj would silently drop them), so that
-//! they are reported with their object, polygon and line.
+//! object/group, in order of first appearance. Triangles and planar convex quads are
+//! kept as they are; bent or concave quads and faces of more vertices are cut into
+//! triangles ([`super::triangulate`]), with one warning counting them. The k-th face
+//! tobj returns is the k-th `f` line of the text, so every message about a face names
+//! `file.obj:LINE` (validation too, through [`validate::validate_sourced`]). `Kd` =
+//! reflectance, times the mean colour of `map_Kd` ([`super::texture`]; a channel of
+//! exactly 1.0 is clamped to 0.999 with a warning), `Ke` = exitance (not multiplied
+//! by pi: OBJ has no radiometric convention, so `Ke` is taken in the units of the
+//! result, like native `emission`); a `Ka` above 1 without `Ke` is warned of as a
+//! light that does not emit. Faces with no material use `default` (reflectance 0.8).
+//! Before `tobj` runs, the text is scanned for `usemtl` names missing from the MTL
+//! (tobj would silently drop them), so that they are reported with their line.
 //!
-//! Not read: normals, texture coordinates, textures, smoothing groups, lines, points,
-//! curves. OBJ has no animation: the scene is static.
+//! Not read: normals, texture coordinates, other textures, smoothing groups, lines,
+//! points, curves. OBJ has no animation: the scene is static.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};

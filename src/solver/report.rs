@@ -1,5 +1,5 @@
 //! Error against run time: one [`RoundRecord`] per refine-and-solve round, printed by
-//! `solve` and written as CSV by `--report`.
+//! `solve` and written as CSV by `--report`, and the [`StopReason`] the last line says.
 
 use std::io::Write;
 use std::path::Path;

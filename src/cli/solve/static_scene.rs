@@ -1,6 +1,7 @@
 //! A static scene (`rhier solve` without motion): refine-and-solve rounds, each
 //! reported (and measured against `--reference`), then the reconstruction, probes,
-//! the power-balance warning and the `.rhier` file.
+//! the power-balance warning, the reason the solve stopped and the `.rhier` file. A
+//! scene with no emitter is not solved: its zero solution is written at once.
 
 use std::path::Path;
 use std::time::Instant;

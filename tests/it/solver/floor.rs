@@ -69,7 +69,7 @@ fn a_small_object_is_refined_below_the_scene_floor() {
     let min_size = 1.0 / 8.0;
     let scene_floor = (min_size * (8.0f64 * 8.0 + 1.0 + 1.0).sqrt()).powi(2);
     assert!(0.25 < 4.0 * scene_floor);
-    assert!(OBJECT_FLOOR_LIMIT * 8.2 < 0.87);
+    const { assert!(OBJECT_FLOOR_LIMIT * 8.2 < 0.87) };
     let opts = SolveOptions {
         min_size,
         eps: 0.01,
