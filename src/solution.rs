@@ -193,6 +193,39 @@ pub struct Solution {
     pub stats: SolveStats,
 }
 
+impl Solution {
+    /// The answer for a scene with no emitter, known without solving: one leaf of
+    /// radiosity zero per patch, over the scene's time domain.
+    pub fn zero(scene: &crate::scene::Scene) -> Solution {
+        let patches = crate::geometry::Patches::at_time(scene, scene.time.start).geometry;
+        let time = [scene.time.start as f32, scene.time.end as f32];
+        let leaves = patches
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Leaf {
+                patch: i as u32,
+                corners: p.corners,
+                time,
+                uv: if p.corners == 4 {
+                    [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+                } else {
+                    [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]
+                },
+                b: [[0.0; 3]; 4],
+            })
+            .collect();
+        Solution {
+            scene: scene.clone(),
+            patches,
+            leaves,
+            stats: SolveStats {
+                estimated_error: 0.0,
+                ..SolveStats::default()
+            },
+        }
+    }
+}
+
 /// The leaf of `leaves` (one patch's) holding `(u, v)`: the first whose domain
 /// contains it, else the first within `1e-6` (a point in a crack between f32
 /// domains), else the one whose domain centre is nearest.

@@ -4,14 +4,21 @@
 //!
 //! Frames are named `frame_NNNNN.png` / `.gltf` in time order. The exposure is
 //! `--exposure`, else chosen on the first frame (99th-percentile luminance → 1) and
-//! kept for the whole sequence so that brightness does not flicker.
+//! kept for the whole sequence so that brightness does not flicker. The camera is
+//! chosen on the first frame too: `--camera` of `--scene`, the file's, one inside an
+//! interior ([`interior_camera`]), else the bounding box seen down `-z`; `--eye`,
+//! `--target` and `--fov` replace its parts. An all-black first frame is warned of.
 
 use std::path::PathBuf;
 
 use anyhow::Context;
+use glam::DVec3;
 use rhier::playback::Frame;
 use rhier::playback::export::write_gltf;
-use rhier::playback::raster::{FrameMesh, Shading, auto_camera, auto_exposure, render, tone_map};
+use rhier::playback::raster::{
+    FrameMesh, Shading, auto_camera, auto_exposure, interior_camera, render, tone_map,
+};
+use rhier::scene::Camera;
 use rhier::store::Reader;
 
 /// Output kind of `rhier play`.
@@ -56,6 +63,76 @@ pub struct Args {
     /// Output kind.
     #[arg(long, value_enum, default_value = "png")]
     pub export: Export,
+    /// Eye position `X,Y,Z` (world units).
+    ///
+    /// Overrides the eye of the camera otherwise used (the scene's, else the
+    /// automatic one); keeps its viewing direction unless `--target` is given.
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    pub eye: Option<[f64; 3]>,
+    /// Point looked at `X,Y,Z` (world units).
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    pub target: Option<[f64; 3]>,
+    /// Vertical field of view in degrees (0 < DEG < 180).
+    #[arg(long)]
+    pub fov: Option<f64>,
+    /// A camera of the glTF scene file given with `--scene`, by name.
+    ///
+    /// The `.rhier` file keeps one camera (the first of a glTF file); this picks
+    /// another of the same file. `--eye`, `--target` and `--fov` still override it.
+    #[arg(long, requires = "scene")]
+    pub camera: Option<String>,
+    /// The glTF scene file whose cameras `--camera` names.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+}
+
+/// Parses `X,Y,Z`.
+fn parse_point(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let values: Vec<f64> = parts.iter().filter_map(|p| p.parse().ok()).collect();
+    match values[..] {
+        [x, y, z] if values.iter().all(|v| v.is_finite()) && parts.len() == 3 => Ok([x, y, z]),
+        _ => Err(format!("expected three finite numbers X,Y,Z, found {s:?}")),
+    }
+}
+
+/// The camera of the frames: `--camera` of `--scene`, else the file's, else one
+/// inside an interior, else the bounding box seen down `-z`; then `--eye`,
+/// `--target` and `--fov` replace their parts.
+fn choose_camera(
+    args: &Args,
+    named: Option<Camera>,
+    stored: Option<Camera>,
+    frame: &Frame,
+    mesh: &FrameMesh,
+) -> anyhow::Result<Camera> {
+    let mut camera = named
+        .or(stored)
+        .or_else(|| interior_camera(mesh))
+        .unwrap_or_else(|| auto_camera(frame));
+    let direction = camera.target - camera.eye;
+    if let Some(e) = args.eye {
+        camera.eye = DVec3::from_array(e);
+        camera.target = camera.eye + direction;
+    }
+    if let Some(t) = args.target {
+        camera.target = DVec3::from_array(t);
+    }
+    if let Some(f) = args.fov {
+        camera.fov_y = f.to_radians();
+    }
+    let d = camera.target - camera.eye;
+    if d.length() == 0.0 || !d.is_finite() {
+        anyhow::bail!(
+            "--eye/--target: expected two different points, found both at {}",
+            camera.eye
+        );
+    }
+    if d.normalize().cross(camera.up).length() < 1e-6 {
+        // Looking straight along the up vector: any other up will do.
+        camera.up = if d.x.abs() < 0.9 { DVec3::X } else { DVec3::Z };
+    }
+    Ok(camera)
 }
 
 /// Times of the frames asked for.
@@ -100,7 +177,31 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     {
         anyhow::bail!("--exposure: expected a positive number, found {e}");
     }
+    if let Some(f) = args.fov
+        && !(f > 0.0 && f < 180.0)
+    {
+        anyhow::bail!("--fov: expected degrees in (0, 180), found {f}");
+    }
     let times = frame_times(&args)?;
+    let named = match (&args.camera, &args.scene) {
+        (Some(name), Some(path)) => {
+            let cameras = rhier::scene::cameras(path)?;
+            let Some((_, c)) = cameras.iter().find(|(n, _)| n == name) else {
+                let names: Vec<&str> = cameras.iter().map(|(n, _)| n.as_str()).collect();
+                anyhow::bail!(
+                    "--camera {name:?}: {} has no such camera (it has: {})",
+                    path.display(),
+                    if names.is_empty() {
+                        "none".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                );
+            };
+            Some(*c)
+        }
+        _ => None,
+    };
     let reader = Reader::open(&args.file)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating output directory {}", args.out.display()))?;
@@ -110,10 +211,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Shading::Smooth
     };
     let mut exposure = args.exposure;
+    let mut camera = None;
     for (k, &t) in times.iter().enumerate() {
         let frame = Frame::build(&reader, t)?;
         let mesh = FrameMesh::build(&frame, shading);
-        let camera = reader.camera().unwrap_or_else(|| auto_camera(&frame));
+        if k == 0 && mesh.colors.iter().flatten().all(|&c| c == 0.0) {
+            eprintln!(
+                "rhier: warning: {} is black at t = {t}: the radiosity is zero everywhere (a scene with no emitter, or whose emitters light nothing); the pictures will be black",
+                args.file.display()
+            );
+        }
+        // Chosen on the first frame and kept, so that the view does not jump.
+        let camera = match camera {
+            Some(c) => c,
+            None => *camera.insert(choose_camera(&args, named, reader.camera(), &frame, &mesh)?),
+        };
         let out = match args.export {
             Export::Png => {
                 let pic = render(&mesh, &camera, args.width, args.height);

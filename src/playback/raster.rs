@@ -124,6 +124,65 @@ pub fn auto_camera(frame: &Frame) -> Camera {
     }
 }
 
+/// Fraction of the surface area (facing inward, towards the bounding box's centre)
+/// above which a frame counts as an interior for [`interior_camera`].
+pub const INTERIOR_FRACTION: f64 = 0.5;
+
+/// A camera inside an interior (a mesh whose surfaces mostly face the centre of its
+/// bounding box, as a room's walls do), else `None`. The eye stands near one wall of
+/// the bounding box, at mid height (`y` up), looking across at the opposite one,
+/// 60° vertical field of view; of the four horizontal directions, the one whose
+/// small test picture gathers the most light (the lit side) is taken.
+pub fn interior_camera(mesh: &FrameMesh) -> Option<Camera> {
+    let (lo, hi) =
+        mesh.positions
+            .iter()
+            .fold(None, |acc: Option<(DVec3, DVec3)>, &p| match acc {
+                None => Some((p, p)),
+                Some((a, b)) => Some((a.min(p), b.max(p))),
+            })?;
+    let centre = 0.5 * (lo + hi);
+    let (mut inward, mut total) = (0.0, 0.0);
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+        let n = 0.5 * (b - a).cross(c - a);
+        let area = n.length();
+        total += area;
+        if n.dot(centre - (a + b + c) / 3.0) > 0.0 {
+            inward += area;
+        }
+    }
+    if total <= 0.0 || inward <= INTERIOR_FRACTION * total {
+        return None;
+    }
+    let half = 0.5 * (hi - lo);
+    let fov_y = 60f64.to_radians();
+    [DVec3::X, DVec3::NEG_X, DVec3::Z, DVec3::NEG_Z]
+        .into_iter()
+        .map(|d| {
+            let eye = centre - d * (0.98 * d.abs().dot(half));
+            let camera = Camera {
+                eye,
+                target: eye + d,
+                up: DVec3::Y,
+                fov_y,
+            };
+            let light: f64 = render(mesh, &camera, 64, 48)
+                .pixels
+                .iter()
+                .flatten()
+                .map(|&c| luminance(c))
+                .filter(|l| l.is_finite())
+                .sum();
+            (camera, light)
+        })
+        .fold(None, |best: Option<(Camera, f64)>, (c, l)| match best {
+            Some((_, bl)) if bl >= l => best,
+            _ => Some((c, l)),
+        })
+        .map(|(c, _)| c)
+}
+
 /// Linear radiosity per pixel, row-major from the top-left, `None` where nothing was
 /// drawn.
 #[derive(Clone, Debug)]

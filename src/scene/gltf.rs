@@ -24,15 +24,17 @@
 //!    reversed so that every polygon is counter-clockwise seen from its lit side.
 //! 5. Materials: `baseColorFactor` (linear RGB, alpha ignored) = reflectance,
 //!    `emissiveFactor` × `KHR_materials_emissive_strength` = radiance `L`, exitance
-//!    `E = pi L`. A reflectance channel of exactly 1.0 (the format's default white) is
-//!    clamped to 0.999 with a warning. Textures are ignored with a warning.
-//!    Primitives without a material use `default` (reflectance 0.8, no emission).
+//!    `E = pi L`. A `baseColorTexture` multiplies the factor by its mean linear
+//!    colour ([`super::texture`]). A reflectance channel of exactly 1.0 (the
+//!    format's default white) is clamped to 0.999 with a warning. Primitives without
+//!    a material use `default` (reflectance 0.8, no emission). A `doubleSided`
+//!    material's polygons get a reversed twin, so they reflect and emit both ways.
 //! 6. Camera: the first node (depth-first from the roots) with a perspective camera,
-//!    placed at the scene's start time.
+//!    placed at the scene's start time; [`cameras`] lists them all by name.
 //!
 //! Not read: morph targets and skins (ignored), sparse accessors (refused), lights
-//! (`KHR_lights_punctual`; only emissive surfaces emit), `doubleSided` (polygons are
-//! one-sided: the front face is the lit side).
+//! (`KHR_lights_punctual`: a warning says how to model them as emissive surfaces),
+//! emissive textures (a warning), texture coordinates (a texture counts by its mean).
 
 use std::collections::BTreeSet;
 use std::f64::consts::PI;
@@ -46,7 +48,7 @@ use glam::{DAffine3, DMat4, DQuat, DVec3};
 use super::model::{
     Camera, Material, MaterialId, MotionKey, MotionTrack, Object, Polygon, Scene, TimeDomain,
 };
-use super::validate;
+use super::{texture, validate};
 use crate::{Error, Result};
 
 /// Reflectance of primitives without a material.
@@ -73,13 +75,39 @@ pub(crate) fn load_slice(bytes: &[u8], base: Option<&Path>, path: &Path) -> Resu
     let buffers = gl::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
         .map_err(|e| Error::invalid(path, "glTF buffers", "readable buffer data", e.to_string()))?;
     let data: Vec<&[u8]> = buffers.iter().map(|b| &b.0[..]).collect();
-    let scene = Reader {
+    let (scene, _) = Reader {
         doc: &gltf.document,
         data,
+        buffers: &buffers,
+        base,
         path,
     }
     .read()?;
     validate::validate(scene, path)
+}
+
+/// The perspective cameras of the glTF file at `path`, by name (the camera's, else
+/// its node's, else `camera N`), placed at the scene's start time, in node order.
+pub(crate) fn cameras(path: &Path) -> Result<Vec<(String, Camera)>> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let invalid =
+        |found: String| Error::invalid(path, "glTF document", "a valid glTF 2.0 file", found);
+    let gltf =
+        gl::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(e.to_string()))?;
+    check_document(gltf.document.as_json()).map_err(invalid)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = gl::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
+        .map_err(|e| Error::invalid(path, "glTF buffers", "readable buffer data", e.to_string()))?;
+    let data: Vec<&[u8]> = buffers.iter().map(|b| &b.0[..]).collect();
+    let (_, cameras) = Reader {
+        doc: &gltf.document,
+        data,
+        buffers: &buffers,
+        base,
+        path,
+    }
+    .read()?;
+    Ok(cameras)
 }
 
 /// Validates the raw document: first what the `gltf` crate's own validation indexes
@@ -205,6 +233,10 @@ struct NodeRest {
 struct Reader<'a> {
     doc: &'a gl::Document,
     data: Vec<&'a [u8]>,
+    /// The same buffers as `data`, as the `gltf` crate's image decoder takes them.
+    buffers: &'a [gl::buffer::Data],
+    /// Where external images are looked for.
+    base: &'a Path,
     path: &'a Path,
 }
 
@@ -268,7 +300,8 @@ impl<'a> Reader<'a> {
         move |b: gl::Buffer<'_>| self.data.get(b.index()).copied()
     }
 
-    fn read(&self) -> Result<Scene> {
+    /// The scene, and every perspective camera by name.
+    fn read(&self) -> Result<(Scene, Vec<(String, Camera)>)> {
         let doc = self.doc;
         let Some(root) = doc.default_scene().or_else(|| doc.scenes().next()) else {
             return Err(self.err("glTF document", "a scene", "no scene"));
@@ -339,27 +372,48 @@ impl<'a> Reader<'a> {
 
         // Step 3: materials (every document material, in order; `default` on demand).
         let mut warnings = Vec::new();
+        if self
+            .doc
+            .extensions_used()
+            .any(|e| e == "KHR_lights_punctual")
+        {
+            warnings.push(format!(
+                "{}: KHR_lights_punctual lights are not read (only surfaces emit): model each lamp as a small mesh whose material has an emissiveFactor (times KHR_materials_emissive_strength), placed where the lamp is",
+                self.path.display()
+            ));
+        }
         let mut materials = self.materials(&mut warnings);
         let mut default_material = None;
 
         // Step 4: objects.
         let mut objects = Vec::new();
-        let mut camera = None;
+        let mut cameras: Vec<(String, Camera)> = Vec::new();
+        let mut double_sided = 0usize;
         for node in &order {
             let i = node.index();
-            let perspective = node.camera().and_then(|cam| match cam.projection() {
-                gl::camera::Projection::Perspective(p) => Some(p.yfov()),
-                gl::camera::Projection::Orthographic(_) => None,
+            let perspective = node.camera().and_then(|cam| {
+                let yfov = match cam.projection() {
+                    gl::camera::Projection::Perspective(p) => Some(p.yfov()),
+                    gl::camera::Projection::Orthographic(_) => None,
+                };
+                yfov.map(|y| (cam, y))
             });
-            if let (None, Some(yfov)) = (camera, perspective) {
+            if let Some((cam, yfov)) = perspective {
                 let w = world_at(i, time.start);
                 let eye = w.transform_point3(DVec3::ZERO);
-                camera = Some(Camera {
-                    eye,
-                    target: eye + w.transform_vector3(DVec3::NEG_Z).normalize_or_zero(),
-                    up: w.transform_vector3(DVec3::Y).normalize_or_zero(),
-                    fov_y: f64::from(yfov),
-                });
+                let name = cam
+                    .name()
+                    .or(node.name())
+                    .map_or_else(|| format!("camera {}", cam.index()), str::to_string);
+                cameras.push((
+                    name,
+                    Camera {
+                        eye,
+                        target: eye + w.transform_vector3(DVec3::NEG_Z).normalize_or_zero(),
+                        up: w.transform_vector3(DVec3::Y).normalize_or_zero(),
+                        fov_y: f64::from(yfov),
+                    },
+                ));
             }
             let Some(mesh) = node.mesh() else {
                 continue;
@@ -433,6 +487,9 @@ impl<'a> Reader<'a> {
                         MaterialId(materials.len() as u32 - 1)
                     }),
                 };
+                // A double-sided material reflects and emits on both sides: each
+                // polygon gets a twin facing the other way.
+                let twins = prim.material().double_sided();
                 for poly in merge_quads(&self.triangles(&prim, &place)?) {
                     let mut v: Vec<DVec3> = poly
                         .iter()
@@ -440,6 +497,13 @@ impl<'a> Reader<'a> {
                         .collect();
                     if mirrored {
                         v.reverse();
+                    }
+                    if twins {
+                        double_sided += 1;
+                        polygons.push(Polygon {
+                            vertices: v.iter().rev().copied().collect(),
+                            material,
+                        });
                     }
                     polygons.push(Polygon {
                         vertices: v,
@@ -453,13 +517,20 @@ impl<'a> Reader<'a> {
                 motion,
             });
         }
-        Ok(Scene {
+        if double_sided > 0 {
+            warnings.push(format!(
+                "{double_sided} polygon(s) of doubleSided materials reflect and emit on both sides (each is solved as two back-to-back polygons)"
+            ));
+        }
+        let camera = cameras.first().map(|c| c.1);
+        let scene = Scene {
             time,
             materials,
             objects,
             camera,
             warnings,
-        })
+        };
+        Ok((scene, cameras))
     }
 
     fn materials(&self, warnings: &mut Vec<String>) -> Vec<Material> {
@@ -472,12 +543,32 @@ impl<'a> Reader<'a> {
             let name = unique_name(&base, &out);
             let pbr = m.pbr_metallic_roughness();
             let [r, g, b, _] = pbr.base_color_factor().map(f64::from);
-            let rho = clamp_white([r, g, b], &name, warnings);
+            let mut rho = [r, g, b];
+            if let Some(info) = pbr.base_color_texture() {
+                let image = info.texture().source();
+                let what = match image.source() {
+                    gl::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
+                        uri.to_string()
+                    }
+                    _ => format!("image {}", image.index()),
+                };
+                match self.texture_mean(&image) {
+                    Ok(mean) => {
+                        warnings.push(texture::note(&name, &what, mean, rho));
+                        rho = std::array::from_fn(|c| mean[c] * rho[c]);
+                    }
+                    Err(e) => warnings.push(format!(
+                        "material \"{name}\": baseColorTexture {what} not read ({e}); the reflectance is baseColorFactor {}",
+                        texture::fmt(rho)
+                    )),
+                }
+            }
+            let rho = clamp_white(rho, &name, warnings);
             let strength = f64::from(m.emissive_strength().unwrap_or(1.0));
             let emission = m.emissive_factor().map(|l| PI * f64::from(l) * strength);
-            if pbr.base_color_texture().is_some() || m.emissive_texture().is_some() {
+            if m.emissive_texture().is_some() {
                 warnings.push(format!(
-                    "material \"{name}\": textures are ignored (only the constant factors are read)"
+                    "material \"{name}\": emissiveTexture is ignored (only emissiveFactor is read)"
                 ));
             }
             out.push(Material {
@@ -487,6 +578,38 @@ impl<'a> Reader<'a> {
             });
         }
         out
+    }
+
+    /// Mean linear colour of a glTF image (PNG or JPEG, embedded or external).
+    fn texture_mean(&self, image: &gl::Image<'_>) -> std::result::Result<[f64; 3], String> {
+        use gl::image::Format;
+        let data = gl::image::Data::from_source(image.source(), Some(self.base), self.buffers)
+            .map_err(|e| e.to_string())?;
+        let (channels, bytes) = match data.format {
+            Format::R8 => (1, 1),
+            Format::R8G8 => (2, 1),
+            Format::R8G8B8 => (3, 1),
+            Format::R8G8B8A8 => (4, 1),
+            Format::R16 => (1, 2),
+            Format::R16G16 => (2, 2),
+            Format::R16G16B16 => (3, 2),
+            Format::R16G16B16A16 => (4, 2),
+            other => return Err(format!("pixel format {other:?}")),
+        };
+        // Luminance-alpha counts as grey: only the first channel of two is colour.
+        let colour = if channels == 2 { 1 } else { channels.min(3) };
+        let values = data
+            .pixels
+            .chunks_exact(bytes)
+            .enumerate()
+            .filter(|(k, _)| k % channels < colour)
+            .map(|(_, b)| match b {
+                [x] => f64::from(*x) / 255.0,
+                [x, y] => f64::from(u16::from_ne_bytes([*x, *y])) / 65535.0,
+                _ => 0.0,
+            });
+        let values: Vec<f64> = values.collect();
+        texture::mean_linear(values.into_iter(), colour).ok_or_else(|| "an empty image".to_string())
     }
 
     /// Reads one channel; `None` for morph-target weights (ignored).

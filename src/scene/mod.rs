@@ -10,7 +10,9 @@
 //! `gltf.rs`, `obj.rs`); each reader maps its format onto the model (the mappings are
 //! specified in `formats/scene.md`) and then calls [`validate::validate`], which
 //! refuses bad input with an error naming the file, object, polygon, what was expected
-//! and what was found, and records repairs as [`Scene::warnings`]. [`cornell_box`] is
+//! and what was found, and records repairs as [`Scene::warnings`]. Beside the readers:
+//! `triangulate.rs` (faces other tools accept), `texture.rs` (a texture's mean colour)
+//! and `sides.rs` ([`two_sided`], emitters facing a close surface). [`cornell_box`] is
 //! the embedded default scene; [`actor_scene`] and [`light_scene`] the embedded
 //! animated scenes (after Damez & Sillion), [`builtin`] finds any of them by name.
 //! This module does not place geometry in world space and does not compute anything
@@ -22,6 +24,9 @@ mod gltf;
 mod json;
 mod model;
 mod obj;
+mod sides;
+mod texture;
+mod triangulate;
 pub mod validate;
 
 use std::path::Path;
@@ -33,6 +38,7 @@ pub use model::{
     Camera, Material, MaterialId, MotionKey, MotionTrack, Object, ObjectId, Polygon, Scene,
     TimeDomain,
 };
+pub use sides::{EMITTER_CLEARANCE, MAX_EMITTERS_CHECKED, emitters_facing_close, two_sided};
 
 use crate::{Error, Result};
 
@@ -64,6 +70,12 @@ pub fn load(path: &Path) -> Result<Scene> {
             },
         )),
     }
+}
+
+/// The perspective cameras of the glTF file at `path` by name, for `play --camera`;
+/// other formats have at most the one camera [`load`] gives.
+pub fn cameras(path: &Path) -> Result<Vec<(String, Camera)>> {
+    gltf::cameras(path)
 }
 
 /// Parses and validates native JSON scene `text`; `path` names it in messages.

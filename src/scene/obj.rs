@@ -3,27 +3,32 @@
 //! How it works (mapping specified in `formats/scene.md`, section "Wavefront OBJ"):
 //! `tobj` parses the file with faces kept as written; models with the same name (tobj
 //! splits an `o`/`g` group at each `usemtl`) are merged into one [`Object`] per OBJ
-//! object/group, in order of first appearance. Faces of 3 or 4 vertices are kept as
-//! they are (quads are checked for planarity by validation); faces of more vertices
-//! are fan-triangulated from their first vertex when planar and convex, refused
-//! otherwise. `Kd` = reflectance (a channel of exactly 1.0 is clamped to 0.999 with a
-//! warning), `Ke` = exitance (not multiplied by pi: OBJ has no radiometric convention,
-//! so `Ke` is taken in the units of the result, like native `emission`). Faces with no
-//! material use `default` (reflectance 0.8). Before `tobj` runs, the text is scanned
-//! for `usemtl` names missing from the MTL (tobj would silently drop them), so that
-//! they are reported with their object, polygon and line.
+//! object/group, in order of first appearance. Triangles and planar convex quads are
+//! kept as they are; bent or concave quads and faces of more vertices are cut into
+//! triangles ([`super::triangulate`]), with one warning counting them. The k-th face
+//! tobj returns is the k-th `f` line of the text, so every message about a face names
+//! `file.obj:LINE` (validation too, through [`validate::validate_sourced`]). `Kd` =
+//! reflectance, times the mean colour of `map_Kd` ([`super::texture`]; a channel of
+//! exactly 1.0 is clamped to 0.999 with a warning), `Ke` = exitance (not multiplied
+//! by pi: OBJ has no radiometric convention, so `Ke` is taken in the units of the
+//! result, like native `emission`); a `Ka` above 1 without `Ke` is warned of as a
+//! light that does not emit. Faces with no material use `default` (reflectance 0.8).
+//! Before `tobj` runs, the text is scanned for `usemtl` names missing from the MTL
+//! (tobj would silently drop them), so that they are reported with their line.
 //!
-//! Not read: normals, texture coordinates, textures, smoothing groups, lines, points,
-//! curves. OBJ has no animation: the scene is static.
+//! Not read: normals, texture coordinates, other textures, smoothing groups, lines,
+//! points, curves. OBJ has no animation: the scene is static.
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
 use super::gltf::{clamp_white, unique_name};
 use super::model::{Material, MaterialId, Object, Polygon, Scene, TimeDomain};
-use super::validate::{self, PLANARITY_TOLERANCE};
+use super::texture;
+use super::triangulate::triangulate;
+use super::validate::{self, PLANARITY_TOLERANCE, QuadProblem};
 use crate::{Error, Result};
 
 /// Reflectance of faces without a material.
@@ -57,11 +62,40 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
 
     // Materials in MTL order; `default` appended when a face has none.
     let mut materials: Vec<Material> = Vec::with_capacity(mtl.len() + 1);
+    let base = path.parent().unwrap_or(Path::new("."));
     for m in &mtl {
         let name = unique_name(&m.name, &materials);
-        let rho = m.diffuse.unwrap_or([DEFAULT_RHO as f32; 3]).map(f64::from);
+        let factor = m.diffuse.map(|d| d.map(f64::from));
+        let mut rho = factor.unwrap_or([DEFAULT_RHO; 3]);
+        if let Some(tex) = &m.diffuse_texture {
+            // `map_Kd [-options] file`: the file is the last word.
+            let file = tex.split_whitespace().last().unwrap_or_default();
+            let factor = factor.unwrap_or([1.0; 3]);
+            match texture::mean_of_file(&base.join(file)) {
+                Ok(mean) => {
+                    warnings.push(texture::note(&name, file, mean, factor));
+                    rho = std::array::from_fn(|c| mean[c] * factor[c]);
+                }
+                Err(e) => warnings.push(format!(
+                    "material \"{name}\": texture map_Kd {file} not read ({e}); the reflectance is Kd {}",
+                    texture::fmt(rho)
+                )),
+            }
+        }
         let rho = clamp_white(rho, &name, &mut warnings);
         let emission = m.emissive.unwrap_or([0.0; 3]).map(f64::from);
+        if let Some(ka) = m.ambient.map(|a| a.map(f64::from))
+            && !emission.iter().any(|&e| e > 0.0)
+            && ka.iter().any(|&a| a > 1.0)
+        {
+            warnings.push(format!(
+                "material \"{name}\": Ka {} looks like a light but Ka (ambient colour) does not emit here; to make it a light give it `Ke {} {} {}` (exitance, in the units of the result)",
+                validate::fmt3(ka),
+                ka[0],
+                ka[1],
+                ka[2]
+            ));
+        }
         materials.push(Material {
             name,
             rho,
@@ -70,9 +104,31 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
     }
     check_usemtl(&text, &mtl, path)?;
 
+    let lines = face_lines(&text);
+    let total: usize = models
+        .iter()
+        .map(|m| {
+            let mesh = &m.mesh;
+            if mesh.face_arities.is_empty() {
+                mesh.indices.len() / 3
+            } else {
+                mesh.face_arities.len()
+            }
+        })
+        .sum();
+    // The k-th face tobj returns is the k-th `f` line, unless tobj skipped one.
+    let lines = (lines.len() == total).then_some(lines);
+    let file = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |f| f.to_string_lossy().into_owned(),
+    );
     let mut default_material = None;
     let mut by_name: BTreeMap<String, usize> = BTreeMap::new();
     let mut objects: Vec<Object> = Vec::new();
+    // Source line of each polygon, per object (unused when lines are unknown).
+    let mut sources: Vec<Vec<usize>> = Vec::new();
+    let mut split = Split::default();
+    let mut face = 0usize;
     for model in &models {
         let mesh = &model.mesh;
         let material = match mesh.material_id {
@@ -92,6 +148,7 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
                 polygons: Vec::new(),
                 motion: None,
             });
+            sources.push(Vec::new());
             objects.len() - 1
         });
         let positions: Vec<DVec3> = mesh
@@ -106,18 +163,14 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
         };
         let mut start = 0;
         for arity in arities {
+            let line = lines.as_ref().map(|l| l[face]);
+            face += 1;
             let object = &mut objects[o];
-            let place = || {
-                format!(
-                    "object \"{}\", polygon {}",
-                    object.name,
-                    object.polygons.len()
-                )
-            };
+            let (at, place) = at_line(path, line, &object.name, object.polygons.len());
             let Some(idx) = mesh.indices.get(start..start + arity) else {
                 return Err(Error::invalid(
-                    path,
-                    place(),
+                    at,
+                    place,
                     "face indices",
                     "a truncated face",
                 ));
@@ -127,33 +180,47 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
             for &i in idx {
                 let Some(v) = positions.get(i as usize) else {
                     return Err(Error::invalid(
-                        path,
-                        place(),
+                        at,
+                        place,
                         format!("vertex indices < {}", positions.len()),
                         format!("index {i}"),
                     ));
                 };
                 vertices.push(*v);
             }
-            if arity <= 4 {
+            let kind = match arity {
+                3 => None,
+                4 => validate::quad_problem(&vertices).map(|q| match q {
+                    QuadProblem::NotPlanar { .. } => SplitKind::NonPlanarQuad,
+                    QuadProblem::Concave { .. } => SplitKind::ConcaveQuad,
+                }),
+                _ => Some(SplitKind::Polygon),
+            };
+            let Some(kind) = kind else {
                 object.polygons.push(Polygon { vertices, material });
-            } else {
-                let fan = fan_triangulate(&vertices).map_err(|found| {
-                    Error::invalid(
-                        path,
-                        place(),
-                        format!(
-                            "a face of 3 or 4 vertices, or a planar (within {PLANARITY_TOLERANCE} x diameter) convex polygon"
-                        ),
-                        format!("a {arity}-gon that is {found}"),
-                    )
-                })?;
-                object.polygons.extend(
-                    fan.into_iter()
-                        .map(|vertices| Polygon { vertices, material }),
-                );
+                sources[o].extend(line);
+                continue;
+            };
+            let triangles = triangulate(&vertices).map_err(|d| {
+                Error::invalid(
+                    at.clone(),
+                    place.clone(),
+                    "a face that can be cut into triangles",
+                    format!("a {arity}-vertex face that is {}", d.describe()),
+                )
+            })?;
+            split.count(kind, line.map(|l| format!("{file}:{l}")));
+            for t in triangles {
+                object.polygons.push(Polygon {
+                    vertices: t.iter().map(|&k| vertices[k]).collect(),
+                    material,
+                });
+                sources[o].extend(line);
             }
         }
+    }
+    if let Some(w) = split.warning(&file) {
+        warnings.push(w);
     }
     let scene = Scene {
         time: TimeDomain::default(),
@@ -162,37 +229,68 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
         camera: None,
         warnings,
     };
-    validate::validate(scene, path)
+    let sources = if lines.is_some() { sources } else { Vec::new() };
+    validate::validate_sourced(scene, path, &sources)
 }
 
-/// Triangles `(v0, v[k], v[k+1])` of a planar convex polygon; `Err` says what it is
-/// instead.
-fn fan_triangulate(v: &[DVec3]) -> std::result::Result<Vec<Vec<DVec3>>, &'static str> {
-    let n = v.len();
-    let area: DVec3 = (1..n - 1)
-        .map(|k| (v[k] - v[0]).cross(v[k + 1] - v[0]))
-        .sum();
-    let normal = area.normalize_or_zero();
-    let c = v.iter().copied().sum::<DVec3>() / n as f64;
-    let diam = v
-        .iter()
-        .flat_map(|a| v.iter().map(move |b| a.distance(*b)))
-        .fold(0.0, f64::max);
-    if normal == DVec3::ZERO {
-        return Err("degenerate");
-    }
-    if v.iter()
-        .any(|p| normal.dot(*p - c).abs() > PLANARITY_TOLERANCE * diam)
-    {
-        return Err("not planar");
-    }
-    for k in 0..n {
-        let turn = (v[(k + 1) % n] - v[k]).cross(v[(k + 2) % n] - v[(k + 1) % n]);
-        if turn.dot(normal) < -1e-9 * diam * diam {
-            return Err("not convex");
+/// The error path (`room.obj:12` when the line is known) and the place of polygon
+/// `polygon` of `object`.
+fn at_line(path: &Path, line: Option<usize>, object: &str, polygon: usize) -> (PathBuf, String) {
+    let at = match line {
+        Some(l) => PathBuf::from(format!("{}:{l}", path.display())),
+        None => path.to_path_buf(),
+    };
+    (at, format!("object \"{object}\", polygon {polygon}"))
+}
+
+/// Line numbers (1-based) of the face statements (`f` with 3 or more vertices) in
+/// file order, the order tobj returns faces in.
+fn face_lines(text: &str) -> Vec<usize> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            let mut w = l.split_whitespace();
+            w.next() == Some("f") && w.count() >= 3
+        })
+        .map(|(k, _)| k + 1)
+        .collect()
+}
+
+/// Why a face was split into triangles.
+#[derive(Clone, Copy)]
+enum SplitKind {
+    NonPlanarQuad,
+    ConcaveQuad,
+    Polygon,
+}
+
+/// Faces split into triangles, by kind, and the first one's line.
+#[derive(Default)]
+struct Split {
+    counts: [usize; 3],
+    first: Option<String>,
+}
+
+impl Split {
+    fn count(&mut self, kind: SplitKind, line: Option<String>) {
+        self.counts[kind as usize] += 1;
+        if self.first.is_none() {
+            self.first = line;
         }
     }
-    Ok((1..n - 1).map(|k| vec![v[0], v[k], v[k + 1]]).collect())
+
+    /// The one warning for all split faces, if any.
+    fn warning(&self, file: &str) -> Option<String> {
+        let [bent, concave, ngons] = self.counts;
+        let total = bent + concave + ngons;
+        (total > 0).then(|| {
+            format!(
+                "{}: split {total} face(s) into triangles: {bent} non-planar quad(s) (a vertex off the plane by more than {PLANARITY_TOLERANCE} x diameter), {concave} concave quad(s), {ngons} face(s) of 5 or more vertices{}",
+                self.first.as_deref().unwrap_or(file),
+                if self.first.is_some() { " (the first here)" } else { "" }
+            )
+        })
+    }
 }
 
 /// Refuses a `usemtl` naming a material that no MTL file defines.

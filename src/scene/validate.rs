@@ -21,7 +21,8 @@
 //! faces each receive and each send the light, and a Cornell box with its floor
 //! twice came out 22–73% too bright off the floor), objects left with no polygon
 //! are dropped, and a scene without an emitter gets the warning
-//! [`NO_EMITTER_WARNING`].
+//! [`NO_EMITTER_WARNING`]; an emitter facing a surface too close gets one too
+//! ([`super::emitters_facing_close`]).
 //!
 //! Every error is an [`Error::Invalid`] naming the file, the place (`object "room",
 //! polygon 3`, `material "lamp"`, `object "cube", motion key 2`), what was expected and
@@ -77,17 +78,30 @@ pub const MIN_EMISSION_WARNING: f64 = 1e-30;
 /// Checks `scene` (loaded from `path`) against the rules of `formats/scene.md`,
 /// normalises rotations, drops zero-area polygons and empty objects, and appends the
 /// warnings. The first violation found is returned as an error.
-pub fn validate(mut scene: Scene, path: &Path) -> Result<Scene> {
+pub fn validate(scene: Scene, path: &Path) -> Result<Scene> {
+    validate_sourced(scene, path, &[])
+}
+
+/// [`validate`] for a scene whose polygon `i` of object `o` came from line
+/// `lines[o][i]` of `path` (OBJ): messages about a polygon name `file:line`.
+pub(crate) fn validate_sourced(
+    mut scene: Scene,
+    path: &Path,
+    lines: &[Vec<usize>],
+) -> Result<Scene> {
+    let src = Sources { path, lines };
     check_time(&scene.time, path)?;
     check_camera(&scene, path)?;
     check_materials(&scene, path)?;
     check_radiosity_range(&mut scene, path)?;
-    check_polygons(&scene, path)?;
+    check_polygons(&scene, &src)?;
     check_motion(&mut scene, path)?;
-    drop_degenerate(&mut scene, path)?;
+    drop_degenerate(&mut scene, &src)?;
     if !scene.has_emitter() {
         scene.warnings.push(NO_EMITTER_WARNING.to_string());
     }
+    let close = super::sides::emitters_facing_close(&scene);
+    scene.warnings.extend(close);
     Ok(scene)
 }
 
@@ -214,9 +228,43 @@ fn check_radiosity_range(scene: &mut Scene, path: &Path) -> Result<()> {
     Ok(())
 }
 
-fn check_polygons(scene: &Scene, path: &Path) -> Result<()> {
-    for o in &scene.objects {
+/// The file a scene came from and, for OBJ, each polygon's source line.
+struct Sources<'a> {
+    path: &'a Path,
+    lines: &'a [Vec<usize>],
+}
+
+impl Sources<'_> {
+    fn line(&self, o: usize, i: usize) -> Option<usize> {
+        self.lines.get(o).and_then(|l| l.get(i)).copied()
+    }
+
+    /// The path for an error about polygon `i` of object `o`: `room.obj:12` when its
+    /// line is known.
+    fn at(&self, o: usize, i: usize) -> std::path::PathBuf {
+        match self.line(o, i) {
+            Some(l) => format!("{}:{l}", self.path.display()).into(),
+            None => self.path.to_path_buf(),
+        }
+    }
+
+    /// Polygon `i` of object `name` in a warning, with `room.obj:12` when known.
+    fn name(&self, o: usize, i: usize, name: &str) -> String {
+        match (self.line(o, i), self.path.file_name()) {
+            (Some(l), Some(f)) => format!(
+                "{}:{l} (object \"{name}\" polygon {i})",
+                f.to_string_lossy()
+            ),
+            _ => format!("object \"{name}\" polygon {i}"),
+        }
+    }
+}
+
+fn check_polygons(scene: &Scene, src: &Sources<'_>) -> Result<()> {
+    for (oi, o) in scene.objects.iter().enumerate() {
         for (i, p) in o.polygons.iter().enumerate() {
+            let path = src.at(oi, i);
+            let path = path.as_path();
             let place = || format!("object \"{}\", polygon {i}", o.name);
             let n = p.vertices.len();
             if n != 3 && n != 4 {
@@ -440,7 +488,7 @@ fn first_places(places: &[String]) -> String {
     format!("{}{more}", places[..places.len().min(5)].join(", "))
 }
 
-fn drop_degenerate(scene: &mut Scene, path: &Path) -> Result<()> {
+fn drop_degenerate(scene: &mut Scene, src: &Sources<'_>) -> Result<()> {
     let d = scene_diameter(scene);
     let min_area = ZERO_AREA_TOLERANCE * d * d;
     let mut dropped = Vec::new();
@@ -454,16 +502,16 @@ fn drop_degenerate(scene: &mut Scene, path: &Path) -> Result<()> {
         for (i, p) in std::mem::take(&mut o.polygons).into_iter().enumerate() {
             let a = p.area_vector();
             if a.length() <= min_area {
-                dropped.push(format!("object \"{}\" polygon {i}", o.name));
+                dropped.push(src.name(oi, i, &o.name));
                 continue;
             }
             if !seen.insert((group, cyclic_key(&p.vertices))) {
-                duplicates.push(format!("object \"{}\" polygon {i}", o.name));
+                duplicates.push(src.name(oi, i, &o.name));
                 continue;
             }
             if p.vertices.len() == 4 {
                 let place = || format!("object \"{}\", polygon {i}", o.name);
-                check_quad(&p.vertices, place, path)?;
+                check_quad(&p.vertices, place, &src.at(oi, i))?;
             }
             kept.push(p);
         }

@@ -77,7 +77,7 @@ use crate::scene::Scene;
 use crate::shafts::meets_any;
 
 use crate::solution::{Leaf, PatchGeometry, Solution, SolveStats};
-pub use report::RoundRecord;
+pub use report::{RoundRecord, StopReason};
 pub use rows::BALANCE_TRIGGER;
 
 /// A hash map with aHash for the solver's hot tables, whose keys are small tuples
@@ -167,6 +167,39 @@ pub const POWER_EXCESS_MAX: f64 = 0.05;
 /// (1e-6) on every sound leaf system.
 pub const RESIDUAL_MAX: f64 = 1e-3;
 
+/// An object's `--min-size` floor is taken relative to its own diameter, but no
+/// finer than this fraction of the scene's floor: a car in a 480-unit tunnel is
+/// meshed to the car's scale, a 1 mm screw in a house not to the screw's.
+pub const OBJECT_FLOOR_LIMIT: f64 = 1.0 / 16.0;
+
+/// The `--min-size` floor (smallest element area) of each object's elements:
+/// `(min_size · d)²` with `d` the object's bounding-box diagonal, at least
+/// [`OBJECT_FLOOR_LIMIT`] of the scene's diameter, at most the scene's.
+fn object_floors(patches: &Patches, min_size: f64) -> Vec<f64> {
+    let n = patches
+        .objects
+        .iter()
+        .map(|&o| o as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut bounds = vec![(DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)); n];
+    for (g, &o) in patches.geometry.iter().zip(&patches.objects) {
+        let b = &mut bounds[o as usize];
+        for v in &g.vertices[..g.corners as usize] {
+            b.0 = b.0.min(*v);
+            b.1 = b.1.max(*v);
+        }
+    }
+    let diam = patches.diameter;
+    bounds
+        .iter()
+        .map(|(lo, hi)| {
+            let d = if lo.x <= hi.x { lo.distance(*hi) } else { diam };
+            (min_size * d.clamp(OBJECT_FLOOR_LIMIT * diam, diam)).powi(2)
+        })
+        .collect()
+}
+
 /// Settings of a solve.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SolveOptions {
@@ -175,7 +208,8 @@ pub struct SolveOptions {
     pub storage: Storage,
     /// Refinement threshold relative to the scene's RMS radiosity.
     pub eps: f64,
-    /// Smallest element edge, as a fraction of the scene's diameter.
+    /// Smallest element edge, as a fraction of the diameter of the scene or of the
+    /// element's object, whichever is smaller (see [`OBJECT_FLOOR_LIMIT`]).
     pub min_size: f64,
     /// Rays per receiver quadrature point for partly hidden links.
     pub rays_per_point: u32,
@@ -384,6 +418,11 @@ pub struct Solver<'a> {
     root: Option<ElementId>,
     /// The last round's estimated error ([`Solver::run`]; `NaN`: none).
     estimate: f64,
+    /// Why [`Solver::run`] stopped refining.
+    stop: StopReason,
+    /// Links of the last refinement pass that were above the threshold but could
+    /// not split: both ends at the `--min-size` floor.
+    floor_links: u64,
     /// Whether the scene is closed around 128 points spread by area
     /// ([`Solver::is_closed`]; `None` before a run).
     closed: Option<bool>,
@@ -391,7 +430,10 @@ pub struct Solver<'a> {
     /// A point within this distance of a surface element's plane counts as on it
     /// (the oracle's behind-the-plane cull): 1e-9 of the scene's diameter.
     plane_tol: f64,
+    /// The `--min-size` floor (element area) of the scene.
     min_area: f64,
+    /// The `--min-size` floor of each object's elements ([`object_floors`]).
+    object_min_area: Vec<f64>,
     /// `A_p` of [`SolveOptions::power_size`] (0: off).
     power_area: f64,
     rho_max: f64,
@@ -524,6 +566,7 @@ impl<'a> Solver<'a> {
             scene,
             plane_tol: diam * 1e-9,
             min_area: (opts.min_size * diam).powi(2),
+            object_min_area: object_floors(&patches, opts.min_size),
             power_area: (opts.power_size * diam).powi(2),
             opts,
             patches,
@@ -532,6 +575,8 @@ impl<'a> Solver<'a> {
             links,
             root,
             estimate: f64::NAN,
+            stop: StopReason::NotRun,
+            floor_links: 0,
             closed: None,
             time,
             rho_max,
@@ -643,6 +688,7 @@ impl<'a> Solver<'a> {
         let mut round = 0;
         // After the first solve, see [`Solver::reevaluate_cluster_sources`].
         let mut clusters_reevaluated = false;
+        self.stop = StopReason::RoundLimit;
         while round < self.opts.max_rounds && idle <= self.opts.max_rounds {
             // The first level (`2 eps`) ends after two solved rounds.
             if at_level >= 2 && eps > self.opts.eps {
@@ -693,6 +739,13 @@ impl<'a> Solver<'a> {
                     .target_error
                     .is_some_and(|t| !samples.is_empty() && (estimate.is_nan() || estimate > t));
                 if !more {
+                    self.stop = if self.floor_links > 0 {
+                        StopReason::MinSize {
+                            links: self.floor_links,
+                        }
+                    } else {
+                        StopReason::Refined
+                    };
                     break;
                 }
                 eps /= 2.0;
@@ -721,11 +774,17 @@ impl<'a> Solver<'a> {
             at_level += 1;
             let mut rec = self.round_record(round, start, (rays0, clear0), estimate, residual);
             on_round(&mut rec, self);
-            let stop = self
+            let met = self
                 .opts
                 .target_error
-                .is_some_and(|t| rec.estimated_error <= t)
-                || self.opts.time_budget.is_some_and(|b| rec.seconds >= b);
+                .is_some_and(|t| rec.estimated_error <= t);
+            let out_of_time = self.opts.time_budget.is_some_and(|b| rec.seconds >= b);
+            if met {
+                self.stop = StopReason::TargetMet;
+            } else if out_of_time {
+                self.stop = StopReason::TimeBudget;
+            }
+            let stop = met || out_of_time;
             records.push(rec);
             round += 1;
             if stop {
@@ -924,6 +983,30 @@ impl<'a> Solver<'a> {
         self.closed
     }
 
+    /// The `--min-size` floor of a link: the finer of its ends' objects' floors (a
+    /// cluster end counts as the scene's), so that a small object is meshed to its
+    /// own scale, and so are the shadows it casts on a large one.
+    fn link_floor(&self, r: ElementId, s: ElementId) -> f64 {
+        let geoms = self.elems.geoms.as_slice();
+        [r, s]
+            .iter()
+            .map(|e| {
+                let patch = geoms[e.ix()].patch;
+                self.patches
+                    .objects
+                    .get(patch as usize)
+                    .and_then(|&o| self.object_min_area.get(o as usize))
+                    .copied()
+                    .unwrap_or(self.min_area)
+            })
+            .fold(self.min_area, f64::min)
+    }
+
+    /// Why the last [`Solver::run`] stopped refining ([`StopReason::NotRun`] before).
+    pub fn stop_reason(&self) -> StopReason {
+        self.stop
+    }
+
     /// Mean reflected radiosity a closed room with the scene's mean exitance and
     /// reflectance would have, max channel: the first round's radiosity scale.
     fn enclosure_estimate(&self) -> f64 {
@@ -1026,6 +1109,7 @@ impl<'a> Solver<'a> {
     /// Refines from the links `wave`; returns true if any link was split.
     fn refine(&mut self, mut wave: Vec<LinkId>, thr: f64) -> Result<bool> {
         let mut changed = false;
+        self.floor_links = 0;
         loop {
             let mut pairs: Vec<(ElementId, ElementId)> = Vec::new();
             for &l in &wave {
@@ -1044,8 +1128,11 @@ impl<'a> Solver<'a> {
                 {
                     continue;
                 }
-                let split = match oracle::choose_split(&self.elems, r, s, self.min_area) {
-                    Split::Keep => continue,
+                let split = match oracle::choose_split(&self.elems, r, s, self.link_floor(r, s)) {
+                    Split::Keep => {
+                        self.floor_links += 1;
+                        continue;
+                    }
                     Split::Receiver => r,
                     Split::Source => s,
                 };

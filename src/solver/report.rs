@@ -1,5 +1,5 @@
 //! Error against run time: one [`RoundRecord`] per refine-and-solve round, printed by
-//! `solve` and written as CSV by `--report`.
+//! `solve` and written as CSV by `--report`, and the [`StopReason`] the last line says.
 
 use std::io::Write;
 use std::path::Path;
@@ -106,4 +106,42 @@ pub fn write_csv(path: &Path, records: &[RoundRecord]) -> Result<()> {
     }
     let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
     f.write_all(out.as_bytes()).map_err(|e| Error::io(path, e))
+}
+
+/// Why a static solve stopped refining, said on its last line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum StopReason {
+    /// No run yet (or a scene with no surface).
+    #[default]
+    NotRun,
+    /// The estimated error reached `--target-error`.
+    TargetMet,
+    /// No link is left above the refinement threshold `--eps`.
+    Refined,
+    /// The links left above `--eps` cannot split: their elements are at the
+    /// `--min-size` floor.
+    MinSize {
+        /// Links above the threshold that stayed whole.
+        links: u64,
+    },
+    /// `--time-budget` ran out.
+    TimeBudget,
+    /// `--max-rounds` rounds were solved.
+    RoundLimit,
+}
+
+impl StopReason {
+    /// The reason in words, for the last line of a solve.
+    pub fn text(self) -> String {
+        match self {
+            StopReason::NotRun => "nothing to refine".into(),
+            StopReason::TargetMet => "target error met (--target-error)".into(),
+            StopReason::Refined => "no link left above --eps".into(),
+            StopReason::MinSize { links } => format!(
+                "no link left to refine: {links} link(s) above --eps have both ends at the --min-size floor (a smaller --min-size refines further)"
+            ),
+            StopReason::TimeBudget => "time budget spent (--time-budget)".into(),
+            StopReason::RoundLimit => "round limit reached (--max-rounds)".into(),
+        }
+    }
 }

@@ -12,6 +12,7 @@
 mod cli;
 mod common;
 mod flatland;
+mod formats;
 mod geometry;
 mod playback;
 mod reference;

@@ -101,6 +101,16 @@ pub struct SceneArgs {
     /// the same motion back and forth. The same scenes are in formats/examples/.
     #[arg(long, value_enum, conflicts_with = "scene")]
     pub builtin: Option<Builtin>,
+    /// Make every surface reflect and emit on both of its sides.
+    ///
+    /// Polygons are one-sided: the side their vertices turn counter-clockwise
+    /// around reflects and emits, the back absorbs and stays black. Formats with no
+    /// side flag (OBJ, native JSON) often hold surfaces that are lit from behind (a
+    /// floor modelled facing down, a lamp facing into its fixture); this gives every
+    /// polygon a twin facing the other way, at twice the patches. glTF materials
+    /// marked `doubleSided` are two-sided without it.
+    #[arg(long)]
+    pub two_sided: bool,
 }
 
 /// Where the answer, the reports and the probes go.
@@ -176,7 +186,15 @@ pub struct AccuracyArgs {
     /// solve the room's error often follows `--recon-tol` more than `--eps`.
     #[arg(long, default_value_t = SolveOptions::default().eps)]
     pub eps: f64,
-    /// Smallest element edge as a fraction of the scene's diameter.
+    /// Smallest element edge as a fraction of the scene's diameter, or of the
+    /// object's when that is smaller.
+    ///
+    /// A link above `--eps` whose ends are both at this floor stays whole; the last
+    /// line of the solve says so when that stopped it. The floor of an element is
+    /// taken relative to its object's diameter (bounding-box diagonal) as well as to
+    /// the scene's, the finer of the two, but no finer than 1/16 of the scene's: a
+    /// car in a long tunnel is meshed to the car's scale, and so is its shadow on the
+    /// tunnel.
     #[arg(long, default_value_t = SolveOptions::default().min_size)]
     pub min_size: f64,
     /// Reconstruction tolerance, relative to the RMS reflected radiosity.
@@ -486,6 +504,14 @@ impl Args {
 impl SceneArgs {
     /// The scene to solve and the stem of the default output name.
     pub fn load(&self) -> anyhow::Result<(Scene, String)> {
+        let (mut scene, stem) = self.load_as_is()?;
+        if self.two_sided {
+            rhier::scene::two_sided(&mut scene);
+        }
+        Ok((scene, stem))
+    }
+
+    fn load_as_is(&self) -> anyhow::Result<(Scene, String)> {
         if let Some(b) = self.builtin {
             use clap::ValueEnum;
             let name = b

@@ -437,9 +437,26 @@ fn obj_with_mtl_loads_the_materials_and_polygons_the_sample_defines() {
         s.warnings,
         vec![
             "material \"lamp\": reflectance 1.0 clamped to 0.999 (radiosity needs rho < 1)"
-                .to_string()
+                .to_string(),
+            format!(
+                "room.obj:{}: split 1 face(s) into triangles: 0 non-planar quad(s) (a vertex off the plane by more than 0.0001 x diameter), 0 concave quad(s), 1 face(s) of 5 or more vertices (the first here)",
+                hexagon_line()
+            )
         ]
     );
+}
+
+/// The line of `room.obj`'s one face of more than 4 vertices (the lamp's hexagon).
+fn hexagon_line() -> usize {
+    let text = std::fs::read_to_string(example("room.obj")).unwrap();
+    let lines: Vec<usize> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.starts_with("f ") && l.split_whitespace().count() > 5)
+        .map(|(k, _)| k + 1)
+        .collect();
+    assert_eq!(lines.len(), 1);
+    lines[0]
 }
 
 #[test]

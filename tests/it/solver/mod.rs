@@ -1,8 +1,10 @@
 //! The hierarchical solver: known answers, invariants, accuracy against the path
-//! tracer, cluster links, scale, and the frame-by-frame baseline.
+//! tracer, cluster links, scale, the `--min-size` floor per object, and the
+//! frame-by-frame baseline.
 
 mod accuracy;
 mod cluster_links;
+mod floor;
 mod invariants;
 mod known;
 mod per_frame;
