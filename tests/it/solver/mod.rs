@@ -3,6 +3,7 @@
 
 mod accuracy;
 mod cluster_links;
+mod enclosures;
 mod invariants;
 mod known;
 mod per_frame;
