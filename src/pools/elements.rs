@@ -9,6 +9,7 @@
 //! more children.
 
 use bytemuck::{Pod, Zeroable};
+use glam::DVec3;
 
 use super::column::{Column, Storage};
 use super::ids::ElementId;
@@ -18,7 +19,8 @@ use crate::{Error, Result};
 #[repr(u8)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ElementKind {
-    /// A group of patches (bounding box in `geom.corners[0..2]`).
+    /// A group of patches (bounding box in `geom.corners[0..2]`, area centroid in
+    /// `geom.corners[2]`).
     Cluster = 0,
     /// A parametric sub-domain of one patch.
     Surface = 1,
@@ -48,8 +50,10 @@ const _: () = assert!(std::mem::size_of::<Node>() == 16);
 ///
 /// Surface: world corners (3 or 4) counter-clockwise seen from the front, their
 /// parameter-space positions, the unit normal, the area. Cluster: `corners[0]` and
-/// `corners[1]` are the box's min and max, `area` the summed area of its patches,
-/// `normal` zero.
+/// `corners[1]` are the box's min and max, `corners[2]` the area centroid of its
+/// patches (where a cluster estimate places the cluster), `area` the summed area of
+/// its patches, `normal` zero, and `uv` the cone that holds its patches' normals
+/// ([`Geom::cluster_cone`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Geom {
@@ -68,6 +72,86 @@ pub struct Geom {
 }
 
 const _: () = assert!(std::mem::size_of::<Geom>() == 168);
+
+impl Geom {
+    /// A cluster's normal cone ([`Cone`]), kept in `uv` (`[ax, ay], [az, cos],
+    /// [coherence, 0]`), which a cluster has no use for otherwise.
+    pub fn cluster_cone(&self) -> Cone {
+        let [[x, y], [z, cos], [coherence, _], _] = self.uv;
+        Cone {
+            axis: DVec3::new(x as f64, y as f64, z as f64),
+            cos: cos as f64,
+            coherence: coherence as f64,
+        }
+    }
+
+    /// Sets [`Geom::cluster_cone`]; the cosine is rounded down, so that the cone
+    /// stored in `f32` still holds every normal.
+    pub fn set_cluster_cone(&mut self, c: &Cone) {
+        let cos = if c.cos > -1.0 {
+            (c.cos - 1e-6).max(-1.0)
+        } else {
+            -1.0
+        };
+        self.uv[0] = [c.axis.x as f32, c.axis.y as f32];
+        self.uv[1] = [c.axis.z as f32, cos as f32];
+        self.uv[2] = [c.coherence as f32, 0.0];
+    }
+}
+
+/// The normals of a set of surfaces ([`Geom::cluster_cone`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cone {
+    /// Unit axis: the direction of the summed vector area `Σ A n`.
+    pub axis: DVec3,
+    /// Cosine of the half-angle about `axis` that holds every normal (`-1`: any).
+    pub cos: f64,
+    /// `|Σ A n| / Σ A`, in `[0, 1]` (1 for coplanar surfaces facing one way), so
+    /// that `area · coherence · axis` is the summed vector area.
+    pub coherence: f64,
+}
+
+impl Cone {
+    /// The cone of one surface of unit normal `n`.
+    pub fn of_normal(n: DVec3) -> Self {
+        Cone {
+            axis: n,
+            cos: 1.0,
+            coherence: 1.0,
+        }
+    }
+
+    /// The cone holding the cones of `parts`, each with its area: the axis of the
+    /// summed vector area, the widest part's angle from it plus its own half-angle
+    /// (cosine `-1` where that passes `π`, or where the vector areas cancel).
+    pub fn merge(parts: impl Iterator<Item = (Cone, f64)> + Clone) -> Self {
+        let sum: DVec3 = parts.clone().map(|(c, a)| c.axis * c.coherence * a).sum();
+        let area: f64 = parts.clone().map(|(_, a)| a).sum();
+        let len = sum.length();
+        if len.is_nan() || len <= 1e-12 * area {
+            return Cone {
+                axis: DVec3::Z,
+                cos: -1.0,
+                coherence: 0.0,
+            };
+        }
+        let axis = sum / len;
+        let mut widest = 0.0f64;
+        for (c, _) in parts {
+            let angle = axis.dot(c.axis).clamp(-1.0, 1.0).acos() + c.cos.clamp(-1.0, 1.0).acos();
+            widest = widest.max(angle);
+        }
+        Cone {
+            axis,
+            cos: if widest >= std::f64::consts::PI {
+                -1.0
+            } else {
+                widest.cos()
+            },
+            coherence: (len / area).min(1.0),
+        }
+    }
+}
 
 /// How an element's power leaves it by direction, summed over its surfaces (`B̄` a
 /// surface's largest channel, `A` its area, `n` its unit normal). `repr(C)`, Pod,

@@ -379,12 +379,21 @@ impl Solver<'_> {
                     SOURCES_BY_POWER,
                 )
             };
-            // The estimate the leaf rows take.
-            let dir = &self.elems.directions.as_slice()[s];
-            let f = cluster_kernel(gs, c, rad, dir, b_of(&self.elems, s), x, n) * vis;
-            if f > 0.0 {
-                out.fixed.push((s as u32, f));
+            if vis <= 0.0 {
+                return;
             }
+            // What the leaf rows take: the cluster estimate, or the parts of a
+            // cluster too near for it, sharing the cluster's visible fraction.
+            let at = oracle::Samples {
+                points: [x; 4],
+                weights: [1.0, 0.0, 0.0, 0.0],
+                count: 1,
+            };
+            self.cluster_parts(&at, n, s as u32, &mut |e, k| {
+                if k[0] > 0.0 {
+                    out.fixed.push((e, k[0] * vis));
+                }
+            });
             return;
         }
         let ps = oracle::poly(gs);

@@ -16,7 +16,7 @@ use glam::DVec3;
 
 use crate::Result;
 use crate::geometry::{Patches, Poly};
-use crate::pools::elements::{Geom, Node};
+use crate::pools::elements::{Cone, Geom, Node};
 use crate::pools::{ElementId, ElementKind, ElementPool};
 
 /// Builds the cluster tree and patch roots into an empty pool; returns the root
@@ -96,21 +96,35 @@ fn push_cluster(
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     let mut area = 0.0;
+    let mut moment = DVec3::ZERO;
     for &m in members {
-        for &p in patches.polys[m as usize].corners() {
+        let poly = &patches.polys[m as usize];
+        for &p in poly.corners() {
             lo = lo.min(p);
             hi = hi.max(p);
         }
         area += patches.areas[m as usize];
+        moment += patches.areas[m as usize] * poly.centroid();
     }
-    let geom = Geom {
-        corners: [lo.to_array(), hi.to_array(), [0.0; 3], [0.0; 3]],
+    let centroid = if area > 0.0 {
+        moment / area
+    } else {
+        (lo + hi) * 0.5
+    };
+    let mut geom = Geom {
+        corners: [lo.to_array(), hi.to_array(), centroid.to_array(), [0.0; 3]],
         normal: [0.0; 3],
         area,
         uv: [[0.0; 2]; 4],
         patch: u32::MAX,
         n: 2,
     };
+    geom.set_cluster_cone(&Cone::merge(members.iter().map(|&m| {
+        (
+            Cone::of_normal(patches.normals[m as usize]),
+            patches.areas[m as usize],
+        )
+    })));
     let node = Node {
         parent,
         first_child: 0,

@@ -68,7 +68,7 @@ use rayon::prelude::*;
 use crate::Result;
 use crate::geometry::{Patches, SceneBvh, cosine_direction, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
-use crate::pools::elements::{Geom, Node};
+use crate::pools::elements::{Cone, Geom, Node};
 use crate::pools::links::{Ends, Transport};
 use crate::pools::{
     ElementId, ElementKind, ElementPool, Emission, LinkId, LinkPool, LinkState, Storage,
@@ -199,6 +199,8 @@ fn object_floors(patches: &Patches, min_size: f64) -> Vec<f64> {
         })
         .collect()
 }
+/// Default [`SolveOptions::cluster_open_ratio`].
+pub const CLUSTER_OPEN_RATIO: f64 = 0.2;
 
 /// Settings of a solve.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -271,6 +273,11 @@ pub struct SolveOptions {
     /// never). Gathering a big source's average radiosity loses the light of its
     /// bright parts, which the leaf system then never hands on.
     pub row_open_ratio: f64,
+    /// Leaf rows and final gather: a cluster source whose bounding sphere's radius
+    /// exceeds this times its distance from a point is opened into its children,
+    /// down to surfaces, whose factors are exact; farther clusters take the cluster
+    /// estimate, which overstates a flat source seen close (`Solver::cluster_parts`).
+    pub cluster_open_ratio: f64,
     /// Final gather: a non-emitting source that can hand a point less than this
     /// times the RMS radiosity takes its link's visibility instead of rays (0: rays
     /// always).
@@ -326,6 +333,7 @@ impl Default for SolveOptions {
             leaf_shapes: 0.0,
             near_gap: 0.0,
             row_open_ratio: 0.25,
+            cluster_open_ratio: CLUSTER_OPEN_RATIO,
         }
     }
 }
@@ -355,6 +363,7 @@ impl SolveOptions {
                 ("open_ratio", Some(self.open_ratio)),
                 ("open_spread", Some(self.open_spread)),
                 ("row_open_ratio", Some(self.row_open_ratio)),
+                ("cluster_open_ratio", Some(self.cluster_open_ratio)),
                 ("faint_source", Some(self.faint_source)),
                 ("--split-spread", Some(self.split_spread)),
                 ("--leaf-shapes", Some(self.leaf_shapes)),
@@ -1402,6 +1411,7 @@ impl<'a> Solver<'a> {
             let node = self.elems.nodes.as_slice()[e];
             let mut lo = DVec3::splat(f64::INFINITY);
             let mut hi = DVec3::splat(f64::NEG_INFINITY);
+            let (mut area, mut moment) = (0.0, DVec3::ZERO);
             for c in node.first_child..node.first_child + node.child_count {
                 let gc = &geoms[c as usize];
                 let k = if gc.patch == u32::MAX {
@@ -1409,14 +1419,40 @@ impl<'a> Solver<'a> {
                 } else {
                     gc.n as usize
                 };
-                for p in &gc.corners[..k] {
-                    lo = lo.min(DVec3::from_array(*p));
-                    hi = hi.max(DVec3::from_array(*p));
+                let corners = gc.corners.map(DVec3::from_array);
+                for &p in &corners[..k] {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
                 }
+                let centroid = if gc.patch == u32::MAX {
+                    corners[2]
+                } else {
+                    crate::geometry::centroid_of(&corners[..k])
+                };
+                area += gc.area;
+                moment += gc.area * centroid;
             }
+            let cone = Cone::merge((node.first_child..node.first_child + node.child_count).map(
+                |c| {
+                    let gc = &geoms[c as usize];
+                    let cone = if gc.patch == u32::MAX {
+                        gc.cluster_cone()
+                    } else {
+                        Cone::of_normal(DVec3::from_array(gc.normal))
+                    };
+                    (cone, gc.area)
+                },
+            ));
             let g = &mut self.elems.geoms.as_mut_slice()[e];
             g.corners[0] = lo.to_array();
             g.corners[1] = hi.to_array();
+            let centroid = if area > 0.0 {
+                moment / area
+            } else {
+                (lo + hi) * 0.5
+            };
+            g.corners[2] = centroid.to_array();
+            g.set_cluster_cone(&cone);
         }
         self.bvh.place(self.scene, t);
         self.motion.moving_now = self.bvh.moving_boxes();
@@ -1568,14 +1604,18 @@ impl<'a> Solver<'a> {
             let gs = &geoms[s as usize];
             let mut f = [0.0f64; 4];
             if gs.patch == u32::MAX {
-                if t.spread >= f32::MAX {
-                    f[..q.count].fill(t.f as f64);
-                } else if t.f > 0.0 {
-                    let k = self.cluster_kernels(&q, n, s);
-                    for (fi, ki) in f.iter_mut().zip(k).take(q.count) {
-                        *fi = ki * t.visibility as f64;
-                    }
+                if t.f > 0.0 {
+                    let vis = t.visibility as f64;
+                    self.cluster_parts(&q, n, s, &mut |e, k| {
+                        let be = b[e as usize];
+                        for (hi, ki) in h.iter_mut().zip(k).take(q.count) {
+                            for c in 0..3 {
+                                hi[c] += ki * vis * be[c] as f64;
+                            }
+                        }
+                    });
                 }
+                continue;
             } else {
                 let ps = oracle::poly(gs);
                 let ns = DVec3::from_array(gs.normal);
@@ -1736,6 +1776,7 @@ fn any_patch_under(elems: &ElementPool, patch_holds: impl Fn(usize) -> bool) -> 
     out
 }
 
+#[allow(dead_code)]
 fn b_of(elems: &ElementPool, e: usize) -> f64 {
     elems.radiosities.as_slice()[e]
         .iter()
@@ -1749,8 +1790,9 @@ fn b_of(elems: &ElementPool, e: usize) -> f64 {
 /// ([`oracle::cluster_emission`]). The receiver's cosine is the bounding sphere's
 /// part above `x`'s horizon ([`clipped_cosine`]), not the centre's: a wall point
 /// level with the centre of a cluster of ceiling and upper walls saw all of it at a
-/// cosine near 0 (the 32 × 32 clutter of `tests/it/solver/scale.rs` absorbed 0.982 of what it
+/// cosine near 0 (the 32 × 32 clutter of `tests/scale.rs` absorbed 0.982 of what it
 /// emits with the centre's cosine, 0.985 with the clipped one).
+#[allow(dead_code)]
 fn cluster_kernel(gs: &Geom, c: DVec3, r: f64, dir: &Emission, bs: f64, x: DVec3, n: DVec3) -> f64 {
     let d = c - x;
     let d2 = d.length_squared().max(f64::MIN_POSITIVE);

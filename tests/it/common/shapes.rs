@@ -189,6 +189,120 @@ pub fn icosphere(c: DVec3, r: f64, level: u32, inward: bool, m: MaterialId) -> V
         .collect()
 }
 
+/// A closed cylinder about the `y` axis (radius `r`, height `h`, base at `y = 0`):
+/// `k` quads around, each cut into `rings` along the height, and two caps of `k`
+/// triangles; facing inwards.
+pub fn cylinder(r: f64, h: f64, k: usize, rings: usize, m: MaterialId) -> Vec<Polygon> {
+    let at = |i: usize, y: f64| {
+        let a = std::f64::consts::TAU * i as f64 / k as f64;
+        DVec3::new(r * a.cos(), y, -r * a.sin())
+    };
+    let poly = |vertices: Vec<DVec3>| Polygon {
+        vertices,
+        material: m,
+    };
+    let mut out = Vec::new();
+    for i in 0..k {
+        for j in 0..rings {
+            let (y0, y1) = (
+                h * j as f64 / rings as f64,
+                h * (j + 1) as f64 / rings as f64,
+            );
+            // Counter-clockwise seen from the axis.
+            out.push(poly(vec![
+                at(i, y0),
+                at(i, y1),
+                at(i + 1, y1),
+                at(i + 1, y0),
+            ]));
+        }
+        let (b, top) = (DVec3::ZERO, DVec3::new(0.0, h, 0.0));
+        out.push(poly(vec![b, at(i, 0.0), at(i + 1, 0.0)]));
+        out.push(poly(vec![top, at(i + 1, h), at(i, h)]));
+    }
+    out
+}
+
+/// An L-shaped room of height `h`: the square `[0, 2a]²` less the quarter
+/// `[a, 2a] × [a, 2a]` in `x, z`; floor and ceiling in three `a × a` squares,
+/// each tiled as `tiling` says, walls in `a`-wide panels; facing inwards.
+pub fn l_room(a: f64, h: f64, tiling: Tiling, m: MaterialId) -> Vec<Polygon> {
+    let (x, y, z) = (DVec3::X * a, DVec3::Y * h, DVec3::Z * a);
+    let mut out = Vec::new();
+    for (i, j) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)] {
+        let o = i * x + j * z;
+        out.extend(tiled_rect(o, z, x, tiling, m)); // floor, +y
+        out.extend(tiled_rect(o + y, x, z, tiling, m)); // ceiling, -y
+    }
+    // The outline, counter-clockwise seen from above (+y): each wall panel faces
+    // inwards.
+    let outline = [
+        DVec3::ZERO,
+        2.0 * z,
+        2.0 * z + x,
+        x + z,
+        2.0 * x + z,
+        2.0 * x,
+    ];
+    for i in 0..outline.len() {
+        let (p, q) = (outline[i], outline[(i + 1) % outline.len()]);
+        let panels = ((q - p).length() / a).round() as usize;
+        for s in 0..panels {
+            let (p0, p1) = (
+                p + (q - p) * s as f64 / panels as f64,
+                p + (q - p) * (s + 1) as f64 / panels as f64,
+            );
+            out.extend(tiled_rect(p0, y, p1 - p0, tiling, m));
+        }
+    }
+    out
+}
+
+/// A room `[0, 6] × [0, 3] × [0, 6]` (faces tiled as `tiling` says) with a pillar
+/// `[1, 1.8] × [0, 3] × [1, 1.8]` from floor to ceiling (the floor and ceiling
+/// left whole under it: the pillar's ends are inside it, the pillar's four sides
+/// face out) and a floating box `[3.5, 4.5] × [1, 2] × [3.5, 4.5]` facing out.
+pub fn room_with_pillar_and_box(tiling: Tiling, m: MaterialId) -> Vec<Polygon> {
+    let mut out = tiled_box(DVec3::ZERO, DVec3::new(6.0, 3.0, 6.0), tiling, true, m);
+    let pillar = tiled_box(
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(1.8, 3.0, 1.8),
+        Tiling::Quads(2),
+        false,
+        m,
+    );
+    // Its sides only (the ends lie on the floor and ceiling, facing into the solid).
+    out.extend(pillar.into_iter().filter(|p| {
+        let n = p.area_vector();
+        n.y.abs() < 1e-9 * n.length()
+    }));
+    out.extend(tiled_box(
+        DVec3::new(3.5, 1.0, 3.5),
+        DVec3::new(4.5, 2.0, 4.5),
+        Tiling::Quads(2),
+        false,
+        m,
+    ));
+    out
+}
+
+/// Triangles and quads mixed: a box whose faces alternate between the tilings.
+pub fn mixed_box(lo: DVec3, hi: DVec3, n: usize, m: MaterialId) -> Vec<Polygon> {
+    let quads = tiled_box(lo, hi, Tiling::Quads(n), true, m);
+    let tris = tiled_box(lo, hi, Tiling::UnequalTriangles(n), true, m);
+    let per = |v: &[Polygon]| v.len() / 6;
+    let (q, t) = (per(&quads), per(&tris));
+    (0..6)
+        .flat_map(|f| {
+            if f % 2 == 0 {
+                quads[f * q..(f + 1) * q].to_vec()
+            } else {
+                tris[f * t..(f + 1) * t].to_vec()
+            }
+        })
+        .collect()
+}
+
 /// One object of `polygons` in one material of exitance `e` and reflectance `rho`
 /// (grey).
 pub fn uniform_scene(polygons: Vec<Polygon>, rho: f64, e: f64) -> Scene {

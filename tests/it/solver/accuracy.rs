@@ -160,22 +160,28 @@ fn the_estimated_error_is_within_three_times_the_true_error() {
 
 #[test]
 fn a_target_error_refines_until_the_estimate_reaches_it() {
-    // From the default eps 0.5 (estimate 6.7%, true 1.4%), a 1% target halves eps
-    // until the change between levels is under 1%, and the true error falls with it
-    // (measured: estimate 0.68%, true 0.91%, 5 rounds instead of 3).
+    // From the default eps 0.5, a target of half the default's estimate halves eps
+    // until the change between levels is under it, and the true error falls with
+    // it. (Measured on 2026-11-29: the default estimates 0.77% and a 0.39% target
+    // is met in more rounds; before the cluster estimate was confined to clusters
+    // facing the point whole, the default estimated 6.7% for a true 1.4%.)
     let (est0, true0, rounds0) = estimated_and_true(false, SolveOptions::default());
+    assert!(
+        est0 > 0.004,
+        "the default's estimate leaves nothing to reach: {est0}"
+    );
+    let target = 0.5 * est0;
     let opts = SolveOptions {
-        target_error: Some(0.01),
+        target_error: Some(target),
         ..SolveOptions::default()
     };
     let (est, truth, rounds) = estimated_and_true(false, opts);
     eprintln!(
-        "default: {est0:.4} / {true0:.4} in {rounds0} rounds; target 0.01: {est:.4} / {truth:.4} in {rounds} rounds"
+        "default: {est0:.4} / {true0:.4} in {rounds0} rounds; target {target:.4}: {est:.4} / {truth:.4} in {rounds} rounds"
     );
-    assert!(est0 > 0.01);
-    // The rounds stop at a change under 1%; the final estimate adds the
+    // The rounds stop at a change under the target; the final estimate adds the
     // reconstruction's interpolation error (about 0.4% here) in quadrature.
-    assert!(est < 0.01f64.hypot(0.005), "final estimate {est}");
+    assert!(est < target.hypot(0.005), "final estimate {est}");
     assert!(rounds > rounds0);
     assert!(
         truth < true0,

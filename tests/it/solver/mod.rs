@@ -4,6 +4,7 @@
 
 mod accuracy;
 mod cluster_links;
+mod enclosures;
 mod floor;
 mod invariants;
 mod known;

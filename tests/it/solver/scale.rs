@@ -358,10 +358,15 @@ fn leaves_split_on_their_spread_mend_shadowed_slots() {
             split_spread: 0.15,
             ..SolveOptions::default()
         });
-    // Measured: 60 points, bias +27.8% -> +9.6%, relative RMS 45.9% -> 28.0%,
-    // 1 429 -> 2 413 leaves (2026-11-25, with the clipped cluster cosine).
+    // Measured: 60 points, bias +66.6% -> +36.4%, relative RMS 84.8% -> 47.0%,
+    // 1 429 -> 2 071 leaves (2026-11-29). The default's +66.6% was +27.8% before
+    // leaf rows took a cluster's parts at their exact factors: a slot's floor
+    // now gathers each neighbouring box side at its exact factor (about 0.3) and
+    // at its mean radiosity, several times what the side has at its foot; the
+    // close-cluster estimate it replaced gave less and lost light elsewhere
+    // (`the_clutter_keeps_its_light`).
     assert!(leaves > leaves0, "no leaf split: {leaves0} -> {leaves}");
-    assert!(bias < 0.5 * bias0, "bias {bias0} -> {bias}");
+    assert!(bias < 0.6 * bias0, "bias {bias0} -> {bias}");
     assert!(rms < 0.7 * rms0, "relative RMS {rms0} -> {rms}");
 }
 
@@ -375,11 +380,11 @@ fn leaves_seen_by_their_shape_mend_shadowed_slots() {
             leaf_shapes: 0.1,
             ..SolveOptions::default()
         });
-    // Measured: 60 points, bias +27.8% -> +15.9%, relative RMS 45.9% -> 31.1%,
-    // 1 429 leaves both (2026-11-25, with the clipped cluster cosine).
+    // Measured: 60 points, bias +66.6% -> +54.8%, relative RMS 84.8% -> 66.6%,
+    // 1 429 leaves both (2026-11-29; see the test above for the default's bias).
     assert_eq!(leaves, leaves0, "the shapes changed the leaves");
-    assert!(bias < 0.65 * bias0, "bias {bias0} -> {bias}");
-    assert!(rms < 0.8 * rms0, "relative RMS {rms0} -> {rms}");
+    assert!(bias < 0.9 * bias0, "bias {bias0} -> {bias}");
+    assert!(rms < 0.85 * rms0, "relative RMS {rms0} -> {rms}");
 }
 
 /// Power absorbed by the surfaces over power emitted, `Σ A (1 − ρ)(B − E) / ρ` over
@@ -407,12 +412,11 @@ fn absorbed_over_emitted(solver: &Solver) -> f64 {
 /// the surfaces but for what the ceiling sends to the back of the lamp hung under
 /// it, which no surface receives (about half a point here). Cluster links too
 /// close for the cluster estimate, left whole at small receivers by the power
-/// criterion, once carried nothing: 0.913 at 32 × 32 boxes (measured), 0.964 once
-/// they carried their Monte Carlo factor, 0.982 on 2026-11-25, 0.985 once a leaf saw
-/// a cluster source by the part of its bounding sphere above the leaf's horizon.
-/// Most of the rest is in cluster-source entries whose visibility is the link's,
-/// averaged over the receiving cluster (BENCHMARKS.md, "Leaves seen by their
-/// shape"); the bound is 2.5%.
+/// criterion, once carried nothing: 0.913 at 32 × 32 boxes (measured), 0.985 with
+/// a receiver-averaged Monte Carlo factor. A box's side gathered nothing from the
+/// floor in front of it where the link from the box's cluster estimated zero (rows
+/// 0.6–0.8); each leaf now opens such links itself: 1.000 (2026-11-29). The bound
+/// is 2.5%.
 #[test]
 fn the_clutter_keeps_its_light() {
     let n = 32;

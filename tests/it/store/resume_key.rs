@@ -48,6 +48,9 @@ fn in_key() -> Vec<(&'static str, Change)> {
         ("solve.contact_meshing", |o, _| o.contact_meshing ^= true),
         ("solve.power_size", |o, _| o.power_size *= 0.5),
         ("solve.row_open_ratio", |o, _| o.row_open_ratio *= 0.5),
+        ("solve.cluster_open_ratio", |o, _| {
+            o.cluster_open_ratio *= 0.5
+        }),
         ("solve.faint_source", |o, _| o.faint_source *= 0.5),
         ("solve.split_spread", |o, _| o.split_spread += 0.15),
         ("solve.leaf_shapes", |o, _| o.leaf_shapes += 0.1),
