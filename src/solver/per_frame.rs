@@ -153,6 +153,43 @@ pub fn solve_per_frame(
     Ok(total)
 }
 
+/// The frames of a scene with no emitter, known without solving: the frames of
+/// [`solve_per_frame`], each the scene's [`Solution::zero`] with its leaves labelled
+/// with the frame's interval, handed to `on_frame` with a report of no round.
+pub fn zero_per_frame(
+    scene: &Scene,
+    fps: f64,
+    mut on_frame: impl FnMut(&FrameReport, &Solution) -> Result<()>,
+) -> Result<PerFrameStats> {
+    let mut total = PerFrameStats::default();
+    let mut solution = Solution::zero(scene);
+    for (index, (t, range)) in frame_times(scene.time, fps)?.into_iter().enumerate() {
+        let start = Instant::now();
+        let label = [range[0] as f32, range[1] as f32];
+        for leaf in &mut solution.leaves {
+            leaf.time = label;
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let report = FrameReport {
+            index: index as u32,
+            t,
+            range,
+            seconds,
+            rounds: 0,
+            leaves: solution.leaves.len() as u64,
+            elements: 0,
+            links_active: 0,
+            links_passive: 0,
+            estimated_error: 0.0,
+        };
+        total.stats.seconds += seconds;
+        total.frames += 1;
+        total.leaves += report.leaves;
+        on_frame(&report, &solution)?;
+    }
+    Ok(total)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,7 +1,8 @@
 //! The space-time branch of `rhier solve`: a scene with motion is solved window by
 //! window ([`rhier::solver::spacetime`]) and streamed into the `.rhier` file, one
 //! chunk per window, with a journal (`OUT.rhier.partial/`) that `--resume` continues
-//! from.
+//! from. A scene with no emitter is not solved: its zero solution is written at
+//! once, in one chunk whose leaves hold over the whole animation.
 
 use std::time::Instant;
 
@@ -27,6 +28,11 @@ pub fn run(
     let (output, animation) = (&args.output, &args.animation);
     let st = args.space_time_options()?;
     refuse_static_only(args, &opts)?;
+    if !scene.has_emitter() {
+        return super::common::write_zero(output, scene, stem, start, |path| {
+            write_report(path, &mut [])
+        });
+    }
     let out = output.out_path(stem);
     let probes = output.probe.as_deref().map(read_probe_points).transpose()?;
     let key = fingerprint(scene, &result_settings(&opts, &st)?)?;
