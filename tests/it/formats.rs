@@ -576,6 +576,56 @@ fn no_emitter_moving_scene_is_answered_at_once_space_time_and_per_frame() {
     );
 }
 
+#[test]
+fn moving_solves_say_why_they_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = cornell_moving(dir.path(), false);
+    let out = dir.path().join("m.rhier");
+    // Space-time: the shared part's rounds, said on the last line.
+    let err = succeed(
+        rhier()
+            .arg("solve")
+            .arg(&scene)
+            .args(["--fps", "2", "--max-rounds", "1", "-o"])
+            .arg(&out),
+    );
+    assert!(
+        last_line(&err)
+            .contains("; shared part stopped: round limit reached (--max-rounds); wrote "),
+        "{err}"
+    );
+    // Per frame: each frame's line, and the last line over all frames.
+    let cases: [(&[&str], &str); 2] = [
+        (&["--max-rounds", "1"], "round limit reached (--max-rounds)"),
+        (
+            &["--time-budget", "1e-9"],
+            "time budget spent (--time-budget)",
+        ),
+    ];
+    for (args, want) in cases {
+        let err = succeed(
+            rhier()
+                .arg("solve")
+                .arg(&scene)
+                .args(["--per-frame", "--fps", "1", "-o"])
+                .arg(&out)
+                .args(args),
+        );
+        let frame_lines: Vec<&str> = err.lines().filter(|l| l.starts_with("frame ")).collect();
+        assert_eq!(frame_lines.len(), 3, "{err}");
+        assert!(
+            frame_lines
+                .iter()
+                .all(|l| l.ends_with(&format!("stopped: {want}"))),
+            "{args:?}: {err}"
+        );
+        assert!(
+            last_line(&err).contains(&format!("; stopped: {want} in every frame; wrote ")),
+            "{args:?}: {err}"
+        );
+    }
+}
+
 fn last_line(err: &str) -> &str {
     err.lines().last().unwrap_or_default()
 }

@@ -2,9 +2,10 @@
 //! ([`rhier::solver::per_frame`]): one independent static solve per frame, each
 //! frame's solution handed back and written here into the output `.rhier` file, one
 //! chunk per frame, in time order, through the store's [`Writer`] (the file appears
-//! when every frame is written). Prints one line per frame (unless `-q`) and with
-//! `--report CSV` writes one row per frame. A scene with no emitter is not solved:
-//! every frame is written zero at once.
+//! when every frame is written). Prints one line per frame and a last line that
+//! says why the frames' solves stopped (unless `-q`), and with `--report CSV`
+//! writes one row per frame. A scene with no emitter is not solved: every frame is
+//! written zero at once.
 
 use std::io::Write;
 use std::path::Path;
@@ -52,7 +53,9 @@ pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
     };
     let quiet = output.quiet;
     let lit = scene.has_emitter();
+    let mut stops = Vec::new();
     let stats = write_frames(&out, &scene, &opts, fps, |report| {
+        stops.push(report.stop);
         if !quiet && lit {
             eprintln!("{}", report.summary());
         }
@@ -74,12 +77,13 @@ pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
         );
     } else if !quiet {
         eprintln!(
-            "solved {} frames at {} fps in {:.3} s ({:.3} s per frame): {} stored cells; wrote {}",
+            "solved {} frames at {} fps in {:.3} s ({:.3} s per frame): {} stored cells; stopped: {}; wrote {}",
             stats.frames,
             fps,
             start.elapsed().as_secs_f64(),
             stats.stats.seconds / stats.frames.max(1) as f64,
             stats.leaves,
+            rhier::solver::report::stop_tally(&stops),
             out.display()
         );
     }

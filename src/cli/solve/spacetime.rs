@@ -304,8 +304,9 @@ fn check_journaled(done: usize, n_windows: usize, out: &std::path::Path) -> anyh
     Ok(())
 }
 
-/// The last line a solve prints: frames, windows, time, and the stored cells
-/// against the frame cells (`cells`).
+/// The last line a solve prints: frames, windows, time, the stored cells against
+/// the frame cells (`cells`), and why the shared part's rounds (the refinement
+/// every window starts from) stopped.
 fn finish_line(
     run: &SpaceTime,
     done: usize,
@@ -314,7 +315,7 @@ fn finish_line(
     out: &std::path::Path,
 ) -> String {
     format!(
-        "solved {} frames ({} windows from the journal) of {} windows in {:.3} s ({:.3} s shared part): {} stored cells for {} frame cells ({:.1}x fewer); wrote {}",
+        "solved {} frames ({} windows from the journal) of {} windows in {:.3} s ({:.3} s shared part): {} stored cells for {} frame cells ({:.1}x fewer); shared part stopped: {}; wrote {}",
         run.stats.frames,
         done,
         run.window_count(),
@@ -323,6 +324,7 @@ fn finish_line(
         stored,
         frame_cells,
         frame_cells as f64 / stored.max(1) as f64,
+        run.solver().stop_reason().text(),
         out.display()
     )
 }
