@@ -20,7 +20,7 @@
 use std::time::Instant;
 
 pub use super::frames::frame_times;
-use super::{Solution, SolveOptions, SolveStats, Solver};
+use super::{Solution, SolveOptions, SolveStats, Solver, StopReason};
 use crate::Result;
 use crate::scene::Scene;
 
@@ -47,6 +47,9 @@ pub struct FrameReport {
     pub links_passive: u64,
     /// Estimated relative error of the last round.
     pub estimated_error: f64,
+    /// Why the frame's solve stopped refining ([`StopReason::NotRun`] for a frame
+    /// of a scene with no emitter, [`zero_per_frame`]).
+    pub stop: StopReason,
 }
 
 impl FrameReport {
@@ -75,14 +78,15 @@ impl FrameReport {
     /// The line `solve --per-frame` prints per frame.
     pub fn summary(&self) -> String {
         format!(
-            "frame {:4}  t {:8.4} s  {:8.3} s  {:7} leaves  {:8} links ({} passive)  est. error {:.3e}",
+            "frame {:4}  t {:8.4} s  {:8.3} s  {:7} leaves  {:8} links ({} passive)  est. error {:.3e}  stopped: {}",
             self.index,
             self.t,
             self.seconds,
             self.leaves,
             self.links_active + self.links_passive,
             self.links_passive,
-            self.estimated_error
+            self.estimated_error,
+            self.stop.text()
         )
     }
 }
@@ -117,6 +121,7 @@ pub fn solve_per_frame(
         solver.freeze_motion();
         let records = solver.run(|_, _| {})?;
         let mut solution = solver.solution();
+        let stop = solver.stop_reason();
         drop(solver);
         let seconds = start.elapsed().as_secs_f64();
         let s = &mut solution.stats;
@@ -137,6 +142,7 @@ pub fn solve_per_frame(
             links_active: s.links_active,
             links_passive: s.links_passive,
             estimated_error: s.estimated_error,
+            stop,
         };
         let a = &mut total.stats;
         a.seconds += seconds;
@@ -146,6 +152,44 @@ pub fn solve_per_frame(
         a.links_passive = a.links_passive.max(s.links_passive);
         a.estimated_error = a.estimated_error.max(s.estimated_error);
         a.residual = a.residual.max(s.residual);
+        total.frames += 1;
+        total.leaves += report.leaves;
+        on_frame(&report, &solution)?;
+    }
+    Ok(total)
+}
+
+/// The frames of a scene with no emitter, known without solving: the frames of
+/// [`solve_per_frame`], each the scene's [`Solution::zero`] with its leaves labelled
+/// with the frame's interval, handed to `on_frame` with a report of no round.
+pub fn zero_per_frame(
+    scene: &Scene,
+    fps: f64,
+    mut on_frame: impl FnMut(&FrameReport, &Solution) -> Result<()>,
+) -> Result<PerFrameStats> {
+    let mut total = PerFrameStats::default();
+    let mut solution = Solution::zero(scene);
+    for (index, (t, range)) in frame_times(scene.time, fps)?.into_iter().enumerate() {
+        let start = Instant::now();
+        let label = [range[0] as f32, range[1] as f32];
+        for leaf in &mut solution.leaves {
+            leaf.time = label;
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let report = FrameReport {
+            index: index as u32,
+            t,
+            range,
+            seconds,
+            rounds: 0,
+            leaves: solution.leaves.len() as u64,
+            elements: 0,
+            links_active: 0,
+            links_passive: 0,
+            estimated_error: 0.0,
+            stop: StopReason::NotRun,
+        };
+        total.stats.seconds += seconds;
         total.frames += 1;
         total.leaves += report.leaves;
         on_frame(&report, &solution)?;

@@ -145,3 +145,64 @@ impl StopReason {
         }
     }
 }
+
+/// Why the solves of several frames stopped, in words for the last line of a
+/// per-frame solve: the reason "in every frame" when all agree, else each reason
+/// with its number of frames, in order of first appearance ("round limit reached
+/// (--max-rounds) in 3 frames, no link left above --eps in 73 frames"). Frames that
+/// stopped at the `--min-size` floor count as one reason, said with the largest
+/// number of links any of them left.
+pub fn stop_tally(reasons: &[StopReason]) -> String {
+    let same =
+        |a: &StopReason, b: &StopReason| std::mem::discriminant(a) == std::mem::discriminant(b);
+    let mut kinds: Vec<(StopReason, usize)> = Vec::new();
+    for r in reasons {
+        match kinds.iter_mut().find(|(k, _)| same(k, r)) {
+            Some((k, n)) => {
+                *n += 1;
+                if let (StopReason::MinSize { links }, StopReason::MinSize { links: more }) = (k, r)
+                {
+                    *links = (*links).max(*more);
+                }
+            }
+            None => kinds.push((*r, 1)),
+        }
+    }
+    match kinds.as_slice() {
+        [] => StopReason::NotRun.text(),
+        [(k, _)] => format!("{} in every frame", k.text()),
+        _ => kinds
+            .iter()
+            .map(|(k, n)| {
+                format!(
+                    "{} in {n} frame{}",
+                    k.text(),
+                    if *n == 1 { "" } else { "s" }
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", "),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stop_tally_counts_frames_by_reason() {
+        use StopReason::*;
+        assert_eq!(stop_tally(&[]), "nothing to refine");
+        assert_eq!(
+            stop_tally(&[Refined, Refined]),
+            "no link left above --eps in every frame"
+        );
+        assert_eq!(
+            stop_tally(&[RoundLimit, Refined, RoundLimit]),
+            "round limit reached (--max-rounds) in 2 frames, no link left above --eps in 1 frame"
+        );
+        let t = stop_tally(&[MinSize { links: 3 }, MinSize { links: 7 }]);
+        assert!(t.starts_with("no link left to refine: 7 link(s)"), "{t}");
+        assert!(t.ends_with(") in every frame"), "{t}");
+    }
+}

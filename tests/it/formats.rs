@@ -450,6 +450,182 @@ fn no_emitter_is_answered_at_once_and_played_black() {
     assert!(!err.contains("black"), "{err}");
 }
 
+/// The moving Cornell box (`formats/examples/cornell_moving.json`: the short block
+/// slides over [0, 2] s) written to `dir`, its lamp dark when `dark`.
+fn cornell_moving(dir: &Path, dark: bool) -> PathBuf {
+    let text = std::fs::read_to_string(crate::common::example("cornell_moving.json")).unwrap();
+    let lamp = r#""emission": [17.0,12.0,4.0]"#;
+    assert!(text.contains(lamp));
+    let text = if dark {
+        text.replace(lamp, r#""emission": [0,0,0]"#)
+    } else {
+        text
+    };
+    write(dir, if dark { "dark.json" } else { "lit.json" }, &text)
+}
+
+#[test]
+fn no_emitter_moving_scene_is_answered_at_once_space_time_and_per_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = cornell_moving(dir.path(), true);
+    let warning = "rhier: warning: scene has no emitter: the solution is zero";
+    // Space-time: one chunk over [0, 2], a zero leaf per patch live at every time.
+    let st = dir.path().join("st.rhier");
+    let st_csv = dir.path().join("st.csv");
+    let err = succeed(
+        rhier()
+            .arg("solve")
+            .arg(&scene)
+            .args(["--fps", "4", "-o"])
+            .arg(&st)
+            .arg("--report")
+            .arg(&st_csv),
+    );
+    assert!(err.contains(warning), "{err}");
+    assert!(
+        last_line(&err).contains(
+            "no emitter, so the radiosity is zero everywhere at every time in [0, 2] (written without solving)"
+        ),
+        "{err}"
+    );
+    assert!(
+        !err.contains("shared round") && !err.contains("window"),
+        "nothing is solved: {err}"
+    );
+    assert!(!rhier::store::journal::journal_dir(&st).exists());
+    let csv = std::fs::read_to_string(&st_csv).unwrap();
+    assert_eq!(csv.lines().count(), 1, "a header and no frame: {csv}");
+    assert!(csv.starts_with("frame,window,t,"), "{csv}");
+    let reader = rhier::store::Reader::open(&st).unwrap();
+    let domain = reader.time_domain();
+    assert_eq!((domain.start, domain.end), (0.0, 2.0));
+    let patches = reader.patches().len();
+    assert_eq!(patches, 20);
+    assert_eq!(reader.chunks().len(), 1);
+    assert_eq!((reader.chunks()[0].t0, reader.chunks()[0].t1), (0.0, 2.0));
+    for t in [0.0, 0.3, 1.0, 2.0] {
+        let leaves = reader.leaves_at(t).unwrap();
+        assert_eq!(leaves.len(), patches, "t = {t}");
+        assert!(
+            leaves
+                .iter()
+                .all(|l| l.time == [0.0, 2.0] && l.b.iter().flatten().all(|&b| b == 0.0))
+        );
+    }
+    let err = succeed(
+        rhier()
+            .arg("play")
+            .arg(&st)
+            .args(["--time", "1", "--width", "32", "--height", "24", "-o"])
+            .arg(dir.path().join("st_frames")),
+    );
+    assert!(err.contains("is black at t = 1"), "{err}");
+    // Per frame: one chunk per frame at 4 fps (9 frames over [0, 2]), each with a
+    // zero leaf per patch labelled with the frame's interval, a report row per frame.
+    let pf = dir.path().join("pf.rhier");
+    let pf_csv = dir.path().join("pf.csv");
+    let err = succeed(
+        rhier()
+            .arg("solve")
+            .arg(&scene)
+            .args(["--per-frame", "--fps", "4", "-o"])
+            .arg(&pf)
+            .arg("--report")
+            .arg(&pf_csv),
+    );
+    assert!(err.contains(warning), "{err}");
+    assert!(
+        last_line(&err).starts_with("solved 9 frames at 4 fps in ")
+            && last_line(&err).contains(
+                "no emitter, so the radiosity is zero everywhere at every frame (written without solving)"
+            ),
+        "{err}"
+    );
+    assert!(!err.contains("frame    0"), "no frame is solved: {err}");
+    let frames = rhier::solver::per_frame::frame_times(
+        rhier::scene::TimeDomain {
+            start: 0.0,
+            end: 2.0,
+        },
+        4.0,
+    )
+    .unwrap();
+    assert_eq!(frames.len(), 9);
+    let reader = rhier::store::Reader::open(&pf).unwrap();
+    assert_eq!(reader.patches().len(), patches);
+    assert_eq!(reader.chunks().len(), frames.len());
+    for (k, (_, range)) in frames.iter().enumerate() {
+        let c = reader.chunks()[k];
+        assert_eq!([c.t0, c.t1], *range, "frame {k}");
+        let leaves = reader.chunk_leaves(k).unwrap();
+        assert_eq!(leaves.len(), patches);
+        let label = [range[0] as f32, range[1] as f32];
+        assert!(
+            leaves
+                .iter()
+                .all(|l| l.time == label && l.b.iter().flatten().all(|&b| b == 0.0))
+        );
+    }
+    let csv = std::fs::read_to_string(&pf_csv).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 9, "{csv}");
+    assert!(rows[4].starts_with("4,1,0.875,1.125,"), "{csv}");
+    assert!(
+        rows.iter().all(|r| r.ends_with(",0,20,0,0,0,0.000000e0")),
+        "{csv}"
+    );
+}
+
+#[test]
+fn moving_solves_say_why_they_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = cornell_moving(dir.path(), false);
+    let out = dir.path().join("m.rhier");
+    // Space-time: the shared part's rounds, said on the last line.
+    let err = succeed(
+        rhier()
+            .arg("solve")
+            .arg(&scene)
+            .args(["--fps", "2", "--max-rounds", "1", "-o"])
+            .arg(&out),
+    );
+    assert!(
+        last_line(&err)
+            .contains("; shared part stopped: round limit reached (--max-rounds); wrote "),
+        "{err}"
+    );
+    // Per frame: each frame's line, and the last line over all frames.
+    let cases: [(&[&str], &str); 2] = [
+        (&["--max-rounds", "1"], "round limit reached (--max-rounds)"),
+        (
+            &["--time-budget", "1e-9"],
+            "time budget spent (--time-budget)",
+        ),
+    ];
+    for (args, want) in cases {
+        let err = succeed(
+            rhier()
+                .arg("solve")
+                .arg(&scene)
+                .args(["--per-frame", "--fps", "1", "-o"])
+                .arg(&out)
+                .args(args),
+        );
+        let frame_lines: Vec<&str> = err.lines().filter(|l| l.starts_with("frame ")).collect();
+        assert_eq!(frame_lines.len(), 3, "{err}");
+        assert!(
+            frame_lines
+                .iter()
+                .all(|l| l.ends_with(&format!("stopped: {want}"))),
+            "{args:?}: {err}"
+        );
+        assert!(
+            last_line(&err).contains(&format!("; stopped: {want} in every frame; wrote ")),
+            "{args:?}: {err}"
+        );
+    }
+}
+
 fn last_line(err: &str) -> &str {
     err.lines().last().unwrap_or_default()
 }

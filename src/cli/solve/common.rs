@@ -592,3 +592,47 @@ impl ResourceArgs {
         )
     }
 }
+
+/// Writes the answer of a scene with no emitter, zero everywhere over its time
+/// domain, without solving: one leaf per patch in one chunk (a static file, and a
+/// space-time one whose leaves all hold over the whole animation), the probes' zeros,
+/// and the report of no round or frame `empty_report` writes.
+pub fn write_zero(
+    output: &OutputArgs,
+    scene: &Scene,
+    stem: &str,
+    start: std::time::Instant,
+    empty_report: impl FnOnce(&Path) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    use rhier::playback::{probe, read_probe_points, write_probe_results};
+    let probes = output.probe.as_deref().map(read_probe_points).transpose()?;
+    let mut solution = rhier::solution::Solution::zero(scene);
+    solution.stats.seconds = start.elapsed().as_secs_f64();
+    if let Some(path) = &output.report {
+        empty_report(path)?;
+    }
+    if let (Some(points), Some(out)) = (&probes, &output.probe_out) {
+        let values = probe(&solution, points, scene.time.start)?;
+        write_probe_results(out, &values)?;
+    }
+    let out = output.out_path(stem);
+    rhier::store::write_solution(&out, &solution, rhier::store::WriteOptions::default())
+        .with_context(|| format!("writing {}", out.display()))?;
+    if !output.quiet {
+        eprintln!(
+            "solved {} patches in {:.3} s: no emitter, so the radiosity is zero everywhere{} (written without solving); wrote {}",
+            solution.patches.len(),
+            solution.stats.seconds,
+            if scene.has_motion() {
+                format!(
+                    " at every time in [{}, {}]",
+                    scene.time.start, scene.time.end
+                )
+            } else {
+                String::new()
+            },
+            out.display()
+        );
+    }
+    Ok(())
+}

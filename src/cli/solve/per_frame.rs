@@ -2,8 +2,10 @@
 //! ([`rhier::solver::per_frame`]): one independent static solve per frame, each
 //! frame's solution handed back and written here into the output `.rhier` file, one
 //! chunk per frame, in time order, through the store's [`Writer`] (the file appears
-//! when every frame is written). Prints one line per frame (unless `-q`) and with
-//! `--report CSV` writes one row per frame.
+//! when every frame is written). Prints one line per frame and a last line that
+//! says why the frames' solves stopped (unless `-q`), and with `--report CSV`
+//! writes one row per frame. A scene with no emitter is not solved: every frame is
+//! written zero at once.
 
 use std::io::Write;
 use std::path::Path;
@@ -13,7 +15,7 @@ use rhier::Error;
 use rhier::scene::Scene;
 use rhier::solution::Solution;
 use rhier::solver::SolveOptions;
-use rhier::solver::per_frame::{FrameReport, PerFrameStats, solve_per_frame};
+use rhier::solver::per_frame::{FrameReport, PerFrameStats, solve_per_frame, zero_per_frame};
 use rhier::store::{FrameWriter, WriteOptions};
 
 use super::common::Args;
@@ -50,8 +52,11 @@ pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
         None => None,
     };
     let quiet = output.quiet;
+    let lit = scene.has_emitter();
+    let mut stops = Vec::new();
     let stats = write_frames(&out, &scene, &opts, fps, |report| {
-        if !quiet {
+        stops.push(report.stop);
+        if !quiet && lit {
             eprintln!("{}", report.summary());
         }
         if let Some((w, path)) = &mut csv {
@@ -62,14 +67,23 @@ pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
         Ok(())
     })
     .with_context(|| format!("per-frame solve into {}", out.display()))?;
-    if !quiet {
+    if !quiet && !lit {
         eprintln!(
-            "solved {} frames at {} fps in {:.3} s ({:.3} s per frame): {} stored cells; wrote {}",
+            "solved {} frames at {} fps in {:.3} s: no emitter, so the radiosity is zero everywhere at every frame (written without solving); wrote {}",
+            stats.frames,
+            fps,
+            start.elapsed().as_secs_f64(),
+            out.display()
+        );
+    } else if !quiet {
+        eprintln!(
+            "solved {} frames at {} fps in {:.3} s ({:.3} s per frame): {} stored cells; stopped: {}; wrote {}",
             stats.frames,
             fps,
             start.elapsed().as_secs_f64(),
             stats.stats.seconds / stats.frames.max(1) as f64,
             stats.leaves,
+            rhier::solver::report::stop_tally(&stops),
             out.display()
         );
     }
@@ -86,7 +100,8 @@ pub fn run(args: &Args, opts: SolveOptions) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Solves every frame of `scene` at `fps` ([`solve_per_frame`]) and writes each
+/// Solves every frame of `scene` at `fps` ([`solve_per_frame`]; a scene with no
+/// emitter is not solved, its frames are zero, [`zero_per_frame`]) and writes each
 /// frame's leaves into the `.rhier` file `path` as one chunk over the frame's
 /// interval, in time order; `on_frame` sees each frame's report after its chunk is
 /// written. Memory holds one frame whatever the animation's length.
@@ -98,10 +113,15 @@ fn write_frames(
     mut on_frame: impl FnMut(&FrameReport) -> rhier::Result<()>,
 ) -> rhier::Result<PerFrameStats> {
     let mut file = FrameWriter::new(path, WriteOptions::default());
-    let stats = solve_per_frame(scene, opts, fps, |r, solution: &Solution| {
+    let frame = |r: &FrameReport, solution: &Solution| {
         file.push(scene, (r.index, r.t, r.range), solution)?;
         on_frame(r)
-    })?;
+    };
+    let stats = if scene.has_emitter() {
+        solve_per_frame(scene, opts, fps, frame)?
+    } else {
+        zero_per_frame(scene, fps, frame)?
+    };
     file.finish(&stats.stats)?;
     Ok(stats)
 }

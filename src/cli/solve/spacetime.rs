@@ -1,7 +1,8 @@
 //! The space-time branch of `rhier solve`: a scene with motion is solved window by
 //! window ([`rhier::solver::spacetime`]) and streamed into the `.rhier` file, one
 //! chunk per window, with a journal (`OUT.rhier.partial/`) that `--resume` continues
-//! from.
+//! from. A scene with no emitter is not solved: its zero solution is written at
+//! once, in one chunk whose leaves hold over the whole animation.
 
 use std::time::Instant;
 
@@ -27,6 +28,11 @@ pub fn run(
     let (output, animation) = (&args.output, &args.animation);
     let st = args.space_time_options()?;
     refuse_static_only(args, &opts)?;
+    if !scene.has_emitter() {
+        return super::common::write_zero(output, scene, stem, start, |path| {
+            write_report(path, &mut [])
+        });
+    }
     let out = output.out_path(stem);
     let probes = output.probe.as_deref().map(read_probe_points).transpose()?;
     let key = fingerprint(scene, &result_settings(&opts, &st)?)?;
@@ -298,8 +304,9 @@ fn check_journaled(done: usize, n_windows: usize, out: &std::path::Path) -> anyh
     Ok(())
 }
 
-/// The last line a solve prints: frames, windows, time, and the stored cells
-/// against the frame cells (`cells`).
+/// The last line a solve prints: frames, windows, time, the stored cells against
+/// the frame cells (`cells`), and why the shared part's rounds (the refinement
+/// every window starts from) stopped.
 fn finish_line(
     run: &SpaceTime,
     done: usize,
@@ -308,7 +315,7 @@ fn finish_line(
     out: &std::path::Path,
 ) -> String {
     format!(
-        "solved {} frames ({} windows from the journal) of {} windows in {:.3} s ({:.3} s shared part): {} stored cells for {} frame cells ({:.1}x fewer); wrote {}",
+        "solved {} frames ({} windows from the journal) of {} windows in {:.3} s ({:.3} s shared part): {} stored cells for {} frame cells ({:.1}x fewer); shared part stopped: {}; wrote {}",
         run.stats.frames,
         done,
         run.window_count(),
@@ -317,6 +324,7 @@ fn finish_line(
         stored,
         frame_cells,
         frame_cells as f64 / stored.max(1) as f64,
+        run.solver().stop_reason().text(),
         out.display()
     )
 }

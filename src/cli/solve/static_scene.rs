@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::Context;
 use rhier::playback::{ProbePoint, probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
-use rhier::solution::{Solution, relative_rms};
+use rhier::solution::relative_rms;
 use rhier::solver::report;
 use rhier::solver::{RoundRecord, SolveOptions, Solver};
 use rhier::store::{
@@ -76,7 +76,9 @@ pub fn run(
     let probes = output.probe.as_deref().map(read_probe_points).transpose()?;
     let t = scene.time.start;
     if !scene.has_emitter() {
-        return write_zero(output, scene, stem, probes.as_deref(), start);
+        return super::common::write_zero(output, scene, stem, start, |path| {
+            Ok(report::write_csv(path, &[])?)
+        });
     }
 
     let bar = output.progress("refining");
@@ -198,38 +200,6 @@ pub fn run(
             (solution.leaves.len() * std::mem::size_of::<rhier::solution::Leaf>()) as u64,
         );
         println!("{m}");
-    }
-    Ok(())
-}
-
-/// Writes the answer of a scene with no emitter, zero everywhere, without solving
-/// (and the probes' zeros, and a report with no round).
-fn write_zero(
-    output: &OutputArgs,
-    scene: &Scene,
-    stem: &str,
-    probes: Option<&[ProbePoint]>,
-    start: Instant,
-) -> anyhow::Result<()> {
-    let mut solution = Solution::zero(scene);
-    solution.stats.seconds = start.elapsed().as_secs_f64();
-    if let Some(path) = &output.report {
-        report::write_csv(path, &[])?;
-    }
-    if let (Some(points), Some(out)) = (probes, &output.probe_out) {
-        let values = probe(&solution, points, scene.time.start)?;
-        write_probe_results(out, &values)?;
-    }
-    let out = output.out_path(stem);
-    write_solution(&out, &solution, WriteOptions::default())
-        .with_context(|| format!("writing {}", out.display()))?;
-    if !output.quiet {
-        eprintln!(
-            "solved {} patches in {:.3} s: no emitter, so the radiosity is zero everywhere (written without solving); wrote {}",
-            solution.patches.len(),
-            solution.stats.seconds,
-            out.display()
-        );
     }
     Ok(())
 }
