@@ -11,3 +11,4 @@ mod known;
 mod per_frame;
 mod scale;
 mod scale_free;
+mod tiled_lamp;
