@@ -590,6 +590,7 @@ impl Solver<'_> {
         // surface sources from its row (seen from its quadrature points), and of
         // clusters with no emitter from their link, not from rays.
         let small_leaf = self
+            .sys
             .row_cache
             .get(&leaf.0)
             .filter(|_| !self.has_motion() && g.area < self.power_area);

@@ -640,6 +640,7 @@ impl Solver<'_> {
         let passed = Some(&self.st.pass_rows).filter(|_| timed);
         let radiosities = self.elems.radiosities.as_slice();
         let rows: Vec<LeafRow> = self
+            .sys
             .leaves
             .par_iter()
             .map(|&leaf| {
@@ -658,7 +659,7 @@ impl Solver<'_> {
                 let mut fresh_pass = Vec::new();
                 let leaf_ray = self.ray_id(leaf.0);
                 let rho_leaf = self.rho_of(leaf);
-                let before = self.row_cache.get(&leaf.0).filter(|_| keep_rows);
+                let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
                 // A static leaf (of the window's base or made again by this
                 // frame) reuses the factors to the static base elements its
                 // sources open into.
@@ -819,10 +820,10 @@ impl Solver<'_> {
             })
             .collect();
         self.clear_rows();
-        self.row_cache.clear();
+        self.sys.row_cache.clear();
         self.st.frame_rows.0.clear();
         self.st.rows_between = 0;
-        let leaves = std::mem::take(&mut self.leaves);
+        let leaves = std::mem::take(&mut self.sys.leaves);
         for (&leaf, out) in leaves.iter().zip(rows) {
             let LeafRow {
                 row,
@@ -866,28 +867,28 @@ impl Solver<'_> {
                 }
             }
             if keep_rows {
-                self.row_cache.insert(leaf.0, kept);
+                self.sys.row_cache.insert(leaf.0, kept);
             }
             self.push_row(row);
         }
-        self.leaves = leaves;
+        self.sys.leaves = leaves;
         self.st.pass_rows.sort_unstable_by_key(|e| e.0);
         self.st.pass_rows.shrink_to_fit();
     }
 
     /// Empties the leaf rows (CSR) before they are pushed again, leaf by leaf.
     fn clear_rows(&mut self) {
-        self.row_start.clear();
-        self.row_sources.clear();
-        self.row_coefs.clear();
-        self.row_start.push(0);
+        self.sys.row_start.clear();
+        self.sys.row_sources.clear();
+        self.sys.row_coefs.clear();
+        self.sys.row_start.push(0);
     }
 
     /// Appends the next leaf's row.
     fn push_row(&mut self, row: Vec<(u32, f64)>) {
-        self.row_sources.extend(row.iter().map(|e| e.0));
-        self.row_coefs.extend(row.iter().map(|e| e.1));
-        self.row_start.push(self.row_sources.len() as u32);
+        self.sys.row_sources.extend(row.iter().map(|e| e.0));
+        self.sys.row_coefs.extend(row.iter().map(|e| e.1));
+        self.sys.row_start.push(self.sys.row_sources.len() as u32);
     }
 
     /// Applies `A = I − ρ·(rows ∘ pull)` to leaf radiosities `x` (3 per leaf), with
@@ -896,8 +897,8 @@ impl Solver<'_> {
         let nodes = self.elems.nodes.as_slice();
         let geoms = self.elems.geoms.as_slice();
         // Pull.
-        for (li, l) in self.leaves.iter().enumerate() {
-            let g = self.leaf_gain.get(li).copied().unwrap_or(1.0);
+        for (li, l) in self.sys.leaves.iter().enumerate() {
+            let g = self.sys.leaf_gain.get(li).copied().unwrap_or(1.0);
             scratch_b[l.ix()] = [g * x[li * 3], g * x[li * 3 + 1], g * x[li * 3 + 2]];
         }
         pull(nodes, geoms, scratch_b);
@@ -907,15 +908,21 @@ impl Solver<'_> {
             .zip(x.par_chunks(3))
             .enumerate()
             .for_each(|(li, (o, xi))| {
-                let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
+                let (r0, r1) = (
+                    self.sys.row_start[li] as usize,
+                    self.sys.row_start[li + 1] as usize,
+                );
                 let mut h = [0.0; 3];
-                for (s, c) in self.row_sources[r0..r1].iter().zip(&self.row_coefs[r0..r1]) {
+                for (s, c) in self.sys.row_sources[r0..r1]
+                    .iter()
+                    .zip(&self.sys.row_coefs[r0..r1])
+                {
                     for k in 0..3 {
                         h[k] += c * b[*s as usize][k];
                     }
                 }
-                let rho = self.patches.rhos[geoms[self.leaves[li].ix()].patch as usize];
-                let r = self.row_scale.get(li).copied().unwrap_or(1.0);
+                let rho = self.patches.rhos[geoms[self.sys.leaves[li].ix()].patch as usize];
+                let r = self.sys.row_scale.get(li).copied().unwrap_or(1.0);
                 for k in 0..3 {
                     o[k] = xi[k] - rho[k] * r * h[k];
                 }
@@ -928,7 +935,7 @@ impl Solver<'_> {
     pub(super) fn solve_rows(&mut self) -> Result<f64> {
         self.compute_leaf_rows();
         if !self.st.balance_fixed {
-            self.balancing = false;
+            self.sys.balancing = false;
         }
         self.solve_balanced()
     }
@@ -947,10 +954,10 @@ impl Solver<'_> {
     /// (BENCHMARKS.md, "Stiff scenes").
     fn solve_balanced(&mut self) -> Result<f64> {
         if !self.balance_rows() && !self.st.balance_fixed {
-            self.balancing = false;
+            self.sys.balancing = false;
         }
         let residual = self.solve_leaves()?;
-        if self.balancing || self.st.balance_fixed || self.closed != Some(true) {
+        if self.sys.balancing || self.st.balance_fixed || self.closed != Some(true) {
             return Ok(residual);
         }
         // A `NaN` balance (nothing emits) balances nothing.
@@ -958,9 +965,9 @@ impl Solver<'_> {
         if off.is_nan() || off <= BALANCE_TRIGGER {
             return Ok(residual);
         }
-        self.balancing = true;
+        self.sys.balancing = true;
         if !self.balance_rows() {
-            self.balancing = false;
+            self.sys.balancing = false;
             return Ok(residual);
         }
         self.solve_leaves()
@@ -972,7 +979,7 @@ impl Solver<'_> {
     /// used, so a space-time frame that keeps the decision to balance but whose
     /// rows could not be (too many left unscaled) reads false.
     pub fn rows_balanced(&self) -> bool {
-        !self.row_scale.is_empty()
+        !self.sys.row_scale.is_empty()
     }
 
     /// Balances the leaf system so that it conserves energy, once
@@ -1013,24 +1020,29 @@ impl Solver<'_> {
     /// sends nothing (gain 0); a gain stays below [`BALANCE_GAIN_MAX`]. The stored
     /// radiosity is the physical one; the scales weigh the transport.
     fn balance_rows(&mut self) -> bool {
-        self.row_scale.clear();
-        self.leaf_gain.clear();
-        if !self.balancing || self.closed != Some(true) || self.leaves.is_empty() {
+        self.sys.row_scale.clear();
+        self.sys.leaf_gain.clear();
+        if !self.sys.balancing || self.closed != Some(true) || self.sys.leaves.is_empty() {
             return false;
         }
         let nodes = self.elems.nodes.as_slice();
         let geoms = self.elems.geoms.as_slice();
-        let nl = self.leaves.len();
-        let areas: Vec<f64> = self.leaves.iter().map(|l| geoms[l.ix()].area).collect();
+        let nl = self.sys.leaves.len();
+        let areas: Vec<f64> = self.sys.leaves.iter().map(|l| geoms[l.ix()].area).collect();
         let rows = |li: usize| {
-            let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
-            self.row_sources[r0..r1].iter().zip(&self.row_coefs[r0..r1])
+            let (r0, r1) = (
+                self.sys.row_start[li] as usize,
+                self.sys.row_start[li + 1] as usize,
+            );
+            self.sys.row_sources[r0..r1]
+                .iter()
+                .zip(&self.sys.row_coefs[r0..r1])
         };
         // Row sums of `K` weighed by the pulled gains.
         let mut pulled = vec![[0.0; 3]; geoms.len()];
         let mut row_sums = |g: &[f64]| -> Vec<f64> {
             pulled.fill([0.0; 3]);
-            for (&l, gl) in self.leaves.iter().zip(g) {
+            for (&l, gl) in self.sys.leaves.iter().zip(g) {
                 pulled[l.ix()] = [*gl, 0.0, 0.0];
             }
             pull(nodes, geoms, &mut pulled);
@@ -1051,7 +1063,7 @@ impl Solver<'_> {
                 }
             }
             push_down(nodes, geoms, &mut mass);
-            self.leaves.iter().map(|l| mass[l.ix()]).collect()
+            self.sys.leaves.iter().map(|l| mass[l.ix()]).collect()
         };
         let rho_max = self
             .patches
@@ -1117,8 +1129,8 @@ impl Solver<'_> {
                 gathers[li] = r[li] * lam[li];
             }
         }
-        self.row_scale = r;
-        self.leaf_gain = g;
+        self.sys.row_scale = r;
+        self.sys.leaf_gain = g;
         true
     }
 
@@ -1129,7 +1141,7 @@ impl Solver<'_> {
     /// closed scene; above 1, the factors make light (`Solver::run`'s error
     /// estimate counts it, `with_power_error`).
     pub fn power_balance(&self) -> f64 {
-        if self.row_start.len() != self.leaves.len() + 1 {
+        if self.sys.row_start.len() != self.sys.leaves.len() + 1 {
             return f64::NAN;
         }
         let geoms = self.elems.geoms.as_slice();
@@ -1141,20 +1153,26 @@ impl Solver<'_> {
             .iter()
             .map(|v| v.map(f64::from))
             .collect();
-        if !self.leaf_gain.is_empty() {
-            for (&l, g) in self.leaves.iter().zip(&self.leaf_gain) {
+        if !self.sys.leaf_gain.is_empty() {
+            for (&l, g) in self.sys.leaves.iter().zip(&self.sys.leaf_gain) {
                 b[l.ix()] = b[l.ix()].map(|v| v * g);
             }
             pull(self.elems.nodes.as_slice(), geoms, &mut b);
         }
         let (mut absorbed, mut emitted) = (0.0, 0.0);
-        for (li, &leaf) in self.leaves.iter().enumerate() {
-            let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
+        for (li, &leaf) in self.sys.leaves.iter().enumerate() {
+            let (r0, r1) = (
+                self.sys.row_start[li] as usize,
+                self.sys.row_start[li + 1] as usize,
+            );
             let g = &geoms[leaf.ix()];
             let p = g.patch as usize;
-            let r = self.row_scale.get(li).copied().unwrap_or(1.0);
+            let r = self.sys.row_scale.get(li).copied().unwrap_or(1.0);
             let mut h = [0.0; 3];
-            for (s, c) in self.row_sources[r0..r1].iter().zip(&self.row_coefs[r0..r1]) {
+            for (s, c) in self.sys.row_sources[r0..r1]
+                .iter()
+                .zip(&self.sys.row_coefs[r0..r1])
+            {
                 for k in 0..3 {
                     h[k] += r * c * b[*s as usize][k];
                 }
@@ -1179,12 +1197,19 @@ impl Solver<'_> {
     /// leaf order: at most 1 for exact factors, 1 in a closed scene seen whole.
     pub fn row_sums(&self) -> Vec<(f64, f64)> {
         let geoms = self.elems.geoms.as_slice();
-        self.leaves
+        self.sys
+            .leaves
             .iter()
             .enumerate()
             .map(|(li, &leaf)| {
-                let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
-                (geoms[leaf.ix()].area, self.row_coefs[r0..r1].iter().sum())
+                let (r0, r1) = (
+                    self.sys.row_start[li] as usize,
+                    self.sys.row_start[li + 1] as usize,
+                );
+                (
+                    geoms[leaf.ix()].area,
+                    self.sys.row_coefs[r0..r1].iter().sum(),
+                )
             })
             .collect()
     }
@@ -1192,11 +1217,11 @@ impl Solver<'_> {
     /// Solves the leaf system with GMRES from the current radiosities; writes the
     /// result into the pool (leaves and pulled inner elements). Returns the residual.
     fn solve_leaves(&mut self) -> Result<f64> {
-        let nl = self.leaves.len();
+        let nl = self.sys.leaves.len();
         let n = self.elems.len();
         let mut rhs = vec![0.0; nl * 3];
         let mut x = vec![0.0; nl * 3];
-        for (li, &l) in self.leaves.iter().enumerate() {
+        for (li, &l) in self.sys.leaves.iter().enumerate() {
             let p = self.elems.geoms.as_slice()[l.ix()].patch as usize;
             let b = self.elems.radiosities.as_slice()[l.ix()];
             for k in 0..3 {
@@ -1213,7 +1238,7 @@ impl Solver<'_> {
             40,
             2000,
         );
-        for (li, &l) in self.leaves.iter().enumerate() {
+        for (li, &l) in self.sys.leaves.iter().enumerate() {
             let out = &mut self.elems.radiosities.as_mut_slice()[l.ix()];
             for k in 0..3 {
                 // Radiosity is never negative; clamp round-off of the Krylov solve.
