@@ -81,7 +81,7 @@ impl Terms {
     /// `Σ factor · visibility · B_element` into `sum`, with the factors rounded as
     /// [`PointCache`] keeps them, so that a point gathers the same value whether its
     /// terms were kept or computed afresh.
-    fn gather(&self, geoms: &[Geom], b: &[[f32; 3]], sum: &mut Sum) {
+    fn gather(&self, geoms: &[Geom], b: &[[f32; 3]], sum: &mut PointGather) {
         for &(e, f) in &self.fixed {
             sum.add(&geoms[e as usize], b[e as usize], e, f64::from(f as f32));
         }
@@ -138,7 +138,7 @@ fn near_foot(
 /// the gather at the foot starts from (one that holds the foot if any does, else the
 /// one that gives the most). 48 bytes.
 #[derive(Clone, Copy, Debug)]
-struct Near {
+struct NearSources {
     f: f64,
     elem: u32,
     /// `elem` holds the foot.
@@ -150,20 +150,20 @@ struct Near {
 
 /// What a point gathers: `Σ factor · visibility · B_s` over its sources but the near
 /// ones, and the near ones apart. 136 bytes.
-struct Sum<'a> {
+struct PointGather<'a> {
     patches: &'a Patches,
     x: DVec3,
     n: DVec3,
     /// [`SolveOptions::near_gap`] (0: no source is near).
     near_gap: f64,
     h: [f64; 3],
-    /// The near sources apart ([`Near`]).
-    near: Option<Near>,
+    /// The near sources apart ([`NearSources`]).
+    near: Option<NearSources>,
 }
 
-impl<'a> Sum<'a> {
+impl<'a> PointGather<'a> {
     fn new(patches: &'a Patches, x: DVec3, n: DVec3, near_gap: f64) -> Self {
-        Sum {
+        PointGather {
             patches,
             x,
             n,
@@ -177,7 +177,7 @@ impl<'a> Sum<'a> {
     #[inline]
     fn add(&mut self, g: &Geom, b: [f32; 3], e: u32, fv: f64) {
         if let Some((foot, holds)) = near_foot(self.x, self.n, g, self.near_gap, self.patches) {
-            let m = self.near.get_or_insert(Near {
+            let m = self.near.get_or_insert(NearSources {
                 f: 0.0,
                 elem: e,
                 holds,
@@ -471,7 +471,13 @@ impl Solver<'_> {
     /// own near source, if on `p`, taken as `x`'s radiosity) makes the pair
     /// `B(x) = E_x + ρ_x (H_x + F_xy B(y))`, `B(y) = E_y + ρ_y (H_y + F_yx B(x))`,
     /// solved for `B(x)`.
-    fn across_gap(&self, p: u32, sum: &Sum, pk: PointKey, limits: &GatherLimits) -> [f64; 3] {
+    fn across_gap(
+        &self,
+        p: u32,
+        sum: &PointGather,
+        pk: PointKey,
+        limits: &GatherLimits,
+    ) -> [f64; 3] {
         let rho = self.patches.rhos[p as usize];
         let em = self.patches.emissions[p as usize];
         let mut b: [f64; 3] = std::array::from_fn(|k| em[k] + rho[k] * sum.h[k]);
@@ -560,7 +566,7 @@ impl Solver<'_> {
         admit: bool,
         once: bool,
         limits: &GatherLimits,
-    ) -> (Sum<'_>, bool, FreshTerms) {
+    ) -> (PointGather<'_>, bool, FreshTerms) {
         let faint = limits.faint;
         // Ray jitter from the point's place, so that a point gathered again (another
         // frame, another cell) casts the same rays.
@@ -583,7 +589,7 @@ impl Solver<'_> {
             .as_ref()
             .filter(|_| !once && !self.elem_moving(leaf));
         let cached = known.and_then(|m| m.get(&pk));
-        let mut sum = Sum::new(&self.patches, x, n, limits.near_gap);
+        let mut sum = PointGather::new(&self.patches, x, n, limits.near_gap);
         let mut fresh = Vec::new();
         let mut terms = Terms::default();
         // A leaf smaller than the power area takes the visibility of non-emitting
