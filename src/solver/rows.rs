@@ -69,6 +69,25 @@ struct LeafRow {
     passed: Vec<((u32, u32), (f64, f64))>,
 }
 
+/// What every leaf's row computation reads ([`Solver::compute_leaf_rows`]): the
+/// pools, the space-time window's caches, and how the rows are kept.
+#[derive(Clone, Copy)]
+struct RowInputs<'r> {
+    geoms: &'r [Geom],
+    ends: &'r [Ends],
+    tr: &'r [Transport],
+    cache: Option<&'r FastMap<(u32, u32), (f32, f32)>>,
+    opened: Option<&'r FastMap<(u32, u32), RowEntries>>,
+    hidden: Option<&'r FastMap<(u32, u32), (f64, f64)>>,
+    masks: Option<&'r FastMap<(u32, u32), u64>>,
+    rays_per_point: u32,
+    factors: Option<(&'r FastMap<(u32, u32), f64>, usize)>,
+    keep_rows: bool,
+    timed: bool,
+    passed: Option<&'r Vec<((u32, u32), (f64, f64))>>,
+    radiosities: &'r [[f32; 3]],
+}
+
 /// The factors one static leaf's row reuses and adds while it opens sources
 /// ([`Window::factors`]).
 struct FactorMemo<'m> {
@@ -631,7 +650,6 @@ impl Solver<'_> {
             .as_ref()
             .filter(|w| w.in_frame)
             .map(|w| (&w.factors, w.frame.elems_len));
-        let settled = |entries: &[(u32, f64)]| self.opened_settled(entries);
         // A static scene keeps each leaf's coefficients from round to round.
         let keep_rows = !self.has_motion();
         // A window's frame records its entries with a moving end, and takes them
@@ -639,186 +657,273 @@ impl Solver<'_> {
         let timed = self.st.window.as_ref().is_some_and(|w| w.in_frame);
         let passed = Some(&self.st.pass_rows).filter(|_| timed);
         let radiosities = self.elems.radiosities.as_slice();
+        let inputs = RowInputs {
+            geoms,
+            ends,
+            tr,
+            cache,
+            opened,
+            hidden,
+            masks,
+            rays_per_point,
+            factors,
+            keep_rows,
+            timed,
+            passed,
+            radiosities,
+        };
         let rows: Vec<LeafRow> = self
             .sys
             .leaves
             .par_iter()
-            .map(|&leaf| {
-                let g = &geoms[leaf.ix()];
-                let q = oracle::samples(g);
-                let n = DVec3::from_array(g.normal);
-                let leaf_moving = self.elem_moving(leaf);
-                let mut row = Vec::new();
-                let mut fresh = Vec::new();
-                let mut kept = Vec::new();
-                let mut fresh_opened = Vec::new();
-                let mut fresh_hidden = Vec::new();
-                let mut fresh_masks = Vec::new();
-                let mut time_entries = Vec::new();
-                let mut between = 0u64;
-                let mut fresh_pass = Vec::new();
-                let leaf_ray = self.ray_id(leaf.0);
-                let rho_leaf = self.rho_of(leaf);
-                let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
-                // A static leaf (of the window's base or made again by this
-                // frame) reuses the factors to the static base elements its
-                // sources open into.
-                let leaf_sid =
-                    Some(self.stable_id(leaf.0)).filter(|&x| !leaf_moving && x != u32::MAX);
-                let mut memo = factors.zip(leaf_sid).map(|((kept, _), sid)| FactorMemo {
-                    leaf: sid,
-                    kept,
-                    fresh: Vec::new(),
-                });
-                for l in self.chain_links(leaf) {
-                    let t = &tr[l as usize];
-                    let s = ends[l as usize].source;
-                    let gs = &geoms[s as usize];
-                    if gs.patch == u32::MAX {
-                        self.push_cluster(leaf, l, &q, n, s, &mut row);
-                        continue;
-                    }
-                    if let Some(k) = before
-                        .and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]))
-                    {
-                        kept.push(k);
-                        self.push_opened(
-                            &q,
-                            n,
-                            s,
-                            k.coef as f64,
-                            k.vis as f64,
-                            &mut row,
-                            memo.as_mut(),
-                        );
-                        continue;
-                    }
-                    // Constant link, static leaf: the coefficient of an earlier
-                    // frame of the window holds.
-                    // A static leaf in a frame, keyed as the window's caches key it
-                    // (a frame's own leaves and links by what they stand for).
-                    let key = self.row_key(leaf, l, s);
-                    let static_base = key.is_some();
-                    let cacheable = static_base && !t.varying();
-                    let key = key.unwrap_or_default();
-                    if let Some(&(c, v)) = cache.filter(|_| cacheable).and_then(|c| c.get(&key)) {
-                        if let Some(entries) =
-                            opened.and_then(|o| o.get(&key)).filter(|e| settled(e))
-                        {
-                            row.extend_from_slice(entries);
-                            continue;
-                        }
-                        let at = row.len();
-                        self.push_opened(&q, n, s, c as f64, v as f64, &mut row, memo.as_mut());
-                        let entries = &row[at..];
-                        if entries.len() > 1 && settled(entries) {
-                            fresh_opened.push((key, entries.into()));
-                        }
-                        continue;
-                    }
-                    // An entry with a moving end, keyed for the frames around.
-                    let tkey = (timed
-                        && gs.patch != u32::MAX
-                        && (leaf_moving || self.elem_moving(ElementId(s))))
-                    .then(|| (leaf_ray, self.row_link_id(l, s)));
-                    let on_line = || {
-                        let (k, r) = tkey.zip(self.st.time_range.as_ref())?;
-                        let bs = radiosities[s as usize]
-                            .iter()
-                            .fold(0.0f32, |m, &x| m.max(x));
-                        r.value(&k, rho_leaf * f64::from(bs))
-                    };
-                    // What an earlier pass of this frame computed for this entry.
-                    let earlier = passed.and_then(|p| {
-                        let i = p.binary_search_by_key(&(leaf.0, l), |e| e.0).ok()?;
-                        Some(p[i].1)
-                    });
-                    let (coef, vis) = if let Some(cv) = on_line() {
-                        // Decided again at each pass: the light it weighs moves.
-                        between += 1;
-                        cv
-                    } else if let Some(cv) = earlier {
-                        cv
-                    } else if t.shaft_clear() {
-                        let ps = oracle::poly(gs);
-                        let f = (0..q.count)
-                            .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
-                            .sum();
-                        // Not what the window keeps anyway.
-                        if timed && !cacheable {
-                            fresh_pass.push(((leaf.0, l), (f, 1.0)));
-                        }
-                        (f, 1.0)
-                    } else {
-                        // Partly hidden: visibility from the leaf's own points, not
-                        // the ancestor's average. A varying link between static
-                        // ends, with no moving object's box in the shaft between
-                        // the ends now, casts only at static geometry with the same
-                        // keys as at any other such frame (`ray_id`).
-                        let static_ends =
-                            hidden.is_some() && static_base && !self.elem_moving(ElementId(s));
-                        let steady = static_ends && self.clear_of_moving(&geoms[leaf.ix()], gs);
-                        // Not steady: the static part of the rays at the leaf's
-                        // points holds over the window ([`Window::masks`]).
-                        let maskable =
-                            static_ends && !steady && rays_per_point * q.count as u32 <= 64;
-                        match hidden.filter(|_| steady).and_then(|h| h.get(&key)) {
-                            Some(&cv) => cv,
-                            None => {
-                                let known = masks.filter(|_| maskable).and_then(|m| m.get(&key));
-                                let how = match known {
-                                    Some(&bits) => RowMasks::Known(bits),
-                                    None if maskable => RowMasks::Make,
-                                    None => RowMasks::None,
-                                };
-                                let (cv, made) = self.hidden_row_coef(leaf, l, s, &q, n, how);
-                                if matches!(how, RowMasks::Make) {
-                                    fresh_masks.push((key, made));
-                                }
-                                if steady {
-                                    fresh_hidden.push((key, cv));
-                                }
-                                if timed && !cacheable && !steady {
-                                    fresh_pass.push(((leaf.0, l), cv));
-                                }
-                                cv
-                            }
-                        }
-                    };
-                    if cache.is_some() && cacheable {
-                        fresh.push((key, (coef as f32, vis as f32)));
-                    }
-                    if let Some(k) = tkey {
-                        time_entries.push((k, (coef as f32, vis as f32)));
-                    }
-                    // Rounded once, so a reused coefficient equals the first.
-                    let coef = if keep_rows {
-                        kept.push(KeptCoef {
-                            link: l,
-                            coef: coef as f32,
-                            vis: vis as f32,
-                        });
-                        coef as f32 as f64
-                    } else {
-                        coef
-                    };
-                    self.push_opened(&q, n, s, coef, vis, &mut row, memo.as_mut());
-                }
-                kept.sort_unstable_by_key(|x| x.link);
-                LeafRow {
-                    row,
-                    fresh,
-                    kept,
-                    opened: fresh_opened,
-                    hidden: fresh_hidden,
-                    masks: fresh_masks,
-                    factors: memo.map(|m| m.fresh).unwrap_or_default(),
-                    timed: time_entries,
-                    between,
-                    passed: fresh_pass,
-                }
-            })
+            .map(|&leaf| self.leaf_row(&inputs, leaf))
             .collect();
+        self.store_leaf_rows(rows, keep_rows);
+    }
+
+    /// One leaf's row ([`Solver::compute_leaf_rows`]): each chain link's source
+    /// opened at its coefficient over the leaf, from the caches where they hold.
+    fn leaf_row(&self, inputs: &RowInputs, leaf: ElementId) -> LeafRow {
+        let RowInputs {
+            geoms,
+            ends,
+            tr,
+            cache,
+            opened,
+            factors,
+            keep_rows,
+            timed,
+            ..
+        } = *inputs;
+        let settled = |entries: &[(u32, f64)]| self.opened_settled(entries);
+        let g = &geoms[leaf.ix()];
+        let q = oracle::samples(g);
+        let n = DVec3::from_array(g.normal);
+        let leaf_moving = self.elem_moving(leaf);
+        let mut row = Vec::new();
+        let mut fresh = Vec::new();
+        let mut kept = Vec::new();
+        let mut fresh_opened = Vec::new();
+        let mut fresh_hidden = Vec::new();
+        let mut fresh_masks = Vec::new();
+        let mut time_entries = Vec::new();
+        let mut between = 0u64;
+        let mut fresh_pass = Vec::new();
+        let leaf_ray = self.ray_id(leaf.0);
+        let rho_leaf = self.rho_of(leaf);
+        let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
+        // A static leaf (of the window's base or made again by this
+        // frame) reuses the factors to the static base elements its
+        // sources open into.
+        let leaf_sid = Some(self.stable_id(leaf.0)).filter(|&x| !leaf_moving && x != u32::MAX);
+        let mut memo = factors.zip(leaf_sid).map(|((kept, _), sid)| FactorMemo {
+            leaf: sid,
+            kept,
+            fresh: Vec::new(),
+        });
+        for l in self.chain_links(leaf) {
+            let t = &tr[l as usize];
+            let s = ends[l as usize].source;
+            let gs = &geoms[s as usize];
+            if gs.patch == u32::MAX {
+                self.push_cluster(leaf, l, &q, n, s, &mut row);
+                continue;
+            }
+            if let Some(k) =
+                before.and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]))
+            {
+                kept.push(k);
+                self.push_opened(
+                    &q,
+                    n,
+                    s,
+                    k.coef as f64,
+                    k.vis as f64,
+                    &mut row,
+                    memo.as_mut(),
+                );
+                continue;
+            }
+            // Constant link, static leaf: the coefficient of an earlier
+            // frame of the window holds.
+            // A static leaf in a frame, keyed as the window's caches key it
+            // (a frame's own leaves and links by what they stand for).
+            let key = self.row_key(leaf, l, s);
+            let static_base = key.is_some();
+            let cacheable = static_base && !t.varying();
+            let key = key.unwrap_or_default();
+            if let Some(&(c, v)) = cache.filter(|_| cacheable).and_then(|c| c.get(&key)) {
+                if let Some(entries) = opened.and_then(|o| o.get(&key)).filter(|e| settled(e)) {
+                    row.extend_from_slice(entries);
+                    continue;
+                }
+                let at = row.len();
+                self.push_opened(&q, n, s, c as f64, v as f64, &mut row, memo.as_mut());
+                let entries = &row[at..];
+                if entries.len() > 1 && settled(entries) {
+                    fresh_opened.push((key, entries.into()));
+                }
+                continue;
+            }
+            // An entry with a moving end, keyed for the frames around.
+            let tkey =
+                (timed && gs.patch != u32::MAX && (leaf_moving || self.elem_moving(ElementId(s))))
+                    .then(|| (leaf_ray, self.row_link_id(l, s)));
+            let (coef, vis) = self.fresh_row_coef(
+                inputs,
+                leaf,
+                l,
+                s,
+                &q,
+                n,
+                rho_leaf,
+                key,
+                static_base,
+                cacheable,
+                tkey,
+                &mut between,
+                &mut fresh_pass,
+                &mut fresh_masks,
+                &mut fresh_hidden,
+            );
+            if cache.is_some() && cacheable {
+                fresh.push((key, (coef as f32, vis as f32)));
+            }
+            if let Some(k) = tkey {
+                time_entries.push((k, (coef as f32, vis as f32)));
+            }
+            // Rounded once, so a reused coefficient equals the first.
+            let coef = if keep_rows {
+                kept.push(KeptCoef {
+                    link: l,
+                    coef: coef as f32,
+                    vis: vis as f32,
+                });
+                coef as f32 as f64
+            } else {
+                coef
+            };
+            self.push_opened(&q, n, s, coef, vis, &mut row, memo.as_mut());
+        }
+        kept.sort_unstable_by_key(|x| x.link);
+        LeafRow {
+            row,
+            fresh,
+            kept,
+            opened: fresh_opened,
+            hidden: fresh_hidden,
+            masks: fresh_masks,
+            factors: memo.map(|m| m.fresh).unwrap_or_default(),
+            timed: time_entries,
+            between,
+            passed: fresh_pass,
+        }
+    }
+
+    /// The coefficient and visibility of the entry of link `l` (source `s`) in the
+    /// row of `leaf` (quadrature `q`, normal `n`) that no cache holds: taken between
+    /// the solved frames around, from an earlier pass, integrated where a shaft
+    /// proved the link clear, or cast from the leaf's points
+    /// ([`Solver::hidden_row_coef`]). Records what the caches are to keep.
+    #[allow(clippy::too_many_arguments)]
+    fn fresh_row_coef(
+        &self,
+        inputs: &RowInputs,
+        leaf: ElementId,
+        l: u32,
+        s: u32,
+        q: &oracle::Samples,
+        n: DVec3,
+        rho_leaf: f64,
+        key: (u32, u32),
+        static_base: bool,
+        cacheable: bool,
+        tkey: Option<(u64, u64)>,
+        between: &mut u64,
+        fresh_pass: &mut Vec<((u32, u32), (f64, f64))>,
+        fresh_masks: &mut Vec<((u32, u32), u64)>,
+        fresh_hidden: &mut Vec<((u32, u32), (f64, f64))>,
+    ) -> (f64, f64) {
+        let RowInputs {
+            geoms,
+            tr,
+            hidden,
+            masks,
+            rays_per_point,
+            timed,
+            passed,
+            radiosities,
+            ..
+        } = *inputs;
+        let t = &tr[l as usize];
+        let gs = &geoms[s as usize];
+        let on_line = || {
+            let (k, r) = tkey.zip(self.st.time_range.as_ref())?;
+            let bs = radiosities[s as usize]
+                .iter()
+                .fold(0.0f32, |m, &x| m.max(x));
+            r.value(&k, rho_leaf * f64::from(bs))
+        };
+        // What an earlier pass of this frame computed for this entry.
+        let earlier = passed.and_then(|p| {
+            let i = p.binary_search_by_key(&(leaf.0, l), |e| e.0).ok()?;
+            Some(p[i].1)
+        });
+        if let Some(cv) = on_line() {
+            // Decided again at each pass: the light it weighs moves.
+            *between += 1;
+            cv
+        } else if let Some(cv) = earlier {
+            cv
+        } else if t.shaft_clear() {
+            let ps = oracle::poly(gs);
+            let f = (0..q.count)
+                .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
+                .sum();
+            // Not what the window keeps anyway.
+            if timed && !cacheable {
+                fresh_pass.push(((leaf.0, l), (f, 1.0)));
+            }
+            (f, 1.0)
+        } else {
+            // Partly hidden: visibility from the leaf's own points, not
+            // the ancestor's average. A varying link between static
+            // ends, with no moving object's box in the shaft between
+            // the ends now, casts only at static geometry with the same
+            // keys as at any other such frame (`ray_id`).
+            let static_ends = hidden.is_some() && static_base && !self.elem_moving(ElementId(s));
+            let steady = static_ends && self.clear_of_moving(&geoms[leaf.ix()], gs);
+            // Not steady: the static part of the rays at the leaf's
+            // points holds over the window ([`Window::masks`]).
+            let maskable = static_ends && !steady && rays_per_point * q.count as u32 <= 64;
+            match hidden.filter(|_| steady).and_then(|h| h.get(&key)) {
+                Some(&cv) => cv,
+                None => {
+                    let known = masks.filter(|_| maskable).and_then(|m| m.get(&key));
+                    let how = match known {
+                        Some(&bits) => RowMasks::Known(bits),
+                        None if maskable => RowMasks::Make,
+                        None => RowMasks::None,
+                    };
+                    let (cv, made) = self.hidden_row_coef(leaf, l, s, q, n, how);
+                    if matches!(how, RowMasks::Make) {
+                        fresh_masks.push((key, made));
+                    }
+                    if steady {
+                        fresh_hidden.push((key, cv));
+                    }
+                    if timed && !cacheable && !steady {
+                        fresh_pass.push(((leaf.0, l), cv));
+                    }
+                    cv
+                }
+            }
+        }
+    }
+
+    /// Installs the leaves' rows ([`Solver::compute_leaf_rows`]) and hands the
+    /// caches what they keep of them.
+    fn store_leaf_rows(&mut self, rows: Vec<LeafRow>, keep_rows: bool) {
         self.clear_rows();
         self.sys.row_cache.clear();
         self.st.frame_rows.0.clear();
