@@ -15,7 +15,7 @@
 //! A point 1 cm over a floor gets nearly all of its factor to the floor from the
 //! few centimetres around its foot, but the gather takes each floor element at its
 //! mean radiosity: a box's bottom hung over the floor read the lit floor around the
-//! box, 50–150× the path tracer's value under it (BENCHMARKS.md, "The actors'
+//! box, many times the path tracer's value under it (BENCHMARKS.md, "The actors'
 //! bottom faces, diagnosed"), and the floor under it read the bottom's mean in turn.
 //! With [`SolveOptions::near_gap`], the terms of elements facing the point across a
 //! gap narrow for their patch, within [`NEAR_REACH`] gaps of the point's foot `y`,
@@ -24,8 +24,8 @@
 //! likewise, and the two are solved as a pair that sees the rest of the scene
 //! through the gap's rim: `B(x) = E_x + ρ_x (H_x + F_xy B(y))`, `B(y) = E_y + ρ_y
 //! (H_y + F_yx B(x))` ([`Solver::across_gap`]). One more gather per such point, where
-//! the gap is: `tests/data/hung_box_room.json`'s gap reads within 0.2% of the lit
-//! floor of the path tracer, against 3–5% before.
+//! the gap is; BENCHMARKS.md, "Two surfaces across a narrow gap", compares
+//! `tests/data/hung_box_room.json`'s gap with the path tracer.
 
 use glam::DVec3;
 
@@ -44,8 +44,8 @@ pub(super) struct GatherLimits {
     /// radiosities under it (0 for a leaf). 4 bytes per element.
     spread: Vec<f32>,
     /// Per element: [`oracle::sphere`], centre and bounding radius, computed once
-    /// per reconstruction instead of at every term of every point (9% of a
-    /// cluttered scene's run; `gen_cubes 50` 69.4 → 62.5 s). 32 bytes per element
+    /// per reconstruction instead of at every term of every point (a sizeable part
+    /// of a cluttered scene's run). 32 bytes per element
     /// (a space-time frame's 2 000 elements: 64 KB); empty where each term computes
     /// its own (the error samples).
     spheres: Vec<(DVec3, f64)>,

@@ -96,16 +96,17 @@ const FRAME_PASSES: usize = 3;
 
 /// A leaf-row entry with a coefficient at most this is not opened into children
 /// ([`Solver::push_opened`]): its share of the leaf's light is too small to matter.
-/// Measured on the Cornell blocks at eps 0.02: 1e-3 doubles the solve's time (2.1 →
-/// 4.0 s), 1e-2 costs 30% (2.8 s) for the same contact-point error (1.5%); the
-/// energy test keeps 0.7% (1e-3) or 1.2% (1e-2) of its 2.8% deficit.
+/// A lower threshold opens many more entries: on the Cornell blocks (BENCHMARKS.md,
+/// "Static solver: error against run time (Cornell box)") the solve takes much
+/// longer for the same error at the contact points and only slightly less energy
+/// lost.
 const ROW_OPEN_MIN_COEF: f64 = 1e-2;
 
 /// A partly hidden leaf-row entry whose unoccluded coefficient is at most this is
 /// not checked at the leaf's corners (`Solver::hidden_row_coef`): it holds too
 /// little of the leaf's view for a missed shadow edge to matter, and in clutter
-/// most entries are that small (the check made the rounds of `tools/gen_cubes.py
-/// 129` 39% slower).
+/// most entries are that small: checking them all slows the rounds of the
+/// generated clutter scenes markedly (BENCHMARKS.md, "Scale (generated scenes)").
 const ROW_CORNER_MIN_COEF: f64 = 1e-2;
 
 /// Default of [`SolveOptions::open_spread`] (tuned in BENCHMARKS.md, "Sources whose

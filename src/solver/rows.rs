@@ -100,33 +100,31 @@ struct FactorMemo<'m> {
 /// power emitted by this fraction (`Solver::solve_balanced`; the solver module
 /// docs). With exact surface factors and cluster estimates only where they hold,
 /// what is left is quadrature and visibility noise that reflectance near 1
-/// amplifies by `ρ/(1 − ρ)`: a closed room lit by a lamp hung under its ceiling
-/// absorbs 0.984 at `ρ = 0.99`, a 1.6% deficit the answer carries everywhere, so
-/// the trigger sits at the 1% the known-answer tests hold the answer to.
-/// The CLI warns at the same level.
+/// amplifies by `ρ/(1 − ρ)`: a deficit the answer carries everywhere, so the
+/// trigger sits at the tolerance the known-answer tests hold the answer to
+/// (BENCHMARKS.md, "Stiff scenes"). The CLI warns at the same level.
 pub const BALANCE_TRIGGER: f64 = 0.01;
 /// Most passes of [`Solver::balance_rows`] (a column pass, then a row pass).
 const BALANCE_PASSES: usize = 200;
-/// A row summing to less than this, or more than its inverse, is not scaled.
-/// On `tests/it/solver/scale.rs`'s 2.8 cm slots, scaling rows down to 0.5 took the slots
-/// from 28% to 98% too bright; down to 0.8, they stay at 28%.
+/// A row summing to less than this, or more than its inverse, is not scaled:
+/// scaling rows that see much less than their hemisphere (the leaves in the narrow
+/// slots of `tests/it/solver/scale.rs`) makes those leaves far too bright.
 const BALANCE_ROW_MIN: f64 = 0.8;
 /// A row summing to at most this sees next to nothing (a leaf inside a solid).
 const BALANCE_HIDDEN: f64 = 0.05;
 /// A leaf system is not balanced when rows left unscaled that see something
 /// (sum between [`BALANCE_HIDDEN`] and [`BALANCE_ROW_MIN`], or above its inverse)
 /// hold more than this share of the area: what they miss is then lost, amplified
-/// by reflectance. `gen_cubes.py 20` (400 cubes on a floor, slots between them)
-/// has 1.8% there and went from absorbing 1.017 to 0.589 of the emitted power at
-/// `ρ = 0.99` when balanced; ACTOR's room has 0.17%.
+/// by reflectance, and balancing the rest of the system makes the answer worse (a
+/// floor of cubes with slots between them; BENCHMARKS.md, "Stiff scenes").
 const BALANCE_OUT_MAX: f64 = 0.005;
 /// [`Solver::balance_rows`] stops when a pass takes less than 1% off what the
-/// leaves send astray: on ACTOR's frames it falls from 8% to 0.2% in ten passes
-/// and then by 0.5% a pass (what the capped gains cannot send).
+/// leaves send astray: after the first few passes what is left is what the capped
+/// gains ([`BALANCE_GAIN_MAX`]) cannot send, and further passes barely move it.
 const BALANCE_STALL: f64 = 0.99;
 /// Largest gain of a leaf as a source: a leaf the factors hardly see is not made
-/// to shine for the few that gather from it. ACTOR's room at `ρ = 0.99` reaches it
-/// on 0.03% of its area; at 100 it is never reached and the answer is the same.
+/// to shine for the few that gather from it. The cap binds on a tiny part of a
+/// room's area, and the answer does not depend on it.
 const BALANCE_GAIN_MAX: f64 = 4.0;
 
 /// A leaf's row entry for a surface source, kept from round to round in a static
@@ -319,12 +317,11 @@ impl Solver<'_> {
     /// shadow edge may still cross the leaf between them and its corners; for an
     /// entry above [`ROW_CORNER_MIN_COEF`] the corners are checked (inset by
     /// [`CORNER_INSET`]) and, if one disagrees, the leaf is integrated on the finer
-    /// rule of [`oracle::fine_samples`]. Why: in a closed room
-    /// lit by a lamp hung 1 cm under its ceiling, the four ceiling leaves that straddle
-    /// the lamp's edge had all their points over the lamp and gathered nothing from
-    /// the floor, though a third of each sees it; the floor's light sent there was
-    /// lost, 3.8% of the emitted power at eps 0.1 (and every surface 3% too dark
-    /// against the path tracer).
+    /// rule of [`oracle::fine_samples`]. Why: in a closed room lit by a lamp hung
+    /// just under its ceiling, the ceiling leaves that straddle the lamp's edge had
+    /// all their points over the lamp and gathered nothing from the floor, though
+    /// part of each sees it; the floor's light sent there was lost, and every
+    /// surface came out too dark against the path tracer.
     ///
     /// `masks` says how the quadrature points' rays treat static geometry
     /// ([`RowMasks`]); the masks made are returned (`RowMasks::Make`), and the value
@@ -469,10 +466,10 @@ impl Solver<'_> {
     /// linked whole to the ceiling, in pieces to the walls near its edges), each of
     /// its points hands on a share of its light that is not its own (the averaged
     /// form factors of its links do not sum to 1 point by point), and where the
-    /// bright part hands on too little the solution loses energy: in a closed room lit
-    /// by a lamp flush in its ceiling, 2.8% of the power at eps 0.1, 1.2% with the
-    /// opening (test `the_leaf_system_conserves_energy`); the loss grew as refinement
-    /// mixed the levels more. Cost: more row entries (see [`ROW_OPEN_MIN_COEF`]).
+    /// bright part hands on too little the solution loses energy (a closed room lit
+    /// by a lamp flush in its ceiling, test `the_leaf_system_conserves_energy`); the
+    /// loss grew as refinement mixed the levels more. Cost: more row entries (see
+    /// [`ROW_OPEN_MIN_COEF`]).
     ///
     /// The children's exact polygon factors, with the link's visible fraction, sum
     /// to the parent's; each child brings its own radiosity. No ray is cast and no
