@@ -69,6 +69,12 @@ struct LeafRow {
     passed: Vec<((u32, u32), (f64, f64))>,
 }
 
+/// A window cache by the key of a leaf row's entry (its leaf and link, [`Solver::row_key`]).
+type KeyMap<V> = FastMap<(u32, u32), V>;
+
+/// `(coefficient, visible fraction)` by the key of a leaf row's entry.
+type KeyedCoefs = Vec<((u32, u32), (f64, f64))>;
+
 /// What every leaf's row computation reads ([`Solver::compute_leaf_rows`]): the
 /// pools, the space-time window's caches, and how the rows are kept.
 #[derive(Clone, Copy)]
@@ -76,15 +82,15 @@ struct RowInputs<'r> {
     geoms: &'r [Geom],
     ends: &'r [Ends],
     tr: &'r [Transport],
-    cache: Option<&'r FastMap<(u32, u32), (f32, f32)>>,
-    opened: Option<&'r FastMap<(u32, u32), RowEntries>>,
-    hidden: Option<&'r FastMap<(u32, u32), (f64, f64)>>,
-    masks: Option<&'r FastMap<(u32, u32), u64>>,
+    cache: Option<&'r KeyMap<(f32, f32)>>,
+    opened: Option<&'r KeyMap<RowEntries>>,
+    hidden: Option<&'r KeyMap<(f64, f64)>>,
+    masks: Option<&'r KeyMap<u64>>,
     rays_per_point: u32,
-    factors: Option<(&'r FastMap<(u32, u32), f64>, usize)>,
+    factors: Option<(&'r KeyMap<f64>, usize)>,
     keep_rows: bool,
     timed: bool,
-    passed: Option<&'r Vec<((u32, u32), (f64, f64))>>,
+    passed: Option<&'r KeyedCoefs>,
     radiosities: &'r [[f32; 3]],
 }
 
@@ -837,9 +843,9 @@ impl Solver<'_> {
         cacheable: bool,
         tkey: Option<(u64, u64)>,
         between: &mut u64,
-        fresh_pass: &mut Vec<((u32, u32), (f64, f64))>,
+        fresh_pass: &mut KeyedCoefs,
         fresh_masks: &mut Vec<((u32, u32), u64)>,
-        fresh_hidden: &mut Vec<((u32, u32), (f64, f64))>,
+        fresh_hidden: &mut KeyedCoefs,
     ) -> (f64, f64) {
         let RowInputs {
             geoms,
