@@ -596,9 +596,10 @@ fn kernel_weighted_visibility(
 /// infinite spread leaves to refinement wherever it matters. Returns `(factor,
 /// kernel-weighted visibility, rays cast)`.
 ///
-/// Why: on a floor crowded with small boxes (`tools/gen_cubes.py 50`) a third of
-/// the active links were such links left whole by the power criterion, carrying
-/// nothing; the solve absorbed 62 of the 80 units emitted.
+/// Why: on a floor crowded with small boxes (`tools/gen_cubes.py`) many of the
+/// active links were such links left whole by the power criterion, carrying
+/// nothing, and the solve lost much of the emitted power (the scenes of
+/// BENCHMARKS.md, "Scale (generated scenes)").
 pub fn close_cluster_factor(
     elems: &ElementPool,
     bvh: &SceneBvh,

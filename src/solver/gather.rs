@@ -15,7 +15,7 @@
 //! A point 1 cm over a floor gets nearly all of its factor to the floor from the
 //! few centimetres around its foot, but the gather takes each floor element at its
 //! mean radiosity: a box's bottom hung over the floor read the lit floor around the
-//! box, 50–150× the path tracer's value under it (BENCHMARKS.md, "The actors'
+//! box, many times the path tracer's value under it (BENCHMARKS.md, "The actors'
 //! bottom faces, diagnosed"), and the floor under it read the bottom's mean in turn.
 //! With [`SolveOptions::near_gap`], the terms of elements facing the point across a
 //! gap narrow for their patch, within [`NEAR_REACH`] gaps of the point's foot `y`,
@@ -24,8 +24,8 @@
 //! likewise, and the two are solved as a pair that sees the rest of the scene
 //! through the gap's rim: `B(x) = E_x + ρ_x (H_x + F_xy B(y))`, `B(y) = E_y + ρ_y
 //! (H_y + F_yx B(x))` ([`Solver::across_gap`]). One more gather per such point, where
-//! the gap is: `tests/data/hung_box_room.json`'s gap reads within 0.2% of the lit
-//! floor of the path tracer, against 3–5% before.
+//! the gap is; BENCHMARKS.md, "Two surfaces across a narrow gap", compares
+//! `tests/data/hung_box_room.json`'s gap with the path tracer.
 
 use glam::DVec3;
 
@@ -44,8 +44,8 @@ pub(super) struct GatherLimits {
     /// radiosities under it (0 for a leaf). 4 bytes per element.
     spread: Vec<f32>,
     /// Per element: [`oracle::sphere`], centre and bounding radius, computed once
-    /// per reconstruction instead of at every term of every point (9% of a
-    /// cluttered scene's run; `gen_cubes 50` 69.4 → 62.5 s). 32 bytes per element
+    /// per reconstruction instead of at every term of every point (a sizeable part
+    /// of a cluttered scene's run). 32 bytes per element
     /// (a space-time frame's 2 000 elements: 64 KB); empty where each term computes
     /// its own (the error samples).
     spheres: Vec<(DVec3, f64)>,
@@ -81,7 +81,7 @@ impl Terms {
     /// `Σ factor · visibility · B_element` into `sum`, with the factors rounded as
     /// [`PointCache`] keeps them, so that a point gathers the same value whether its
     /// terms were kept or computed afresh.
-    fn gather(&self, geoms: &[Geom], b: &[[f32; 3]], sum: &mut Sum) {
+    fn gather(&self, geoms: &[Geom], b: &[[f32; 3]], sum: &mut PointGather) {
         for &(e, f) in &self.fixed {
             sum.add(&geoms[e as usize], b[e as usize], e, f64::from(f as f32));
         }
@@ -138,7 +138,7 @@ fn near_foot(
 /// the gather at the foot starts from (one that holds the foot if any does, else the
 /// one that gives the most). 48 bytes.
 #[derive(Clone, Copy, Debug)]
-struct Near {
+struct NearSources {
     f: f64,
     elem: u32,
     /// `elem` holds the foot.
@@ -150,20 +150,20 @@ struct Near {
 
 /// What a point gathers: `Σ factor · visibility · B_s` over its sources but the near
 /// ones, and the near ones apart. 136 bytes.
-struct Sum<'a> {
+struct PointGather<'a> {
     patches: &'a Patches,
     x: DVec3,
     n: DVec3,
     /// [`SolveOptions::near_gap`] (0: no source is near).
     near_gap: f64,
     h: [f64; 3],
-    /// The near sources apart ([`Near`]).
-    near: Option<Near>,
+    /// The near sources apart ([`NearSources`]).
+    near: Option<NearSources>,
 }
 
-impl<'a> Sum<'a> {
+impl<'a> PointGather<'a> {
     fn new(patches: &'a Patches, x: DVec3, n: DVec3, near_gap: f64) -> Self {
-        Sum {
+        PointGather {
             patches,
             x,
             n,
@@ -177,7 +177,7 @@ impl<'a> Sum<'a> {
     #[inline]
     fn add(&mut self, g: &Geom, b: [f32; 3], e: u32, fv: f64) {
         if let Some((foot, holds)) = near_foot(self.x, self.n, g, self.near_gap, self.patches) {
-            let m = self.near.get_or_insert(Near {
+            let m = self.near.get_or_insert(NearSources {
                 f: 0.0,
                 elem: e,
                 holds,
@@ -471,7 +471,13 @@ impl Solver<'_> {
     /// own near source, if on `p`, taken as `x`'s radiosity) makes the pair
     /// `B(x) = E_x + ρ_x (H_x + F_xy B(y))`, `B(y) = E_y + ρ_y (H_y + F_yx B(x))`,
     /// solved for `B(x)`.
-    fn across_gap(&self, p: u32, sum: &Sum, pk: PointKey, limits: &GatherLimits) -> [f64; 3] {
+    fn across_gap(
+        &self,
+        p: u32,
+        sum: &PointGather,
+        pk: PointKey,
+        limits: &GatherLimits,
+    ) -> [f64; 3] {
         let rho = self.patches.rhos[p as usize];
         let em = self.patches.emissions[p as usize];
         let mut b: [f64; 3] = std::array::from_fn(|k| em[k] + rho[k] * sum.h[k]);
@@ -560,7 +566,7 @@ impl Solver<'_> {
         admit: bool,
         once: bool,
         limits: &GatherLimits,
-    ) -> (Sum<'_>, bool, FreshTerms) {
+    ) -> (PointGather<'_>, bool, FreshTerms) {
         let faint = limits.faint;
         // Ray jitter from the point's place, so that a point gathered again (another
         // frame, another cell) casts the same rays.
@@ -583,13 +589,14 @@ impl Solver<'_> {
             .as_ref()
             .filter(|_| !once && !self.elem_moving(leaf));
         let cached = known.and_then(|m| m.get(&pk));
-        let mut sum = Sum::new(&self.patches, x, n, limits.near_gap);
+        let mut sum = PointGather::new(&self.patches, x, n, limits.near_gap);
         let mut fresh = Vec::new();
         let mut terms = Terms::default();
         // A leaf smaller than the power area takes the visibility of non-emitting
         // surface sources from its row (seen from its quadrature points), and of
         // clusters with no emitter from their link, not from rays.
         let small_leaf = self
+            .sys
             .row_cache
             .get(&leaf.0)
             .filter(|_| !self.has_motion() && g.area < self.power_area);

@@ -96,16 +96,17 @@ const FRAME_PASSES: usize = 3;
 
 /// A leaf-row entry with a coefficient at most this is not opened into children
 /// ([`Solver::push_opened`]): its share of the leaf's light is too small to matter.
-/// Measured on the Cornell blocks at eps 0.02: 1e-3 doubles the solve's time (2.1 →
-/// 4.0 s), 1e-2 costs 30% (2.8 s) for the same contact-point error (1.5%); the
-/// energy test keeps 0.7% (1e-3) or 1.2% (1e-2) of its 2.8% deficit.
+/// A lower threshold opens many more entries: on the Cornell blocks (BENCHMARKS.md,
+/// "Static solver: error against run time (Cornell box)") the solve takes much
+/// longer for the same error at the contact points and only slightly less energy
+/// lost.
 const ROW_OPEN_MIN_COEF: f64 = 1e-2;
 
 /// A partly hidden leaf-row entry whose unoccluded coefficient is at most this is
 /// not checked at the leaf's corners (`Solver::hidden_row_coef`): it holds too
 /// little of the leaf's view for a missed shadow edge to matter, and in clutter
-/// most entries are that small (the check made the rounds of `tools/gen_cubes.py
-/// 129` 39% slower).
+/// most entries are that small: checking them all slows the rounds of the
+/// generated clutter scenes markedly (BENCHMARKS.md, "Scale (generated scenes)").
 const ROW_CORNER_MIN_COEF: f64 = 1e-2;
 
 /// Default of [`SolveOptions::open_spread`] (tuned in BENCHMARKS.md, "Sources whose
@@ -449,12 +450,31 @@ pub struct Solver<'a> {
     /// Per cluster built at the start (and patch root): true if an emitting patch
     /// lies under it.
     emits_under: Vec<bool>,
+    /// The leaf system: the leaves and their rows.
+    sys: LeafSystem,
+    /// Active links by receiver.
+    link_index: LinkIndex,
+    /// Static solve with [`SolveOptions::leaf_shapes`]: the shape of the radiosity
+    /// over the small quad leaves whose light varies over them, `leaf →` one factor
+    /// per quadrant (mean 1 by the quadrature weights), for the final gather
+    /// ([`Solver::leaf_shapes`]).
+    shapes: HashMap<u32, [f32; 4]>,
+    rays: u64,
+    shaft_clear: u64,
+    /// What moves and where it stands now.
+    motion: Motion,
+    /// The state of a space-time solve (all empty in a static solve).
+    st: SpaceTimeState,
+}
+
+/// The leaf system: the leaves, their rows over the chain links'
+/// sources, and in a closed scene the balance of those rows.
+#[derive(Default)]
+struct LeafSystem {
     /// Leaves (surface elements without children), in id order.
     leaves: Vec<ElementId>,
     /// Leaf index of each element (`u32::MAX` for inner elements).
     leaf_index: Vec<u32>,
-    /// Active links by receiver.
-    link_index: LinkIndex,
     /// Leaf rows (CSR over leaves): sources of the leaf's chain links and their
     /// coefficients re-integrated over the leaf.
     row_start: Vec<u32>,
@@ -470,17 +490,6 @@ pub struct Solver<'a> {
     /// Static solve: each leaf's row coefficients by chain link (`(link, coef)`,
     /// sorted by link), reused by the next round for links that did not change.
     row_cache: FastMap<u32, Vec<KeptCoef>>,
-    /// Static solve with [`SolveOptions::leaf_shapes`]: the shape of the radiosity
-    /// over the small quad leaves whose light varies over them, `leaf →` one factor
-    /// per quadrant (mean 1 by the quadrature weights), for the final gather
-    /// ([`Solver::leaf_shapes`]).
-    shapes: HashMap<u32, [f32; 4]>,
-    rays: u64,
-    shaft_clear: u64,
-    /// What moves and where it stands now.
-    motion: Motion,
-    /// The state of a space-time solve (all empty in a static solve).
-    st: SpaceTimeState,
 }
 
 /// What moves in the scene and where it stands now: per patch and per cluster
@@ -590,16 +599,8 @@ impl<'a> Solver<'a> {
             time,
             rho_max,
             emits_under: Vec::new(),
-            leaves: Vec::new(),
-            leaf_index: Vec::new(),
+            sys: LeafSystem::default(),
             link_index: LinkIndex::default(),
-            row_start: Vec::new(),
-            row_sources: Vec::new(),
-            row_coefs: Vec::new(),
-            row_scale: Vec::new(),
-            leaf_gain: Vec::new(),
-            balancing: false,
-            row_cache: FastMap::default(),
             shapes: HashMap::new(),
             rays: 0,
             shaft_clear: 0,
@@ -880,7 +881,7 @@ impl<'a> Solver<'a> {
             round,
             seconds: start.elapsed().as_secs_f64(),
             elements: self.elems.len() as u64,
-            leaves: self.leaves.len() as u64,
+            leaves: self.sys.leaves.len() as u64,
             links_active: active,
             links_passive: passive,
             bytes_elements: self.elems.bytes() as u64,
@@ -934,7 +935,7 @@ impl<'a> Solver<'a> {
     fn sample_values(&self, samples: &[ErrorSample]) -> Vec<Option<[f64; 3]>> {
         let geoms = self.elems.geoms.as_slice();
         let mut by_patch: HashMap<u32, Vec<ElementId>> = HashMap::new();
-        for &l in &self.leaves {
+        for &l in &self.sys.leaves {
             by_patch.entry(geoms[l.ix()].patch).or_default().push(l);
         }
         // A few points: each term computes its own sphere.
@@ -1055,7 +1056,7 @@ impl<'a> Solver<'a> {
     /// bright lamp does not loosen the threshold for everything it lights.
     fn rms_radiosity(&self) -> f64 {
         let (mut s, mut a) = (0.0, 0.0);
-        for &l in &self.leaves {
+        for &l in &self.sys.leaves {
             let g = &self.elems.geoms.as_slice()[l.ix()];
             let b = self.elems.radiosities.as_slice()[l.ix()];
             let e = self.patches.emissions[g.patch as usize];
@@ -1467,12 +1468,12 @@ impl<'a> Solver<'a> {
     /// Rebuilds the leaf list and the by-receiver index of active links.
     fn index_links(&mut self) {
         let n = self.elems.len();
-        self.leaves.clear();
-        self.leaf_index = vec![u32::MAX; n];
+        self.sys.leaves.clear();
+        self.sys.leaf_index = vec![u32::MAX; n];
         for (i, node) in self.elems.nodes.as_slice().iter().enumerate() {
             if node.child_count == 0 && node.kind == ElementKind::Surface as u8 {
-                self.leaf_index[i] = self.leaves.len() as u32;
-                self.leaves.push(ElementId(i as u32));
+                self.sys.leaf_index[i] = self.sys.leaves.len() as u32;
+                self.sys.leaves.push(ElementId(i as u32));
             }
         }
         let mut start = vec![0u32; n + 1];
@@ -1556,7 +1557,8 @@ impl<'a> Solver<'a> {
     /// their shape, and split on their spread").
     fn leaf_shapes(&self) -> HashMap<u32, [f32; 4]> {
         let geoms = self.elems.geoms.as_slice();
-        self.leaves
+        self.sys
+            .leaves
             .par_iter()
             .filter_map(|&leaf| {
                 let g = &geoms[leaf.ix()];
@@ -1596,7 +1598,7 @@ impl<'a> Solver<'a> {
         let g = &geoms[leaf.ix()];
         let q = oracle::samples(g);
         let n = DVec3::from_array(g.normal);
-        let row = self.row_cache.get(&leaf.0);
+        let row = self.sys.row_cache.get(&leaf.0);
         let mut h = [[0.0f64; 3]; 4];
         for l in self.chain_links(leaf) {
             let t = &tr[l as usize];
@@ -1667,6 +1669,7 @@ impl<'a> Solver<'a> {
         let geoms = self.elems.geoms.as_slice();
         let this = &*self;
         let split: Vec<ElementId> = self
+            .sys
             .leaves
             .par_iter()
             .copied()
@@ -1730,7 +1733,8 @@ impl<'a> Solver<'a> {
 
     /// Piecewise-constant radiosity of every leaf (element averages), for tests.
     pub fn leaf_radiosities(&self) -> Vec<(u32, [f32; 2], [f32; 3])> {
-        self.leaves
+        self.sys
+            .leaves
             .iter()
             .map(|&l| {
                 let g = &self.elems.geoms.as_slice()[l.ix()];
@@ -1966,9 +1970,9 @@ mod tests {
         assert!(s.rows_balanced(), "balance {}", s.power_balance());
         let nodes = s.elems.nodes.as_slice();
         let geoms = s.elems.geoms.as_slice();
-        let nl = s.leaves.len();
+        let nl = s.sys.leaves.len();
         let mut pulled = vec![[0.0; 3]; geoms.len()];
-        for (&l, g) in s.leaves.iter().zip(&s.leaf_gain) {
+        for (&l, g) in s.sys.leaves.iter().zip(&s.sys.leaf_gain) {
             pulled[l.ix()] = [*g, 0.0, 0.0];
         }
         pull(nodes, geoms, &mut pulled);
@@ -1977,22 +1981,25 @@ mod tests {
         let (mut area, mut scaled) = (0.0, 0.0);
         let mut worst_row: f64 = 0.0;
         for li in 0..nl {
-            let (r0, r1) = (s.row_start[li] as usize, s.row_start[li + 1] as usize);
-            let a = geoms[s.leaves[li].ix()].area;
+            let (r0, r1) = (
+                s.sys.row_start[li] as usize,
+                s.sys.row_start[li + 1] as usize,
+            );
+            let a = geoms[s.sys.leaves[li].ix()].area;
             for k in r0..r1 {
-                let src = s.row_sources[k] as usize;
-                gathers[li] += s.row_scale[li] * s.row_coefs[k] * pulled[src][0];
-                mass[src] += a * s.row_scale[li] * s.row_coefs[k];
+                let src = s.sys.row_sources[k] as usize;
+                gathers[li] += s.sys.row_scale[li] * s.sys.row_coefs[k] * pulled[src][0];
+                mass[src] += a * s.sys.row_scale[li] * s.sys.row_coefs[k];
             }
             area += a;
-            if s.row_scale[li] != 1.0 {
+            if s.sys.row_scale[li] != 1.0 {
                 scaled += a;
                 worst_row = worst_row.max((gathers[li] - 1.0).abs());
             }
         }
         push_down(nodes, geoms, &mut mass);
         let mut worst_col: f64 = 0.0;
-        for ((leaf, gain), gathered) in s.leaves.iter().zip(&s.leaf_gain).zip(&gathers) {
+        for ((leaf, gain), gathered) in s.sys.leaves.iter().zip(&s.sys.leaf_gain).zip(&gathers) {
             let l = leaf.ix();
             let sends = gain * mass[l];
             let target = geoms[l].area * gathered;
@@ -2051,7 +2058,7 @@ mod tests {
         let floor = s.patches.polys[0];
         let under_lamp = |x: DVec3| (4.0..=6.0).contains(&x.x) && (4.0..=6.0).contains(&x.z);
         let mut straddling = 0;
-        for (li, leaf) in s.leaves.iter().enumerate() {
+        for (li, leaf) in s.sys.leaves.iter().enumerate() {
             let g = &geoms[leaf.ix()];
             if g.patch != 1 {
                 continue;
@@ -2075,10 +2082,13 @@ mod tests {
                 continue;
             }
             straddling += 1;
-            let (r0, r1) = (s.row_start[li] as usize, s.row_start[li + 1] as usize);
+            let (r0, r1) = (
+                s.sys.row_start[li] as usize,
+                s.sys.row_start[li + 1] as usize,
+            );
             let row: f64 = (r0..r1)
-                .filter(|&k| geoms[s.row_sources[k] as usize].patch == 0)
-                .map(|k| s.row_coefs[k])
+                .filter(|&k| geoms[s.sys.row_sources[k] as usize].patch == 0)
+                .map(|k| s.sys.row_coefs[k])
                 .sum();
             eprintln!("leaf {li}: covered {covered:.2}, row {row:.4}, exact {exact:.4}");
             assert!(

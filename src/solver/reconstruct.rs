@@ -307,6 +307,7 @@ impl Solver<'_> {
         .then(|| self.emitters_now())
         .flatten();
         let mut cells: Vec<Cell> = self
+            .sys
             .leaves
             .iter()
             .map(|&l| {

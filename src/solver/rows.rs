@@ -69,6 +69,31 @@ struct LeafRow {
     passed: Vec<((u32, u32), (f64, f64))>,
 }
 
+/// A window cache by the key of a leaf row's entry (its leaf and link, [`Solver::row_key`]).
+type KeyMap<V> = FastMap<(u32, u32), V>;
+
+/// `(coefficient, visible fraction)` by the key of a leaf row's entry.
+type KeyedCoefs = Vec<((u32, u32), (f64, f64))>;
+
+/// What every leaf's row computation reads ([`Solver::compute_leaf_rows`]): the
+/// pools, the space-time window's caches, and how the rows are kept.
+#[derive(Clone, Copy)]
+struct RowInputs<'r> {
+    geoms: &'r [Geom],
+    ends: &'r [Ends],
+    tr: &'r [Transport],
+    cache: Option<&'r KeyMap<(f32, f32)>>,
+    opened: Option<&'r KeyMap<RowEntries>>,
+    hidden: Option<&'r KeyMap<(f64, f64)>>,
+    masks: Option<&'r KeyMap<u64>>,
+    rays_per_point: u32,
+    factors: Option<(&'r KeyMap<f64>, usize)>,
+    keep_rows: bool,
+    timed: bool,
+    passed: Option<&'r KeyedCoefs>,
+    radiosities: &'r [[f32; 3]],
+}
+
 /// The factors one static leaf's row reuses and adds while it opens sources
 /// ([`Window::factors`]).
 struct FactorMemo<'m> {
@@ -81,33 +106,31 @@ struct FactorMemo<'m> {
 /// power emitted by this fraction (`Solver::solve_balanced`; the solver module
 /// docs). With exact surface factors and cluster estimates only where they hold,
 /// what is left is quadrature and visibility noise that reflectance near 1
-/// amplifies by `ρ/(1 − ρ)`: a closed room lit by a lamp hung under its ceiling
-/// absorbs 0.984 at `ρ = 0.99`, a 1.6% deficit the answer carries everywhere, so
-/// the trigger sits at the 1% the known-answer tests hold the answer to.
-/// The CLI warns at the same level.
+/// amplifies by `ρ/(1 − ρ)`: a deficit the answer carries everywhere, so the
+/// trigger sits at the tolerance the known-answer tests hold the answer to
+/// (BENCHMARKS.md, "Stiff scenes"). The CLI warns at the same level.
 pub const BALANCE_TRIGGER: f64 = 0.01;
 /// Most passes of [`Solver::balance_rows`] (a column pass, then a row pass).
 const BALANCE_PASSES: usize = 200;
-/// A row summing to less than this, or more than its inverse, is not scaled.
-/// On `tests/it/solver/scale.rs`'s 2.8 cm slots, scaling rows down to 0.5 took the slots
-/// from 28% to 98% too bright; down to 0.8, they stay at 28%.
+/// A row summing to less than this, or more than its inverse, is not scaled:
+/// scaling rows that see much less than their hemisphere (the leaves in the narrow
+/// slots of `tests/it/solver/scale.rs`) makes those leaves far too bright.
 const BALANCE_ROW_MIN: f64 = 0.8;
 /// A row summing to at most this sees next to nothing (a leaf inside a solid).
 const BALANCE_HIDDEN: f64 = 0.05;
 /// A leaf system is not balanced when rows left unscaled that see something
 /// (sum between [`BALANCE_HIDDEN`] and [`BALANCE_ROW_MIN`], or above its inverse)
 /// hold more than this share of the area: what they miss is then lost, amplified
-/// by reflectance. `gen_cubes.py 20` (400 cubes on a floor, slots between them)
-/// has 1.8% there and went from absorbing 1.017 to 0.589 of the emitted power at
-/// `ρ = 0.99` when balanced; ACTOR's room has 0.17%.
+/// by reflectance, and balancing the rest of the system makes the answer worse (a
+/// floor of cubes with slots between them; BENCHMARKS.md, "Stiff scenes").
 const BALANCE_OUT_MAX: f64 = 0.005;
 /// [`Solver::balance_rows`] stops when a pass takes less than 1% off what the
-/// leaves send astray: on ACTOR's frames it falls from 8% to 0.2% in ten passes
-/// and then by 0.5% a pass (what the capped gains cannot send).
+/// leaves send astray: after the first few passes what is left is what the capped
+/// gains ([`BALANCE_GAIN_MAX`]) cannot send, and further passes barely move it.
 const BALANCE_STALL: f64 = 0.99;
 /// Largest gain of a leaf as a source: a leaf the factors hardly see is not made
-/// to shine for the few that gather from it. ACTOR's room at `ρ = 0.99` reaches it
-/// on 0.03% of its area; at 100 it is never reached and the answer is the same.
+/// to shine for the few that gather from it. The cap binds on a tiny part of a
+/// room's area, and the answer does not depend on it.
 const BALANCE_GAIN_MAX: f64 = 4.0;
 
 /// A leaf's row entry for a surface source, kept from round to round in a static
@@ -300,12 +323,11 @@ impl Solver<'_> {
     /// shadow edge may still cross the leaf between them and its corners; for an
     /// entry above [`ROW_CORNER_MIN_COEF`] the corners are checked (inset by
     /// [`CORNER_INSET`]) and, if one disagrees, the leaf is integrated on the finer
-    /// rule of [`oracle::fine_samples`]. Why: in a closed room
-    /// lit by a lamp hung 1 cm under its ceiling, the four ceiling leaves that straddle
-    /// the lamp's edge had all their points over the lamp and gathered nothing from
-    /// the floor, though a third of each sees it; the floor's light sent there was
-    /// lost, 3.8% of the emitted power at eps 0.1 (and every surface 3% too dark
-    /// against the path tracer).
+    /// rule of [`oracle::fine_samples`]. Why: in a closed room lit by a lamp hung
+    /// just under its ceiling, the ceiling leaves that straddle the lamp's edge had
+    /// all their points over the lamp and gathered nothing from the floor, though
+    /// part of each sees it; the floor's light sent there was lost, and every
+    /// surface came out too dark against the path tracer.
     ///
     /// `masks` says how the quadrature points' rays treat static geometry
     /// ([`RowMasks`]); the masks made are returned (`RowMasks::Make`), and the value
@@ -450,10 +472,10 @@ impl Solver<'_> {
     /// linked whole to the ceiling, in pieces to the walls near its edges), each of
     /// its points hands on a share of its light that is not its own (the averaged
     /// form factors of its links do not sum to 1 point by point), and where the
-    /// bright part hands on too little the solution loses energy: in a closed room lit
-    /// by a lamp flush in its ceiling, 2.8% of the power at eps 0.1, 1.2% with the
-    /// opening (test `the_leaf_system_conserves_energy`); the loss grew as refinement
-    /// mixed the levels more. Cost: more row entries (see [`ROW_OPEN_MIN_COEF`]).
+    /// bright part hands on too little the solution loses energy (a closed room lit
+    /// by a lamp flush in its ceiling, test `the_leaf_system_conserves_energy`); the
+    /// loss grew as refinement mixed the levels more. Cost: more row entries (see
+    /// [`ROW_OPEN_MIN_COEF`]).
     ///
     /// The children's exact polygon factors, with the link's visible fraction, sum
     /// to the parent's; each child brings its own radiosity. No ray is cast and no
@@ -631,7 +653,6 @@ impl Solver<'_> {
             .as_ref()
             .filter(|w| w.in_frame)
             .map(|w| (&w.factors, w.frame.elems_len));
-        let settled = |entries: &[(u32, f64)]| self.opened_settled(entries);
         // A static scene keeps each leaf's coefficients from round to round.
         let keep_rows = !self.has_motion();
         // A window's frame records its entries with a moving end, and takes them
@@ -639,190 +660,278 @@ impl Solver<'_> {
         let timed = self.st.window.as_ref().is_some_and(|w| w.in_frame);
         let passed = Some(&self.st.pass_rows).filter(|_| timed);
         let radiosities = self.elems.radiosities.as_slice();
+        let inputs = RowInputs {
+            geoms,
+            ends,
+            tr,
+            cache,
+            opened,
+            hidden,
+            masks,
+            rays_per_point,
+            factors,
+            keep_rows,
+            timed,
+            passed,
+            radiosities,
+        };
         let rows: Vec<LeafRow> = self
+            .sys
             .leaves
             .par_iter()
-            .map(|&leaf| {
-                let g = &geoms[leaf.ix()];
-                let q = oracle::samples(g);
-                let n = DVec3::from_array(g.normal);
-                let leaf_moving = self.elem_moving(leaf);
-                let mut row = Vec::new();
-                let mut fresh = Vec::new();
-                let mut kept = Vec::new();
-                let mut fresh_opened = Vec::new();
-                let mut fresh_hidden = Vec::new();
-                let mut fresh_masks = Vec::new();
-                let mut time_entries = Vec::new();
-                let mut between = 0u64;
-                let mut fresh_pass = Vec::new();
-                let leaf_ray = self.ray_id(leaf.0);
-                let rho_leaf = self.rho_of(leaf);
-                let before = self.row_cache.get(&leaf.0).filter(|_| keep_rows);
-                // A static leaf (of the window's base or made again by this
-                // frame) reuses the factors to the static base elements its
-                // sources open into.
-                let leaf_sid =
-                    Some(self.stable_id(leaf.0)).filter(|&x| !leaf_moving && x != u32::MAX);
-                let mut memo = factors.zip(leaf_sid).map(|((kept, _), sid)| FactorMemo {
-                    leaf: sid,
-                    kept,
-                    fresh: Vec::new(),
-                });
-                for l in self.chain_links(leaf) {
-                    let t = &tr[l as usize];
-                    let s = ends[l as usize].source;
-                    let gs = &geoms[s as usize];
-                    if gs.patch == u32::MAX {
-                        self.push_cluster(leaf, l, &q, n, s, &mut row);
-                        continue;
-                    }
-                    if let Some(k) = before
-                        .and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]))
-                    {
-                        kept.push(k);
-                        self.push_opened(
-                            &q,
-                            n,
-                            s,
-                            k.coef as f64,
-                            k.vis as f64,
-                            &mut row,
-                            memo.as_mut(),
-                        );
-                        continue;
-                    }
-                    // Constant link, static leaf: the coefficient of an earlier
-                    // frame of the window holds.
-                    // A static leaf in a frame, keyed as the window's caches key it
-                    // (a frame's own leaves and links by what they stand for).
-                    let key = self.row_key(leaf, l, s);
-                    let static_base = key.is_some();
-                    let cacheable = static_base && !t.varying();
-                    let key = key.unwrap_or_default();
-                    if let Some(&(c, v)) = cache.filter(|_| cacheable).and_then(|c| c.get(&key)) {
-                        if let Some(entries) =
-                            opened.and_then(|o| o.get(&key)).filter(|e| settled(e))
-                        {
-                            row.extend_from_slice(entries);
-                            continue;
-                        }
-                        let at = row.len();
-                        self.push_opened(&q, n, s, c as f64, v as f64, &mut row, memo.as_mut());
-                        let entries = &row[at..];
-                        if entries.len() > 1 && settled(entries) {
-                            fresh_opened.push((key, entries.into()));
-                        }
-                        continue;
-                    }
-                    // An entry with a moving end, keyed for the frames around.
-                    let tkey = (timed
-                        && gs.patch != u32::MAX
-                        && (leaf_moving || self.elem_moving(ElementId(s))))
-                    .then(|| (leaf_ray, self.row_link_id(l, s)));
-                    let on_line = || {
-                        let (k, r) = tkey.zip(self.st.time_range.as_ref())?;
-                        let bs = radiosities[s as usize]
-                            .iter()
-                            .fold(0.0f32, |m, &x| m.max(x));
-                        r.value(&k, rho_leaf * f64::from(bs))
-                    };
-                    // What an earlier pass of this frame computed for this entry.
-                    let earlier = passed.and_then(|p| {
-                        let i = p.binary_search_by_key(&(leaf.0, l), |e| e.0).ok()?;
-                        Some(p[i].1)
-                    });
-                    let (coef, vis) = if let Some(cv) = on_line() {
-                        // Decided again at each pass: the light it weighs moves.
-                        between += 1;
-                        cv
-                    } else if let Some(cv) = earlier {
-                        cv
-                    } else if t.shaft_clear() {
-                        let ps = oracle::poly(gs);
-                        let f = (0..q.count)
-                            .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
-                            .sum();
-                        // Not what the window keeps anyway.
-                        if timed && !cacheable {
-                            fresh_pass.push(((leaf.0, l), (f, 1.0)));
-                        }
-                        (f, 1.0)
-                    } else {
-                        // Partly hidden: visibility from the leaf's own points, not
-                        // the ancestor's average. A varying link between static
-                        // ends, with no moving object's box in the shaft between
-                        // the ends now, casts only at static geometry with the same
-                        // keys as at any other such frame (`ray_id`).
-                        let static_ends =
-                            hidden.is_some() && static_base && !self.elem_moving(ElementId(s));
-                        let steady = static_ends && self.clear_of_moving(&geoms[leaf.ix()], gs);
-                        // Not steady: the static part of the rays at the leaf's
-                        // points holds over the window ([`Window::masks`]).
-                        let maskable =
-                            static_ends && !steady && rays_per_point * q.count as u32 <= 64;
-                        match hidden.filter(|_| steady).and_then(|h| h.get(&key)) {
-                            Some(&cv) => cv,
-                            None => {
-                                let known = masks.filter(|_| maskable).and_then(|m| m.get(&key));
-                                let how = match known {
-                                    Some(&bits) => RowMasks::Known(bits),
-                                    None if maskable => RowMasks::Make,
-                                    None => RowMasks::None,
-                                };
-                                let (cv, made) = self.hidden_row_coef(leaf, l, s, &q, n, how);
-                                if matches!(how, RowMasks::Make) {
-                                    fresh_masks.push((key, made));
-                                }
-                                if steady {
-                                    fresh_hidden.push((key, cv));
-                                }
-                                if timed && !cacheable && !steady {
-                                    fresh_pass.push(((leaf.0, l), cv));
-                                }
-                                cv
-                            }
-                        }
-                    };
-                    if cache.is_some() && cacheable {
-                        fresh.push((key, (coef as f32, vis as f32)));
-                    }
-                    if let Some(k) = tkey {
-                        time_entries.push((k, (coef as f32, vis as f32)));
-                    }
-                    // Rounded once, so a reused coefficient equals the first.
-                    let coef = if keep_rows {
-                        kept.push(KeptCoef {
-                            link: l,
-                            coef: coef as f32,
-                            vis: vis as f32,
-                        });
-                        coef as f32 as f64
-                    } else {
-                        coef
-                    };
-                    self.push_opened(&q, n, s, coef, vis, &mut row, memo.as_mut());
-                }
-                kept.sort_unstable_by_key(|x| x.link);
-                LeafRow {
-                    row,
-                    fresh,
-                    kept,
-                    opened: fresh_opened,
-                    hidden: fresh_hidden,
-                    masks: fresh_masks,
-                    factors: memo.map(|m| m.fresh).unwrap_or_default(),
-                    timed: time_entries,
-                    between,
-                    passed: fresh_pass,
-                }
-            })
+            .map(|&leaf| self.leaf_row(&inputs, leaf))
             .collect();
+        self.store_leaf_rows(rows, keep_rows);
+    }
+
+    /// One leaf's row ([`Solver::compute_leaf_rows`]): each chain link's source
+    /// opened at its coefficient over the leaf, from the caches where they hold.
+    fn leaf_row(&self, inputs: &RowInputs, leaf: ElementId) -> LeafRow {
+        let RowInputs {
+            geoms,
+            ends,
+            tr,
+            cache,
+            opened,
+            factors,
+            keep_rows,
+            timed,
+            ..
+        } = *inputs;
+        let settled = |entries: &[(u32, f64)]| self.opened_settled(entries);
+        let g = &geoms[leaf.ix()];
+        let q = oracle::samples(g);
+        let n = DVec3::from_array(g.normal);
+        let leaf_moving = self.elem_moving(leaf);
+        let mut row = Vec::new();
+        let mut fresh = Vec::new();
+        let mut kept = Vec::new();
+        let mut fresh_opened = Vec::new();
+        let mut fresh_hidden = Vec::new();
+        let mut fresh_masks = Vec::new();
+        let mut time_entries = Vec::new();
+        let mut between = 0u64;
+        let mut fresh_pass = Vec::new();
+        let leaf_ray = self.ray_id(leaf.0);
+        let rho_leaf = self.rho_of(leaf);
+        let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
+        // A static leaf (of the window's base or made again by this
+        // frame) reuses the factors to the static base elements its
+        // sources open into.
+        let leaf_sid = Some(self.stable_id(leaf.0)).filter(|&x| !leaf_moving && x != u32::MAX);
+        let mut memo = factors.zip(leaf_sid).map(|((kept, _), sid)| FactorMemo {
+            leaf: sid,
+            kept,
+            fresh: Vec::new(),
+        });
+        for l in self.chain_links(leaf) {
+            let t = &tr[l as usize];
+            let s = ends[l as usize].source;
+            let gs = &geoms[s as usize];
+            if gs.patch == u32::MAX {
+                self.push_cluster(leaf, l, &q, n, s, &mut row);
+                continue;
+            }
+            if let Some(k) =
+                before.and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]))
+            {
+                kept.push(k);
+                self.push_opened(
+                    &q,
+                    n,
+                    s,
+                    k.coef as f64,
+                    k.vis as f64,
+                    &mut row,
+                    memo.as_mut(),
+                );
+                continue;
+            }
+            // Constant link, static leaf: the coefficient of an earlier
+            // frame of the window holds.
+            // A static leaf in a frame, keyed as the window's caches key it
+            // (a frame's own leaves and links by what they stand for).
+            let key = self.row_key(leaf, l, s);
+            let static_base = key.is_some();
+            let cacheable = static_base && !t.varying();
+            let key = key.unwrap_or_default();
+            if let Some(&(c, v)) = cache.filter(|_| cacheable).and_then(|c| c.get(&key)) {
+                if let Some(entries) = opened.and_then(|o| o.get(&key)).filter(|e| settled(e)) {
+                    row.extend_from_slice(entries);
+                    continue;
+                }
+                let at = row.len();
+                self.push_opened(&q, n, s, c as f64, v as f64, &mut row, memo.as_mut());
+                let entries = &row[at..];
+                if entries.len() > 1 && settled(entries) {
+                    fresh_opened.push((key, entries.into()));
+                }
+                continue;
+            }
+            // An entry with a moving end, keyed for the frames around.
+            let tkey =
+                (timed && gs.patch != u32::MAX && (leaf_moving || self.elem_moving(ElementId(s))))
+                    .then(|| (leaf_ray, self.row_link_id(l, s)));
+            let (coef, vis) = self.fresh_row_coef(
+                inputs,
+                leaf,
+                l,
+                s,
+                &q,
+                n,
+                rho_leaf,
+                key,
+                static_base,
+                cacheable,
+                tkey,
+                &mut between,
+                &mut fresh_pass,
+                &mut fresh_masks,
+                &mut fresh_hidden,
+            );
+            if cache.is_some() && cacheable {
+                fresh.push((key, (coef as f32, vis as f32)));
+            }
+            if let Some(k) = tkey {
+                time_entries.push((k, (coef as f32, vis as f32)));
+            }
+            // Rounded once, so a reused coefficient equals the first.
+            let coef = if keep_rows {
+                kept.push(KeptCoef {
+                    link: l,
+                    coef: coef as f32,
+                    vis: vis as f32,
+                });
+                coef as f32 as f64
+            } else {
+                coef
+            };
+            self.push_opened(&q, n, s, coef, vis, &mut row, memo.as_mut());
+        }
+        kept.sort_unstable_by_key(|x| x.link);
+        LeafRow {
+            row,
+            fresh,
+            kept,
+            opened: fresh_opened,
+            hidden: fresh_hidden,
+            masks: fresh_masks,
+            factors: memo.map(|m| m.fresh).unwrap_or_default(),
+            timed: time_entries,
+            between,
+            passed: fresh_pass,
+        }
+    }
+
+    /// The coefficient and visibility of the entry of link `l` (source `s`) in the
+    /// row of `leaf` (quadrature `q`, normal `n`) that no cache holds: taken between
+    /// the solved frames around, from an earlier pass, integrated where a shaft
+    /// proved the link clear, or cast from the leaf's points
+    /// ([`Solver::hidden_row_coef`]). Records what the caches are to keep.
+    #[allow(clippy::too_many_arguments)]
+    fn fresh_row_coef(
+        &self,
+        inputs: &RowInputs,
+        leaf: ElementId,
+        l: u32,
+        s: u32,
+        q: &oracle::Samples,
+        n: DVec3,
+        rho_leaf: f64,
+        key: (u32, u32),
+        static_base: bool,
+        cacheable: bool,
+        tkey: Option<(u64, u64)>,
+        between: &mut u64,
+        fresh_pass: &mut KeyedCoefs,
+        fresh_masks: &mut Vec<((u32, u32), u64)>,
+        fresh_hidden: &mut KeyedCoefs,
+    ) -> (f64, f64) {
+        let RowInputs {
+            geoms,
+            tr,
+            hidden,
+            masks,
+            rays_per_point,
+            timed,
+            passed,
+            radiosities,
+            ..
+        } = *inputs;
+        let t = &tr[l as usize];
+        let gs = &geoms[s as usize];
+        let on_line = || {
+            let (k, r) = tkey.zip(self.st.time_range.as_ref())?;
+            let bs = radiosities[s as usize]
+                .iter()
+                .fold(0.0f32, |m, &x| m.max(x));
+            r.value(&k, rho_leaf * f64::from(bs))
+        };
+        // What an earlier pass of this frame computed for this entry.
+        let earlier = passed.and_then(|p| {
+            let i = p.binary_search_by_key(&(leaf.0, l), |e| e.0).ok()?;
+            Some(p[i].1)
+        });
+        if let Some(cv) = on_line() {
+            // Decided again at each pass: the light it weighs moves.
+            *between += 1;
+            cv
+        } else if let Some(cv) = earlier {
+            cv
+        } else if t.shaft_clear() {
+            let ps = oracle::poly(gs);
+            let f = (0..q.count)
+                .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
+                .sum();
+            // Not what the window keeps anyway.
+            if timed && !cacheable {
+                fresh_pass.push(((leaf.0, l), (f, 1.0)));
+            }
+            (f, 1.0)
+        } else {
+            // Partly hidden: visibility from the leaf's own points, not
+            // the ancestor's average. A varying link between static
+            // ends, with no moving object's box in the shaft between
+            // the ends now, casts only at static geometry with the same
+            // keys as at any other such frame (`ray_id`).
+            let static_ends = hidden.is_some() && static_base && !self.elem_moving(ElementId(s));
+            let steady = static_ends && self.clear_of_moving(&geoms[leaf.ix()], gs);
+            // Not steady: the static part of the rays at the leaf's
+            // points holds over the window ([`Window::masks`]).
+            let maskable = static_ends && !steady && rays_per_point * q.count as u32 <= 64;
+            match hidden.filter(|_| steady).and_then(|h| h.get(&key)) {
+                Some(&cv) => cv,
+                None => {
+                    let known = masks.filter(|_| maskable).and_then(|m| m.get(&key));
+                    let how = match known {
+                        Some(&bits) => RowMasks::Known(bits),
+                        None if maskable => RowMasks::Make,
+                        None => RowMasks::None,
+                    };
+                    let (cv, made) = self.hidden_row_coef(leaf, l, s, q, n, how);
+                    if matches!(how, RowMasks::Make) {
+                        fresh_masks.push((key, made));
+                    }
+                    if steady {
+                        fresh_hidden.push((key, cv));
+                    }
+                    if timed && !cacheable && !steady {
+                        fresh_pass.push(((leaf.0, l), cv));
+                    }
+                    cv
+                }
+            }
+        }
+    }
+
+    /// Installs the leaves' rows ([`Solver::compute_leaf_rows`]) and hands the
+    /// caches what they keep of them.
+    fn store_leaf_rows(&mut self, rows: Vec<LeafRow>, keep_rows: bool) {
         self.clear_rows();
-        self.row_cache.clear();
+        self.sys.row_cache.clear();
         self.st.frame_rows.0.clear();
         self.st.rows_between = 0;
-        let leaves = std::mem::take(&mut self.leaves);
+        let leaves = std::mem::take(&mut self.sys.leaves);
         for (&leaf, out) in leaves.iter().zip(rows) {
             let LeafRow {
                 row,
@@ -866,28 +975,28 @@ impl Solver<'_> {
                 }
             }
             if keep_rows {
-                self.row_cache.insert(leaf.0, kept);
+                self.sys.row_cache.insert(leaf.0, kept);
             }
             self.push_row(row);
         }
-        self.leaves = leaves;
+        self.sys.leaves = leaves;
         self.st.pass_rows.sort_unstable_by_key(|e| e.0);
         self.st.pass_rows.shrink_to_fit();
     }
 
     /// Empties the leaf rows (CSR) before they are pushed again, leaf by leaf.
     fn clear_rows(&mut self) {
-        self.row_start.clear();
-        self.row_sources.clear();
-        self.row_coefs.clear();
-        self.row_start.push(0);
+        self.sys.row_start.clear();
+        self.sys.row_sources.clear();
+        self.sys.row_coefs.clear();
+        self.sys.row_start.push(0);
     }
 
     /// Appends the next leaf's row.
     fn push_row(&mut self, row: Vec<(u32, f64)>) {
-        self.row_sources.extend(row.iter().map(|e| e.0));
-        self.row_coefs.extend(row.iter().map(|e| e.1));
-        self.row_start.push(self.row_sources.len() as u32);
+        self.sys.row_sources.extend(row.iter().map(|e| e.0));
+        self.sys.row_coefs.extend(row.iter().map(|e| e.1));
+        self.sys.row_start.push(self.sys.row_sources.len() as u32);
     }
 
     /// Applies `A = I − ρ·(rows ∘ pull)` to leaf radiosities `x` (3 per leaf), with
@@ -896,8 +1005,8 @@ impl Solver<'_> {
         let nodes = self.elems.nodes.as_slice();
         let geoms = self.elems.geoms.as_slice();
         // Pull.
-        for (li, l) in self.leaves.iter().enumerate() {
-            let g = self.leaf_gain.get(li).copied().unwrap_or(1.0);
+        for (li, l) in self.sys.leaves.iter().enumerate() {
+            let g = self.sys.leaf_gain.get(li).copied().unwrap_or(1.0);
             scratch_b[l.ix()] = [g * x[li * 3], g * x[li * 3 + 1], g * x[li * 3 + 2]];
         }
         pull(nodes, geoms, scratch_b);
@@ -907,15 +1016,21 @@ impl Solver<'_> {
             .zip(x.par_chunks(3))
             .enumerate()
             .for_each(|(li, (o, xi))| {
-                let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
+                let (r0, r1) = (
+                    self.sys.row_start[li] as usize,
+                    self.sys.row_start[li + 1] as usize,
+                );
                 let mut h = [0.0; 3];
-                for (s, c) in self.row_sources[r0..r1].iter().zip(&self.row_coefs[r0..r1]) {
+                for (s, c) in self.sys.row_sources[r0..r1]
+                    .iter()
+                    .zip(&self.sys.row_coefs[r0..r1])
+                {
                     for k in 0..3 {
                         h[k] += c * b[*s as usize][k];
                     }
                 }
-                let rho = self.patches.rhos[geoms[self.leaves[li].ix()].patch as usize];
-                let r = self.row_scale.get(li).copied().unwrap_or(1.0);
+                let rho = self.patches.rhos[geoms[self.sys.leaves[li].ix()].patch as usize];
+                let r = self.sys.row_scale.get(li).copied().unwrap_or(1.0);
                 for k in 0..3 {
                     o[k] = xi[k] - rho[k] * r * h[k];
                 }
@@ -928,7 +1043,7 @@ impl Solver<'_> {
     pub(super) fn solve_rows(&mut self) -> Result<f64> {
         self.compute_leaf_rows();
         if !self.st.balance_fixed {
-            self.balancing = false;
+            self.sys.balancing = false;
         }
         self.solve_balanced()
     }
@@ -947,10 +1062,10 @@ impl Solver<'_> {
     /// (BENCHMARKS.md, "Stiff scenes").
     fn solve_balanced(&mut self) -> Result<f64> {
         if !self.balance_rows() && !self.st.balance_fixed {
-            self.balancing = false;
+            self.sys.balancing = false;
         }
         let residual = self.solve_leaves()?;
-        if self.balancing || self.st.balance_fixed || self.closed != Some(true) {
+        if self.sys.balancing || self.st.balance_fixed || self.closed != Some(true) {
             return Ok(residual);
         }
         // A `NaN` balance (nothing emits) balances nothing.
@@ -958,9 +1073,9 @@ impl Solver<'_> {
         if off.is_nan() || off <= BALANCE_TRIGGER {
             return Ok(residual);
         }
-        self.balancing = true;
+        self.sys.balancing = true;
         if !self.balance_rows() {
-            self.balancing = false;
+            self.sys.balancing = false;
             return Ok(residual);
         }
         self.solve_leaves()
@@ -972,7 +1087,7 @@ impl Solver<'_> {
     /// used, so a space-time frame that keeps the decision to balance but whose
     /// rows could not be (too many left unscaled) reads false.
     pub fn rows_balanced(&self) -> bool {
-        !self.row_scale.is_empty()
+        !self.sys.row_scale.is_empty()
     }
 
     /// Balances the leaf system so that it conserves energy, once
@@ -1013,24 +1128,29 @@ impl Solver<'_> {
     /// sends nothing (gain 0); a gain stays below [`BALANCE_GAIN_MAX`]. The stored
     /// radiosity is the physical one; the scales weigh the transport.
     fn balance_rows(&mut self) -> bool {
-        self.row_scale.clear();
-        self.leaf_gain.clear();
-        if !self.balancing || self.closed != Some(true) || self.leaves.is_empty() {
+        self.sys.row_scale.clear();
+        self.sys.leaf_gain.clear();
+        if !self.sys.balancing || self.closed != Some(true) || self.sys.leaves.is_empty() {
             return false;
         }
         let nodes = self.elems.nodes.as_slice();
         let geoms = self.elems.geoms.as_slice();
-        let nl = self.leaves.len();
-        let areas: Vec<f64> = self.leaves.iter().map(|l| geoms[l.ix()].area).collect();
+        let nl = self.sys.leaves.len();
+        let areas: Vec<f64> = self.sys.leaves.iter().map(|l| geoms[l.ix()].area).collect();
         let rows = |li: usize| {
-            let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
-            self.row_sources[r0..r1].iter().zip(&self.row_coefs[r0..r1])
+            let (r0, r1) = (
+                self.sys.row_start[li] as usize,
+                self.sys.row_start[li + 1] as usize,
+            );
+            self.sys.row_sources[r0..r1]
+                .iter()
+                .zip(&self.sys.row_coefs[r0..r1])
         };
         // Row sums of `K` weighed by the pulled gains.
         let mut pulled = vec![[0.0; 3]; geoms.len()];
         let mut row_sums = |g: &[f64]| -> Vec<f64> {
             pulled.fill([0.0; 3]);
-            for (&l, gl) in self.leaves.iter().zip(g) {
+            for (&l, gl) in self.sys.leaves.iter().zip(g) {
                 pulled[l.ix()] = [*gl, 0.0, 0.0];
             }
             pull(nodes, geoms, &mut pulled);
@@ -1051,7 +1171,7 @@ impl Solver<'_> {
                 }
             }
             push_down(nodes, geoms, &mut mass);
-            self.leaves.iter().map(|l| mass[l.ix()]).collect()
+            self.sys.leaves.iter().map(|l| mass[l.ix()]).collect()
         };
         let rho_max = self
             .patches
@@ -1117,8 +1237,8 @@ impl Solver<'_> {
                 gathers[li] = r[li] * lam[li];
             }
         }
-        self.row_scale = r;
-        self.leaf_gain = g;
+        self.sys.row_scale = r;
+        self.sys.leaf_gain = g;
         true
     }
 
@@ -1129,7 +1249,7 @@ impl Solver<'_> {
     /// closed scene; above 1, the factors make light (`Solver::run`'s error
     /// estimate counts it, `with_power_error`).
     pub fn power_balance(&self) -> f64 {
-        if self.row_start.len() != self.leaves.len() + 1 {
+        if self.sys.row_start.len() != self.sys.leaves.len() + 1 {
             return f64::NAN;
         }
         let geoms = self.elems.geoms.as_slice();
@@ -1141,20 +1261,26 @@ impl Solver<'_> {
             .iter()
             .map(|v| v.map(f64::from))
             .collect();
-        if !self.leaf_gain.is_empty() {
-            for (&l, g) in self.leaves.iter().zip(&self.leaf_gain) {
+        if !self.sys.leaf_gain.is_empty() {
+            for (&l, g) in self.sys.leaves.iter().zip(&self.sys.leaf_gain) {
                 b[l.ix()] = b[l.ix()].map(|v| v * g);
             }
             pull(self.elems.nodes.as_slice(), geoms, &mut b);
         }
         let (mut absorbed, mut emitted) = (0.0, 0.0);
-        for (li, &leaf) in self.leaves.iter().enumerate() {
-            let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
+        for (li, &leaf) in self.sys.leaves.iter().enumerate() {
+            let (r0, r1) = (
+                self.sys.row_start[li] as usize,
+                self.sys.row_start[li + 1] as usize,
+            );
             let g = &geoms[leaf.ix()];
             let p = g.patch as usize;
-            let r = self.row_scale.get(li).copied().unwrap_or(1.0);
+            let r = self.sys.row_scale.get(li).copied().unwrap_or(1.0);
             let mut h = [0.0; 3];
-            for (s, c) in self.row_sources[r0..r1].iter().zip(&self.row_coefs[r0..r1]) {
+            for (s, c) in self.sys.row_sources[r0..r1]
+                .iter()
+                .zip(&self.sys.row_coefs[r0..r1])
+            {
                 for k in 0..3 {
                     h[k] += r * c * b[*s as usize][k];
                 }
@@ -1179,12 +1305,19 @@ impl Solver<'_> {
     /// leaf order: at most 1 for exact factors, 1 in a closed scene seen whole.
     pub fn row_sums(&self) -> Vec<(f64, f64)> {
         let geoms = self.elems.geoms.as_slice();
-        self.leaves
+        self.sys
+            .leaves
             .iter()
             .enumerate()
             .map(|(li, &leaf)| {
-                let (r0, r1) = (self.row_start[li] as usize, self.row_start[li + 1] as usize);
-                (geoms[leaf.ix()].area, self.row_coefs[r0..r1].iter().sum())
+                let (r0, r1) = (
+                    self.sys.row_start[li] as usize,
+                    self.sys.row_start[li + 1] as usize,
+                );
+                (
+                    geoms[leaf.ix()].area,
+                    self.sys.row_coefs[r0..r1].iter().sum(),
+                )
             })
             .collect()
     }
@@ -1192,11 +1325,11 @@ impl Solver<'_> {
     /// Solves the leaf system with GMRES from the current radiosities; writes the
     /// result into the pool (leaves and pulled inner elements). Returns the residual.
     fn solve_leaves(&mut self) -> Result<f64> {
-        let nl = self.leaves.len();
+        let nl = self.sys.leaves.len();
         let n = self.elems.len();
         let mut rhs = vec![0.0; nl * 3];
         let mut x = vec![0.0; nl * 3];
-        for (li, &l) in self.leaves.iter().enumerate() {
+        for (li, &l) in self.sys.leaves.iter().enumerate() {
             let p = self.elems.geoms.as_slice()[l.ix()].patch as usize;
             let b = self.elems.radiosities.as_slice()[l.ix()];
             for k in 0..3 {
@@ -1213,7 +1346,7 @@ impl Solver<'_> {
             40,
             2000,
         );
-        for (li, &l) in self.leaves.iter().enumerate() {
+        for (li, &l) in self.sys.leaves.iter().enumerate() {
             let out = &mut self.elems.radiosities.as_mut_slice()[l.ix()];
             for k in 0..3 {
                 // Radiosity is never negative; clamp round-off of the Krylov solve.

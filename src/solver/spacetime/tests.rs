@@ -673,9 +673,9 @@ fn row_terms_kept_over_a_window_are_the_ones_computed_afresh() {
     let (mut s, b_ref) = light_window(&scene, 1.0, 0.5);
     let rows = |s: &Solver| {
         (
-            s.row_start.clone(),
-            s.row_sources.clone(),
-            s.row_coefs.clone(),
+            s.sys.row_start.clone(),
+            s.sys.row_sources.clone(),
+            s.sys.row_coefs.clone(),
         )
     };
     for t in [0.0, 0.04, 0.08] {

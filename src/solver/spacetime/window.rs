@@ -391,7 +391,7 @@ impl Solver<'_> {
     /// Restores the pools to `snap` (see [`Snapshot`]).
     fn restore(&mut self, snap: &mut Snapshot) {
         // Element and link ids past the snapshot will be reused.
-        self.row_cache.clear();
+        self.sys.row_cache.clear();
         self.elems.truncate(snap.elems_len);
         self.links.truncate(snap.links_len);
         for l in snap.passivated.drain(..) {
