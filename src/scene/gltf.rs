@@ -66,23 +66,7 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
 
 /// Loads and validates glTF `bytes`; external buffers are resolved against `base`.
 pub(crate) fn load_slice(bytes: &[u8], base: Option<&Path>, path: &Path) -> Result<Scene> {
-    let invalid =
-        |found: String| Error::invalid(path, "glTF document", "a valid glTF 2.0 file", found);
-    let gltf =
-        gl::Gltf::from_slice_without_validation(bytes).map_err(|e| invalid(e.to_string()))?;
-    check_document(gltf.document.as_json()).map_err(invalid)?;
-    let base = base.unwrap_or(Path::new("."));
-    let buffers = gl::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
-        .map_err(|e| Error::invalid(path, "glTF buffers", "readable buffer data", e.to_string()))?;
-    let data: Vec<&[u8]> = buffers.iter().map(|b| &b.0[..]).collect();
-    let (scene, _) = Reader {
-        doc: &gltf.document,
-        data,
-        buffers: &buffers,
-        base,
-        path,
-    }
-    .read()?;
+    let (scene, _) = read(bytes, base.unwrap_or(Path::new(".")), path)?;
     validate::validate(scene, path)
 }
 
@@ -90,24 +74,29 @@ pub(crate) fn load_slice(bytes: &[u8], base: Option<&Path>, path: &Path) -> Resu
 /// its node's, else `camera N`), placed at the scene's start time, in node order.
 pub(crate) fn cameras(path: &Path) -> Result<Vec<(String, Camera)>> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let (_, cameras) = read(&bytes, path.parent().unwrap_or(Path::new(".")), path)?;
+    Ok(cameras)
+}
+
+/// The scene (not yet validated) and the cameras of glTF `bytes`, external buffers
+/// resolved against `base`; errors name `path`.
+fn read(bytes: &[u8], base: &Path, path: &Path) -> Result<(Scene, Vec<(String, Camera)>)> {
     let invalid =
         |found: String| Error::invalid(path, "glTF document", "a valid glTF 2.0 file", found);
     let gltf =
-        gl::Gltf::from_slice_without_validation(&bytes).map_err(|e| invalid(e.to_string()))?;
+        gl::Gltf::from_slice_without_validation(bytes).map_err(|e| invalid(e.to_string()))?;
     check_document(gltf.document.as_json()).map_err(invalid)?;
-    let base = path.parent().unwrap_or(Path::new("."));
     let buffers = gl::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
         .map_err(|e| Error::invalid(path, "glTF buffers", "readable buffer data", e.to_string()))?;
     let data: Vec<&[u8]> = buffers.iter().map(|b| &b.0[..]).collect();
-    let (_, cameras) = Reader {
+    Reader {
         doc: &gltf.document,
         data,
         buffers: &buffers,
         base,
         path,
     }
-    .read()?;
-    Ok(cameras)
+    .read()
 }
 
 /// Validates the raw document: first what the `gltf` crate's own validation indexes
