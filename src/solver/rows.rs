@@ -46,6 +46,7 @@ pub(super) enum RowMasks {
 
 /// What one leaf's row computation hands back ([`Solver::compute_leaf_rows`]): the
 /// row, and what the caches are to keep of it.
+#[derive(Default)]
 struct LeafRow {
     /// The row's entries `(source, coefficient)`.
     row: Vec<(u32, f64)>,
@@ -703,15 +704,7 @@ impl Solver<'_> {
         let q = oracle::samples(g);
         let n = DVec3::from_array(g.normal);
         let leaf_moving = self.elem_moving(leaf);
-        let mut row = Vec::new();
-        let mut fresh = Vec::new();
-        let mut kept = Vec::new();
-        let mut fresh_opened = Vec::new();
-        let mut fresh_hidden = Vec::new();
-        let mut fresh_masks = Vec::new();
-        let mut time_entries = Vec::new();
-        let mut between = 0u64;
-        let mut fresh_pass = Vec::new();
+        let mut out = LeafRow::default();
         let leaf_ray = self.ray_id(leaf.0);
         let rho_leaf = self.rho_of(leaf);
         let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
@@ -729,20 +722,20 @@ impl Solver<'_> {
             let s = ends[l as usize].source;
             let gs = &geoms[s as usize];
             if gs.patch == u32::MAX {
-                self.push_cluster(leaf, l, &q, n, s, &mut row);
+                self.push_cluster(leaf, l, &q, n, s, &mut out.row);
                 continue;
             }
             if let Some(k) =
                 before.and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]))
             {
-                kept.push(k);
+                out.kept.push(k);
                 self.push_opened(
                     &q,
                     n,
                     s,
                     k.coef as f64,
                     k.vis as f64,
-                    &mut row,
+                    &mut out.row,
                     memo.as_mut(),
                 );
                 continue;
@@ -757,14 +750,14 @@ impl Solver<'_> {
             let key = key.unwrap_or_default();
             if let Some(&(c, v)) = cache.filter(|_| cacheable).and_then(|c| c.get(&key)) {
                 if let Some(entries) = opened.and_then(|o| o.get(&key)).filter(|e| settled(e)) {
-                    row.extend_from_slice(entries);
+                    out.row.extend_from_slice(entries);
                     continue;
                 }
-                let at = row.len();
-                self.push_opened(&q, n, s, c as f64, v as f64, &mut row, memo.as_mut());
-                let entries = &row[at..];
+                let at = out.row.len();
+                self.push_opened(&q, n, s, c as f64, v as f64, &mut out.row, memo.as_mut());
+                let entries = &out.row[at..];
                 if entries.len() > 1 && settled(entries) {
-                    fresh_opened.push((key, entries.into()));
+                    out.opened.push((key, entries.into()));
                 }
                 continue;
             }
@@ -784,20 +777,17 @@ impl Solver<'_> {
                 static_base,
                 cacheable,
                 tkey,
-                &mut between,
-                &mut fresh_pass,
-                &mut fresh_masks,
-                &mut fresh_hidden,
+                &mut out,
             );
             if cache.is_some() && cacheable {
-                fresh.push((key, (coef as f32, vis as f32)));
+                out.fresh.push((key, (coef as f32, vis as f32)));
             }
             if let Some(k) = tkey {
-                time_entries.push((k, (coef as f32, vis as f32)));
+                out.timed.push((k, (coef as f32, vis as f32)));
             }
             // Rounded once, so a reused coefficient equals the first.
             let coef = if keep_rows {
-                kept.push(KeptCoef {
+                out.kept.push(KeptCoef {
                     link: l,
                     coef: coef as f32,
                     vis: vis as f32,
@@ -806,21 +796,11 @@ impl Solver<'_> {
             } else {
                 coef
             };
-            self.push_opened(&q, n, s, coef, vis, &mut row, memo.as_mut());
+            self.push_opened(&q, n, s, coef, vis, &mut out.row, memo.as_mut());
         }
-        kept.sort_unstable_by_key(|x| x.link);
-        LeafRow {
-            row,
-            fresh,
-            kept,
-            opened: fresh_opened,
-            hidden: fresh_hidden,
-            masks: fresh_masks,
-            factors: memo.map(|m| m.fresh).unwrap_or_default(),
-            timed: time_entries,
-            between,
-            passed: fresh_pass,
-        }
+        out.kept.sort_unstable_by_key(|x| x.link);
+        out.factors = memo.map(|m| m.fresh).unwrap_or_default();
+        out
     }
 
     /// The coefficient and visibility of the entry of link `l` (source `s`) in the
@@ -842,10 +822,7 @@ impl Solver<'_> {
         static_base: bool,
         cacheable: bool,
         tkey: Option<(u64, u64)>,
-        between: &mut u64,
-        fresh_pass: &mut KeyedCoefs,
-        fresh_masks: &mut Vec<((u32, u32), u64)>,
-        fresh_hidden: &mut KeyedCoefs,
+        out: &mut LeafRow,
     ) -> (f64, f64) {
         let RowInputs {
             geoms,
@@ -874,7 +851,7 @@ impl Solver<'_> {
         });
         if let Some(cv) = on_line() {
             // Decided again at each pass: the light it weighs moves.
-            *between += 1;
+            out.between += 1;
             cv
         } else if let Some(cv) = earlier {
             cv
@@ -885,7 +862,7 @@ impl Solver<'_> {
                 .sum();
             // Not what the window keeps anyway.
             if timed && !cacheable {
-                fresh_pass.push(((leaf.0, l), (f, 1.0)));
+                out.passed.push(((leaf.0, l), (f, 1.0)));
             }
             (f, 1.0)
         } else {
@@ -910,13 +887,13 @@ impl Solver<'_> {
                     };
                     let (cv, made) = self.hidden_row_coef(leaf, l, s, q, n, how);
                     if matches!(how, RowMasks::Make) {
-                        fresh_masks.push((key, made));
+                        out.masks.push((key, made));
                     }
                     if steady {
-                        fresh_hidden.push((key, cv));
+                        out.hidden.push((key, cv));
                     }
                     if timed && !cacheable && !steady {
-                        fresh_pass.push(((leaf.0, l), cv));
+                        out.passed.push(((leaf.0, l), cv));
                     }
                     cv
                 }
