@@ -62,6 +62,26 @@ fn solve_shards(scene: &Path, settings: &[&str], n: usize, dir: &Path) -> Vec<Pa
         .collect()
 }
 
+/// Solves `scene` (`CORNELL`) as a shard of 6 whose index is `index`, read from the
+/// environment variable `RHIER_TEST_INDEX` as a job array's task reads its own.
+fn solve_from_env(scene: &Path, index: &str, out: &Path) -> Output {
+    rhier()
+        .arg("solve")
+        .arg(scene)
+        .args(CORNELL)
+        .args([
+            "--shards",
+            "6",
+            "--shard-index-env",
+            "RHIER_TEST_INDEX",
+            "-o",
+        ])
+        .arg(out)
+        .env("RHIER_TEST_INDEX", index)
+        .output()
+        .unwrap()
+}
+
 fn merge(parts: &[PathBuf], out: &Path) -> Output {
     rhier()
         .arg("merge")
@@ -244,21 +264,7 @@ fn the_merged_file_is_the_same_whatever_n_for_the_same_boundaries() {
     let parts6: Vec<PathBuf> = (0..6)
         .map(|k| {
             let p = d6.join(format!("part-{k}.rhier"));
-            ok(rhier()
-                .arg("solve")
-                .arg(&scene)
-                .args(CORNELL)
-                .args([
-                    "--shards",
-                    "6",
-                    "--shard-index-env",
-                    "RHIER_TEST_INDEX",
-                    "-o",
-                ])
-                .arg(&p)
-                .env("RHIER_TEST_INDEX", k.to_string())
-                .output()
-                .unwrap());
+            ok(solve_from_env(&scene, &k.to_string(), &p));
             p
         })
         .collect();
@@ -273,21 +279,7 @@ fn the_merged_file_is_the_same_whatever_n_for_the_same_boundaries() {
     assert_eq!(a.chunks().len(), 5);
     assert!(same_chunks(&a, &b));
     // An index the shard count does not have is refused, naming the variable.
-    let o = rhier()
-        .arg("solve")
-        .arg(&scene)
-        .args(CORNELL)
-        .args([
-            "--shards",
-            "6",
-            "--shard-index-env",
-            "RHIER_TEST_INDEX",
-            "-o",
-        ])
-        .arg(dir.path().join("x.rhier"))
-        .env("RHIER_TEST_INDEX", "6")
-        .output()
-        .unwrap();
+    let o = solve_from_env(&scene, "6", &dir.path().join("x.rhier"));
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("RHIER_TEST_INDEX = 6"));
 }
@@ -337,7 +329,7 @@ fn merge_refuses_gaps_overlaps_other_settings_and_corrupt_parts() {
         .arg(&stat)
         .output()
         .unwrap());
-    refused(&[stat.clone()], &out, &["static.rhier", "provenance"]);
+    refused(std::slice::from_ref(&stat), &out, &["static.rhier", "provenance"]);
     // A corrupt part: one bit of a chunk flipped.
     let bad = dir.path().join("bad.rhier");
     let mut bytes = std::fs::read(&parts[1]).unwrap();

@@ -154,6 +154,11 @@ fn v2_provenance() -> ProvenanceRecord {
 
 /// Writes the version-2 sample: `animated_box(1, 2)` with [`v2_provenance`].
 fn write_v2_part(path: &Path) {
+    write_animated(path, Some(v2_provenance()));
+}
+
+/// Writes `animated_box(1, 2)` in its chunks, with `provenance` if given.
+fn write_animated(path: &Path, provenance: Option<ProvenanceRecord>) {
     let sample = animated_box(1, 2);
     let mut w = Writer::create(
         path,
@@ -164,7 +169,9 @@ fn write_v2_part(path: &Path) {
     for (t0, t1, leaves) in &sample.chunks {
         w.write_chunk(*t0, *t1, leaves).unwrap();
     }
-    w.set_provenance(v2_provenance());
+    if let Some(p) = provenance {
+        w.set_provenance(p);
+    }
     w.finish(&sample.solution.stats).unwrap();
 }
 
@@ -188,17 +195,7 @@ fn the_version_2_sample_reads_with_its_provenance() {
     // version 2, needing a reader of version 1; the v1 file's sections, byte for
     // byte, after the header.
     let plain = dir.path().join("plain.rhier");
-    let sample = animated_box(1, 2);
-    let mut w = Writer::create(
-        &plain,
-        &SolutionHeader::of(&sample.solution),
-        WriteOptions::default(),
-    )
-    .unwrap();
-    for (t0, t1, leaves) in &sample.chunks {
-        w.write_chunk(*t0, *t1, leaves).unwrap();
-    }
-    w.finish(&sample.solution.stats).unwrap();
+    write_animated(&plain, None);
     let r = Reader::open(&plain).unwrap();
     assert_eq!((r.header().version, r.header().min_reader_version), (2, 1));
     assert!(r.provenance().is_none());
