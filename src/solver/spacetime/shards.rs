@@ -15,10 +15,11 @@
 //! and its frames between: those whose brackets lie within `interp_motion` of each
 //! other in motion take the line at every point and skip their solve (cheap), the
 //! others test their points and may solve ([`FrameBetween`](crate::solver::FrameBetween)). The weights are
-//! in keyframes ([`START_COST`], [`TESTED_COST`], [`FREE_COST`]) and were fitted on
-//! the per-frame times of ACTOR750 and LIGHT750 (BENCHMARKS.md, "Farm"); the split
-//! minimises the costliest shard over every contiguous split (a dynamic programme
-//! over the windows).
+//! in keyframes ([`START_COST`], [`TESTED_COST`], [`FREE_COST`]), set by hand (a
+//! window's start costs about a keyframe, BENCHMARKS.md, "Longer windows"), not
+//! fitted; how even the shards come out is measured in BENCHMARKS.md, "Farm". The
+//! split minimises the costliest shard over every contiguous split (a dynamic
+//! programme over the windows).
 
 use std::ops::Range;
 
