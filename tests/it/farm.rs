@@ -329,7 +329,11 @@ fn merge_refuses_gaps_overlaps_other_settings_and_corrupt_parts() {
         .arg(&stat)
         .output()
         .unwrap());
-    refused(std::slice::from_ref(&stat), &out, &["static.rhier", "provenance"]);
+    refused(
+        std::slice::from_ref(&stat),
+        &out,
+        &["static.rhier", "provenance"],
+    );
     // A corrupt part: one bit of a chunk flipped.
     let bad = dir.path().join("bad.rhier");
     let mut bytes = std::fs::read(&parts[1]).unwrap();
