@@ -55,12 +55,25 @@ struct StatsJson {
     residual: f64,
 }
 
+/// The provenance section (a space-time solve's file, format version 2).
+#[derive(Serialize)]
+struct ProvenanceJson {
+    /// Windows `first..end` of the solve's `windows`.
+    windows: [u32; 3],
+    /// Shard `shard` of `shards`.
+    shard: [u32; 2],
+    time: [f64; 2],
+    /// CRC-32 of the solve's fingerprint text (parts of one solve share it).
+    fingerprint_crc32: String,
+}
+
 #[derive(Serialize)]
 struct Inspect {
     file: String,
     header: HeaderJson,
     scene: SceneJson,
     stats: StatsJson,
+    provenance: Option<ProvenanceJson>,
     /// Leaves checked in every chunk (`None` with `--no-verify`).
     verified_leaves: Option<u64>,
     memory: MemoryReport,
@@ -108,6 +121,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             estimated_error: s.estimated_error,
             residual: s.residual,
         },
+        provenance: r.provenance().map(|p| ProvenanceJson {
+            windows: [p.first, p.end, p.windows],
+            shard: [p.shard, p.shards],
+            time: p.time,
+            fingerprint_crc32: format!("{:#010x}", crc32fast::hash(p.fingerprint.as_bytes())),
+        }),
         verified_leaves,
         memory: MemoryReport::from_reader(&r),
     };
@@ -150,6 +169,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         rhier::solver::report::estimate_text(st.estimated_error),
         st.residual
     )?;
+    if let Some(p) = &report.provenance {
+        writeln!(
+            text,
+            "provenance: windows {}..{} of {}, shard {} of {}, time [{}, {}], fingerprint crc32 {}",
+            p.windows[0],
+            p.windows[1],
+            p.windows[2],
+            p.shard[0],
+            p.shard[1],
+            p.time[0],
+            p.time[1],
+            p.fingerprint_crc32
+        )?;
+    }
     match report.verified_leaves {
         Some(n) => writeln!(
             text,

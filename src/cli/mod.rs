@@ -6,6 +6,7 @@
 
 mod flatland;
 mod inspect;
+mod merge;
 mod play;
 mod probe;
 mod reference;
@@ -50,6 +51,22 @@ enum Command {
     Flatland(flatland::Args),
     /// Independent Monte Carlo reference radiosity at probe points.
     Reference(reference::Args),
+    /// The windows of a space-time solve, their estimated costs and their split
+    /// into shards for a job scheduler (`rhier solve --shard K/N`).
+    ///
+    /// Takes the scene and the settings of `rhier solve` and solves nothing: every
+    /// window's frames, keyframes and time span, its estimated cost (in keyframes,
+    /// from the motion), and the contiguous runs of windows of about equal cost
+    /// that `--shards N` splits them into.
+    Plan(Box<solve::plan::Args>),
+    /// Join the parts of a space-time solve's shards into one `.rhier` file.
+    ///
+    /// The parts must come from the same scene and settings (the fingerprint each
+    /// holds), and their windows must cover the animation with no gap and no
+    /// overlap, every shard once; otherwise the merge fails naming the part, or the
+    /// missing shard. Chunks are copied as stored, not re-encoded; the file appears
+    /// only once whole.
+    Merge(merge::Args),
 }
 
 /// Runs the parsed command line.
@@ -62,5 +79,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Inspect(a)) => inspect::run(a),
         Some(Command::Flatland(a)) => flatland::run(a),
         Some(Command::Reference(a)) => reference::run(a),
+        Some(Command::Plan(a)) => solve::plan::run(*a),
+        Some(Command::Merge(a)) => merge::run(a),
     }
 }

@@ -16,12 +16,16 @@ use crate::error::{Error, Result};
 /// `type` on DOS).
 pub const MAGIC: [u8; 10] = [0x89, b'R', b'H', b'I', b'E', b'R', 0x0D, 0x0A, 0x1A, 0x0A];
 
-/// Format version this code writes.
-pub const VERSION: u32 = 1;
+/// Format version this code writes (2: the optional provenance section).
+pub const VERSION: u32 = 2;
 /// Oldest format version this code still reads.
 pub const OLDEST_READABLE: u32 = 1;
-/// The version a reader must have at least to read what this code writes.
+/// The version a reader must have at least to read what this code writes without
+/// a provenance section: a version-1 reader reads such a file as it is.
 pub const MIN_READER_VERSION: u32 = 1;
+/// The version a reader must have at least to read a file with a provenance
+/// section (a section kind version 1 does not know).
+pub const PROVENANCE_READER_VERSION: u32 = 2;
 
 /// Size of the header in bytes.
 pub const HEADER_LEN: usize = 64;
@@ -70,6 +74,8 @@ pub enum SectionKind {
     Stats = 5,
     /// Link records (only with `--keep-links`).
     Links = 6,
+    /// Where a space-time file's windows come from (version 2; at most one).
+    Provenance = 7,
 }
 
 impl SectionKind {
@@ -82,6 +88,7 @@ impl SectionKind {
             4 => SectionKind::ChunkIndex,
             5 => SectionKind::Stats,
             6 => SectionKind::Links,
+            7 => SectionKind::Provenance,
             _ => return None,
         })
     }
@@ -95,6 +102,7 @@ impl SectionKind {
             SectionKind::ChunkIndex => "chunk_index",
             SectionKind::Stats => "stats",
             SectionKind::Links => "links",
+            SectionKind::Provenance => "provenance",
         }
     }
 }
@@ -336,7 +344,7 @@ impl SectionEntry {
             Error::invalid(
                 path,
                 place("kind", 0),
-                "a section kind in 1..=6",
+                "a section kind in 1..=7",
                 kind_raw.to_string(),
             )
         })?;

@@ -85,7 +85,7 @@ pub fn fingerprint(scene: &Scene, settings: &[(&str, serde_json::Value)]) -> Res
 
 /// The first line where two fingerprints differ, as `"that" there, "this" here`
 /// (trimmed, without a trailing comma); `None` if no line does.
-fn first_difference(there: &str, here: &str) -> Option<String> {
+pub(crate) fn first_difference(there: &str, here: &str) -> Option<String> {
     let clean = |l: Option<&str>| {
         l.map_or("nothing".to_string(), |l| {
             format!("`{}`", l.trim().trim_end_matches(','))
@@ -149,6 +149,13 @@ impl Journal {
     /// fresh start). [`Journal::read`] reads them one at a time, so resuming a long
     /// solve holds one window's leaves, not all of them.
     pub fn resume(out: &Path, key: &str) -> Result<(Journal, u32)> {
+        Journal::resume_from(out, key, 0)
+    }
+
+    /// [`Journal::resume`] for a solve whose first window is `first` (a shard of a
+    /// farm solve, `rhier solve --shard K/N`): counts the finished windows `first,
+    /// first + 1, …` up to the first missing one.
+    pub fn resume_from(out: &Path, key: &str, first: u32) -> Result<(Journal, u32)> {
         let dir = journal_dir(out);
         if !dir.exists() {
             return Ok((Journal::create(out, key)?, 0));
@@ -166,7 +173,7 @@ impl Journal {
             ));
         }
         let mut count = 0;
-        while dir.join(window_name(count)).exists() {
+        while dir.join(window_name(first + count)).exists() {
             count += 1;
         }
         Ok((Journal { dir }, count))

@@ -7,7 +7,8 @@
 //! valid only when finished (temporary name, fsync, rename), [`reader`] maps a file and
 //! validates it before any rkyv access, and [`memory`] holds the named counters that
 //! `inspect` and `solve --stats` print, and [`journal`] keeps the finished windows of a space-time
-//! solve in progress so that `solve --resume` can continue it.
+//! solve in progress so that `solve --resume` can continue it; [`merge`] joins the
+//! files of a solve run as shards into one.
 //!
 //! It does not evaluate radiosity: that is [`crate::playback`], which runs the same
 //! code on a [`crate::solution::Solution`] in memory and on a [`Reader`].
@@ -15,6 +16,7 @@
 pub mod format;
 pub mod journal;
 pub mod memory;
+pub mod merge;
 pub mod reader;
 pub mod records;
 pub mod samples;

@@ -24,7 +24,7 @@ use rkyv::rancor;
 use super::format::{Codec, ENTRY_LEN, HEADER_LEN, Header, SectionEntry, SectionKind, crc32};
 use super::records::{
     ArchivedChunkIndexRecord, ArchivedLeafRecord, ArchivedPatchRecord, ArchivedSceneRecord,
-    ArchivedStatsRecord, ChunkRecord,
+    ArchivedStatsRecord, ChunkRecord, ProvenanceRecord,
 };
 use crate::error::{Error, Result};
 use crate::scene::{
@@ -79,6 +79,8 @@ pub struct Reader {
     patches: Vec<PatchGeometry>,
     chunks: Vec<ChunkRecord>,
     stats: SolveStats,
+    /// The provenance section's record (a space-time solve of version 2 or later).
+    provenance: Option<ProvenanceRecord>,
     /// Chunks decoded by the last `leaves_at`: `(chunk, leaves)`.
     recent: std::sync::Mutex<Vec<(usize, std::sync::Arc<Vec<Leaf>>)>>,
 }
@@ -182,28 +184,37 @@ impl Reader {
             patches: Vec::new(),
             chunks: Vec::new(),
             stats: SolveStats::default(),
+            provenance: None,
             recent: std::sync::Mutex::new(Vec::new()),
         };
         reader.load_scene(i_scene)?;
         reader.load_patches(i_patches)?;
         reader.load_index(i_index)?;
         reader.load_stats(i_stats)?;
+        let mut provenance = reader
+            .sections
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| e.kind == SectionKind::Provenance);
+        match (provenance.next(), provenance.next()) {
+            (Some((i, _)), None) => reader.load_provenance(i)?,
+            (None, _) => {}
+            (Some(_), Some(_)) => {
+                return Err(Error::invalid(
+                    &reader.path,
+                    format!("byte {} (section table)", range.start),
+                    "at most one provenance section",
+                    "two or more",
+                ));
+            }
+        }
         Ok(reader)
     }
 
     /// The stored bytes of section `i` after the CRC check, decompressed if needed.
     fn section_bytes(&self, i: usize) -> Result<std::borrow::Cow<'_, [u8]>> {
         let e = &self.sections[i];
-        let stored = &self.data.bytes()[e.offset as usize..(e.offset + e.stored_len) as usize];
-        let crc = crc32(stored);
-        if crc != e.crc {
-            return Err(Error::invalid(
-                &self.path,
-                format!("byte {} ({} section {i})", e.offset, e.kind.name()),
-                format!("CRC-32 {:#010x} stated in the section table", e.crc),
-                format!("{crc:#010x}"),
-            ));
-        }
+        let stored = self.stored_section(i)?;
         match e.codec {
             Codec::Raw => Ok(std::borrow::Cow::Borrowed(stored)),
             Codec::Zstd => {
@@ -394,6 +405,74 @@ impl Reader {
         drop(bytes);
         self.stats = stats;
         Ok(())
+    }
+
+    fn load_provenance(&mut self, i: usize) -> Result<()> {
+        let bytes = self.section_bytes(i)?;
+        let p = rkyv::access::<super::records::ArchivedProvenanceRecord, rancor::Error>(&bytes)
+            .map_err(|e| rkyv_err(&self.path, self.place(i), "the provenance record", e))?;
+        let p = ProvenanceRecord {
+            fingerprint: p.fingerprint.to_string(),
+            windows: p.windows.to_native(),
+            first: p.first.to_native(),
+            end: p.end.to_native(),
+            shard: p.shard.to_native(),
+            shards: p.shards.to_native(),
+            time: p.time.map(|x| x.to_native()),
+        };
+        drop(bytes);
+        let ok = p.first <= p.end
+            && p.end <= p.windows
+            && p.shard < p.shards
+            && p.time[0] <= p.time[1]
+            && p.time[0] >= self.time.start
+            && p.time[1] <= self.time.end;
+        if !ok {
+            return Err(Error::invalid(
+                &self.path,
+                self.place(i),
+                format!(
+                    "windows first <= end <= windows, shard < shards, a time range inside [{}, {}]",
+                    self.time.start, self.time.end
+                ),
+                format!(
+                    "windows {}..{} of {}, shard {} of {}, time [{}, {}]",
+                    p.first, p.end, p.windows, p.shard, p.shards, p.time[0], p.time[1]
+                ),
+            ));
+        }
+        self.provenance = Some(p);
+        Ok(())
+    }
+
+    /// Where the file's windows come from: the fingerprint of the space-time solve
+    /// and the run of its windows the file holds (`None`: a static or per-frame
+    /// solve, or a file older than version 2).
+    pub fn provenance(&self) -> Option<&ProvenanceRecord> {
+        self.provenance.as_ref()
+    }
+
+    /// The stored (possibly compressed) bytes of section `i` of the table, after
+    /// their CRC-32 is checked: what `rhier merge` copies without decoding.
+    pub fn stored_section(&self, i: usize) -> Result<&[u8]> {
+        let e = self.sections.get(i).ok_or_else(|| {
+            Error::Usage(format!(
+                "{}: section {i} requested, the file has {}",
+                self.path.display(),
+                self.sections.len()
+            ))
+        })?;
+        let stored = &self.data.bytes()[e.offset as usize..(e.offset + e.stored_len) as usize];
+        let crc = crc32(stored);
+        if crc != e.crc {
+            return Err(Error::invalid(
+                &self.path,
+                format!("byte {} ({} section {i})", e.offset, e.kind.name()),
+                format!("CRC-32 {:#010x} stated in the section table", e.crc),
+                format!("{crc:#010x}"),
+            ));
+        }
+        Ok(stored)
     }
 
     /// The file's path (or in-memory name).
@@ -647,11 +726,11 @@ fn check_raw_len(kind: SectionKind, items: u64, raw_len: u64) -> std::result::Re
                 Err(format!("1 stats record of {want} bytes"))
             };
         }
-        SectionKind::Scene => {
+        SectionKind::Scene | SectionKind::Provenance => {
             return if items == 1 {
                 Ok(())
             } else {
-                Err("1 scene record".into())
+                Err(format!("1 {} record", kind.name()))
             };
         }
     } as u64;

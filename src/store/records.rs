@@ -3,7 +3,7 @@
 //!
 //! Each section holds one rkyv archive of one root value ([`SceneRecord`],
 //! `Vec<PatchRecord>`, `Vec<LeafRecord>`, [`ChunkIndexRecord`], [`StatsRecord`],
-//! `Vec<LinkRecord>`). rkyv is pinned to little-endian, unaligned, 64-bit relative
+//! `Vec<LinkRecord>`, [`ProvenanceRecord`]). rkyv is pinned to little-endian, unaligned, 64-bit relative
 //! pointers (Cargo.toml features `little_endian`, `unaligned`, `pointer_width_64`), so
 //! an archive is read in place from any byte offset of a mapped file and may exceed
 //! 2 GiB. These types are plain mirrors of the in-memory contract
@@ -138,6 +138,30 @@ const _: () = assert!(std::mem::size_of::<ArchivedChunkRecord>() == 36);
 pub struct ChunkIndexRecord {
     /// Chunks in time order.
     pub chunks: Vec<ChunkRecord>,
+}
+
+/// Where the windows of a space-time file come from (version 2): the solve's
+/// fingerprint (`store::journal::fingerprint`: the scene and every setting that
+/// changes the result) and the run of windows `first..end` of the solve's `windows`
+/// that the file holds, as shard `shard` of `shards` (`0` of `1` for a solve on one
+/// machine and for a merged file), covering the times `time`. What `rhier merge`
+/// checks parts against. One record of variable length (a string).
+#[derive(Archive, Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct ProvenanceRecord {
+    /// The fingerprint text of the solve (scene and result settings).
+    pub fingerprint: String,
+    /// Windows in the whole solve's plan.
+    pub windows: u32,
+    /// First window held.
+    pub first: u32,
+    /// One past the last window held (`first` when the shard holds none).
+    pub end: u32,
+    /// Shard index, `0..shards`.
+    pub shard: u32,
+    /// Shards the plan was split into.
+    pub shards: u32,
+    /// Time range covered by windows `first..end` (`[t, t]` when none).
+    pub time: [f64; 2],
 }
 
 /// Solve statistics (mirror of [`SolveStats`]).

@@ -28,11 +28,11 @@ use rkyv::rancor;
 
 use super::format::{
     Codec, FLAG_COMPRESSED, FLAG_LINKS, FLAG_MOVING, HEADER_LEN, Header, MIN_READER_VERSION,
-    SectionEntry, SectionKind, VERSION, crc32,
+    PROVENANCE_READER_VERSION, SectionEntry, SectionKind, VERSION, crc32,
 };
 use super::records::{
     CameraRecord, ChunkIndexRecord, ChunkRecord, LinkRecord, MaterialRecord, ObjectRecord,
-    PatchRecord, SceneRecord, StatsRecord, track_record,
+    PatchRecord, ProvenanceRecord, SceneRecord, StatsRecord, track_record,
 };
 use crate::error::{Error, Result};
 use crate::scene::Scene;
@@ -144,6 +144,7 @@ pub struct Writer {
     entries: Vec<SectionEntry>,
     chunks: Vec<ChunkRecord>,
     links: Vec<LinkRecord>,
+    provenance: Option<ProvenanceRecord>,
 }
 
 impl std::fmt::Debug for Writer {
@@ -161,6 +162,24 @@ pub fn temp_path(path: &Path) -> PathBuf {
     let mut s = path.as_os_str().to_owned();
     s.push(".tmp");
     PathBuf::from(s)
+}
+
+/// The sink of a file written through `<path>.tmp`.
+fn file_sink(path: &Path) -> Result<Sink> {
+    let tmp = temp_path(path);
+    let file = OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .open(&tmp)
+        .map_err(|e| Error::io(&tmp, e))?;
+    // Sections arrive whole (a chunk in one write, which bypasses the buffer):
+    // the buffer only gathers the small ones, and a solve keeps it resident.
+    Ok(Sink::File {
+        out: BufWriter::with_capacity(64 << 10, file),
+        tmp,
+        done: false,
+    })
 }
 
 /// True if `path` exists and is neither a regular file nor a directory (a device such
@@ -188,21 +207,91 @@ impl Writer {
                 options,
             );
         }
-        let tmp = temp_path(path);
-        let file = OpenOptions::new()
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&tmp)
-            .map_err(|e| Error::io(&tmp, e))?;
-        // Sections arrive whole (a chunk in one write, which bypasses the buffer):
-        // the buffer only gathers the small ones, and a solve keeps it resident.
-        let sink = Sink::File {
-            out: BufWriter::with_capacity(64 << 10, file),
-            tmp,
-            done: false,
+        Writer::start(path.to_path_buf(), file_sink(path)?, header, options)
+    }
+
+    /// Starts writing `path` (as [`Writer::create`]) with the scene and patch
+    /// sections of `src` copied as they are stored, for chunks copied from files of
+    /// the same solve ([`Writer::copy_chunk`], `rhier merge`).
+    pub fn create_copying(path: &Path, src: &super::Reader) -> Result<Writer> {
+        let sink = if writes_in_place(path) {
+            Sink::Device(Vec::new())
+        } else {
+            file_sink(path)?
         };
-        Writer::start(path.to_path_buf(), sink, header, options)
+        let td = src.time_domain();
+        let mut w = Writer {
+            path: path.to_path_buf(),
+            sink,
+            pos: 0,
+            options: WriteOptions::default(),
+            flags: src.header().flags & FLAG_MOVING,
+            time: [td.start, td.end],
+            patch_corners: src.patches().iter().map(|p| p.corners).collect(),
+            entries: Vec::new(),
+            chunks: Vec::new(),
+            links: Vec::new(),
+            provenance: None,
+        };
+        w.emit(&[0u8; HEADER_LEN])?;
+        for kind in [SectionKind::Scene, SectionKind::Patches] {
+            let i = src
+                .sections()
+                .iter()
+                .position(|e| e.kind == kind)
+                .ok_or_else(|| {
+                    Error::invalid(
+                        src.path(),
+                        "section table",
+                        format!("a {} section", kind.name()),
+                        "none",
+                    )
+                })?;
+            w.copy_section(src, i)?;
+        }
+        Ok(w)
+    }
+
+    /// Appends section `i` of `src` as it is stored (CRC checked) with its table
+    /// entry; returns the new section's index.
+    fn copy_section(&mut self, src: &super::Reader, i: usize) -> Result<u32> {
+        let stored = src.stored_section(i)?;
+        let e = src.sections()[i];
+        if e.codec == Codec::Zstd {
+            self.flags |= FLAG_COMPRESSED;
+        }
+        let section = self.entries.len() as u32;
+        self.entries.push(SectionEntry {
+            offset: self.pos,
+            ..e
+        });
+        self.emit(stored)?;
+        Ok(section)
+    }
+
+    /// Appends chunk `k` of `src` as it is stored: its section's bytes are copied,
+    /// not decoded or re-encoded (their CRC is checked), and its index entry gets the
+    /// new section and the chunk that carries into it. `src` must have this file's
+    /// patches (the caller checks it is a file of the same solve); chunks come in
+    /// time order as for [`Writer::write_chunk`].
+    pub fn copy_chunk(&mut self, src: &super::Reader, k: usize) -> Result<()> {
+        let c = *src.chunks().get(k).ok_or_else(|| {
+            Error::Usage(format!(
+                "{}: chunk {k} requested, the file has {} chunks",
+                src.path().display(),
+                src.chunks().len()
+            ))
+        })?;
+        self.check_chunk_time(c.t0, c.t1)?;
+        let section = self.copy_section(src, c.section as usize)?;
+        self.push_chunk(c.t0, c.t1, c.reach, section, c.leaves);
+        Ok(())
+    }
+
+    /// Records where the file's windows come from (a space-time solve): written as
+    /// the provenance section, which makes the file need a version-2 reader.
+    pub fn set_provenance(&mut self, provenance: ProvenanceRecord) {
+        self.provenance = Some(provenance);
     }
 
     /// Starts writing into memory; [`Writer::finish_to_bytes`] returns the file's bytes
@@ -238,6 +327,7 @@ impl Writer {
             entries: Vec::new(),
             chunks: Vec::new(),
             links: Vec::new(),
+            provenance: None,
         };
         if !(scene.time.start.is_finite() && scene.time.end.is_finite())
             || scene.time.end < scene.time.start
@@ -325,19 +415,7 @@ impl Writer {
         mut after_block: impl FnMut(),
     ) -> Result<()> {
         let index = self.chunks.len();
-        let prev_t1 = self.chunks.last().map_or(self.time[0], |c| c.t1);
-        let in_domain = t0 >= self.time[0] && t1 <= self.time[1];
-        if !(t0.is_finite() && t1.is_finite()) || t1 < t0 || t0 < prev_t1 || !in_domain {
-            return Err(Error::invalid(
-                &self.path,
-                format!("chunk {index}"),
-                format!(
-                    "a time range inside [{}, {}] starting at or after {prev_t1}",
-                    self.time[0], self.time[1]
-                ),
-                format!("[{t0}, {t1}]"),
-            ));
-        }
+        self.check_chunk_time(t0, t1)?;
         let root = vec_root(leaves.len());
         let raw_len = std::mem::size_of_val(leaves) + root.len();
         let mut reach = t0;
@@ -389,6 +467,31 @@ impl Writer {
                 });
             }
         }
+        self.push_chunk(t0, t1, reach, section, leaves.len() as u32);
+        Ok(())
+    }
+
+    /// Refuses a chunk `[t0, t1]` outside the time domain or before the last one.
+    fn check_chunk_time(&self, t0: f64, t1: f64) -> Result<()> {
+        let prev_t1 = self.chunks.last().map_or(self.time[0], |c| c.t1);
+        let in_domain = t0 >= self.time[0] && t1 <= self.time[1];
+        if !(t0.is_finite() && t1.is_finite()) || t1 < t0 || t0 < prev_t1 || !in_domain {
+            return Err(Error::invalid(
+                &self.path,
+                format!("chunk {}", self.chunks.len()),
+                format!(
+                    "a time range inside [{}, {}] starting at or after {prev_t1}",
+                    self.time[0], self.time[1]
+                ),
+                format!("[{t0}, {t1}]"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Adds the index entry of a chunk whose section is written.
+    fn push_chunk(&mut self, t0: f64, t1: f64, reach: f64, section: u32, leaves: u32) {
+        let index = self.chunks.len();
         // First chunk whose leaves may still be live at t0 (reach only matters for
         // chunks after the previous carry_from, whose reach was below an earlier t0).
         let mut carry_from = self.chunks.last().map_or(0, |c| c.carry_from);
@@ -400,10 +503,9 @@ impl Writer {
             t1,
             reach,
             section,
-            leaves: leaves.len() as u32,
+            leaves,
             carry_from,
         });
-        Ok(())
     }
 
     /// Queues links for the links section; ignored unless
@@ -497,12 +599,18 @@ impl Writer {
         )?;
         let bytes = archive(&self.path, &StatsRecord::from(stats))?;
         self.section(SectionKind::Stats, &bytes, 1, false)?;
+        let mut min_reader_version = MIN_READER_VERSION;
+        if let Some(p) = self.provenance.take() {
+            let bytes = archive(&self.path, &p)?;
+            self.section(SectionKind::Provenance, &bytes, 1, false)?;
+            min_reader_version = PROVENANCE_READER_VERSION;
+        }
         let table: Vec<u8> = self.entries.iter().flat_map(|e| e.encode()).collect();
         let table_offset = self.pos;
         self.emit(&table)?;
         let header = Header {
             version: VERSION,
-            min_reader_version: MIN_READER_VERSION,
+            min_reader_version,
             flags: self.flags,
             table_offset,
             table_count: self.entries.len() as u32,

@@ -11,6 +11,7 @@
 
 mod cli;
 mod common;
+mod farm;
 mod flatland;
 mod formats;
 mod geometry;

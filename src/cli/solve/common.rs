@@ -73,6 +73,89 @@ pub struct Args {
     /// Memory, files and threads.
     #[command(flatten)]
     pub resources: ResourceArgs,
+    /// Which shard of a farm solve to solve.
+    #[command(flatten)]
+    pub farm: ShardArgs,
+}
+
+/// One shard of a space-time solve split for a job scheduler (`rhier plan
+/// --shards N`): its index `0..count`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// Index, `0..count`.
+    pub index: usize,
+    /// Shards the windows are split into.
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let expected = || format!("K/N with 0 <= K < N (e.g. 0/4), not {s:?}");
+        let (k, n) = s.split_once('/').ok_or_else(expected)?;
+        let (index, count) = (
+            k.trim().parse().map_err(|_| expected())?,
+            n.trim().parse().map_err(|_| expected())?,
+        );
+        Shard::new(index, count).ok_or_else(expected)
+    }
+}
+
+impl Shard {
+    /// Shard `index` of `count`, if `index < count`.
+    pub fn new(index: usize, count: usize) -> Option<Shard> {
+        (index < count).then_some(Shard { index, count })
+    }
+}
+
+/// Which shard of a farm solve `rhier solve` solves.
+#[derive(Debug, clap::Args)]
+#[command(next_help_heading = "Farm")]
+pub struct ShardArgs {
+    /// Solve only shard K of N of a space-time solve's windows (`rhier plan --shards
+    /// N` shows them) and write them as a part for `rhier merge`.
+    ///
+    /// The windows are split into N contiguous runs of about equal estimated cost;
+    /// the split depends on the scene and the settings alone, so every task of a job
+    /// array finds the same one. The shard solves the shared part, then its own
+    /// windows, the first from a cold cache of final-gather terms (the merged file
+    /// differs from a solve on one machine by what that cache would have saved).
+    /// The part records the solve's fingerprint and the windows and times it holds;
+    /// `--resume` continues an interrupted shard. A shard with no window (more
+    /// shards than windows) writes a part that holds none.
+    #[arg(long, conflicts_with_all = ["shards", "shard_index_env"])]
+    pub shard: Option<Shard>,
+    /// With `--shard-index-env`: the number of shards N.
+    #[arg(long, requires = "shard_index_env")]
+    pub shards: Option<usize>,
+    /// Read the shard index K of `--shards N` from this environment variable, so that
+    /// one command line serves every task of a job array (`SLURM_ARRAY_TASK_ID`,
+    /// Kubernetes' `JOB_COMPLETION_INDEX`).
+    #[arg(long, requires = "shards")]
+    pub shard_index_env: Option<String>,
+}
+
+impl ShardArgs {
+    /// The shard asked for, if any: `--shard K/N`, or `--shards N` with K from
+    /// the environment variable `--shard-index-env` names.
+    pub fn shard(&self) -> anyhow::Result<Option<Shard>> {
+        if let Some(s) = self.shard {
+            return Ok(Some(s));
+        }
+        let (Some(n), Some(var)) = (self.shards, &self.shard_index_env) else {
+            return Ok(None);
+        };
+        let value = std::env::var(var).map_err(|_| {
+            anyhow::anyhow!("--shard-index-env {var}: the environment variable {var} is not set")
+        })?;
+        let k: usize = value.trim().parse().map_err(|_| {
+            anyhow::anyhow!("--shard-index-env {var}: expected a shard index, found {value:?}")
+        })?;
+        Shard::new(k, n).map(Some).ok_or_else(|| {
+            anyhow::anyhow!("--shard-index-env {var} = {k}: expected an index below --shards {n}")
+        })
+    }
 }
 
 /// The scene to solve.
@@ -458,9 +541,24 @@ impl Args {
     /// The solver settings the arguments ask for (shared by every mode of `solve`),
     /// checked against their domains ([`SolveOptions::validate`]).
     pub fn solve_options(&self) -> anyhow::Result<SolveOptions> {
-        let a = &self.accuracy;
+        self.accuracy.solve_options(&self.resources)
+    }
+
+    /// The time settings the arguments ask for, checked
+    /// ([`SpaceTimeOptions::validate`]).
+    pub fn space_time_options(&self) -> anyhow::Result<SpaceTimeOptions> {
+        self.animation.space_time_options(&self.resources)
+    }
+}
+
+impl AccuracyArgs {
+    /// The solver settings these and `resources` ask for (`rhier solve` and `rhier
+    /// plan` read them alike), checked against their domains
+    /// ([`SolveOptions::validate`]).
+    pub fn solve_options(&self, resources: &ResourceArgs) -> anyhow::Result<SolveOptions> {
+        let a = self;
         let opts = SolveOptions {
-            storage: self.resources.storage(false, None),
+            storage: resources.storage(false, None),
             eps: a.eps,
             min_size: a.min_size,
             recon_tol: a.recon_tol,
@@ -479,16 +577,18 @@ impl Args {
         opts.validate()?;
         Ok(opts)
     }
+}
 
-    /// The time settings the arguments ask for, checked
+impl AnimationArgs {
+    /// The time settings these and `resources` (`--budget`) ask for, checked
     /// ([`SpaceTimeOptions::validate`]).
-    pub fn space_time_options(&self) -> anyhow::Result<SpaceTimeOptions> {
-        let a = &self.animation;
+    pub fn space_time_options(&self, resources: &ResourceArgs) -> anyhow::Result<SpaceTimeOptions> {
+        let a = self;
         let st = SpaceTimeOptions {
             fps: a.fps,
             window: a.window,
             merge_tol: a.merge_tol,
-            kept_budget: self.resources.budget,
+            kept_budget: resources.budget,
             key_stride: a.key_stride,
             key_motion: a.key_motion,
             interp_tol: a.interp_tol,

@@ -6,9 +6,12 @@
 //! ([`per_frame`]). What they share (the arguments, loading the scene, the storage
 //! and settings made of the arguments) is in [`common`], which imports none of
 //! them; this module reads the arguments once and hands them to the way that fits.
+//! `rhier plan` ([`plan`]) reads the same arguments to show the windows a
+//! space-time solve makes and their split into shards.
 
 mod common;
 mod per_frame;
+pub mod plan;
 mod spacetime;
 mod static_scene;
 
@@ -28,6 +31,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .with_context(|| format!("--scratch {}: cannot create the directory", dir.display()))?;
     }
     let opts = args.solve_options()?;
+    let sharded = args.farm.shard()?.is_some();
+    if sharded && args.animation.per_frame {
+        anyhow::bail!("--shard splits a space-time solve's windows; --per-frame has none");
+    }
     if args.animation.per_frame {
         return per_frame::run(&args, opts);
     }
@@ -38,6 +45,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if scene.has_motion() {
         spacetime::run(&args, &scene, &stem, opts, start)
+    } else if sharded {
+        anyhow::bail!(
+            "--shard splits a space-time solve's windows; {stem} does not move, so it is solved whole"
+        )
     } else {
         static_scene::run(&args.output, &scene, &stem, opts, start)
     }

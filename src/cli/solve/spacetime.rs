@@ -1,7 +1,9 @@
 //! The space-time branch of `rhier solve`: a scene with motion is solved window by
 //! window ([`rhier::solver::spacetime`]) and streamed into the `.rhier` file, one
 //! chunk per window, with a journal (`OUT.rhier.partial/`) that `--resume` continues
-//! from. A scene with no emitter is not solved: its zero solution is written at
+//! from. With `--shard K/N` it solves the shard's run of windows only and writes
+//! them as a part for `rhier merge`; every file records the solve's fingerprint
+//! and the windows it holds (its provenance). A scene with no emitter is not solved: its zero solution is written at
 //! once, in one chunk whose leaves hold over the whole animation.
 
 use std::time::Instant;
@@ -11,13 +13,15 @@ use rhier::playback::{probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
 use rhier::solution::SolveStats;
 use rhier::solver::SolveOptions;
-use rhier::solver::spacetime::{FrameRecord, SpaceTime, WindowOutput, result_settings};
+use rhier::solver::spacetime::{FrameRecord, Plan, SpaceTime, WindowOutput, plan, result_settings};
 use rhier::store::journal::{Journal, fingerprint};
+use rhier::store::records::ProvenanceRecord;
 use rhier::store::{MemoryReport, Reader, SolutionHeader, WriteOptions, Writer};
 
-use super::common::Args;
+use super::common::{Args, Shard};
 
-/// Runs the space-time solve of a moving scene.
+/// Runs the space-time solve of a moving scene (or, with `--shard K/N`, of one
+/// shard of its windows).
 pub fn run(
     args: &Args,
     scene: &Scene,
@@ -28,7 +32,13 @@ pub fn run(
     let (output, animation) = (&args.output, &args.animation);
     let st = args.space_time_options()?;
     refuse_static_only(args, &opts)?;
+    let shard = args.farm.shard()?;
     if !scene.has_emitter() {
+        if shard.is_some() {
+            anyhow::bail!(
+                "--shard: {stem} has no emitter, so its answer is zero everywhere and written without solving; solve it whole"
+            );
+        }
         return super::common::write_zero(output, scene, stem, start, |path| {
             write_report(path, &mut [])
         });
@@ -36,7 +46,23 @@ pub fn run(
     let out = output.out_path(stem);
     let probes = output.probe.as_deref().map(read_probe_points).transpose()?;
     let key = fingerprint(scene, &result_settings(&opts, &st)?)?;
-    let (journal, done) = open_journal(&out, &key, animation.resume)?;
+    // The windows this run solves: every window, or the shard's run of them.
+    let plan = shard.map(|_| plan(scene, &opts, &st)).transpose()?;
+    let range = match (shard, &plan) {
+        (Some(s), Some(p)) => p.shards(s.count)[s.index].clone(),
+        _ => 0..0,
+    };
+    let journal_key = match shard {
+        Some(s) => format!(
+            "{key}shard {} of {}: windows {}..{}\n",
+            s.index, s.count, range.start, range.end
+        ),
+        None => key.clone(),
+    };
+    if let (Some(s), Some(p), true) = (shard, &plan, range.is_empty()) {
+        return write_empty_shard(args, scene, &opts, p, s, &key, &out, start);
+    }
+    let (journal, done) = open_journal(&out, &journal_key, animation.resume, range.start)?;
     // Out of core unless asked for RAM: the pools, kept terms and leaves page through
     // files in the journal directory, beside the output on its file system (a
     // system temp directory may be a RAM-backed tmpfs) and removed with it.
@@ -57,10 +83,19 @@ pub fn run(
         say(format!("shared {}", rec.summary()))
     })?;
     let n_windows = run.window_count();
-    check_journaled(done, n_windows, &out)?;
+    let range = match &plan {
+        Some(p) if p.windows.as_slice() != run.windows() => anyhow::bail!(
+            "--shard: the plan's {} windows differ from the solver's {n_windows} (a bug: please report it)",
+            p.windows.len()
+        ),
+        Some(_) => range,
+        None => 0..n_windows,
+    };
+    check_journaled(done, range.len(), &out)?;
     if done > 0 {
         say(format!(
-            "resuming: {done} of {n_windows} windows already solved"
+            "resuming: {done} of {} windows already solved",
+            range.len()
         ));
     }
     let header = SolutionHeader {
@@ -72,13 +107,22 @@ pub fn run(
     let mut frames: Vec<FrameRecord> = Vec::new();
     let (mut stored, mut frame_cells) = (0u64, 0u64);
     if let Some(journal) = &journal {
-        (stored, frame_cells) = replay_journal(journal, done, &mut run, &mut writer)?;
+        (stored, frame_cells) = replay_journal(
+            journal,
+            range.start..range.start + done,
+            &mut run,
+            &mut writer,
+        )?;
     }
     let mut last_residual = 0.0;
-    for wi in done..n_windows {
-        if animation.stop_after_windows.is_some_and(|k| wi as u32 >= k) {
+    for wi in range.start + done..range.end {
+        if animation
+            .stop_after_windows
+            .is_some_and(|k| (wi - range.start) as u32 >= k)
+        {
             anyhow::bail!(
-                "stopped after {wi} windows as asked (--stop-after-windows); resume with --resume"
+                "stopped after {} windows as asked (--stop-after-windows); resume with --resume",
+                wi - range.start
             );
         }
         if let Some(b) = &bar {
@@ -91,7 +135,7 @@ pub fn run(
         })?;
         // The last window is not journaled: nothing comes after it to hand its
         // terms to, and an interrupted solve is finished by solving it again.
-        let journal = journal.as_ref().filter(|_| wi + 1 < n_windows);
+        let journal = journal.as_ref().filter(|_| wi + 1 < range.end);
         store_window(&w, &mut writer, journal, &run)?;
         stored += w.leaves.len() as u64;
         frame_cells += w.frame_cells;
@@ -116,6 +160,11 @@ pub fn run(
         estimated_error: run.stats.rounds.last().map_or(0.0, |r| r.estimated_error),
         residual: last_residual,
     };
+    let span = match &plan {
+        Some(p) => p.span_of(&range),
+        None => [scene.time.start, scene.time.end],
+    };
+    writer.set_provenance(provenance(&key, n_windows, &range, shard, span));
     writer
         .finish(&stats)
         .with_context(|| format!("writing {}", out.display()))?;
@@ -129,7 +178,14 @@ pub fn run(
     }
     if !quiet {
         let cells = (stored, frame_cells);
-        eprintln!("{}", finish_line(&run, done, stats.seconds, cells, &out));
+        let line = finish_line(&run, done, stats.seconds, cells, &out);
+        match shard {
+            Some(s) => eprintln!(
+                "shard {} of {} (windows {}..{}): {line}",
+                s.index, s.count, range.start, range.end
+            ),
+            None => eprintln!("{line}"),
+        }
     }
     if output.stats {
         println!("{}", memory_report(&run, stem, stored));
@@ -138,6 +194,80 @@ pub fn run(
     drop(run);
     if let Some(journal) = journal {
         journal.finish()?;
+    }
+    Ok(())
+}
+
+/// The provenance record of a file holding windows `range` of `windows`, keyed by
+/// the solve's fingerprint `key`, as `shard` (none: the whole solve, shard 0 of 1).
+fn provenance(
+    key: &str,
+    windows: usize,
+    range: &std::ops::Range<usize>,
+    shard: Option<Shard>,
+    time: [f64; 2],
+) -> ProvenanceRecord {
+    let s = shard.unwrap_or(Shard { index: 0, count: 1 });
+    ProvenanceRecord {
+        fingerprint: key.to_string(),
+        windows: windows as u32,
+        first: range.start as u32,
+        end: range.end as u32,
+        shard: s.index as u32,
+        shards: s.count as u32,
+        time,
+    }
+}
+
+/// Writes the part of a shard that holds no window (more shards than windows):
+/// the scene, its patches as the solver would make them, no chunk, and the
+/// provenance that tells `rhier merge` it is there. Nothing is solved.
+#[allow(clippy::too_many_arguments)]
+fn write_empty_shard(
+    args: &Args,
+    scene: &Scene,
+    opts: &SolveOptions,
+    plan: &Plan,
+    shard: Shard,
+    key: &str,
+    out: &std::path::Path,
+    start: Instant,
+) -> anyhow::Result<()> {
+    let patches = rhier::solver::spacetime::plan_patches(scene, opts);
+    let header = SolutionHeader {
+        scene,
+        patches: &patches.geometry,
+    };
+    let mut writer = Writer::create(out, &header, WriteOptions::default())
+        .with_context(|| format!("creating {}", out.display()))?;
+    let range = plan.shards(shard.count)[shard.index].clone();
+    let span = plan.span_of(&range);
+    writer.set_provenance(provenance(
+        key,
+        plan.windows.len(),
+        &range,
+        Some(shard),
+        span,
+    ));
+    let stats = SolveStats {
+        seconds: start.elapsed().as_secs_f64(),
+        estimated_error: f64::NAN,
+        ..SolveStats::default()
+    };
+    writer
+        .finish(&stats)
+        .with_context(|| format!("writing {}", out.display()))?;
+    if let Some(path) = &args.output.report {
+        write_report(path, &mut [])?;
+    }
+    if !args.output.quiet {
+        eprintln!(
+            "shard {} of {}: no window ({} windows in all); wrote {} holding none",
+            shard.index,
+            shard.count,
+            plan.windows.len(),
+            out.display()
+        );
     }
     Ok(())
 }
@@ -167,6 +297,7 @@ fn open_journal(
     out: &std::path::Path,
     key: &str,
     resume: bool,
+    first: usize,
 ) -> anyhow::Result<(Option<Journal>, usize)> {
     // A device or FIFO (`-o /dev/null`) is written in place at the end (see the
     // store's writer): nothing could be resumed into it, so it gets no journal beside
@@ -180,29 +311,29 @@ fn open_journal(
         }
         Ok((None, 0))
     } else if resume {
-        let (j, done) = Journal::resume(out, key)?;
+        let (j, done) = Journal::resume_from(out, key, first as u32)?;
         Ok((Some(j), done as usize))
     } else {
         Ok((Some(Journal::create(out, key)?), 0))
     }
 }
 
-/// Writes the `done` windows `journal` holds to `writer` and hands `run` the terms
-/// the last of them handed on; returns the stored cells and the frame cells.
+/// Writes the windows `done` that `journal` holds to `writer` and hands `run` the
+/// terms the last of them handed on; returns the stored cells and the frame cells.
 fn replay_journal(
     journal: &Journal,
-    done: usize,
+    done: std::ops::Range<usize>,
     run: &mut SpaceTime,
     writer: &mut Writer,
 ) -> anyhow::Result<(u64, u64)> {
     let (mut stored, mut frame_cells) = (0u64, 0u64);
     // The next window starts from the terms the last journaled one handed on.
-    if done > 0 {
-        journal.read_kept(done as u32 - 1, |r, len, path| {
+    if !done.is_empty() {
+        journal.read_kept(done.end as u32 - 1, |r, len, path| {
             run.decode_carried(r, len, path)
         })?;
     }
-    for wi in 0..done {
+    for wi in done {
         let w = journal.read(wi as u32)?;
         writer.write_chunk(w.t0, w.t1, &w.leaves)?;
         stored += w.leaves.len() as u64;

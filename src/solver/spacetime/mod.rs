@@ -24,6 +24,10 @@
 //!    animation's length; the final-gather terms that still hold are the only state
 //!    handed to the next window (and journaled beside it).
 //!
+//! **Shards.** The windows, cut into contiguous runs of about equal estimated cost,
+//! can be solved on separate machines, each run's first window from a cold cache
+//! (`shards.rs`; `rhier solve --shard K/N`, `rhier merge`).
+//!
 //! **Elements with time ranges.** A cell whose corners hold over consecutive frames
 //! becomes one leaf with a longer time range (`merge.rs`; §4.3, eq. 8–9).
 //!
@@ -44,6 +48,7 @@ pub(in crate::solver) mod interpolate;
 pub(in crate::solver) mod kept_terms;
 mod merge;
 mod plan;
+mod shards;
 #[cfg(test)]
 mod tests;
 pub(in crate::solver) mod window;
@@ -55,6 +60,7 @@ pub use plan::{
     MAX_KEY_FRAMES, Step, WINDOW_KEYS, WindowPlan, frame_motion, solve_order, swept_boxes,
     time_layout,
 };
+pub use shards::{FREE_COST, Plan, START_COST, TESTED_COST, plan, plan_patches, split_bounds};
 
 pub use super::frames::frame_instants;
 use super::frames::frame_range;
@@ -462,6 +468,11 @@ impl<'a> SpaceTime<'a> {
     /// Number of windows.
     pub fn window_count(&self) -> usize {
         self.windows.len()
+    }
+
+    /// Frame times and keyframes of every window (what [`plan`] plans).
+    pub fn windows(&self) -> &[WindowPlan] {
+        &self.windows
     }
 
     /// Index of the first frame of window `w`.

@@ -266,7 +266,10 @@ fn cli_probe_play_and_inspect_read_back_the_written_box() {
         String::from_utf8_lossy(&out.stderr)
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["header"]["version"], 1);
+    // Format version 2 (issue 50); without a provenance section a version-1
+    // reader reads the file.
+    assert_eq!(v["header"]["version"], 2);
+    assert_eq!(v["header"]["min_reader_version"], 1);
     assert_eq!(v["scene"]["patches"], 7);
     assert_eq!(v["verified_leaves"], 5 * 4 + 2 * 4);
     assert_eq!(v["memory"]["chunks"][0]["leaves"], 5 * 4 + 2 * 4);

@@ -1,4 +1,4 @@
-//! Committed sample files (`tests/data/`): the valid version-1 samples still read and
+//! Committed sample files (`tests/data/`): the valid version-1 and version-2 samples read and
 //! hold what their generator put in; every corrupted sample is refused with an error
 //! naming the file, the place and what was expected.
 //!
@@ -10,10 +10,9 @@ use std::path::{Path, PathBuf};
 
 use rhier::playback::{SolutionView, probe};
 use rhier::store::format::{ENTRY_LEN, HEADER_LEN, crc32};
+use rhier::store::records::ProvenanceRecord;
 use rhier::store::samples::{animated_box, box_solution};
-use rhier::store::{
-    Codec, Reader, SectionKind, SolutionHeader, WriteOptions, Writer, write_solution,
-};
+use rhier::store::{Codec, Reader, SectionKind, SolutionHeader, WriteOptions, Writer};
 
 fn data() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
@@ -77,10 +76,10 @@ fn corruptions(valid: &[u8]) -> Vec<(&'static str, Vec<u8>, &'static str)> {
     b[1] = b'X';
     out.push(("wrong_magic.rhier", b, "magic"));
     let mut b = valid.to_vec();
-    b[12..16].copy_from_slice(&2u32.to_le_bytes());
-    b[16..20].copy_from_slice(&2u32.to_le_bytes());
+    b[12..16].copy_from_slice(&3u32.to_le_bytes());
+    b[16..20].copy_from_slice(&3u32.to_le_bytes());
     reseal(&mut b);
-    out.push(("future_version.rhier", b, "needing a reader of version 2"));
+    out.push(("future_version.rhier", b, "needing a reader of version 3"));
     let mut b = valid.to_vec();
     let e = entry_of(valid, SectionKind::Chunk, 0);
     b[e + 16..e + 24].copy_from_slice(&(1u64 << 60).to_le_bytes());
@@ -130,10 +129,39 @@ fn regenerate_samples() {
     );
     let dir = data();
     std::fs::create_dir_all(&dir).unwrap();
-    let sample = animated_box(1, 2);
+    // The version-1 samples were written by the version-1 writer and are kept as
+    // they are; the current writer makes the version-2 one.
+    write_v2_part(&dir.join("v2_part.rhier"));
     let valid = dir.join("v1_animated.rhier");
+    let bytes = std::fs::read(&valid).unwrap();
+    for (name, b, _) in corruptions(&bytes) {
+        std::fs::write(dir.join(name), b).unwrap();
+    }
+}
+
+/// The provenance of the version-2 sample: shard 1 of 3 holding windows 2..4 of 5.
+fn v2_provenance() -> ProvenanceRecord {
+    ProvenanceRecord {
+        fingerprint: "rhier space-time journal 4\nsample\n".into(),
+        windows: 5,
+        first: 2,
+        end: 4,
+        shard: 1,
+        shards: 3,
+        time: [0.0, 1.0],
+    }
+}
+
+/// Writes the version-2 sample: `animated_box(1, 2)` with [`v2_provenance`].
+fn write_v2_part(path: &Path) {
+    write_animated(path, Some(v2_provenance()));
+}
+
+/// Writes `animated_box(1, 2)` in its chunks, with `provenance` if given.
+fn write_animated(path: &Path, provenance: Option<ProvenanceRecord>) {
+    let sample = animated_box(1, 2);
     let mut w = Writer::create(
-        &valid,
+        path,
         &SolutionHeader::of(&sample.solution),
         WriteOptions::default(),
     )
@@ -141,16 +169,41 @@ fn regenerate_samples() {
     for (t0, t1, leaves) in &sample.chunks {
         w.write_chunk(*t0, *t1, leaves).unwrap();
     }
-    w.finish(&sample.solution.stats).unwrap();
-    let opts = WriteOptions {
-        compress: false,
-        keep_links: false,
-    };
-    write_solution(&dir.join("v1_static_raw.rhier"), &box_solution(1), opts).unwrap();
-    let bytes = std::fs::read(&valid).unwrap();
-    for (name, b, _) in corruptions(&bytes) {
-        std::fs::write(dir.join(name), b).unwrap();
+    if let Some(p) = provenance {
+        w.set_provenance(p);
     }
+    w.finish(&sample.solution.stats).unwrap();
+}
+
+#[test]
+fn the_version_2_sample_reads_with_its_provenance() {
+    let path = data().join("v2_part.rhier");
+    let r = Reader::open(&path).unwrap();
+    assert_eq!((r.header().version, r.header().min_reader_version), (2, 2));
+    assert_eq!(r.provenance(), Some(&v2_provenance()));
+    let want = animated_box(1, 2).solution;
+    assert_eq!(r.to_solution().unwrap().leaves, want.leaves);
+    // The current writer makes the same bytes.
+    let dir = tempfile::tempdir().unwrap();
+    let again = dir.path().join("v2.rhier");
+    write_v2_part(&again);
+    assert_eq!(
+        std::fs::read(&again).unwrap(),
+        std::fs::read(&path).unwrap()
+    );
+    // Without a provenance section a version-1 reader reads the file as it is:
+    // version 2, needing a reader of version 1; the v1 file's sections, byte for
+    // byte, after the header.
+    let plain = dir.path().join("plain.rhier");
+    write_animated(&plain, None);
+    let r = Reader::open(&plain).unwrap();
+    assert_eq!((r.header().version, r.header().min_reader_version), (2, 1));
+    assert!(r.provenance().is_none());
+    let (a, b) = (
+        std::fs::read(&plain).unwrap(),
+        std::fs::read(data().join("v1_animated.rhier")).unwrap(),
+    );
+    assert_eq!(a[HEADER_LEN..], b[HEADER_LEN..]);
 }
 
 #[test]
