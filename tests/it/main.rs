@@ -14,6 +14,7 @@ mod common;
 mod flatland;
 mod formats;
 mod geometry;
+mod interactive;
 mod playback;
 mod reference;
 mod scene;

@@ -7,7 +7,7 @@
 //! and settings made of the arguments) is in [`common`], which imports none of
 //! them; this module reads the arguments once and hands them to the way that fits.
 
-mod common;
+pub(super) mod common;
 mod per_frame;
 mod spacetime;
 mod static_scene;

@@ -1,0 +1,1 @@
+//! The `rhier interact` command line.
