@@ -138,7 +138,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (scene, _stem) = match &args.from {
         Some(from) => {
             let r = Reader::open(from).with_context(|| format!("reading {}", from.display()))?;
-            let links = r.links().with_context(|| format!("reading {}", from.display()))?;
+            let links = r
+                .links()
+                .with_context(|| format!("reading {}", from.display()))?;
             if links.is_empty() {
                 anyhow::bail!(
                     "{}: the file holds no links; solve the scene with `rhier solve --keep-links` to interact from it",

@@ -101,15 +101,17 @@ pub fn parse_move(
         }
         let translation = match map.get("translation") {
             None => DVec3::ZERO,
-            Some(t) => DVec3::from_array(numbers::<3>(t).ok_or_else(|| {
-                bad("\"translation\": 3 finite numbers", t.to_string())
-            })?),
+            Some(t) => DVec3::from_array(
+                numbers::<3>(t)
+                    .ok_or_else(|| bad("\"translation\": 3 finite numbers", t.to_string()))?,
+            ),
         };
         let rotation = match map.get("rotation") {
             None => DQuat::IDENTITY,
             Some(r) => {
-                let q = numbers::<4>(r)
-                    .ok_or_else(|| bad("\"rotation\": 4 finite numbers [x,y,z,w]", r.to_string()))?;
+                let q = numbers::<4>(r).ok_or_else(|| {
+                    bad("\"rotation\": 4 finite numbers [x,y,z,w]", r.to_string())
+                })?;
                 let q = DQuat::from_array(q);
                 if (q.length() - 1.0).abs() > UNIT_TOLERANCE {
                     return Err(bad(
@@ -163,7 +165,10 @@ mod tests {
         assert_eq!(m[0].pose.translation, DVec3::new(1.0, 2.0, 3.0));
         assert_eq!(m[0].pose.rotation, DQuat::IDENTITY);
         let h = std::f64::consts::FRAC_1_SQRT_2;
-        let m = parse(&format!(r#"[{{"object": "box", "rotation": [0, {h}, 0, {h}]}}]"#)).unwrap();
+        let m = parse(&format!(
+            r#"[{{"object": "box", "rotation": [0, {h}, 0, {h}]}}]"#
+        ))
+        .unwrap();
         assert_eq!(m[0].pose.translation, DVec3::ZERO);
         assert!((m[0].pose.rotation.y - h).abs() < 1e-15);
     }
@@ -174,8 +179,14 @@ mod tests {
             (r#"{"object": "chair"}"#, "\"chair\""),
             (r#"{"object": "box", "rotation": [0, 0, 0, 2]}"#, "length 2"),
             (r#"{"object": "box", "translation": [0, 1]}"#, "translation"),
-            (r#"{"object": "box", "translation": [0, 1, NaN]}"#, "malformed"),
-            (r#"{"object": "box", "translation": [0, 1, 1e999]}"#, "line 3"),
+            (
+                r#"{"object": "box", "translation": [0, 1, NaN]}"#,
+                "malformed",
+            ),
+            (
+                r#"{"object": "box", "translation": [0, 1, 1e999]}"#,
+                "line 3",
+            ),
             (r#"{"object": "wall"}"#, "held static"),
             (r#"{"object": "box""#, "malformed"),
             (r#"{"object": "box", "scale": [1, 1, 1]}"#, "scale"),

@@ -209,7 +209,10 @@ mod tests {
         p.record(0, m1, transform_box(&m1, b0));
         let b = p.boxes()[0];
         // Two quarter turns: the box sits on the negative x axis.
-        assert!((b.0.x + 2.0).abs() < 1e-9 && (b.1.x + 1.0).abs() < 1e-9, "{b:?}");
+        assert!(
+            (b.0.x + 2.0).abs() < 1e-9 && (b.1.x + 1.0).abs() < 1e-9,
+            "{b:?}"
+        );
         assert!(Predictor::new(Method::None, 3, 1.1, 1).boxes().is_empty());
         assert!("mean:0".parse::<Method>().is_err() && "mean:3".parse::<Method>().is_ok());
     }

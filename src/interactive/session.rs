@@ -9,14 +9,16 @@
 //!    forgotten); a link between two surfaces whose box meets an old or new box is
 //!    tested with its shaft (from the [`ShaftStore`], built on the fly if missing)
 //!    and affected if the shaft meets the box; a link with a cluster end is
-//!    affected if the box of its ends meets one. The predicted boxes of the next
-//!    moves are tested in the same pass (Fig. 1): the shafts they meet are built
-//!    ahead and kept;
+//!    affected if the box of its ends meets one;
 //! 3. evaluates the affected active links again (visibility and form factor),
 //!    adds the children a refined link whose end moved had dropped as empty and
 //!    that exchange light now, then refines and solves the leaf system again,
 //!    warm-started ([`crate::solver::Solver`]'s `settle`);
-//! 4. runs the shaft collector (Fig. 2) and reports [`MoveStats`].
+//! 4. makes ready, in one more pass over the links as the refinement left them,
+//!    the shafts of the links whose ends' box meets a predicted box of the next
+//!    moves or a moved object's box now (the next move's old box): the manager's
+//!    part, Fig. 1 (with `--predict none` shafts are only built on the fly);
+//! 5. runs the shaft collector (Fig. 2) and reports [`MoveStats`].
 //!
 //! With [`Traversal::Every`] step 2 takes every link as affected: the brute force
 //! the tests hold the traversal to. What it does not do yet: re-activate passive
@@ -174,13 +176,12 @@ impl<'a> Session<'a> {
         for (m, &(_, b)) in moves.iter().zip(&new) {
             self.predictor.record(m.object, m.pose.to_affine(), b);
         }
-        let predicted = self.predictor.boxes();
         let t_trav = Instant::now();
         let holding = self.solver.elements_holding(&moved);
         let old: Vec<Aabb> = old.into_iter().map(|x| x.1).collect();
         let new: Vec<Aabb> = new.into_iter().map(|x| x.1).collect();
-        let found = self.traverse(&holding, &old, &new, &predicted);
-        let traversal_s = t_trav.elapsed().as_secs_f64() - self.shafts.seconds;
+        let found = self.traverse(&holding, &old, &new);
+        let mut traversal_s = t_trav.elapsed().as_secs_f64() - self.shafts.seconds;
         let t_solve = Instant::now();
         let (mut active, mut passive) = (Vec::new(), Vec::new());
         {
@@ -214,6 +215,18 @@ impl<'a> Session<'a> {
             self.pairs.insert((e.receiver, e.source), i as u32);
         }
         let solve_s = t_solve.elapsed().as_secs_f64();
+        if self.settings.predict != Method::None {
+            // The manager's part (Fig. 1): the boxes of the next moves, and where the
+            // objects stand now (the next move's old boxes), over the links as the
+            // refinement left them, in one traversal.
+            let t_pred = Instant::now();
+            let shaft_s = self.shafts.seconds;
+            let mut boxes = self.predictor.boxes();
+            boxes.extend(&new);
+            let holding = self.solver.elements_holding(&moved);
+            self.prepare(&holding, &boxes);
+            traversal_s += t_pred.elapsed().as_secs_f64() - (self.shafts.seconds - shaft_s);
+        }
         let links = self.solver.links.len();
         let c0 = self.shafts.counters;
         self.shafts.collect(links);
@@ -285,13 +298,7 @@ impl<'a> Session<'a> {
 
     /// The links the move affects (module docs, step 2), and the shafts the
     /// predicted boxes meet built ahead.
-    fn traverse(
-        &mut self,
-        holding: &[bool],
-        old: &[Aabb],
-        new: &[Aabb],
-        predicted: &[Aabb],
-    ) -> Found {
+    fn traverse(&mut self, holding: &[bool], old: &[Aabb], new: &[Aabb]) -> Found {
         let mut f = Found::default();
         let every = self.settings.traversal == Traversal::Every;
         let geoms = self.solver.elems.geoms.as_slice();
@@ -306,9 +313,7 @@ impl<'a> Session<'a> {
             }
             let (gr, gs) = (&geoms[e.receiver as usize], &geoms[e.source as usize]);
             let reach = union(geom_box(gr), geom_box(gs));
-            let needed = meets_any(reach, &now);
-            let ahead = meets_any(reach, predicted);
-            if !(needed || ahead) {
+            if !meets_any(reach, &now) {
                 if every {
                     f.affected.push(LinkId(l));
                 }
@@ -316,18 +321,10 @@ impl<'a> Session<'a> {
             }
             if gr.patch == u32::MAX || gs.patch == u32::MAX {
                 // A cluster end: the box of both ends is the test.
-                if needed || every {
-                    f.affected.push(LinkId(l));
-                }
+                f.affected.push(LinkId(l));
                 continue;
             }
-            let shaft = self.shafts.get(l, needed, || shaft_between(gr, gs));
-            if !needed {
-                if every {
-                    f.affected.push(LinkId(l));
-                }
-                continue;
-            }
+            let shaft = self.shafts.get(l, true, || shaft_between(gr, gs));
             let mut hit = false;
             for (k, b) in now.iter().enumerate() {
                 if !meets_any(reach, std::slice::from_ref(b)) {
@@ -348,6 +345,37 @@ impl<'a> Session<'a> {
             }
         }
         f
+    }
+}
+
+impl Session<'_> {
+    /// Makes ready the shafts of the links between two surfaces, neither holding a
+    /// moved object, whose ends' box meets one of `boxes` (built ahead, or
+    /// restored; a stored shaft's age is reset).
+    fn prepare(&mut self, holding: &[bool], boxes: &[Aabb]) {
+        if boxes.is_empty() {
+            return;
+        }
+        let geoms = self.solver.elems.geoms.as_slice();
+        let ends = self.solver.links.ends.as_slice();
+        let around = boxes
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |a, &b| union(a, b));
+        for (i, e) in ends.iter().enumerate() {
+            let (r, s) = (e.receiver as usize, e.source as usize);
+            let (gr, gs) = (&geoms[r], &geoms[s]);
+            if holding.get(r).copied().unwrap_or(false)
+                || holding.get(s).copied().unwrap_or(false)
+                || gr.patch == u32::MAX
+                || gs.patch == u32::MAX
+            {
+                continue;
+            }
+            let reach = union(geom_box(gr), geom_box(gs));
+            if meets_any(reach, std::slice::from_ref(&around)) && meets_any(reach, boxes) {
+                self.shafts.get(i as u32, false, || shaft_between(gr, gs));
+            }
+        }
     }
 }
 

@@ -315,7 +315,10 @@ mod tests {
         assert_eq!(s.counters.restored, 1);
         assert_eq!(a.to_bytes(), b.to_bytes());
         let probe = (DVec3::new(0.2, 0.4, 0.9), DVec3::new(0.3, 0.5, 1.1));
-        assert_eq!(a.misses_box(probe.0, probe.1), b.misses_box(probe.0, probe.1));
+        assert_eq!(
+            a.misses_box(probe.0, probe.1),
+            b.misses_box(probe.0, probe.1)
+        );
         assert_eq!(s.compressed_bytes(), 0);
     }
 

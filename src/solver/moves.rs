@@ -176,6 +176,11 @@ impl<'a> Solver<'a> {
             self.index_links();
             residual = self.solve_rows()?;
             wave = self.active_links(false);
+            if pass == 0 {
+                // A cluster source's coefficient depends on its radiosity (its
+                // visibility points are drawn by power): the move changed it.
+                self.reevaluate_cluster_sources(&wave);
+            }
         }
         Ok(Settled {
             refined: self.links.counts().1 - passive0,

@@ -4,3 +4,4 @@
 
 mod cli;
 mod moves;
+mod shafts;

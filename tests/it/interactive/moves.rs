@@ -18,7 +18,7 @@ use crate::common::shapes::{Tiling, tiled_box, tiled_rect};
 
 /// A 4 × 2.5 × 4 room (tiled as `tiling`) lit by a ceiling lamp, with a
 /// 0.6 × 0.5 × 0.6 box "crate" at `[1.0, y, 1.4]` (`y = 0`: on the floor).
-fn room(tiling: Tiling, y: f64) -> Scene {
+pub fn room(tiling: Tiling, y: f64) -> Scene {
     let (white, lamp, red) = (MaterialId(0), MaterialId(1), MaterialId(2));
     let mut walls = tiled_box(DVec3::ZERO, DVec3::new(4.0, 2.5, 4.0), tiling, true, white);
     walls.extend(tiled_rect(
@@ -59,7 +59,7 @@ fn room(tiling: Tiling, y: f64) -> Scene {
 /// Settings light enough for a test, the same for the session and the fresh solves.
 fn options() -> SolveOptions {
     SolveOptions {
-        eps: 0.5,
+        eps: 0.25,
         max_rounds: 6,
         ..SolveOptions::default()
     }
@@ -101,6 +101,27 @@ fn posed(scene: &Scene, pose: Pose) -> Scene {
     s
 }
 
+/// `pts` without the floor points under the crate when it stands on the floor
+/// (inside a solid: what a probe finds there is arbitrary).
+fn outside(scene: &Scene, pts: Vec<ProbePoint>) -> Vec<ProbePoint> {
+    let (lo, hi) = scene.objects[1]
+        .polygons
+        .iter()
+        .flat_map(|p| &p.vertices)
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    let pad = 0.02;
+    pts.into_iter()
+        .filter(|q| {
+            !(lo.y < 1e-9
+                && q.p.y < 1e-9
+                && (lo.x - pad..=hi.x + pad).contains(&q.p.x)
+                && (lo.z - pad..=hi.z + pad).contains(&q.p.z))
+        })
+        .collect()
+}
+
 /// Relative RMS error of `b` against `r` and the worst point's relative error.
 fn error(b: &[[f64; 3]], r: &[[f64; 3]]) -> (f64, f64) {
     let (mut num, mut den, mut worst) = (0.0, 0.0, 0.0f64);
@@ -134,8 +155,9 @@ fn check_moves(what: &str, scene: &Scene, poses: &[Pose]) {
     let stage = Stage::new(scene, Some(&movable)).unwrap();
     let mut fast = Session::start(&stage, options(), settings(Traversal::Affected)).unwrap();
     let mut brute = Session::start(&stage, options(), settings(Traversal::Every)).unwrap();
-    let pts = points();
     for (i, &pose) in poses.iter().enumerate() {
+        let ref_scene = posed(scene, pose);
+        let pts = outside(&ref_scene, points());
         let m = [ObjectMove { object: 1, pose }];
         let stats = fast.apply(&m).unwrap();
         brute.apply(&m).unwrap();
@@ -160,41 +182,54 @@ fn check_moves(what: &str, scene: &Scene, poses: &[Pose]) {
             missed.len(),
             &missed[..missed.len().min(10)]
         );
-        assert!(stats.links_affected > 0 && stats.links_reevaluated > 0, "{stats:?}");
+        assert!(
+            stats.links_affected > 0 && stats.links_reevaluated > 0,
+            "{stats:?}"
+        );
         assert!(
             stats.links_affected < brute.solver().links.len() as u64,
             "{what}: the traversal took every link"
         );
         let b = probe(&fast.solution(), &pts, 0.0).unwrap();
         let b_brute = probe(&brute.solution(), &pts, 0.0).unwrap();
-        let ref_scene = posed(scene, pose);
         let ref_stage = Stage::new(&ref_scene, Some(&movable)).unwrap();
         let fresh = Session::start(&ref_stage, options(), settings(Traversal::Affected)).unwrap();
         let b_ref = probe(&fresh.solution(), &pts, 0.0).unwrap();
         let (rms, worst) = error(&b, &b_ref);
-        if std::env::var("RHIER_DEBUG_INTERACT").is_ok() {
-            let fine = Session::start(&ref_stage, SolveOptions { eps: 0.125, ..options() }, settings(Traversal::Affected)).unwrap();
-            let b_fine = probe(&fine.solution(), &pts, 0.0).unwrap();
-            eprintln!("fine vs fresh {:?}, fine vs fast {:?}", error(&b_ref, &b_fine), error(&b, &b_fine));
-            let mut idx: Vec<usize> = (0..pts.len()).collect();
-            let rel = |k: usize| error(&b[k..k + 1], &b_ref[k..k + 1]).0;
-            idx.sort_by(|&a, &c| rel(c).total_cmp(&rel(a)));
-            for &k in &idx[..6] {
-                eprintln!("{:?} {:?} fast {:.4} ref {:.4} fine {:.4}", pts[k].p, pts[k].n, b[k][1], b_ref[k][1], b_fine[k][1]);
-            }
-        }
+        // A finer solve of the configuration: how far each answer is from the truth.
+        let fine_opts = SolveOptions {
+            eps: options().eps / 2.0,
+            ..options()
+        };
+        let fine = Session::start(&ref_stage, fine_opts, settings(Traversal::Affected)).unwrap();
+        let b_fine = probe(&fine.solution(), &pts, 0.0).unwrap();
+        let (fast_fine, _) = error(&b, &b_fine);
+        let (fresh_fine, _) = error(&b_ref, &b_fine);
         let (rms_brute, worst_brute) = error(&b, &b_brute);
         eprintln!(
-            "{what}, move {i}: against a fresh solve {:.3}% RMS (worst point {:.2}%), against the brute force {:.4}% (worst {:.3}%); {} of {} links affected",
+            "{what}, move {i}: against a fresh solve {:.3}% RMS (worst point {:.2}%), against the brute force {:.4}% (worst {:.3}%); against a solve at eps / 2: {:.3}% (the fresh solve {:.3}%); {} of {} links affected",
             100.0 * rms,
             100.0 * worst,
             100.0 * rms_brute,
             100.0 * worst_brute,
+            100.0 * fast_fine,
+            100.0 * fresh_fine,
             stats.links_affected,
             stats.links_total
         );
-        assert!(rms < 0.01, "{what}, move {i}: {rms} against a fresh solve");
-        assert!(rms_brute < 0.005, "{what}, move {i}: {rms_brute} against the brute force");
+        // Two solves of one configuration whose hierarchies differ differ by about
+        // their own error (here 1-2% against the finer solve): the bar is that the
+        // update is as close to the finer solve as the fresh solve is, within 1%,
+        // and within 2% of the fresh solve.
+        assert!(rms < 0.02, "{what}, move {i}: {rms} against a fresh solve");
+        assert!(
+            fast_fine < fresh_fine + 0.01,
+            "{what}, move {i}: {fast_fine} against the finer solve, the fresh solve {fresh_fine}"
+        );
+        assert!(
+            rms_brute < 0.005,
+            "{what}, move {i}: {rms_brute} against the brute force"
+        );
     }
 }
 
@@ -219,7 +254,11 @@ fn turn(angle: f64, y: f64) -> Pose {
 fn a_hovering_box_casts_its_shadow_where_a_fresh_solve_does() {
     for tiling in [Tiling::Quads(2), Tiling::UnequalTriangles(2)] {
         let scene = room(tiling, 0.6);
-        let moves = [shift(0.2, 0.0, 0.0), shift(0.4, 0.1, -0.2), shift(0.6, 0.1, -0.4)];
+        let moves = [
+            shift(0.2, 0.0, 0.0),
+            shift(0.4, 0.1, -0.2),
+            shift(0.6, 0.1, -0.4),
+        ];
         check_moves(&format!("hovering {tiling:?}"), &scene, &moves);
     }
 }
@@ -228,7 +267,11 @@ fn a_hovering_box_casts_its_shadow_where_a_fresh_solve_does() {
 fn a_box_sliding_on_the_floor_keeps_its_contacts_right() {
     for tiling in [Tiling::Quads(2), Tiling::UnequalTriangles(2)] {
         let scene = room(tiling, 0.0);
-        let moves = [shift(0.25, 0.0, 0.0), shift(0.5, 0.0, 0.1), shift(0.75, 0.0, 0.2)];
+        let moves = [
+            shift(0.25, 0.0, 0.0),
+            shift(0.5, 0.0, 0.1),
+            shift(0.75, 0.0, 0.2),
+        ];
         check_moves(&format!("sliding {tiling:?}"), &scene, &moves);
     }
 }
