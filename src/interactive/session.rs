@@ -4,7 +4,7 @@
 //! A move ([`Session::apply`]):
 //! 1. places the moved objects (patches, elements, clusters, BVH parts) and records
 //!    their boxes before and after;
-//! 2. traverses the links once ([`Session::traverse`]): a link with an end that
+//! 2. traverses the links once (`Session::traverse`): a link with an end that
 //!    holds a moved object is affected without a test (its shaft, stale now, is
 //!    forgotten); a link between two surfaces whose box meets an old or new box is
 //!    tested with its shaft (from the [`ShaftStore`], built on the fly if missing)
