@@ -5,6 +5,7 @@ shafts stored three ways, update time per move (median, 95th percentile), reside
 shaft bytes and shafts built on the fly side by side.
 
 usage: tools/interactive_bench.py OUT_DIR [--tables N] [--moves M] [--eps E] [--rhier BIN]
+                                  [--paths straight,curved,jittery] [--modes all,budget,none]
 
 Writes OUT_DIR/room.json (a 6 x 6 m room, a lamp, N x N tables of 4 legs and a top,
 a chair of 5 boxes, each box's faces cut in 2 x 2 quads: N = 15, the default, gives
@@ -146,12 +147,18 @@ def main():
     print(f"{n} polygons -> {path}", file=sys.stderr)
     print("| path | shafts | median ms | p95 ms | resident KiB (last) | all shafts KiB | built on the fly (after move 2) |")
     print("|---|---|---|---|---|---|---|")
+    want_paths = opt("--paths", "straight,curved,jittery").split(",")
+    want_modes = opt("--modes", ",".join(MODES)).split(",")
     for name, ts in paths(moves).items():
+        if name not in want_paths:
+            continue
         mv = os.path.join(out, f"{name}.jsonl")
         with open(mv, "w") as f:
             for t in ts:
                 f.write(json.dumps({"object": "chair", "translation": t}) + "\n")
         for mode, flags in MODES.items():
+            if mode not in want_modes:
+                continue
             st = os.path.join(out, f"{name}-{mode}.jsonl")
             cmd = [rhier, "interact", path, "--movable", "chair", "--moves", mv, "--stats", st,
                    "--eps", eps, "-q"] + flags

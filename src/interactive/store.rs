@@ -158,7 +158,10 @@ impl ShaftStore {
     pub fn get(&mut self, l: u32, now: bool, build: impl FnOnce() -> Shaft) -> Shaft {
         if let Some(r) = self.resident.get_mut(&l) {
             r.age = 0;
-            self.counters.existing += 1;
+            // Table 2's "already existing": found when a move needed it.
+            if now {
+                self.counters.existing += 1;
+            }
             return r.shaft;
         }
         let start = Instant::now();
