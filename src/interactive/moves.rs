@@ -13,10 +13,13 @@ use serde_json::Value;
 
 use crate::{Error, Result};
 
+const _: () = assert!(std::mem::size_of::<Pose>() == 56);
+const _: () = assert!(std::mem::size_of::<ObjectMove>() == 64);
+
 /// How far from 1 a rotation quaternion's length may be.
 pub const UNIT_TOLERANCE: f64 = 1e-6;
 
-/// One object's pose in a move. 64 bytes.
+/// One object's pose in a move. 56 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pose {
     /// Translation applied after the rotation.
@@ -38,7 +41,7 @@ impl Pose {
     }
 }
 
-/// One object of a move: its index in the scene and its new pose. 72 bytes.
+/// One object of a move: its index in the scene and its new pose. 64 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ObjectMove {
     /// Object index in the scene.
