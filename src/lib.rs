@@ -22,6 +22,7 @@
 //! | [`pools`] | storage backends (RAM, mmap) and struct-of-arrays arenas with `u32` ids |
 //! | [`oracle`] | refinement decisions: keep a link, split receiver, split source |
 //! | [`solver`] | hierarchical radiosity: clusters, refinement, GMRES, reconstruction; animations in time windows ([`solver::spacetime`]) or frame by frame ([`solver::per_frame`]) |
+//! | [`interactive`] | interactive updates: moves applied one at a time through the line-space hierarchy, shafts kept under a budget |
 //! | [`shafts`] | shafts between elements (Haines & Wallace) for visibility culling |
 //! | [`store`] | the `.rhier` file: writer, reader, validation; the journal `solve --resume` continues from |
 //! | [`playback`] | evaluation of a stored solution: probes, frames, exports |
@@ -31,6 +32,7 @@
 pub mod error;
 pub mod flatland;
 pub mod geometry;
+pub mod interactive;
 pub mod oracle;
 pub mod playback;
 pub mod pools;

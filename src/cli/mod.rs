@@ -6,6 +6,7 @@
 
 mod flatland;
 mod inspect;
+mod interact;
 mod merge;
 mod play;
 mod probe;
@@ -47,6 +48,14 @@ enum Command {
     Play(play::Args),
     /// What a `.rhier` file holds and what it costs in memory.
     Inspect(inspect::Args),
+    /// Move objects of a solved scene one move at a time (moves as JSON lines).
+    ///
+    /// The scene is solved, then each line of `--moves` (or standard input with
+    /// `-`) moves objects; the radiosity is brought up to date by the links the move
+    /// affects only (line-space hierarchy, shafts stored near the moving objects
+    /// under a budget). One statistics line per move (`--stats`), probes after each
+    /// move (`--probe`), and the session as an animation (`-o`). formats/interactive.md.
+    Interact(Box<interact::Args>),
     /// Exact 2D radiosity with the visibility complex.
     Flatland(flatland::Args),
     /// Independent Monte Carlo reference radiosity at probe points.
@@ -77,6 +86,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Probe(a)) => probe::run(a),
         Some(Command::Play(a)) => play::run(a),
         Some(Command::Inspect(a)) => inspect::run(a),
+        Some(Command::Interact(a)) => interact::run(*a),
         Some(Command::Flatland(a)) => flatland::run(a),
         Some(Command::Reference(a)) => reference::run(a),
         Some(Command::Plan(a)) => solve::plan::run(*a),

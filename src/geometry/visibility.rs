@@ -275,9 +275,18 @@ impl SceneBvh {
     /// Moves every moving object's BVH to its place at time `t` (no rebuild: only
     /// the part's transform changes).
     pub fn place(&mut self, scene: &Scene, t: f64) {
+        self.place_with(|o| scene.objects.get(o as usize).map(|obj| obj.to_world(t)));
+    }
+
+    /// Moves the BVH of each moving object `o` for which `world(o)` gives its
+    /// object → world map (no rebuild: only the part's transform changes).
+    pub fn place_with(&mut self, world: impl Fn(u32) -> Option<DAffine3>) {
         for part in &mut self.parts {
-            if let Some(obj) = scene.objects.get(part.object as usize) {
-                part.local_to_world = obj.to_world(t) * from_unit(part.unit);
+            if part.object == u32::MAX {
+                continue;
+            }
+            if let Some(m) = world(part.object) {
+                part.local_to_world = m * from_unit(part.unit);
                 part.world_to_local = part.local_to_world.inverse();
                 part.update_box();
             }

@@ -99,6 +99,51 @@ impl Shaft {
         false
     }
 
+    /// The shaft's numbers, little-endian, its used planes only: what a shaft store
+    /// keeps of an evicted shaft ([`Shaft::from_bytes`] gives it back bit for bit).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(8 * (8 + 4 * self.count + 8));
+        let mut put = |x: f64| out.extend_from_slice(&x.to_le_bytes());
+        put(self.count as f64);
+        put(self.eps);
+        self.lo.to_array().into_iter().for_each(&mut put);
+        self.hi.to_array().into_iter().for_each(&mut put);
+        for &(n, d) in self.ends.iter().chain(&self.planes[..self.count]) {
+            n.to_array().into_iter().for_each(&mut put);
+            put(d);
+        }
+        out
+    }
+
+    /// The shaft [`Shaft::to_bytes`] wrote, or `None` for bytes it cannot have
+    /// written.
+    pub fn from_bytes(b: &[u8]) -> Option<Shaft> {
+        let x: Vec<f64> = b
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+            .collect();
+        let count = *x.first()? as usize;
+        if b.len() % 8 != 0 || count > MAX_PLANES || x.len() != 8 + 4 * (2 + count) {
+            return None;
+        }
+        let plane = |i: usize| {
+            let k = 8 + 4 * i;
+            (DVec3::new(x[k], x[k + 1], x[k + 2]), x[k + 3])
+        };
+        let mut planes = [(DVec3::ZERO, 0.0); MAX_PLANES];
+        for (i, p) in planes[..count].iter_mut().enumerate() {
+            *p = plane(2 + i);
+        }
+        Some(Shaft {
+            lo: DVec3::new(x[2], x[3], x[4]),
+            hi: DVec3::new(x[5], x[6], x[7]),
+            planes,
+            count,
+            ends: [plane(0), plane(1)],
+            eps: x[1],
+        })
+    }
+
     /// True if no triangle of `bvh` other than those of patches `skip` can block a
     /// segment between the two polygons.
     pub fn is_clear(&self, bvh: &SceneBvh, skip: [u32; 2]) -> bool {

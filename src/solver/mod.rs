@@ -42,6 +42,7 @@ pub mod frames;
 mod gather;
 pub mod gmres;
 pub mod hierarchy;
+pub(crate) mod moves;
 pub mod per_frame;
 mod reconstruct;
 pub mod report;
@@ -1376,11 +1377,24 @@ impl<'a> Solver<'a> {
         if !self.has_motion() {
             return;
         }
+        let scene = self.scene;
+        self.place_patches(|o| Some(scene.objects[o as usize].to_world(t)));
+        self.bvh.place(self.scene, t);
+        self.motion.moving_now = self.bvh.moving_boxes();
+        self.motion.now = t;
+    }
+
+    /// Places the patches of each moving object `o` for which `world(o)` gives its
+    /// object → world map, their elements, and the boxes and cones of the clusters
+    /// that hold moving patches (not the BVH: [`SceneBvh::place`]).
+    pub(crate) fn place_patches(&mut self, world: impl Fn(u32) -> Option<glam::DAffine3>) {
         for i in 0..self.patches.len() {
             if !self.motion.moving_patch[i] {
                 continue;
             }
-            let m = self.scene.objects[self.patches.objects[i] as usize].to_world(t);
+            let Some(m) = world(self.patches.objects[i]) else {
+                continue;
+            };
             let g = self.patches.geometry[i];
             let k = g.corners as usize;
             let world: Vec<DVec3> = g.vertices[..k]
@@ -1455,9 +1469,6 @@ impl<'a> Solver<'a> {
             g.corners[2] = centroid.to_array();
             g.set_cluster_cone(&cone);
         }
-        self.bvh.place(self.scene, t);
-        self.motion.moving_now = self.bvh.moving_boxes();
-        self.motion.now = t;
     }
 
     /// The radiosity scale `B_ref` errors are measured against (see `b_ref`).

@@ -15,6 +15,7 @@ mod farm;
 mod flatland;
 mod formats;
 mod geometry;
+mod interactive;
 mod playback;
 mod reference;
 mod scene;

@@ -541,41 +541,14 @@ impl Args {
     /// The solver settings the arguments ask for (shared by every mode of `solve`),
     /// checked against their domains ([`SolveOptions::validate`]).
     pub fn solve_options(&self) -> anyhow::Result<SolveOptions> {
-        self.accuracy.solve_options(&self.resources)
+        self.accuracy
+            .solve_options(self.resources.storage(false, None))
     }
 
     /// The time settings the arguments ask for, checked
     /// ([`SpaceTimeOptions::validate`]).
     pub fn space_time_options(&self) -> anyhow::Result<SpaceTimeOptions> {
         self.animation.space_time_options(&self.resources)
-    }
-}
-
-impl AccuracyArgs {
-    /// The solver settings these and `resources` ask for (`rhier solve` and `rhier
-    /// plan` read them alike), checked against their domains
-    /// ([`SolveOptions::validate`]).
-    pub fn solve_options(&self, resources: &ResourceArgs) -> anyhow::Result<SolveOptions> {
-        let a = self;
-        let opts = SolveOptions {
-            storage: resources.storage(false, None),
-            eps: a.eps,
-            min_size: a.min_size,
-            recon_tol: a.recon_tol,
-            recon_tol_moving: a.recon_tol_moving,
-            power_size: a.power_size,
-            split_spread: a.split_spread,
-            leaf_shapes: a.leaf_shapes,
-            near_gap: a.near_gap,
-            max_rounds: a.max_rounds,
-            target_error: a.target_error,
-            time_budget: a.time_budget,
-            seed: a.seed,
-            contact_meshing: !a.no_contact_meshing,
-            ..SolveOptions::default()
-        };
-        opts.validate()?;
-        Ok(opts)
     }
 }
 
@@ -598,6 +571,32 @@ impl AnimationArgs {
         };
         st.validate()?;
         Ok(st)
+    }
+}
+
+impl AccuracyArgs {
+    /// The solve's settings these flags give, with the pools in `storage`; checked.
+    pub fn solve_options(&self, storage: Storage) -> anyhow::Result<SolveOptions> {
+        let a = self;
+        let opts = SolveOptions {
+            storage,
+            eps: a.eps,
+            min_size: a.min_size,
+            recon_tol: a.recon_tol,
+            recon_tol_moving: a.recon_tol_moving,
+            power_size: a.power_size,
+            split_spread: a.split_spread,
+            leaf_shapes: a.leaf_shapes,
+            near_gap: a.near_gap,
+            max_rounds: a.max_rounds,
+            target_error: a.target_error,
+            time_budget: a.time_budget,
+            seed: a.seed,
+            contact_meshing: !a.no_contact_meshing,
+            ..SolveOptions::default()
+        };
+        opts.validate()?;
+        Ok(opts)
     }
 }
 

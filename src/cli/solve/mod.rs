@@ -9,7 +9,7 @@
 //! `rhier plan` ([`plan`]) reads the same arguments to show the windows a
 //! space-time solve makes and their split into shards.
 
-mod common;
+pub(super) mod common;
 mod per_frame;
 pub mod plan;
 mod spacetime;

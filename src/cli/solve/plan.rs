@@ -76,7 +76,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !scene.has_motion() {
         anyhow::bail!("{stem} does not move: a static scene is solved whole, in no window");
     }
-    let opts = args.accuracy.solve_options(&args.resources)?;
+    let opts = args
+        .accuracy
+        .solve_options(args.resources.storage(false, None))?;
     let st = args.animation.space_time_options(&args.resources)?;
     rhier::solver::spacetime::static_only(&opts)?;
     let p = plan(&scene, &opts, &st)?;

@@ -421,7 +421,7 @@ impl Solver<'_> {
 
     /// Re-evaluates the links `ids` where the geometry stands now (state and time
     /// class kept).
-    fn reevaluate(&mut self, ids: &[LinkId]) {
+    pub(in crate::solver) fn reevaluate(&mut self, ids: &[LinkId]) {
         if ids.is_empty() {
             return;
         }
