@@ -857,14 +857,9 @@ impl Solver<'_> {
             cv
         } else if t.shaft_clear() {
             let ps = oracle::poly(gs);
-            let f = clear_row_factor(
-                &geoms[leaf.ix()],
-                q,
-                n,
-                &ps,
-                oracle::sphere(gs),
-                ROW_FINE_DEPTH,
-            );
+            let f = (0..q.count)
+                .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
+                .sum();
             // Not what the window keeps anyway.
             if timed && !cacheable {
                 out.passed.push(((leaf.0, l), (f, 1.0)));
@@ -1338,77 +1333,4 @@ impl Solver<'_> {
         self.pull_pool();
         Ok(outcome.residual)
     }
-}
-
-/// [`clear_row_factor`] cuts a leaf while its bounding radius exceeds this times
-/// its distance to the source's bounding sphere.
-const ROW_FINE_RATIO: f64 = 1.0;
-
-/// Deepest a leaf is cut by [`clear_row_factor`].
-const ROW_FINE_DEPTH: u32 = 3;
-
-/// The unoccluded factor from leaf `g` (its rule `q`, normal `n`) to polygon `ps`
-/// (bounding sphere `sphere`): `Σ_q w_q F(x_q → ps)`, the leaf cut into four
-/// (as [`oracle::fine_samples`] cuts it) while it looks large from the source
-/// ([`ROW_FINE_RATIO`]), [`ROW_FINE_DEPTH`] times at most.
-///
-/// Why: four points on a big leaf miss how the factor to a near source peaks
-/// across it. A 6 × 3 × 6 m room with one quad per wall lit by a lamp under its
-/// ceiling had leaf radiosities 2–5% under the mean of the final gather over
-/// them at eps 0.5, the power lost and the whole room dark
-/// (`tests/it/solver/tiled_lamp.rs`).
-fn clear_row_factor(
-    g: &Geom,
-    q: &oracle::Samples,
-    n: DVec3,
-    ps: &crate::geometry::Poly,
-    sphere: (DVec3, f64),
-    depth: u32,
-) -> f64 {
-    let ratio = ROW_FINE_RATIO;
-    let (c, r) = oracle::sphere(g);
-    let d = (c.distance(sphere.0) - sphere.1).max(0.0);
-    if depth == 0 || ratio <= 0.0 || r <= ratio * d {
-        return (0..q.count)
-            .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, ps))
-            .sum();
-    }
-    let k = g.n as usize;
-    let at = |i: usize| DVec3::from_array(g.corners[i]);
-    let pieces: Vec<Vec<DVec3>> = if k == 3 {
-        let (a, b, e) = (at(0), at(1), at(2));
-        let (ab, be, ea) = ((a + b) / 2.0, (b + e) / 2.0, (e + a) / 2.0);
-        vec![
-            vec![a, ab, ea],
-            vec![ab, b, be],
-            vec![ea, be, e],
-            vec![be, ea, ab],
-        ]
-    } else {
-        let (p0, p1, p2, p3) = (at(0), at(1), at(2), at(3));
-        let (m01, m12, m23, m30) = (
-            (p0 + p1) / 2.0,
-            (p1 + p2) / 2.0,
-            (p2 + p3) / 2.0,
-            (p3 + p0) / 2.0,
-        );
-        let mid = (p0 + p1 + p2 + p3) / 4.0;
-        vec![
-            vec![p0, m01, mid, m30],
-            vec![m01, p1, m12, mid],
-            vec![mid, m12, p2, m23],
-            vec![m30, mid, m23, p3],
-        ]
-    };
-    let (mut sum, mut total) = (0.0, 0.0);
-    for piece in &pieces {
-        let mut sub = *g;
-        for (i, v) in piece.iter().enumerate() {
-            sub.corners[i] = v.to_array();
-        }
-        let area = crate::geometry::Poly::new(piece).area_vector().length() / 2.0;
-        total += area;
-        sum += area * clear_row_factor(&sub, &oracle::samples(&sub), n, ps, sphere, depth - 1);
-    }
-    if total > 0.0 { sum / total } else { 0.0 }
 }
