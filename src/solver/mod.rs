@@ -307,7 +307,7 @@ pub struct SolveOptions {
     /// Static solves: reconstruct twice, the second final gather seeing every
     /// leaf source by the first reconstruction's field (cell by cell where it looks
     /// large, by quadrants elsewhere) instead of its constant radiosity
-    /// (`Solver::field_shapes`). On by default; twice the reconstruction's time.
+    /// (`Solver::field_shapes`). Off by default; twice the reconstruction's time.
     /// Why: a point gathering a big leaf at its mean misses how the leaf's
     /// radiosity varies across the part the point sees most (the Cornell ceiling
     /// by a wall; BENCHMARKS.md, "Static solver: error against run time").
@@ -341,7 +341,7 @@ impl Default for SolveOptions {
             split_spread: 0.0,
             leaf_shapes: 0.0,
             near_gap: 0.0,
-            source_field: true,
+            source_field: false,
             row_open_ratio: 0.25,
             cluster_open_ratio: CLUSTER_OPEN_RATIO,
         }
