@@ -6,12 +6,13 @@
 //! [`VertexCache`]); a cell whose centre differs from the mean of its corners by more
 //! than the reconstruction tolerance splits along the directions in which it is
 //! long enough ([`Cell::split_dirs`]), and the cells that stop are stored with
-//! their corner values (bilinear within the cell), each corner raised by the
-//! share of its cells' centre offsets their interpolant misses ([`MEAN_SHIFT`]).
-//! A static solve reconstructs twice ([`super::SolveOptions::source_field`]): the
-//! second final gather sees each leaf source by the first one's field, cell by
-//! cell where the source looks large from the point, by quadrants elsewhere
-//! ([`Solver::field_shapes`]), not by its constant radiosity. In a space-time window the
+//! their corner values (bilinear within the cell), each corner raised, in a
+//! static solve, by the share of its cells' centre offsets their interpolant
+//! misses ([`MEAN_SHIFT`]). With [`super::SolveOptions::source_field`] a static
+//! solve reconstructs twice: the second final gather sees each leaf source by the
+//! first one's field, cell by cell where the source looks large from the point, by
+//! quadrants elsewhere ([`Solver::field_shapes`]), not by its constant radiosity.
+//! In a space-time window the
 //! points a frame between two solved frames may take on the line between theirs
 //! are not gathered ([`super::FrameBetween`]), and every point's value comes back for
 //! later frames to interpolate ([`super::FrameValues`]), with the direct light of the
@@ -515,12 +516,19 @@ impl Solver<'_> {
     }
 
     /// Per gathered point: how far its value is raised so that the cells around
-    /// it hold the mean their centres' gathers say (empty: none).
+    /// it hold the mean their centres' gathers say, [`MEAN_SHIFT`] of each cell's
+    /// centre offset averaged over the cells that share the point by area (empty:
+    /// none, in a space-time window).
     fn mean_shifts(
         &self,
         cache: &VertexCache,
         done: &[(Cell, [usize; 4], usize)],
     ) -> Vec<[f64; 3]> {
+        // Not in a space-time window: its frames between interpolate the points'
+        // gathered values, which would then disagree with the stored cells.
+        if self.st.window.is_some() {
+            return Vec::new();
+        }
         let f = MEAN_SHIFT;
         let mut sum = vec![[0.0f64; 3]; cache.values.len()];
         let mut weight = vec![0.0f64; cache.values.len()];
