@@ -51,6 +51,8 @@ pub(super) struct GatherLimits {
     spheres: Vec<(DVec3, f64)>,
     /// [`SolveOptions::near_gap`].
     near_gap: f64,
+    /// Sources seen by their quadrants ([`super::reconstruct::FieldShapes`]).
+    pub(super) shapes: super::reconstruct::FieldShapes,
 }
 
 impl GatherLimits {
@@ -91,6 +93,14 @@ impl Terms {
         }
     }
 }
+
+/// Second final gather ([`SolveOptions::source_field`]): a leaf source whose
+/// bounding sphere's radius exceeds this times its distance from the point is
+/// gathered cell by cell from the first reconstruction (each cell's exact factor
+/// times its mean), a farther one by its quadrants. Where a point sees a source
+/// large, the source's variation across it is what its mean misses (a ceiling
+/// point by a wall gathers most from the wall's top strip).
+const CELL_OPEN_RATIO: f64 = 0.3;
 
 /// A source is near a point only if the point's normal is within this cosine of
 /// facing it head-on.
@@ -397,9 +407,26 @@ impl Solver<'_> {
             return;
         }
         let ps = oracle::poly(gs);
-        let f = match self.shapes.get(&(s as u32)) {
-            Some(r) => shaped_factor(x, n, gs, r),
-            None => point_to_polygon(x, n, &ps),
+        let cells = limits
+            .shapes
+            .cells
+            .get(&(s as u32))
+            .filter(|_| rad / d > CELL_OPEN_RATIO);
+        let f = if let Some(cells) = cells {
+            cells
+                .iter()
+                .map(|(pc, r)| *r as f64 * point_to_polygon(x, n, pc))
+                .sum()
+        } else {
+            match limits
+                .shapes
+                .quadrants
+                .get(&(s as u32))
+                .or_else(|| self.shapes.get(&(s as u32)))
+            {
+                Some(r) => shaped_factor(x, n, gs, r),
+                None => point_to_polygon(x, n, &ps),
+            }
         };
         if f <= 0.0 {
             return;
@@ -763,6 +790,7 @@ impl Solver<'_> {
             },
             spread,
             near_gap: self.opts.near_gap,
+            shapes: Default::default(),
             spheres: if spheres {
                 self.elems
                     .geoms

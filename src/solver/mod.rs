@@ -305,6 +305,14 @@ pub struct SolveOptions {
     /// default: never). See the module docs of `src/solver/gather.rs`, "Two surfaces
     /// across a narrow gap".
     pub near_gap: f64,
+    /// Static solves: reconstruct twice, the second final gather seeing every
+    /// leaf source by the first reconstruction's field (cell by cell where it looks
+    /// large, by quadrants elsewhere) instead of its constant radiosity
+    /// (`Solver::field_shapes`). Off by default; twice the reconstruction's time.
+    /// Why: a point gathering a big leaf at its mean misses how the leaf's
+    /// radiosity varies across the part the point sees most (the Cornell ceiling
+    /// by a wall; BENCHMARKS.md, "Static solver: error against run time").
+    pub source_field: bool,
 }
 
 impl Default for SolveOptions {
@@ -334,6 +342,7 @@ impl Default for SolveOptions {
             split_spread: 0.0,
             leaf_shapes: 0.0,
             near_gap: 0.0,
+            source_field: false,
             row_open_ratio: 0.25,
             cluster_open_ratio: CLUSTER_OPEN_RATIO,
         }

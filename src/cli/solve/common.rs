@@ -330,6 +330,18 @@ pub struct AccuracyArgs {
     /// `--per-frame` only: a space-time solve refuses it.
     #[arg(long, default_value_t = SolveOptions::default().leaf_shapes)]
     pub leaf_shapes: f64,
+    /// Reconstruct a static solve twice, the second final gather seeing every leaf
+    /// source by the first one's field instead of its constant radiosity.
+    ///
+    /// A point near a big leaf (a ceiling point by a wall) gathers most from the
+    /// part of it nearest, whose radiosity the leaf's mean misses. The second gather
+    /// takes each leaf source cell by cell from the first reconstruction where it
+    /// looks large from the point, by quadrants elsewhere: on the empty Cornell box
+    /// 1.26% → 0.97% off the lamp at eps 0.5, for about twice the time
+    /// (BENCHMARKS.md, "Static solver: error against run time"). It replaces
+    /// `--leaf-shapes` on the leaves it shapes.
+    #[arg(long)]
+    pub source_field: bool,
     /// Solve a reconstruction point that faces a surface across a gap narrower than
     /// this fraction of the square root of the surface's area together with its foot
     /// on that surface (0: never).
@@ -587,6 +599,7 @@ impl AccuracyArgs {
             power_size: a.power_size,
             split_spread: a.split_spread,
             leaf_shapes: a.leaf_shapes,
+            source_field: a.source_field,
             near_gap: a.near_gap,
             max_rounds: a.max_rounds,
             target_error: a.target_error,
