@@ -25,7 +25,7 @@ pub use formfactor::{
     contour_integral as formfactor_contour, cosine_direction, point_to_point_kernel,
     point_to_polygon,
 };
-pub use nearest::{closest_point_on_polygon, nearest_facing};
+pub use nearest::{closest_point_on_polygon, nearest_facing, on_emitters};
 pub use patches::{PatchGeometry, PatchId, Patches, param_point};
 pub use polygon::{MAX_CORNERS, Poly, centroid_of};
-pub use visibility::{Hit, LastHit, Parts, SEGMENT_TRIM, SceneBvh};
+pub use visibility::{FRONT_FIRST_TIE, Hit, LastHit, Parts, SEGMENT_TRIM, SceneBvh};

@@ -68,3 +68,16 @@ pub fn nearest_facing(
     }
     best
 }
+
+/// For each probe point `(p, n)`, whether the patch `probe` finds for it
+/// ([`nearest_facing`]) emits: the points an error report leaves out
+/// ([`crate::solution::PointError`]).
+pub fn on_emitters(patches: &super::Patches, points: &[(DVec3, DVec3)]) -> Vec<bool> {
+    points
+        .iter()
+        .map(|&(p, n)| {
+            nearest_facing(&patches.polys, &patches.normals, p, n)
+                .is_some_and(|(i, _)| patches.emissions[i].iter().any(|&e| e > 0.0))
+        })
+        .collect()
+}

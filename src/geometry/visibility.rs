@@ -36,6 +36,13 @@ pub const SEGMENT_TRIM: f64 = 1e-4;
 /// to it, so a node the ray leaves sooner is never entered).
 const NODE_EPSILON: f64 = 1e-4;
 
+/// How much further than it is a face turned away from the ray counts in
+/// [`SceneBvh::intersect_front_first`], in units of the ray's direction (the
+/// callers' `d` is twice the scene's diameter: about 4·10⁻⁶ of the scene): far above
+/// the f32 round-off of two coincident triangles' hits, far below any gap a scene
+/// means.
+pub const FRONT_FIRST_TIE: f64 = 2e-6;
+
 /// Which parts of a [`SceneBvh`] a query looks at.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Parts {
@@ -391,25 +398,62 @@ impl SceneBvh {
     /// closed box, 2% of the light at ρ = 0.99 (`tests/it/reference.rs`).
     /// Occlusion queries need no shift: they trim their segments by
     /// [`SEGMENT_TRIM`], which is that same `10⁻⁴`.
+    ///
+    /// Of two polygons at the same place (a two-sided surface's back-to-back
+    /// twins) it returns either; [`SceneBvh::intersect_front_first`] returns the
+    /// one facing the ray.
     pub fn intersect(&self, o: DVec3, d: DVec3, smin: f64, smax: f64) -> Option<Hit> {
+        self.closest_hit(o, d, smin, smax, 0.0)
+    }
+
+    /// [`SceneBvh::intersect`], but a face turned away from the ray counts as
+    /// [`FRONT_FIRST_TIE`] further than it is, so that of back-to-back twins (a
+    /// glTF `doubleSided` polygon, `--two-sided`) the one facing the ray is hit;
+    /// its `t` is the true one. With a plain closest hit the traversal's order
+    /// chose, and a path tracer that stops at a back face (the inside of a solid)
+    /// stopped on about half of the bounces that met a two-sided wall: `rhier
+    /// reference` read the Cornell box of `tests/data/blender/cornell-box.glb`
+    /// 25–90% too dark.
+    pub fn intersect_front_first(&self, o: DVec3, d: DVec3, smin: f64, smax: f64) -> Option<Hit> {
+        self.closest_hit(o, d, smin, smax, FRONT_FIRST_TIE)
+    }
+
+    /// Closest hit, back faces pushed `tie` further along the ray.
+    fn closest_hit(&self, o: DVec3, d: DVec3, smin: f64, smax: f64, tie: f64) -> Option<Hit> {
         let back = 2.0 * NODE_EPSILON;
         let o = o - d * back;
-        let mut best: Option<Hit> = None;
+        // The best hit and its key (its parameter, pushed if it faces away).
+        let mut best: Option<(Hit, f64)> = None;
         for part in &self.parts {
-            let tmax = best.map_or(smax, |h| h.t);
+            let tmax = best.map_or(smax, |(_, key)| key);
             let ray = part.local_ray(o, d, smin + back, tmax + back);
+            // A mirroring motion turns the triangles' winding over.
+            let flip = part.local_to_world.matrix3.determinant() < 0.0;
+            let away = |id: usize| {
+                let t = &part.tris[id];
+                let s = (t.v1 - t.v0).cross(t.v2 - t.v0).dot(ray.direction);
+                (s > 0.0) != flip
+            };
             let mut hit = obvhs::ray::RayHit::none();
-            if part
-                .bvh
-                .ray_traverse(ray, &mut hit, |r, id| part.tris[id].intersect(r))
-            {
-                best = Some(Hit {
-                    patch: part.tri_patch[hit.primitive_id as usize],
-                    t: hit.t as f64 - back,
-                });
+            if part.bvh.ray_traverse(ray, &mut hit, |r, id| {
+                let t = part.tris[id].intersect(r);
+                if tie > 0.0 && t.is_finite() && away(id) {
+                    t + tie as f32
+                } else {
+                    t
+                }
+            }) {
+                let id = hit.primitive_id as usize;
+                let pushed = if tie > 0.0 && away(id) { tie } else { 0.0 };
+                let key = hit.t as f64 - back;
+                let hit = Hit {
+                    patch: part.tri_patch[id],
+                    t: key - pushed,
+                };
+                best = Some((hit, key));
             }
         }
-        best
+        best.map(|(hit, _)| hit)
     }
 
     /// Calls `f(patch, triangle)` (world space) for every triangle whose box overlaps

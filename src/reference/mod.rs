@@ -9,7 +9,9 @@
 //! continues in a cosine-distributed direction, its throughput multiplied by the
 //! reflectance of the surface it reaches (emission found by such a bounce is not
 //! counted: next-event estimation already did), with Russian roulette after three
-//! bounces: a path goes on with probability its throughput's largest channel (then
+//! bounces (a bounce meets the face turned to it first, so that a two-sided
+//! surface's back-to-back twins reflect it: [`SceneBvh::intersect_front_first`]): a
+//! path goes on with probability its throughput's largest channel (then
 //! divided by it), so no path weighs more than 1 and a path lasts about
 //! `1/(1 − ρ)` bounces (a hundred at ρ = 0.99; `MAX_BOUNCES` is far beyond).
 //! The estimate is unbiased; its standard error is reported per point
@@ -192,7 +194,7 @@ fn path_irradiance(
             uniform(hash3(key, bounce, 5)),
         );
         let dir = cosine_direction(n, u1, u2);
-        let Some(hit) = bvh.intersect(x, dir * diam * 2.0, 1e-6, 1.0) else {
+        let Some(hit) = bvh.intersect_front_first(x, dir * diam * 2.0, 1e-6, 1.0) else {
             break;
         };
         let y = x + dir * diam * 2.0 * hit.t;

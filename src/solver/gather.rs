@@ -723,7 +723,7 @@ impl Solver<'_> {
     /// on it).
     pub(super) fn outside_solids(&self, x: DVec3, n: DVec3) -> bool {
         let diam = self.patches.diameter;
-        match self.bvh.intersect(x, n * diam, 1e-7, 1.0) {
+        match self.bvh.intersect_front_first(x, n * diam, 1e-7, 1.0) {
             Some(h) => self.patches.normals[h.patch as usize].dot(n) <= 0.0,
             None => true,
         }

@@ -986,7 +986,7 @@ impl<'a> Solver<'a> {
                 // round-off: that is no opening (an icosphere of 320 triangles read
                 // open for one such ray in 8 192, and was never balanced).
                 self.bvh
-                    .intersect(smp.x, dir * diam * 2.0, 1e-6, 1.0)
+                    .intersect_front_first(smp.x, dir * diam * 2.0, 1e-6, 1.0)
                     .is_some_and(|hit| {
                         hit.patch == smp.patch
                             || self.patches.normals[hit.patch as usize].dot(dir) < 0.0

@@ -35,13 +35,14 @@ pub struct RoundRecord {
     pub estimated_error: f64,
     /// Relative residual of the linear solve.
     pub residual: f64,
-    /// True relative RMS error at the reference points (with `--reference`).
-    pub true_error: Option<f64>,
+    /// True error at the reference points (with `--reference`): off the emitters,
+    /// over all points and the worst point.
+    pub true_error: Option<crate::solution::PointError>,
 }
 
 impl RoundRecord {
     /// CSV header matching [`RoundRecord::csv_row`].
-    pub const CSV_HEADER: &'static str = "round,seconds,elements,leaves,links_active,links_passive,bytes_elements,bytes_links,bytes_bvh,rays,shaft_clear,estimated_error,residual,true_error";
+    pub const CSV_HEADER: &'static str = "round,seconds,elements,leaves,links_active,links_passive,bytes_elements,bytes_links,bytes_bvh,rays,shaft_clear,estimated_error,residual,true_error,true_error_all,worst_point,worst_error";
 
     /// One CSV row.
     pub fn csv_row(&self) -> String {
@@ -60,8 +61,14 @@ impl RoundRecord {
             self.shaft_clear,
             self.estimated_error,
             self.residual,
-            self.true_error
-                .map_or(String::new(), |e| format!("{e:.6e}"))
+            self.true_error.map_or(",,,".to_string(), |e| {
+                let worst = if e.worst == usize::MAX {
+                    ",".to_string()
+                } else {
+                    format!("{},{:.6e}", e.worst, e.worst_error)
+                };
+                format!("{:.6e},{:.6e},{worst}", e.off_emitters, e.all)
+            })
         )
     }
 
@@ -80,7 +87,7 @@ impl RoundRecord {
             self.residual
         );
         if let Some(e) = self.true_error {
-            s.push_str(&format!("  true error {e:.3e}"));
+            s.push_str(&format!("  true error {}", e.text()));
         }
         s
     }

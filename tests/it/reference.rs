@@ -39,3 +39,31 @@ fn reference_reaches_e_over_one_minus_rho() {
         );
     }
 }
+
+/// The same closed enclosure made two-sided (every polygon with a reversed twin, as
+/// glTF `doubleSided` loads): the twins facing into the walls see only the walls'
+/// insides, so the answer in the room is unchanged. A bounce that met a wall used to
+/// stop on whichever twin the traversal found first, often the back one
+/// (`SceneBvh::intersect_front_first`; the Blender Cornell box read 25–90% dark).
+#[test]
+fn reference_is_unchanged_by_back_to_back_twins() {
+    let pts = [
+        (DVec3::new(0.5, 0.0, 0.5), DVec3::Y),
+        (DVec3::new(0.5, 1.0, 0.3), DVec3::NEG_Y),
+        (DVec3::new(0.0, 0.4, 0.6), DVec3::X),
+    ];
+    let rho = 0.9;
+    let mut scene = common::uniform_enclosure(rho, 1.0, 1.0, 2);
+    assert!(rhier::scene::two_sided(&mut scene) > 0);
+    let est = rhier::reference::radiosity_at(&scene, &pts, 4_000, 5);
+    let exact = 1.0 / (1.0 - rho);
+    for (e, (p, _)) in est.iter().zip(&pts) {
+        eprintln!("{p}: {} ± {} (exact {exact})", e.b[1], e.std_error[1]);
+        assert!(
+            (e.b[1] - exact).abs() < (4.0 * e.std_error[1]).max(0.02 * exact),
+            "{p}: {} ± {}, exact {exact}",
+            e.b[1],
+            e.std_error[1]
+        );
+    }
+}

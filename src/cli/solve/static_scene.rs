@@ -1,5 +1,6 @@
 //! A static scene (`rhier solve` without motion): refine-and-solve rounds, each
-//! reported (and measured against `--reference`), then the reconstruction, probes,
+//! reported (and measured against `--reference`, off the emitters first:
+//! [`PointError`]), then the reconstruction, probes,
 //! the power-balance warning, the reason the solve stopped and the `.rhier` file. A
 //! scene with no emitter is not solved: its zero solution is written at once.
 
@@ -9,7 +10,7 @@ use std::time::Instant;
 use anyhow::Context;
 use rhier::playback::{ProbePoint, probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
-use rhier::solution::relative_rms;
+use rhier::solution::PointError;
 use rhier::solver::report;
 use rhier::solver::{RoundRecord, SolveOptions, Solver};
 use rhier::store::{
@@ -83,13 +84,18 @@ pub fn run(
 
     let bar = output.progress("refining");
     let mut solver = Solver::new(scene, opts)?;
+    // Points on an emitting patch are left out of the headline error.
+    let on_emitter = reference.as_ref().map_or_else(Vec::new, |(pts, _)| {
+        let pn: Vec<_> = pts.iter().map(|q| (q.p, q.n)).collect();
+        rhier::geometry::on_emitters(&solver.patches, &pn)
+    });
     let quiet = output.quiet;
     let mut true_error_failure = None;
     let records: Vec<RoundRecord> = solver.run(|rec, s| {
         if let Some((pts, b_ref)) = &reference {
             let sol = s.solution();
             match probe(&sol, pts, t) {
-                Ok(b) => rec.true_error = Some(relative_rms(&b, b_ref)),
+                Ok(b) => rec.true_error = Some(PointError::measure(&b, b_ref, &on_emitter)),
                 Err(e) => true_error_failure = Some(e),
             }
         }

@@ -295,3 +295,107 @@ fn solver_settings_out_of_their_domain_are_refused() {
         }
     }
 }
+
+/// `--reference` measures off the emitters first (issue 45): with a reference equal
+/// to the solve's own answer on the lamp and off by known factors elsewhere, the
+/// round's line and the report's columns give the error off the lamp, over all
+/// points, and the worst point, each the value the factors make.
+#[test]
+fn reference_error_is_reported_off_the_emitters_with_the_worst_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = dir.path().join("p.json");
+    // Floor, left wall, two points on the lamp (213..343 × 227..332), ceiling.
+    let points = [
+        ([278.0, 0.0, 278.0], [0.0, 1.0, 0.0]),
+        ([0.0, 274.0, 278.0], [1.0, 0.0, 0.0]),
+        ([278.0, 548.8, 278.0], [0.0, -1.0, 0.0]),
+        ([230.0, 548.8, 240.0], [0.0, -1.0, 0.0]),
+        ([100.0, 548.8, 100.0], [0.0, -1.0, 0.0]),
+    ];
+    let json = |b: Option<&[[f64; 3]]>| {
+        let items: Vec<serde_json::Value> = points
+            .iter()
+            .enumerate()
+            .map(|(i, (p, n))| match b {
+                Some(b) => serde_json::json!({"p": p, "n": n, "B": b[i]}),
+                None => serde_json::json!({"p": p, "n": n}),
+            })
+            .collect();
+        serde_json::Value::Array(items).to_string()
+    };
+    std::fs::write(&pts, json(None)).unwrap();
+    let vals = dir.path().join("v.json");
+    let solve = |extra: &[&std::path::Path]| {
+        let mut cmd = rhier();
+        cmd.args(["solve", "--threads", "2", "--max-rounds", "2", "--probe"])
+            .arg(&pts)
+            .arg("--probe-out")
+            .arg(&vals)
+            .arg("-o")
+            .arg(dir.path().join("c.rhier"));
+        if let [r, csv] = extra {
+            cmd.arg("--reference").arg(r).arg("--report").arg(csv);
+        }
+        succeed(&mut cmd)
+    };
+    solve(&[]);
+    let b: Vec<[f64; 3]> =
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(&vals).unwrap())
+            .unwrap()
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| {
+                let a = v["B"].as_array().unwrap();
+                [0, 1, 2].map(|c| a[c].as_f64().unwrap())
+            })
+            .collect();
+    assert!(
+        b[2][0] > 10.0 * b[4][0],
+        "points 2 and 3 are on the lamp: {b:?}"
+    );
+    // The solve's answer over these factors: errors 1/4 on the floor and the
+    // ceiling, 1/2 on the wall (the worst), none on the lamp.
+    let factor = [1.25, 1.5, 1.0, 1.0, 1.25];
+    let reference: Vec<[f64; 3]> = b
+        .iter()
+        .zip(factor)
+        .map(|(v, f)| v.map(|x| x / f))
+        .collect();
+    let ref_file = dir.path().join("ref.json");
+    std::fs::write(&ref_file, json(Some(&reference))).unwrap();
+    let csv = dir.path().join("r.csv");
+    let out = solve(&[&ref_file, &csv]);
+    let rms = |idx: &[usize]| {
+        let (mut num, mut den) = (0.0, 0.0);
+        for &i in idx {
+            for c in 0..3 {
+                num += (b[i][c] - reference[i][c]).powi(2);
+                den += reference[i][c].powi(2);
+            }
+        }
+        (num / den).sqrt()
+    };
+    let (off, all) = (rms(&[0, 1, 4]), rms(&[0, 1, 2, 3, 4]));
+    assert!(
+        off > 2.0 * all,
+        "the lamp's points dilute: {off} against {all}"
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let last: Vec<&str> = lines.last().unwrap().split(',').collect();
+    let col = |name: &str| last[header.iter().position(|h| *h == name).unwrap()];
+    let num = |name: &str| col(name).parse::<f64>().unwrap();
+    eprintln!("{text}");
+    assert!((num("true_error") - off).abs() < 1e-5 * off, "{text}");
+    assert!((num("true_error_all") - all).abs() < 1e-5 * all, "{text}");
+    assert_eq!(col("worst_point"), "1");
+    assert!((num("worst_error") - 0.5).abs() < 1e-5, "{text}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("off the emitters (3 points; worst point 1: 5.000e-1)")
+            && stderr.contains("over all points"),
+        "{stderr}"
+    );
+}

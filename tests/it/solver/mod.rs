@@ -5,6 +5,7 @@
 mod accuracy;
 mod cluster_links;
 mod enclosures;
+mod exported;
 mod floor;
 mod invariants;
 mod known;

@@ -1,0 +1,256 @@
+//! A real exported scene (issue 45, part 4): Blender's Cornell box with Suzanne,
+//! `tests/data/blender/cornell-box.glb`, as exported: its walls, floor and ceiling
+//! are two-sided slabs that pass through each other at the corners, the lamp is a
+//! two-sided 5.8 mm box 0.1 mm under the ceiling, and the white is 1.0 (clamped to
+//! 0.999). Measured against the path tracer at points off the lamp; and a
+//! hand-built twin, a closed room of two-sided slabs overlapping at the corners
+//! lit uniformly (exactly `E/(1 − ρ)` inside), which isolates what went wrong:
+//! contact meshing took the room side of a slab for a face resting on its own
+//! back-to-back twin, and dropped it whenever a ray behind it met a back face of
+//! the slab's far side first (the traversal's order chose among coincident twins).
+
+use std::path::Path;
+
+use glam::DVec3;
+use rhier::playback::probe::{ProbePoint, probe};
+use rhier::scene::Scene;
+use rhier::solution::PointError;
+use rhier::solver::{SolveOptions, solve};
+
+use crate::common;
+use crate::common::shapes;
+
+/// The Blender file as loaded (two-sided materials get their twins).
+fn blender_box() -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender/cornell-box.glb");
+    rhier::scene::load(&path).expect("the Blender Cornell box loads")
+}
+
+/// 29 points on the room side of the floor (top at y = −0.8668), the red, green
+/// and back walls (x = −1.008, x = 0.9925, z = −0.8705) and the ceiling (bottom at
+/// y = 0.8625) off the lamp (|x|, |z| ≤ 0.502 under it), then 2 on the lamp's
+/// bottom (y = 0.8566).
+fn points() -> Vec<(DVec3, DVec3)> {
+    let mut p = Vec::new();
+    for (x, z) in [
+        (-0.8, 0.85),
+        (0.8, 0.85),
+        (-0.85, -0.7),
+        (0.85, -0.7),
+        (0.0, 0.9),
+        (-0.9, 0.2),
+        (0.9, 0.2),
+        (0.0, -0.75),
+    ] {
+        p.push((DVec3::new(x, -0.8668, z), DVec3::Y));
+    }
+    for (y, z) in [
+        (0.0, 0.0),
+        (0.5, -0.5),
+        (-0.5, 0.5),
+        (0.7, 0.8),
+        (-0.7, -0.7),
+    ] {
+        p.push((DVec3::new(0.9925, y, z), DVec3::NEG_X));
+        p.push((DVec3::new(-1.008, y, z), DVec3::X));
+    }
+    for (x, y) in [
+        (0.0, 0.0),
+        (-0.6, 0.5),
+        (0.6, -0.5),
+        (0.0, 0.7),
+        (0.0, -0.7),
+    ] {
+        p.push((DVec3::new(x, y, -0.8705), DVec3::Z));
+    }
+    for (x, z) in [
+        (-0.8, 0.0),
+        (0.8, 0.0),
+        (0.0, -0.75),
+        (0.0, 0.8),
+        (-0.8, 0.85),
+        (0.8, -0.8),
+    ] {
+        p.push((DVec3::new(x, 0.8625, z), DVec3::NEG_Y));
+    }
+    for (x, z) in [(0.0, 0.0), (0.3, -0.3)] {
+        p.push((DVec3::new(x, 0.8566, z), DVec3::NEG_Y));
+    }
+    p
+}
+
+/// The solver's error against the path tracer at [`points`], off the lamp, with
+/// `opts`.
+fn blender_error(opts: SolveOptions, paths: u32) -> PointError {
+    let scene = blender_box();
+    let pts = points();
+    let reference: Vec<[f64; 3]> = rhier::reference::radiosity_at(&scene, &pts, paths, 13)
+        .iter()
+        .map(|e| e.b)
+        .collect();
+    let (sol, records) = solve(&scene, opts).expect("solve");
+    let probes: Vec<ProbePoint> = pts.iter().map(|&(p, n)| ProbePoint { p, n }).collect();
+    let b = probe(&sol, &probes, 0.0).expect("probe");
+    let patches = rhier::geometry::Patches::at_time(&scene, 0.0);
+    let on_lamp = rhier::geometry::on_emitters(&patches, &pts);
+    assert_eq!(
+        on_lamp.iter().filter(|&&x| x).count(),
+        2,
+        "the last two points are on the lamp"
+    );
+    let err = PointError::measure(&b, &reference, &on_lamp);
+    for (i, ((p, _), (x, r))) in pts.iter().zip(b.iter().zip(&reference)).enumerate() {
+        eprintln!("{i:2} {p}: {x:.4?} reference {r:.4?}");
+    }
+    eprintln!(
+        "{}; estimate {:.3e}",
+        err.text(),
+        records.last().map_or(f64::NAN, |r| r.estimated_error)
+    );
+    err
+}
+
+/// The Blender Cornell box against the path tracer, off the lamp: short of the
+/// bar. Before (2026-11-29, base colours × 0.8, 31 points, 20,000 paths): the room
+/// read 0.1–4% of the path tracer at default settings (contact meshing dropped the
+/// room side of every slab) while the path tracer itself read 25–90% dark (it
+/// stopped on back twins). Now 11.8% relative RMS off the lamp (worst point 24%,
+/// the ceiling), every point 74–101% of the path tracer and the estimate 15.4%;
+/// and the solve takes minutes (1 m 40 s of CPU at `--eps 2 --max-rounds 1`), too
+/// long for CI.
+#[test]
+#[ignore = "12% off the lamp at eps 0.5, short of 5%, and minutes long (issue 45)"]
+fn blender_cornell_box_agrees_with_the_path_tracer() {
+    let err = blender_error(
+        SolveOptions {
+            eps: BLENDER_EPS,
+            ..SolveOptions::default()
+        },
+        BLENDER_PATHS,
+    );
+    assert!(
+        err.off_emitters < BLENDER_RMS && err.worst_error < BLENDER_WORST,
+        "{}",
+        err.text()
+    );
+}
+
+/// Whether contact meshing of `scene` keeps a patch through each of `points`
+/// facing its way: the largest distance from a point to the nearest patch facing
+/// it, printed.
+fn farthest_from_a_kept_patch(scene: &Scene, points: &[(DVec3, DVec3)]) -> f64 {
+    let patches = rhier::geometry::Patches::at_time(scene, 0.0);
+    let (kept, stats) = rhier::geometry::split_at_contacts(scene, &patches, 0.0);
+    let far = points
+        .iter()
+        .map(|&(p, n)| {
+            rhier::geometry::nearest_facing(&kept.polys, &kept.normals, p, n)
+                .map_or(f64::INFINITY, |(_, x)| x.distance(p))
+        })
+        .fold(0.0, f64::max);
+    eprintln!("{stats:?}; farthest point {far:.3e} from a kept patch");
+    far
+}
+
+/// Contact meshing keeps the room side of the Blender box's two-sided slabs at
+/// every probe point (the points lie on the surfaces to the file's precision,
+/// 4 decimals). Before, it dropped 976 pieces, the room sides among them: the
+/// nearest kept patch facing a floor point was 13 cm away.
+#[test]
+fn blender_cornell_box_keeps_the_room_side_of_its_slabs() {
+    let far = farthest_from_a_kept_patch(&blender_box(), &points());
+    assert!(far < 1e-4, "a probe point is {far} from a kept patch");
+}
+
+/// A closed room 2 × 2 × 2 whose six walls are two-sided slabs `t` thick that pass
+/// through each other at the corners as Blender's do, every polygon emitting `e`
+/// with reflectance `rho`: inside the room `B = e/(1 − ρ)` exactly.
+fn slab_room(rho: f64, e: f64, t: f64) -> Scene {
+    let (w, o) = (2.0, t / 2.0);
+    // Each slab: a solid box (faces outward), overlapping its neighbours by `o`.
+    let slabs = [
+        (DVec3::new(-o, -t, -o), DVec3::new(w + o, 0.0, w + o)), // floor
+        (DVec3::new(-o, w, -o), DVec3::new(w + o, w + t, w + o)), // ceiling
+        (
+            DVec3::new(-t, -t - o, -t),
+            DVec3::new(0.0, w + t + o, w + t),
+        ), // x = 0
+        (
+            DVec3::new(w, -t - o, -t),
+            DVec3::new(w + t, w + t + o, w + t),
+        ), // x = 2
+        (
+            DVec3::new(-o, -t - o, -t),
+            DVec3::new(w + o, w + t + o, 0.0),
+        ), // z = 0
+        (
+            DVec3::new(-o, -t - o, w),
+            DVec3::new(w + o, w + t + o, w + t),
+        ), // z = 2
+    ];
+    let mut polygons = Vec::new();
+    for (lo, hi) in slabs {
+        for mut p in common::closed_box(lo, hi, 1, |_| 0) {
+            p.vertices.reverse();
+            polygons.push(p);
+        }
+    }
+    let mut scene = shapes::uniform_scene(polygons, rho, e);
+    rhier::scene::two_sided(&mut scene);
+    scene
+}
+
+/// Contact meshing keeps the room side of every slab of the two-sided slab room,
+/// at points on each wall (before, it dropped 119 pieces, and a point was 2 m from
+/// a kept patch facing it); and its solve gives the known answer (too long for CI:
+/// minutes of CPU at default settings, the slabs' insides being closed rooms too).
+#[test]
+fn two_sided_slab_room_keeps_the_room_side_of_its_slabs() {
+    let far = farthest_from_a_kept_patch(&slab_room(0.5, 1.0, 0.1), &slab_points());
+    assert!(far < 1e-9, "a probe point is {far} from a kept patch");
+}
+
+/// Points on the room side of each wall of [`slab_room`].
+fn slab_points() -> Vec<(DVec3, DVec3)> {
+    vec![
+        (DVec3::new(0.7, 0.0, 1.3), DVec3::Y),
+        (DVec3::new(1.3, 2.0, 0.6), DVec3::NEG_Y),
+        (DVec3::new(0.0, 0.8, 1.1), DVec3::X),
+        (DVec3::new(2.0, 1.4, 0.4), DVec3::NEG_X),
+        (DVec3::new(1.2, 0.3, 0.0), DVec3::Z),
+        (DVec3::new(0.5, 1.7, 2.0), DVec3::NEG_Z),
+    ]
+}
+
+/// The slab room's known answer at [`slab_points`], at two reflectances; the
+/// worst point within 1%.
+#[test]
+#[ignore = "minutes of CPU at default settings"]
+fn two_sided_slab_room_gives_e_over_one_minus_rho() {
+    let probes: Vec<ProbePoint> = slab_points()
+        .into_iter()
+        .map(|(p, n)| ProbePoint { p, n })
+        .collect();
+    for rho in [0.5, 0.9] {
+        let (sol, _) = solve(&slab_room(rho, 1.0, 0.1), SolveOptions::default()).expect("solve");
+        let exact = 1.0 / (1.0 - rho);
+        let b = probe(&sol, &probes, 0.0).expect("probe");
+        let worst = b
+            .iter()
+            .map(|x| (x[1] - exact).abs() / exact)
+            .fold(0.0, f64::max);
+        eprintln!(
+            "rho {rho}: {:?} (exact {exact}); worst {worst:.4}",
+            b.iter().map(|x| x[1]).collect::<Vec<_>>()
+        );
+        assert!(worst < 0.01, "rho {rho}: worst point {worst} from {exact}");
+    }
+}
+
+/// Settings of `blender_cornell_box_agrees_with_the_path_tracer`.
+const BLENDER_EPS: f64 = 0.5;
+/// Paths per point of its reference.
+const BLENDER_PATHS: u32 = 4_000;
+/// Its bars: relative RMS off the lamp and the worst point.
+const BLENDER_RMS: f64 = 0.05;
+const BLENDER_WORST: f64 = 0.10;
