@@ -474,6 +474,7 @@ impl Args {
             time_budget: a.time_budget,
             seed: a.seed,
             contact_meshing: !a.no_contact_meshing,
+            keep_passive: self.output.keep_links,
             ..SolveOptions::default()
         };
         opts.validate()?;
