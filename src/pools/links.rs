@@ -99,7 +99,7 @@ impl Retained {
     pub fn new_id(&self, old: u32) -> Option<u32> {
         let (w, b) = (old as usize / 64, old % 64);
         let word = *self.bits.get(w)?;
-        (word >> b & 1 == 1).then(|| self.before[w] + (word & ((1u64 << b) - 1)).count_ones())
+        ((word >> b) & 1 == 1).then(|| self.before[w] + (word & ((1u64 << b) - 1)).count_ones())
     }
 }
 
@@ -185,7 +185,7 @@ impl LinkPool {
         let ends = self.ends.as_mut_slice();
         let mut j = 0;
         for i in 0..n {
-            if bits[i / 64] >> (i % 64) & 1 == 1 {
+            if (bits[i / 64] >> (i % 64)) & 1 == 1 {
                 ends[j] = ends[i];
                 j += 1;
             }

@@ -270,7 +270,9 @@ impl Solver<'_> {
     /// whose estimate is zero is still opened when its receiver is a cluster: the
     /// average of a box's faces may see nothing of the floor beside the box while
     /// one face sees it at 0.4. A link too close for the cluster estimate
-    /// ([`oracle::close_cluster_factor`]) is opened the same way.
+    /// ([`oracle::close_cluster_factor`]) is opened the same way. With `kept` (a
+    /// static solve) the parts are recorded for the next round ([`ClusterPart`]).
+    #[allow(clippy::too_many_arguments)]
     fn push_cluster(
         &self,
         leaf: ElementId,
