@@ -69,7 +69,7 @@ use crate::Result;
 use crate::geometry::{Patches, SceneBvh, cosine_direction, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
 use crate::pools::elements::{Cone, Geom, Node};
-use crate::pools::links::{Ends, Transport};
+use crate::pools::links::{Ends, Retained, Transport};
 use crate::pools::{
     ElementId, ElementKind, ElementPool, Emission, LinkId, LinkPool, LinkState, Storage,
 };
@@ -1228,24 +1228,17 @@ impl<'a> Solver<'a> {
             return;
         }
         let retained = self.links.drop_passive();
-        for row in self.sys.row_cache.values_mut() {
-            row.retain_mut(|k| match retained.new_id(k.link) {
-                Some(id) => {
-                    k.link = id;
-                    true
-                }
-                None => false,
-            });
+        // Each kept record follows its link to the new id, or goes with it.
+        fn follow<T>(rows: &mut FastMap<u32, Vec<T>>, link: fn(&mut T) -> &mut u32, r: &Retained) {
+            for row in rows.values_mut() {
+                row.retain_mut(|k| {
+                    let l = link(k);
+                    r.new_id(*l).map(|id| *l = id).is_some()
+                });
+            }
         }
-        for parts in self.sys.cluster_cache.values_mut() {
-            parts.retain_mut(|k| match retained.new_id(k.link) {
-                Some(id) => {
-                    k.link = id;
-                    true
-                }
-                None => false,
-            });
-        }
+        follow(&mut self.sys.row_cache, |k| &mut k.link, &retained);
+        follow(&mut self.sys.cluster_cache, |k| &mut k.link, &retained);
     }
 
     /// The active links, or only the active varying ones.
