@@ -553,12 +553,8 @@ impl Args {
     /// The solver settings the arguments ask for (shared by every mode of `solve`),
     /// checked against their domains ([`SolveOptions::validate`]).
     pub fn solve_options(&self) -> anyhow::Result<SolveOptions> {
-        let mut opts = self
-            .accuracy
-            .solve_options(self.resources.storage(false, None))?;
-        // `--keep-links` writes every link, the passive ones too.
-        opts.keep_passive = self.output.keep_links;
-        Ok(opts)
+        self.accuracy
+            .solve_options(self.resources.storage(false, None))
     }
 
     /// The time settings the arguments ask for, checked
