@@ -518,15 +518,22 @@ impl Solver<'_> {
     /// Per gathered point: how far its value is raised so that the cells around
     /// it hold the mean their centres' gathers say, [`MEAN_SHIFT`] of each cell's
     /// centre offset averaged over the cells that share the point by area (empty:
-    /// none, in a space-time window).
+    /// none, in a space-time window that spans time).
     fn mean_shifts(
         &self,
         cache: &VertexCache,
         done: &[(Cell, [usize; 4], usize)],
     ) -> Vec<[f64; 3]> {
-        // Not in a space-time window: its frames between interpolate the points'
-        // gathered values, which would then disagree with the stored cells.
-        if self.st.window.is_some() {
+        // Not in a space-time window that spans time: its frames between
+        // interpolate the points' gathered values, which would then disagree with
+        // the stored cells. A window of one instant (a static scene solved in
+        // space-time) has none, and is shifted as the static solve is.
+        if self
+            .st
+            .window
+            .as_ref()
+            .is_some_and(|w| w.span[1] > w.span[0])
+        {
             return Vec::new();
         }
         let f = MEAN_SHIFT;

@@ -54,6 +54,9 @@ fn in_key() -> Vec<(&'static str, Change)> {
         ("solve.faint_source", |o, _| o.faint_source *= 0.5),
         ("solve.split_spread", |o, _| o.split_spread += 0.15),
         ("solve.leaf_shapes", |o, _| o.leaf_shapes += 0.1),
+        ("solve.source_field", |o, _| {
+            o.source_field = !o.source_field
+        }),
         ("solve.near_gap", |o, _| o.near_gap += 0.1),
         ("space_time.fps", |_, s| s.fps *= 2.0),
         ("space_time.window", |_, s| s.window = Some(0.5)),
