@@ -5,8 +5,8 @@
 //! window it was working on, every finished window but the last is also written to
 //! the directory `<out>.partial/` as one file `window-NNNNN.bin` (the last one's
 //! leaves go to the writer, which finishes the file right after; a solve
-//! interrupted there solves that window again, and nothing comes after it to hand
-//! its terms to):
+//! interrupted there solves that window again). A window depends on no other, so
+//! the windows are all a resumed solve needs:
 //!
 //! | bytes | field |
 //! |---|---|
@@ -19,9 +19,6 @@
 //! | 48..52 | CRC-32 of the leaf bytes (u32 LE) |
 //! | 52..56 | zero |
 //! | 56.. | `n` leaves as [`Leaf`] records (96 bytes each, little-endian) |
-//!
-//! Beside the last finished window, `kept-NNNNN.bin` holds the final-gather terms
-//! it hands the next window (layout and write order: [`Journal::write_kept`]).
 //!
 //! Each is written to a temporary name, fsynced and renamed, so a window file is
 //! either whole or absent. The file `solve.key` holds a fingerprint of the scene and
@@ -49,12 +46,10 @@ const MAGIC: &[u8; 8] = b"RHIERWIN";
 const VERSION: u32 = 1;
 const HEADER: usize = 56;
 const LEAF: usize = std::mem::size_of::<Leaf>();
-const KEPT_MAGIC: &[u8; 8] = b"RHIERKPT";
-const KEPT_HEADER: usize = 32;
 
 /// First line of a fingerprint; a journal keyed by another version of the text is
 /// refused as another solve's.
-const KEY_HEAD: &str = "rhier space-time journal 4";
+const KEY_HEAD: &str = "rhier space-time journal 5";
 
 /// What makes two space-time solves write the same windows, as the text `solve.key`
 /// holds: the version of rhier, the scene's content (CRC-32 and length of its
@@ -224,122 +219,6 @@ impl Journal {
         })
     }
 
-    /// Records the final-gather terms window `index` hands the next one, written
-    /// by `payload` (see `PointCache::encode`), as `kept-NNNNN.bin`: a 32-byte
-    /// header (magic `RHIERKPT`, version, window index, payload length as u64,
-    /// CRC-32 of the payload, zero) and the payload. Written before the window's own
-    /// file, so a journaled window always has its terms beside it; the previous
-    /// window's are removed once this window's file is written
-    /// ([`Journal::drop_kept`]).
-    pub fn write_kept(
-        &self,
-        index: u32,
-        payload: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-    ) -> Result<()> {
-        self.write_headed(&kept_name(index), KEPT_HEADER, |f, io| {
-            let mut w = CountingWriter {
-                inner: f,
-                crc: crc32fast::Hasher::new(),
-                len: 0,
-            };
-            payload(&mut w).map_err(io)?;
-            let (crc, len) = (w.crc.finalize(), w.len);
-            let mut head = Vec::with_capacity(KEPT_HEADER);
-            head.extend_from_slice(KEPT_MAGIC);
-            head.extend_from_slice(&VERSION.to_le_bytes());
-            head.extend_from_slice(&index.to_le_bytes());
-            head.extend_from_slice(&len.to_le_bytes());
-            head.extend_from_slice(&crc.to_le_bytes());
-            head.extend_from_slice(&0u32.to_le_bytes());
-            Ok(head)
-        })
-    }
-
-    /// Reads the terms window `index` handed the next one: checks the header and
-    /// the payload's CRC-32, then hands `decode` a reader of the payload, its length
-    /// and the file's path.
-    pub fn read_kept<T>(
-        &self,
-        index: u32,
-        decode: impl FnOnce(&mut dyn Read, u64, &Path) -> Result<T>,
-    ) -> Result<T> {
-        let path = self.dir.join(kept_name(index));
-        let bad = |place: &str, expected: String, found: String| {
-            Error::invalid(&path, place.to_string(), expected, found)
-        };
-        let io = |e| Error::io(&path, e);
-        let mut f = File::open(&path).map_err(io)?;
-        let file_len = f.metadata().map_err(io)?.len();
-        let mut head = [0u8; KEPT_HEADER];
-        if file_len < KEPT_HEADER as u64 {
-            return Err(bad(
-                "header",
-                format!("at least {KEPT_HEADER} bytes"),
-                file_len.to_string(),
-            ));
-        }
-        f.read_exact(&mut head).map_err(io)?;
-        let u32_at =
-            |o: usize| u32::from_le_bytes([head[o], head[o + 1], head[o + 2], head[o + 3]]);
-        let mut len = [0u8; 8];
-        len.copy_from_slice(&head[16..24]);
-        let len = u64::from_le_bytes(len);
-        if &head[0..8] != KEPT_MAGIC {
-            return Err(bad(
-                "bytes 0..8",
-                "magic RHIERKPT".into(),
-                format!("{:?}", &head[0..8]),
-            ));
-        }
-        if u32_at(8) != VERSION {
-            return Err(bad("version", VERSION.to_string(), u32_at(8).to_string()));
-        }
-        if u32_at(12) != index {
-            return Err(bad(
-                "window index",
-                index.to_string(),
-                u32_at(12).to_string(),
-            ));
-        }
-        if len != file_len - KEPT_HEADER as u64 {
-            return Err(bad(
-                "length",
-                format!("{} bytes of payload", file_len - KEPT_HEADER as u64),
-                len.to_string(),
-            ));
-        }
-        // The CRC first, so that nothing is decoded from a damaged file.
-        let mut crc = crc32fast::Hasher::new();
-        let mut buf = vec![0u8; 1 << 16];
-        loop {
-            let n = f.read(&mut buf).map_err(io)?;
-            if n == 0 {
-                break;
-            }
-            crc.update(&buf[..n]);
-        }
-        let crc = crc.finalize();
-        if crc != u32_at(24) {
-            return Err(bad(
-                "payload",
-                format!("CRC-32 {:#010x}", u32_at(24)),
-                format!("{crc:#010x}"),
-            ));
-        }
-        f.seek(SeekFrom::Start(KEPT_HEADER as u64)).map_err(io)?;
-        let mut r = std::io::BufReader::new(f);
-        decode(&mut r, len, &path)
-    }
-
-    /// Removes the terms window `index` handed on (the next window's are written).
-    pub fn drop_kept(&self, index: u32) -> Result<()> {
-        let path = self.dir.join(kept_name(index));
-        match fs::remove_file(&path) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::io(&path, e)),
-            _ => Ok(()),
-        }
-    }
-
     /// Removes the journal (the output file is complete).
     pub fn finish(self) -> Result<()> {
         fs::remove_dir_all(&self.dir).map_err(|e| Error::io(&self.dir, e))
@@ -390,30 +269,6 @@ impl Journal {
             let _ = d.sync_all();
         }
         Ok(())
-    }
-}
-
-fn kept_name(i: u32) -> String {
-    format!("kept-{i:05}.bin")
-}
-
-/// A writer that counts and checksums what goes through it.
-struct CountingWriter<'a, W: Write> {
-    inner: &'a mut W,
-    crc: crc32fast::Hasher,
-    len: u64,
-}
-
-impl<W: Write> Write for CountingWriter<'_, W> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.crc.update(&buf[..n]);
-        self.len += n as u64;
-        Ok(n)
-    }
-
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
     }
 }
 
@@ -507,46 +362,6 @@ mod tests {
             uv: [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
             b: [[0.25, 0.5, 1.0]; 4],
         }
-    }
-
-    #[test]
-    fn kept_terms_round_trip_and_damage_is_named() {
-        let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().join("a.rhier");
-        let j = Journal::create(&out, "key-1").unwrap();
-        let payload: Vec<u8> = (0..70_000u32).map(|i| (i * 7 % 251) as u8).collect();
-        j.write_kept(3, |w| w.write_all(&payload)).unwrap();
-        let read = |j: &Journal, i: u32| {
-            j.read_kept(i, |r, len, path| {
-                let mut v = Vec::new();
-                r.read_to_end(&mut v).map_err(|e| Error::io(path, e))?;
-                assert_eq!(v.len() as u64, len);
-                Ok(v)
-            })
-        };
-        assert_eq!(read(&j, 3).unwrap(), payload);
-        // Another window's index, a flipped payload byte, a cut file: each named.
-        let p = journal_dir(&out).join("kept-00003.bin");
-        fs::copy(&p, journal_dir(&out).join("kept-00004.bin")).unwrap();
-        let e = read(&j, 4).unwrap_err().to_string();
-        assert!(
-            e.contains("kept-00004.bin") && e.contains("window index"),
-            "{e}"
-        );
-        let mut bytes = fs::read(&p).unwrap();
-        bytes[KEPT_HEADER + 1000] ^= 4;
-        fs::write(&p, &bytes).unwrap();
-        let e = read(&j, 3).unwrap_err().to_string();
-        assert!(e.contains("kept-00003.bin") && e.contains("CRC"), "{e}");
-        fs::write(&p, &bytes[..bytes.len() - 1]).unwrap();
-        let e = read(&j, 3).unwrap_err().to_string();
-        assert!(e.contains("length"), "{e}");
-        // Dropped once the next window's are written; dropping twice is fine.
-        j.drop_kept(3).unwrap();
-        j.drop_kept(3).unwrap();
-        assert!(!p.exists());
-        let e = read(&j, 3).unwrap_err().to_string();
-        assert!(e.contains("kept-00003.bin"), "{e}");
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! A space-time solve run as shards and merged (issue 50), through the real `rhier`
 //! binary: `plan --shards N`, `solve --shard K/N` (and `--shard-index-env`), `merge`.
-//! The merged file against the solve on one machine (probes at every frame, the
-//! first shard's windows bit for bit), the same file whatever N for the same
+//! The merged file against the solve on one machine (the same leaves, the same
+//! probes at every frame), the same file whatever N for the same
 //! boundaries, `--resume` inside a shard, and every refusal of `merge` (a missing
 //! shard, one given twice, another shard count, other settings, a corrupt part, a
 //! file that is no part), each naming the part and leaving no output behind.
@@ -167,10 +167,12 @@ fn grid_points_cover_each_patch_nine_times() {
     assert_eq!(grid_points(&patches, 3).len(), 9 * patches.geometry.len());
 }
 
-/// The shards of LIGHT and ACTOR merge into a file close to the solve on one
-/// machine at every frame; the first shard's windows are that solve's bit for bit
-/// (both start cold at window 0), the others differ by their first window's cold
-/// cache of final-gather terms.
+/// The shards of LIGHT and ACTOR merge into the file the solve on one machine
+/// writes: every window's leaves bit for bit (a window depends on no other, so a
+/// shard's first window is the single solve's), and so every probe at every frame.
+/// Issue 50 asks for 0.5% relative RMS at every frame; when windows handed their
+/// final-gather terms on, a shard's cold first window made LIGHT's worst frame here
+/// 1.2% off (BENCHMARKS.md, "Farm").
 #[test]
 fn merged_shards_match_the_solve_on_one_machine_at_every_frame() {
     let dir = tempfile::tempdir().unwrap();
@@ -189,34 +191,20 @@ fn merged_shards_match_the_solve_on_one_machine_at_every_frame() {
             Reader::open(&single).unwrap(),
         );
         a.verify().unwrap();
-        assert_eq!(a.chunks().len(), b.chunks().len());
         assert_eq!(a.chunks().len(), 7);
-        // Shard 0's chunks are the single solve's.
-        let first = Reader::open(&parts[0]).unwrap();
-        let n0 = first.chunks().len();
-        assert!(n0 >= 2, "{n0}");
-        for k in 0..n0 {
-            assert_eq!(a.chunk_leaves(k).unwrap(), b.chunk_leaves(k).unwrap());
+        // Every shard holds windows, so every shard but the first starts cold.
+        for p in &parts {
+            assert!(Reader::open(p).unwrap().chunks().len() >= 2, "{p:?}");
         }
+        assert!(same_chunks(&a, &b), "{name}: the merged chunks differ");
         // The merged file says what it is: every window, shard 0 of 1, the
         // single solve's fingerprint.
         let (pa, pb) = (a.provenance().unwrap(), b.provenance().unwrap());
         assert_eq!(pa, pb);
         assert_eq!((pa.first, pa.end, pa.shard, pa.shards), (0, 7, 0, 1));
         let diffs = frame_differences(&scene, &a, &b, 4.0);
-        let worst = diffs.iter().copied().fold(0.0, f64::max);
-        let later = &diffs[diffs.len() / 2..];
-        eprintln!("{name}: merged against single, per frame: {diffs:?}");
-        // Issue 50 asks for 0.5% at every frame; on these coarse settings, windows
-        // of two frames (a cold start every other frame), area-weighted 3 × 3
-        // grids on every patch, LIGHT's worst frame is 1.2% (its small patches;
-        // the area-weighted random points of tools/farm/compare.py see 0.26%),
-        // so the bar is not met here: BENCHMARKS.md, "Farm".
-        assert!(worst <= 0.02, "{name}: worst frame {worst}");
-        // The cold caches do change something after shard 0 (the test would pass
-        // on a merge of the single solve with itself otherwise).
-        assert!(later.iter().any(|&d| d > 0.0), "{name}: {diffs:?}");
-        assert!(diffs[0] == 0.0, "{name}: {diffs:?}");
+        assert_eq!(diffs.len(), 13);
+        assert!(diffs.iter().all(|&d| d == 0.0), "{name}: {diffs:?}");
     }
 }
 

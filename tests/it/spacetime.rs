@@ -479,59 +479,25 @@ fn the_shared_part_gathers_light_when_every_first_link_varies() {
 }
 
 #[test]
-fn a_window_depends_on_the_ones_before_it_only_through_the_terms_they_hand_on() {
-    // What makes resume exact: a run that starts at window 2 with the terms window
-    // 1 handed on (as `--resume` reads them from the journal) solves windows 2 to
-    // 4 as the full run did, bit for bit.
+fn a_window_depends_on_no_other() {
+    // What makes shards and resume exact: a run that solves window 2 alone, or
+    // windows 3 and 4 alone, writes what the full run wrote for them, bit for bit
+    // (each window starts from the shared part and an empty cache of terms; when
+    // windows handed their terms on, a shard's first window differed by up to
+    // 0.7% at a frame, BENCHMARKS.md "Farm").
     let scene = sliding_block(-60.0, 0.8);
     let o = st(5.0, 0.2);
     let mut full = SpaceTime::new(&scene, opts(), o, |_, _| {}).unwrap();
     assert_eq!(full.window_count(), 5);
-    let mut handed = Vec::new();
-    let mut windows = Vec::new();
-    for w in 0..5 {
-        windows.push(full.solve_window(w, |_| {}).unwrap());
-        if w == 1 {
-            full.encode_carried(&mut handed).unwrap();
-        }
-    }
-    assert!(
-        handed.len() > 100_000,
-        "window 1 hands on {} bytes of terms",
-        handed.len()
-    );
-    let path = std::path::Path::new("kept-00001.bin");
-    let mut resumed = SpaceTime::new(&scene, opts(), o, |_, _| {}).unwrap();
-    resumed
-        .decode_carried(&mut &handed[..], handed.len() as u64, path)
-        .unwrap();
-    assert_eq!(resumed.solve_window(2, |_| {}).unwrap(), windows[2]);
-    assert_eq!(resumed.solve_window(3, |_| {}).unwrap(), windows[3]);
-    assert_eq!(resumed.solve_window(4, |_| {}).unwrap(), windows[4]);
-    // The terms are used: a window 2 that starts from none gathers them afresh,
-    // with decisions of its own (the sources it opens), and ends elsewhere.
-    let mut fresh = SpaceTime::new(&scene, opts(), o, |_, _| {}).unwrap();
-    let alone = fresh.solve_window(2, |_| {}).unwrap();
-    assert_ne!(alone.leaves.to_vec(), windows[2].leaves.to_vec());
-    // A damaged payload is refused with its place named.
-    let mut bad = handed.clone();
-    bad[0] ^= 0xff; // the first point's patch
-    let err = fresh
-        .decode_carried(&mut &bad[..], bad.len() as u64, path)
-        .unwrap_err()
-        .to_string();
-    assert!(
-        err.contains("kept-00001.bin") && err.contains("kept point 0 patch"),
-        "{err}"
-    );
-    let err = fresh
-        .decode_carried(&mut &handed[..100], 100, path)
-        .unwrap_err()
-        .to_string();
-    assert!(
-        err.contains("kept point 0 records") && err.contains("within the file"),
-        "{err}"
-    );
+    let windows: Vec<_> = (0..5)
+        .map(|w| full.solve_window(w, |_| {}).unwrap())
+        .collect();
+    let mut alone = SpaceTime::new(&scene, opts(), o, |_, _| {}).unwrap();
+    assert_eq!(alone.solve_window(2, |_| {}).unwrap(), windows[2]);
+    let mut later = SpaceTime::new(&scene, opts(), o, |_, _| {}).unwrap();
+    assert_eq!(later.solve_window(3, |_| {}).unwrap(), windows[3]);
+    assert_eq!(later.solve_window(4, |_| {}).unwrap(), windows[4]);
+    assert!(windows.iter().all(|w| w.leaves.len() > 100));
 }
 
 #[test]

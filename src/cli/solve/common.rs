@@ -119,8 +119,8 @@ pub struct ShardArgs {
     /// The windows are split into N contiguous runs of about equal estimated cost;
     /// the split depends on the scene and the settings alone, so every task of a job
     /// array finds the same one. The shard solves the shared part, then its own
-    /// windows, the first from a cold cache of final-gather terms (the merged file
-    /// differs from a solve on one machine by what that cache would have saved).
+    /// windows. A window depends on no other, so the merged parts hold the leaves a
+    /// solve on one machine writes, bit for bit, whatever N.
     /// The part records the solve's fingerprint and the windows and times it holds;
     /// `--resume` continues an interrupted shard. A shard with no window (more
     /// shards than windows) writes a part that holds none.

@@ -107,12 +107,8 @@ pub fn run(
     let mut frames: Vec<FrameRecord> = Vec::new();
     let (mut stored, mut frame_cells) = (0u64, 0u64);
     if let Some(journal) = &journal {
-        (stored, frame_cells) = replay_journal(
-            journal,
-            range.start..range.start + done,
-            &mut run,
-            &mut writer,
-        )?;
+        (stored, frame_cells) =
+            replay_journal(journal, range.start..range.start + done, &mut writer)?;
     }
     let mut last_residual = 0.0;
     for wi in range.start + done..range.end {
@@ -133,10 +129,10 @@ pub fn run(
             say(f.summary());
             frames.push(*f);
         })?;
-        // The last window is not journaled: nothing comes after it to hand its
-        // terms to, and an interrupted solve is finished by solving it again.
+        // The last window is not journaled: the file is finished right after it,
+        // and an interrupted solve is finished by solving it again.
         let journal = journal.as_ref().filter(|_| wi + 1 < range.end);
-        store_window(&w, &mut writer, journal, &run)?;
+        store_window(&w, &mut writer, journal)?;
         stored += w.leaves.len() as u64;
         frame_cells += w.frame_cells;
         if let Some(budget) = args.resources.budget
@@ -318,21 +314,14 @@ fn open_journal(
     }
 }
 
-/// Writes the windows `done` that `journal` holds to `writer` and hands `run` the
-/// terms the last of them handed on; returns the stored cells and the frame cells.
+/// Writes the windows `done` that `journal` holds to `writer` (the windows after
+/// them depend on none of them); returns the stored cells and the frame cells.
 fn replay_journal(
     journal: &Journal,
     done: std::ops::Range<usize>,
-    run: &mut SpaceTime,
     writer: &mut Writer,
 ) -> anyhow::Result<(u64, u64)> {
     let (mut stored, mut frame_cells) = (0u64, 0u64);
-    // The next window starts from the terms the last journaled one handed on.
-    if !done.is_empty() {
-        journal.read_kept(done.end as u32 - 1, |r, len, path| {
-            run.decode_carried(r, len, path)
-        })?;
-    }
     for wi in done {
         let w = journal.read(wi as u32)?;
         writer.write_chunk(w.t0, w.t1, &w.leaves)?;
@@ -400,26 +389,19 @@ fn memory_report(run: &SpaceTime, stem: &str, stored: u64) -> MemoryReport {
     m
 }
 
-/// Writes window `w` to `writer` and, with a `journal`, to the journal with the
-/// terms it hands the next window. Out of core, the leaves are paged in a block at a
-/// time and handed back.
+/// Writes window `w` to `writer` and, with a `journal`, to the journal. Out of
+/// core, the leaves are paged in a block at a time and handed back.
 fn store_window(
     w: &WindowOutput,
     writer: &mut Writer,
     journal: Option<&Journal>,
-    run: &SpaceTime,
 ) -> anyhow::Result<()> {
     let leaves = &w.leaves;
     writer.write_chunk_paged(w.t0, w.t1, leaves, || leaves.release_resident())?;
     if let Some(journal) = journal {
-        // The terms handed on first: a journaled window always has them.
-        journal.write_kept(w.index, |out| run.encode_carried(out))?;
         journal.append_leaves(w.index, [w.t0, w.t1], w.frame_cells, leaves, || {
             leaves.release_resident()
         })?;
-        if let Some(before) = w.index.checked_sub(1) {
-            journal.drop_kept(before)?;
-        }
     }
     Ok(())
 }

@@ -25,16 +25,14 @@
 //! dropped (the cells a moving object re-meshes move on with it, and a window
 //! would otherwise keep every point any frame ever made). Under a byte budget, the points the last
 //! reconstruction did not register are dropped too and no new point is admitted
-//! while over it. Dropping changes the work, never the values: a point gathered
-//! afresh gets the same terms it had.
+//! while over it. Dropping changes the work and, a little, the values: a point
+//! gathered afresh opens its sources as the frame's hierarchy and radiosity have
+//! them now, not as they were when its terms were kept (so the budget is one of the
+//! settings a resume journal is keyed by).
 //!
-//! **Carried.** A window's terms outlive it (`Solver::release_window` keeps the
-//! cache as it is): the next window starts from those on the shared part's
-//! elements that still hold against the boxes its own objects sweep, rebuilt once
-//! ([`PointCache::carried`]; which hold: `Solver::revalidated`). FrameBetween windows
-//! they can be written for a resumed solve's journal ([`PointCache::encode`],
-//! [`PointCache::decode`]); the rebuild goes over points in key order, so it makes
-//! the same cache from those as from the window's own.
+//! **One window's.** The cache lives and dies with its window
+//! (`Solver::release_window`): a window's values do not depend on the windows
+//! solved before it, so shards and resumed solves write what one run writes.
 
 use std::ops::Range;
 
@@ -150,18 +148,6 @@ impl<'a> PointView<'a> {
         let m1 = next.map_or(self.masked.len(), |n| n.masked as usize);
         (e.fixed as usize..f1, e.masked as usize..m1)
     }
-}
-
-/// One source of a point's kept terms: its key (`source << 1 | clear`), its fixed
-/// and its masked terms.
-pub type SourceTerms = (u32, Vec<FixedTerm>, Vec<MaskedTerm>);
-
-/// [`SourceTerms`] borrowed: a source's key, fixed and masked terms.
-type SourceSlices<'s> = (u32, &'s [FixedTerm], &'s [MaskedTerm]);
-
-/// `sources` as [`SourceSlices`].
-fn as_slices(sources: &[SourceTerms]) -> Vec<SourceSlices<'_>> {
-    sources.iter().map(|s| (s.0, &s.1[..], &s.2[..])).collect()
 }
 
 /// One point's records as the arenas will hold them, made off the cache by
@@ -328,31 +314,21 @@ impl PointCache {
         if !same || !self.healthy || (slot.is_none() && !self.admits()) {
             return;
         }
-        self.append_flat(p.pk, slot, &p.index, &[&p.fixed], &[&p.masked]);
+        self.append(p.pk, slot, &p.index, &p.fixed, &p.masked);
     }
 
-    /// Writes point `pk`'s `sources` (sorted by key) at the arenas' ends, in place
-    /// of slot `slot`'s records if it has one. A point whose terms would not fit
-    /// the 16-bit offsets is not kept.
-    fn append(&mut self, pk: PointKey, slot: Option<u32>, sources: &[SourceSlices]) {
-        let index = Self::index_of(sources);
-        let fixed: Vec<&[FixedTerm]> = sources.iter().map(|s| s.1).collect();
-        let masked: Vec<&[MaskedTerm]> = sources.iter().map(|s| s.2).collect();
-        self.append_flat(pk, slot, &index, &fixed, &masked);
-    }
-
-    /// [`PointCache::append`] with the index records made: the fixed and masked
-    /// terms are the concatenations of `fixed` and `masked`.
-    fn append_flat(
+    /// Writes point `pk`'s records at the arenas' ends, in place of slot `slot`'s
+    /// records if it has one. A point whose terms would not fit the 16-bit offsets
+    /// is not kept.
+    fn append(
         &mut self,
         pk: PointKey,
         slot: Option<u32>,
         index: &[TermIndex],
-        fixed: &[&[FixedTerm]],
-        masked: &[&[MaskedTerm]],
+        fixed: &[FixedTerm],
+        masked: &[MaskedTerm],
     ) {
-        let n_fixed: usize = fixed.iter().map(|s| s.len()).sum();
-        let n_masked: usize = masked.iter().map(|s| s.len()).sum();
+        let (n_fixed, n_masked) = (fixed.len(), masked.len());
         if n_fixed > usize::from(u16::MAX) || n_masked > usize::from(u16::MAX) {
             if let Some(s) = slot {
                 self.forget(s);
@@ -369,15 +345,11 @@ impl PointCache {
             n_masked: n_masked as u32,
             stamp: self.seq,
         };
-        let appended = self.index.extend_from_slice(index).and_then(|()| {
-            for s in fixed {
-                self.fixed.extend_from_slice(s)?;
-            }
-            for s in masked {
-                self.masked.extend_from_slice(s)?;
-            }
-            Ok(())
-        });
+        let appended = self
+            .index
+            .extend_from_slice(index)
+            .and_then(|()| self.fixed.extend_from_slice(fixed))
+            .and_then(|()| self.masked.extend_from_slice(masked));
         if let Err(e) = appended {
             // What was appended is dead; the point keeps its old span.
             eprintln!(
@@ -399,25 +371,6 @@ impl PointCache {
                 self.spans.push(span);
             }
         }
-    }
-
-    /// The index records of `sources` (sorted by key, at most 65535 fixed and
-    /// masked terms in all): each source's key and where its terms start.
-    fn index_of(sources: &[SourceSlices]) -> Vec<TermIndex> {
-        let (mut f, mut m) = (0u16, 0u16);
-        sources
-            .iter()
-            .map(|s| {
-                let e = TermIndex {
-                    key: s.0,
-                    fixed: f,
-                    masked: m,
-                };
-                f += s.1.len() as u16;
-                m += s.2.len() as u16;
-                e
-            })
-            .collect()
     }
 
     /// Where slot `s`'s records start in the three arenas.
@@ -548,248 +501,7 @@ impl PointCache {
         self.fixed.release_resident();
         self.masked.release_resident();
     }
-
-    /// The points kept, in key order.
-    fn keys_sorted(&self) -> Vec<PointKey> {
-        let mut k: Vec<PointKey> = self.slots.keys().copied().collect();
-        k.sort_unstable();
-        k
-    }
-
-    /// Point `pk`'s sources in key order.
-    fn sources(&self, pk: &PointKey) -> Vec<SourceTerms> {
-        let Some(view) = self.get(pk) else {
-            return Vec::new();
-        };
-        view.index
-            .iter()
-            .enumerate()
-            .map(|(i, e)| {
-                let (f, m) = view.ranges(i);
-                (e.key, view.fixed[f].to_vec(), view.masked[m].to_vec())
-            })
-            .collect()
-    }
-
-    /// A new cache on `storage` (at most `budget` bytes) with the sources of each
-    /// point that `keep` accepts, as `keep` leaves them (it may turn masked terms
-    /// into fixed ones): what a window starts from (module docs, "Carried").
-    /// Points go in key order and count as registered by no reconstruction yet, so
-    /// the same accepted content makes the same cache whether it comes from the
-    /// last window's cache or from the journal ([`PointCache::decode`]).
-    pub fn carried(
-        &self,
-        storage: &Storage,
-        budget: Option<usize>,
-        mut keep: impl FnMut(PointKey, &mut SourceTerms) -> bool,
-    ) -> Result<PointCache> {
-        let mut out = PointCache::new(storage, budget)?;
-        for (i, pk) in self.keys_sorted().into_iter().enumerate() {
-            let mut sources = self.sources(&pk);
-            sources.retain_mut(|s| keep(pk, s));
-            if !sources.is_empty() && out.admits() {
-                out.append(pk, None, &as_slices(&sources));
-            }
-            // Out of core, both caches' pages go back as it goes.
-            if i % 1024 == 1023 {
-                self.release_resident();
-                out.release_resident();
-            }
-        }
-        out.release_resident();
-        Ok(out)
-    }
-
-    /// Writes the sources `keep` accepts to `w` for the journal: per point in key
-    /// order that has any, its key (3 × u32), its source, fixed-term and
-    /// masked-term counts (3 × u32), then its [`TermIndex`], [`FixedTerm`] and
-    /// [`MaskedTerm`] records as they lie in memory (little-endian). Read back by
-    /// [`PointCache::decode`].
-    pub fn encode(
-        &self,
-        w: &mut dyn std::io::Write,
-        mut keep: impl FnMut(&SourceTerms) -> bool,
-    ) -> std::io::Result<()> {
-        for (i, pk) in self.keys_sorted().into_iter().enumerate() {
-            // Out of core, the pages read go back as it goes.
-            if i % 1024 == 1023 {
-                self.release_resident();
-            }
-            let mut sources = self.sources(&pk);
-            sources.retain(&mut keep);
-            if sources.is_empty() {
-                continue;
-            }
-            let index = Self::index_of(&as_slices(&sources));
-            let n_fixed: usize = sources.iter().map(|s| s.1.len()).sum();
-            let n_masked: usize = sources.iter().map(|s| s.2.len()).sum();
-            let mut head = [0u8; POINT_HEAD];
-            let counts = [index.len(), n_fixed, n_masked].map(|n| n as u32);
-            for (k, v) in [pk.0, pk.1, pk.2, counts[0], counts[1], counts[2]]
-                .into_iter()
-                .enumerate()
-            {
-                head[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
-            }
-            w.write_all(&head)?;
-            w.write_all(bytemuck::cast_slice(&index))?;
-            for s in &sources {
-                w.write_all(bytemuck::cast_slice(&s.1))?;
-            }
-            for s in &sources {
-                w.write_all(bytemuck::cast_slice(&s.2))?;
-            }
-        }
-        self.release_resident();
-        Ok(())
-    }
-
-    /// Reads [`PointCache::encode`]'s bytes (`len` of them, from `path`) into a cache
-    /// on `storage` holding every point and source they name (the next window
-    /// applies its budget, as it does to the terms a window hands on in memory),
-    /// checking every field:
-    /// points in increasing key order on patches `patch_ok` accepts, sources in
-    /// increasing key order whose offsets stay within the point's terms, elements
-    /// `elem_ok` accepts, finite factors and visibilities in [0, 1]. A damaged file
-    /// is an error that names the place.
-    pub fn decode(
-        r: &mut dyn std::io::Read,
-        len: u64,
-        path: &std::path::Path,
-        storage: &Storage,
-        elem_ok: impl Fn(u32) -> bool,
-        patch_ok: impl Fn(u32) -> bool,
-    ) -> Result<PointCache> {
-        let bad = |place: String, expected: &str, found: String| {
-            crate::Error::invalid(path, place, expected, found)
-        };
-        let io = |e| crate::Error::io(path, e);
-        let mut out = PointCache::new(storage, None)?;
-        let mut left = len;
-        let mut last: Option<PointKey> = None;
-        let mut n_points = 0u64;
-        while left > 0 {
-            let place = |what: &str| format!("kept point {n_points} {what}");
-            if left < POINT_HEAD as u64 {
-                return Err(bad(
-                    place("header"),
-                    "24 bytes",
-                    format!("{left} bytes left"),
-                ));
-            }
-            let mut head = [0u8; POINT_HEAD];
-            r.read_exact(&mut head).map_err(io)?;
-            left -= POINT_HEAD as u64;
-            let v: [u32; 6] = std::array::from_fn(|i| {
-                u32::from_le_bytes([
-                    head[4 * i],
-                    head[4 * i + 1],
-                    head[4 * i + 2],
-                    head[4 * i + 3],
-                ])
-            });
-            let pk = (v[0], v[1], v[2]);
-            let (n_index, n_fixed, n_masked) = (v[3] as usize, v[4] as usize, v[5] as usize);
-            if !patch_ok(pk.0) {
-                return Err(bad(
-                    place("patch"),
-                    "a patch of the scene",
-                    pk.0.to_string(),
-                ));
-            }
-            if last.is_some_and(|l| l >= pk) {
-                return Err(bad(
-                    place("key"),
-                    "points in increasing key order",
-                    format!("{pk:?} after {last:?}"),
-                ));
-            }
-            let max = usize::from(u16::MAX);
-            if n_index == 0 || n_fixed > max || n_masked > max {
-                return Err(bad(
-                    place("counts"),
-                    "1 or more sources, at most 65535 fixed and masked terms",
-                    format!("{n_index} sources, {n_fixed} fixed, {n_masked} masked"),
-                ));
-            }
-            let bytes = (n_index * 8 + n_fixed * 8 + n_masked * 24) as u64;
-            if bytes > left {
-                return Err(bad(
-                    place("records"),
-                    "records within the file",
-                    format!("{bytes} bytes with {left} left"),
-                ));
-            }
-            left -= bytes;
-            let mut index = vec![TermIndex::zeroed(); n_index];
-            let mut fixed = vec![FixedTerm::zeroed(); n_fixed];
-            let mut masked = vec![MaskedTerm::zeroed(); n_masked];
-            r.read_exact(bytemuck::cast_slice_mut(&mut index))
-                .map_err(io)?;
-            r.read_exact(bytemuck::cast_slice_mut(&mut fixed))
-                .map_err(io)?;
-            r.read_exact(bytemuck::cast_slice_mut(&mut masked))
-                .map_err(io)?;
-            let mut sources = Vec::with_capacity(n_index);
-            for (i, e) in index.iter().enumerate() {
-                let next = index.get(i + 1);
-                let f1 = next.map_or(n_fixed, |n| n.fixed as usize);
-                let m1 = next.map_or(n_masked, |n| n.masked as usize);
-                let (f0, m0) = (e.fixed as usize, e.masked as usize);
-                let first_ok = i > 0 || (f0 == 0 && m0 == 0);
-                let order_ok = next.is_none_or(|n| n.key > e.key);
-                if !first_ok || !order_ok || f0 > f1 || m0 > m1 || f1 > n_fixed || m1 > n_masked {
-                    return Err(bad(
-                        place(&format!("source {i}")),
-                        "sources in increasing key order, each starting where the one before ends",
-                        format!("key {} at fixed {f0}..{f1}, masked {m0}..{m1}", e.key),
-                    ));
-                }
-                if !elem_ok(e.key >> 1) {
-                    return Err(bad(
-                        place(&format!("source {i}")),
-                        "an element of the shared part",
-                        (e.key >> 1).to_string(),
-                    ));
-                }
-                sources.push((e.key, fixed[f0..f1].to_vec(), masked[m0..m1].to_vec()));
-            }
-            for t in &fixed {
-                if !(elem_ok(t.elem) && t.f.is_finite() && t.f >= 0.0) {
-                    return Err(bad(
-                        place("fixed term"),
-                        "an element of the shared part and a finite factor >= 0",
-                        format!("element {}, factor {}", t.elem, t.f),
-                    ));
-                }
-            }
-            for t in &masked {
-                if !(elem_ok(t.elem)
-                    && t.f.is_finite()
-                    && t.f >= 0.0
-                    && (0.0..=1.0).contains(&t.vis_static))
-                {
-                    return Err(bad(
-                        place("masked term"),
-                        "an element of the shared part, a finite factor >= 0 and a visibility in [0, 1]",
-                        format!(
-                            "element {}, factor {}, visibility {}",
-                            t.elem, t.f, t.vis_static
-                        ),
-                    ));
-                }
-            }
-            out.append(pk, None, &as_slices(&sources));
-            last = Some(pk);
-            n_points += 1;
-        }
-        out.release_resident();
-        Ok(out)
-    }
 }
-
-/// Bytes of a point's head in [`PointCache::encode`]'s format.
-const POINT_HEAD: usize = 24;
 
 #[cfg(test)]
 mod tests {

@@ -20,12 +20,12 @@
 //!    midpoint), take on the line between the solved frames around them what they
 //!    allow (`interpolate.rs`).
 //! 3. *Release* ([`Solver::release_window`]): the window's leaves go to the output,
-//!    the pools are restored to the shared part, so memory does not grow with the
-//!    animation's length; the final-gather terms that still hold are the only state
-//!    handed to the next window (and journaled beside it).
+//!    the pools are restored to the shared part and the window's kept terms dropped,
+//!    so memory does not grow with the animation's length and no window depends on
+//!    another: each is a function of the shared part and its own frames.
 //!
 //! **Shards.** The windows, cut into contiguous runs of about equal estimated cost,
-//! can be solved on separate machines, each run's first window from a cold cache
+//! can be solved on separate machines and merged into the file one machine writes
 //! (`shards.rs`; `rhier solve --shard K/N`, `rhier merge`).
 //!
 //! **Elements with time ranges.** A cell whose corners hold over consecutive frames
@@ -71,7 +71,6 @@ use super::{
 use crate::Result;
 use crate::pools::Column;
 use crate::scene::Scene;
-use kept_terms::PointCache;
 use window::Window;
 
 /// Settings of the time dimension.
@@ -340,9 +339,8 @@ pub struct SpaceTimeStats {
     pub b_ref: f64,
 }
 
-/// The space-time state a [`Solver`] holds (its field `st`): the current window,
-/// what the last window hands on, and what a frame solved between two others takes
-/// from them. Empty in a static solve.
+/// The space-time state a [`Solver`] holds (its field `st`): the current window
+/// and what a frame solved between two others takes from them. Empty in a static solve.
 pub(in crate::solver) struct SpaceTimeState {
     /// Whether `Solver::balancing` is fixed: space-time windows keep the shared
     /// part's choice.
@@ -359,9 +357,6 @@ pub(in crate::solver) struct SpaceTimeState {
     pub(in crate::solver) kept_budget: Option<usize>,
     /// [`Solver::set_direct_apart`].
     pub(in crate::solver) direct_apart: bool,
-    /// The final-gather terms the last window kept on the shared part's elements,
-    /// handed to the next window ([`Solver::release_window`], [`Solver::begin_window`]).
-    pub(in crate::solver) carried: Option<PointCache>,
     /// The solved frames around a frame solved between them, whose row entries
     /// with a moving end this frame may take ([`TimeRange`]).
     pub(in crate::solver) time_range: Option<TimeRange>,
@@ -388,7 +383,6 @@ impl SpaceTimeState {
             links_at: t,
             kept_budget: None,
             direct_apart: false,
-            carried: None,
             time_range: None,
             frame_rows: FrameRows::default(),
             rows_between: 0,
@@ -399,9 +393,8 @@ impl SpaceTimeState {
 
 /// A space-time solve in progress: the shared part is solved by
 /// [`SpaceTime::new`], then the caller asks for the windows in time order with
-/// [`SpaceTime::solve_window`] (skipping those an interrupted run already wrote,
-/// after [`SpaceTime::decode_carried`] with what the last of them handed on: a
-/// window depends on the ones before it only through that).
+/// [`SpaceTime::solve_window`], all of them or any run of them (a shard's windows,
+/// or those an interrupted run did not write): a window depends on no other.
 pub struct SpaceTime<'a> {
     /// How far the moving objects travel from each frame of the animation to the
     /// next ([`frame_motion`]).
@@ -448,7 +441,7 @@ impl<'a> SpaceTime<'a> {
             b_ref,
             ..SpaceTimeStats::default()
         };
-        // The state every window starts from (with the terms the last one handed on).
+        // The state every window starts from.
         let shared_tr = solver.links.transports.as_slice().to_vec();
         let shared_b = solver.elems.radiosities.as_slice().to_vec();
         let shared_dir = solver.elems.directions.as_slice().to_vec();
@@ -483,44 +476,6 @@ impl<'a> SpaceTime<'a> {
     /// The patches leaves refer to (for the file's header).
     pub fn patches(&self) -> &[super::PatchGeometry] {
         &self.solver.patches.geometry
-    }
-
-    /// Writes the final-gather terms the last solved window hands the next (those
-    /// on the shared part, `Solver::on_shared_part`; nothing before the first) in
-    /// `PointCache::encode`'s format: a journal keeps them beside the window, and
-    /// `solve --resume` continues with the next window exactly as an uninterrupted
-    /// solve does.
-    pub fn encode_carried(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
-        let s = &self.solver;
-        s.st.carried
-            .as_ref()
-            .map_or(Ok(()), |c| c.encode(w, |src| s.on_shared_part(src)))
-    }
-
-    /// Takes the terms [`SpaceTime::encode_carried`] wrote (`len` bytes from
-    /// `path`) as the ones the last window handed on, before the first window a
-    /// resumed solve solves, checking that every point lies on a static patch and
-    /// every element is one of the shared part (all the pools hold between
-    /// windows).
-    pub fn decode_carried(
-        &mut self,
-        r: &mut dyn std::io::Read,
-        len: u64,
-        path: &std::path::Path,
-    ) -> Result<()> {
-        let s = &mut self.solver;
-        let shared = s.elems.len();
-        let moving = &s.motion.moving_patch;
-        let c = kept_terms::PointCache::decode(
-            r,
-            len,
-            path,
-            &s.opts.storage,
-            |e| (e as usize) < shared,
-            |p| moving.get(p as usize) == Some(&false),
-        )?;
-        s.st.carried = Some(c);
-        Ok(())
     }
 
     /// The solver (pools, geometry) as it stands.

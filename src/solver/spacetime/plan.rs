@@ -15,8 +15,8 @@ use crate::scene::Scene;
 /// Key intervals per window when `--window` is not given ([`time_layout`]).
 ///
 /// A window's start costs more than a keyframe (the window before ends on a
-/// keyframe, this one starts on the next frame, and its first frame gathers with
-/// the terms handed on only), while a longer window sweeps larger boxes, so more of
+/// keyframe, this one starts on the next frame, and its first frame gathers every
+/// point afresh), while a longer window sweeps larger boxes, so more of
 /// its links vary; on ACTOR and LIGHT the starts saved outweigh that, at the same
 /// peak memory (BENCHMARKS.md, "Longer windows; hull planes made one at a time"). At
 /// most `WINDOW_KEYS · MAX_KEY_FRAMES + 1` frames are lost when a solve is

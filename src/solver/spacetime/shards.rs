@@ -3,10 +3,10 @@
 //! cost per window from the motion), and its split into `N` contiguous runs of
 //! windows of about equal cost ([`Plan::shards`]).
 //!
-//! A window depends on the one before only through the final-gather terms it hands
-//! on (`Solver::release_window`), so a shard solves the shared part (which every
-//! window starts from, the same in every shard) and then its own windows, the first
-//! from a cold cache of terms. The plan is a function of the scene and the settings
+//! A window depends on no other (`Solver::release_window`), so a shard solves the
+//! shared part (which every window starts from, the same in every shard) and then
+//! its own windows, and writes the leaves a solve on one machine writes for them.
+//! The plan is a function of the scene and the settings
 //! alone (the solver's own [`frame_motion`] and [`time_layout`], with the scene's
 //! diameter as the solver computes it), so every array task of a farm finds the same
 //! windows and the same shards without talking to the others.

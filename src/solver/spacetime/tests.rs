@@ -5,7 +5,6 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::kept_terms::{MaskedTerm, PointCache};
 use super::window::FRAME_SID;
 use super::*;
 use crate::oracle;
@@ -13,7 +12,6 @@ use crate::pools::elements::Geom;
 use crate::pools::{ElementId, Storage};
 use crate::scene::{MaterialId, MotionKey, MotionTrack, Object, Polygon, cornell_box};
 use crate::shafts::meets_any;
-use crate::solver::gather::Terms;
 use crate::solver::geom_box;
 use crate::solver::rows::RowMasks;
 
@@ -550,115 +548,6 @@ fn light_window(scene: &Scene, eps: f64, end: f64) -> (Solver<'_>, f64) {
     let b_ref = s.radiosity_scale();
     s.begin_window([t0, end], b_ref).unwrap();
     (s, b_ref)
-}
-
-#[test]
-fn a_carried_term_holds_unless_a_moving_object_may_come_between() {
-    // A static point on the floor of the Cornell box keeps three sources'
-    // terms: fixed terms (visibility included) from the light, masked terms
-    // from the back wall, and unoccluded terms keyed clear from the ceiling.
-    // A window whose moving object sweeps a box on the segment from the point
-    // to the light drops the light's terms only; one whose object stays out of
-    // the box around the point and the light keeps all three.
-    let scene = crate::scene::cornell_box(true);
-    let s = Solver::new(&scene, SolveOptions::default()).unwrap();
-    let geoms = s.elems.geoms.as_slice();
-    let find = |pred: &dyn Fn(&Geom) -> bool| {
-        (0..geoms.len())
-            .find(|&e| geoms[e].patch != u32::MAX && pred(&geoms[e]))
-            .unwrap()
-    };
-    let normal = |g: &Geom| DVec3::from_array(g.normal);
-    let light = find(&|g| s.patches.emissions[g.patch as usize][0] > 0.0);
-    let floor = find(&|g| normal(g).y > 0.9 && s.patches.emissions[g.patch as usize][0] == 0.0);
-    let ceiling = find(&|g| normal(g).y < -0.9 && s.patches.emissions[g.patch as usize][0] == 0.0);
-    let back = find(&|g| normal(g).z > 0.9);
-    let q = |x: f64| (x * (1u64 << 24) as f64) as u32;
-    let pk = (geoms[floor].patch, q(0.5), q(0.5));
-    let x = s.patches.point(pk.0 as usize, 0.5, 0.5);
-    let masked = |elem: usize| MaskedTerm {
-        mask: 0b1011,
-        key: 7,
-        elem: elem as u32,
-        f: 0.1,
-        vis_static: 0.75,
-    };
-    let mut cache = PointCache::new(&crate::pools::Storage::Ram, None).unwrap();
-    let src = |e: usize| (e as u32) << 1;
-    cache.add(
-        pk,
-        vec![
-            (
-                src(light),
-                Terms {
-                    fixed: vec![(light as u32, 0.2)],
-                    masked: vec![],
-                },
-            ),
-            (
-                src(back),
-                Terms {
-                    fixed: vec![],
-                    masked: vec![(masked(back), 0.75)],
-                },
-            ),
-            (
-                src(ceiling) | 1,
-                Terms {
-                    fixed: vec![(ceiling as u32, 0.3)],
-                    masked: vec![],
-                },
-            ),
-        ],
-    );
-    let (lo, hi) = geom_box(&geoms[light]);
-    let between = x.lerp((lo + hi) * 0.5, 0.5);
-    let kept = |swept: &[(DVec3, DVec3)]| {
-        let c = s.revalidated(&cache, swept).unwrap();
-        let view = c.get(&pk);
-        [src(light), src(back), src(ceiling) | 1].map(|k| view.is_some_and(|v| v.get(k).is_some()))
-    };
-    let small = DVec3::splat(10.0);
-    assert_eq!(
-        kept(&[(between - small, between + small)]),
-        [false, true, true]
-    );
-    // Beside the point, off the box around it and the light (the box of the
-    // light's corners and the point, padded by a hair).
-    let aside = DVec3::new(hi.x + 50.0, x.y + 20.0, x.z);
-    assert_eq!(kept(&[(aside - small, aside + small)]), [true, true, true]);
-    assert_eq!(kept(&[]), [true, true, true]);
-    // Where no moving object can come between, a masked term becomes the
-    // fixed term a fresh gather makes (factor times the static visibility);
-    // near one it stays masked.
-    let c = s.revalidated(&cache, &[]).unwrap();
-    let view = c.get(&pk).unwrap();
-    assert_eq!(
-        view.get(src(back)).unwrap(),
-        (
-            &[kept_terms::FixedTerm {
-                elem: back as u32,
-                f: 0.1 * 0.75
-            }][..],
-            &[][..]
-        )
-    );
-    let (lo, hi) = geom_box(&geoms[back]);
-    let on_back = (lo + hi) * 0.5;
-    let c = s
-        .revalidated(&cache, &[(on_back - small, on_back + small)])
-        .unwrap();
-    assert_eq!(
-        c.get(&pk).unwrap().get(src(back)).unwrap().1,
-        &[masked(back)]
-    );
-    assert_eq!(
-        view.get(src(light)).unwrap().0,
-        &[kept_terms::FixedTerm {
-            elem: light as u32,
-            f: 0.2
-        }]
-    );
 }
 
 #[test]

@@ -19,10 +19,11 @@
 //!
 //! **What a window keeps** ([`Window`]): the final-gather terms of its static
 //! points ([`super::kept_terms`]), and the leaf-row coefficients, opened entries, hidden
-//! coefficients and masks that hold over the window ([`crate::solver::rows`]). What holds of
-//! the final-gather terms is handed to the next window (`Solver::revalidated`).
+//! coefficients and masks that hold over the window ([`crate::solver::rows`]). All of it
+//! goes with the window: the next starts from the shared part and an empty cache, so a
+//! window's leaves do not depend on which windows were solved before it in the same
+//! process (`Solver::release_window`).
 
-use super::kept_terms::{self, SourceTerms};
 use crate::solver::*;
 
 /// Pool lengths at some moment, and what was done since to older records (links
@@ -87,7 +88,7 @@ pub(in crate::solver) struct Window {
     /// geometry and the rays' keys hold over the window, so a later frame casts
     /// only the rays a mask leaves clear, at the moving objects only, and gets the
     /// value casting every ray would give, bit for bit (the final gather's
-    /// [`kept_terms::MaskedTerm`] for rows; paper 001 §5.2: what a moving object cannot
+    /// [`super::kept_terms::MaskedTerm`] for rows; paper 001 §5.2: what a moving object cannot
     /// change is computed once).
     pub(in crate::solver) masks: FastMap<(u32, u32), u64>,
     /// Exact factors `Σ_q w_q F(x_q → e)` from a static leaf (keyed by
@@ -171,9 +172,7 @@ impl Solver<'_> {
     /// animation were left coarse by the shared part: they are refined here, against
     /// `eps · b_ref`, once for all the window's frames.
     ///
-    /// The final-gather terms the last window handed on ([`Solver::release_window`])
-    /// are the window's to start with, those that hold against the boxes the moving
-    /// objects sweep over `span` (`Solver::revalidated`).
+    /// The window's final-gather terms start empty ([`Solver::release_window`]).
     pub fn begin_window(&mut self, span: [f64; 2], b_ref: f64) -> Result<()> {
         let swept = super::swept_boxes(self.scene, span[0], span[1]);
         self.begin_window_in(span, swept, b_ref)
@@ -187,10 +186,7 @@ impl Solver<'_> {
         swept: Vec<(DVec3, DVec3)>,
         b_ref: f64,
     ) -> Result<()> {
-        let points = match self.st.carried.take() {
-            Some(c) => self.revalidated(&c, &swept)?,
-            None => PointCache::new(&self.opts.storage, self.st.kept_budget)?,
-        };
+        let points = PointCache::new(&self.opts.storage, self.st.kept_budget)?;
         self.st.window = Some(Window {
             swept,
             span,
@@ -269,7 +265,6 @@ impl Solver<'_> {
         let shared = self.st.window.as_ref().map_or(0, |w| w.base.elems_len);
         let b = self.elems.radiosities.as_slice()[..shared].to_vec();
         self.release_window();
-        self.st.carried = None;
         self.elems.radiosities.as_mut_slice().copy_from_slice(&b);
         self.index_links();
         let b_ref = self.b_ref();
@@ -292,100 +287,24 @@ impl Solver<'_> {
     }
 
     /// Drops what the current window added to the pools and restores the shared part
-    /// as it was when the window began. The final-gather terms the window kept are
-    /// kept for the next window, as they are: [`Solver::begin_window`] keeps those
-    /// on the shared part's elements that still hold there, so that a window's
-    /// first keyframe does not gather from an empty cache (the paper's "what is
-    /// constant in time is computed once", across windows as within one). They are
-    /// the only state one window hands the next: the journal keeps them beside each
-    /// finished window, and a resumed solve reads them back and makes the same
-    /// leaves.
+    /// as it was when the window began. The final-gather terms the window kept go
+    /// with it: the next window gathers from an empty cache. A kept term is not the
+    /// value a fresh gather makes later in the animation (it keeps the sources'
+    /// opening and elements of when it was gathered, `Solver::point_terms`), so terms
+    /// handed from window to window made a window's leaves depend on every window
+    /// solved before it: a farm's shard, starting cold, differed from one machine's
+    /// solve by up to 0.7% at a frame (LIGHT750, BENCHMARKS.md "Farm"). Starting
+    /// every window empty makes the windows independent: any run of them, on one
+    /// machine, in shards or resumed from a journal, writes the same leaves, for
+    /// about 5% more time than handing the terms on.
     pub fn release_window(&mut self) {
         self.reset_frame();
         if let Some(mut w) = self.st.window.take() {
-            self.st.carried = w.points.get_mut().unwrap_or_else(|e| e.into_inner()).take();
             self.restore(&mut w.base);
             drop(w);
             release_free_memory();
         }
         self.pull_pool();
-    }
-
-    /// True if every element the source terms `src` name is one of the shared
-    /// part's (which, between windows, is all the pools hold): the terms a window
-    /// hands the next. Terms on the window's own elements go with them.
-    pub(in crate::solver) fn on_shared_part(&self, src: &SourceTerms) -> bool {
-        let shared = self.elems.len() as u32;
-        src.0 >> 1 < shared
-            && src.1.iter().all(|t| t.elem < shared)
-            && src.2.iter().all(|t| t.elem < shared)
-    }
-
-    /// The terms `carried` from the last window that hold in a window whose moving
-    /// objects sweep the boxes `swept`: those on the shared part
-    /// ([`Solver::on_shared_part`]), as follows. A source's masked terms hold in any window
-    /// (their static rays are kept and the moving objects are cast against at each
-    /// frame), and so do the terms of a source keyed clear (the point's shaft to it
-    /// is empty and constant in this window too, or the key would differ). Its
-    /// fixed terms hold, visibility included, where the box around the point and
-    /// the source (which holds every ray they were computed from) meets no swept
-    /// box, as no moving object can come between then; otherwise the source is
-    /// dropped and gathered afresh. A masked term whose own box meets no swept box
-    /// becomes the fixed term a fresh gather would make (factor times the static
-    /// visibility), which costs no shaft test at each frame.
-    pub(in crate::solver) fn revalidated(
-        &self,
-        carried: &PointCache,
-        swept: &[(DVec3, DVec3)],
-    ) -> Result<PointCache> {
-        let geoms = self.elems.geoms.as_slice();
-        let nodes = self.elems.nodes.as_slice();
-        // A point is gathered a hair inside its cell (`CORNER_INSET`).
-        let pad = DVec3::splat(CORNER_INSET * self.patches.diameter);
-        let q = 1.0 / (1u64 << 24) as f64;
-        carried.carried(&self.opts.storage, self.st.kept_budget, |pk, src| {
-            if !self.on_shared_part(src) {
-                return false;
-            }
-            if src.0 & 1 == 1 {
-                return true;
-            }
-            let x = self
-                .patches
-                .point(pk.0 as usize, f64::from(pk.1) * q, f64::from(pk.2) * q);
-            let clear_of_swept = |e: u32| {
-                let (lo, hi) = geom_box(&geoms[e as usize]);
-                !meets_any(lo.min(x - pad), hi.max(x + pad), swept)
-            };
-            let (key, fixed, masked) = src;
-            if !fixed.is_empty() && !clear_of_swept(*key >> 1) {
-                return false;
-            }
-            // A cluster's term weighs its contents by their radiosity when it was
-            // gathered (`cluster_kernel`), and a source with children gathered
-            // whole was not opened for the spread of its radiosity then: both are
-            // kept for one window only, as before, and gathered afresh in the next.
-            let s = *key >> 1;
-            let whole = |e: u32| e == s && nodes[s as usize].child_count > 0;
-            if fixed
-                .iter()
-                .any(|t| geoms[t.elem as usize].patch == u32::MAX || whole(t.elem))
-                || masked.iter().any(|t| whole(t.elem))
-            {
-                return false;
-            }
-            masked.retain(|t| {
-                if !clear_of_swept(t.elem) {
-                    return true;
-                }
-                let f = t.f * t.vis_static;
-                if f > 0.0 {
-                    fixed.push(kept_terms::FixedTerm { elem: t.elem, f });
-                }
-                false
-            });
-            true
-        })
     }
 
     /// Restores the pools to `snap` (see [`Snapshot`]).

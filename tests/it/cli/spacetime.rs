@@ -83,10 +83,10 @@ fn interrupted_solve_leaves_no_file_and_resume_gives_the_same_leaves() {
 
 #[test]
 fn the_last_window_is_solved_again_on_resume_from_the_one_before() {
-    // A solve is journaled up to the window before the last (the last hands its
-    // terms to nothing; a solve interrupted in it solves it again). Stopped there,
-    // the journal holds the four windows and the terms the fourth hands on, and
-    // resuming solves the last window from those, as the uninterrupted solve did.
+    // A solve is journaled up to the window before the last (the file is
+    // finished right after the last; a solve interrupted in it solves it again).
+    // Stopped there, the journal holds the four windows, and resuming solves the
+    // last window as the uninterrupted solve did.
     let dir = tempfile::tempdir().unwrap();
     let (full, cut) = (dir.path().join("full.rhier"), dir.path().join("cut.rhier"));
     solve_ok(&full, &[]);
@@ -95,7 +95,6 @@ fn the_last_window_is_solved_again_on_resume_from_the_one_before() {
     assert!(!cut.exists());
     let journal = rhier::store::journal::journal_dir(&cut);
     assert!(journal.join("window-00003.bin").exists());
-    assert!(journal.join("kept-00003.bin").exists());
     assert!(!journal.join("window-00004.bin").exists());
     solve_ok(&cut, &["--resume"]);
     assert!(!journal.exists());
@@ -164,19 +163,14 @@ fn out_of_core_by_default_with_the_leaves_of_ram_and_no_scratch_left() {
         v
     };
     assert_eq!(names(dir.path()), ["paged.rhier", "ram.rhier"]);
-    // Interrupted after two windows: the journal holds its windows, the terms the
-    // last one hands on, and its key only.
+    // Interrupted after two windows: the journal holds its windows and its key
+    // only (a window depends on no other).
     let cut = dir.path().join("cut.rhier");
     let o = solve(&cut, &["--stop-after-windows", "2"]);
     assert_eq!(o.status.code(), Some(1));
     assert_eq!(
         names(&rhier::store::journal::journal_dir(&cut)),
-        [
-            "kept-00001.bin",
-            "solve.key",
-            "window-00000.bin",
-            "window-00001.bin"
-        ]
+        ["solve.key", "window-00000.bin", "window-00001.bin"]
     );
 }
 
