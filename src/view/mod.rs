@@ -15,7 +15,7 @@
 //! What it serves (an exact match on the path, nothing decoded, nothing from the
 //! disk): the embedded page ([`assets`]) and `/api/info`, `/api/inspect`,
 //! `/api/mesh?t=`, `/api/frame?t=&shading=`, `/api/probe?t=&p=&n=`. Any other path is
-//! 404; a method other than GET 405; a bad or missing parameter 400, and a time
+//! 404; a target that is not a path 400; a method other than GET 405; a bad or missing parameter 400, and a time
 //! outside the file's domain 400 with the store's message.
 
 pub mod assets;
@@ -146,6 +146,12 @@ impl Viewer {
 
     /// Answers a request: `method` and the request target `url` (path and query).
     pub fn handle(&self, method: &str, url: &str) -> Reply {
+        if !url.starts_with('/') || url.bytes().any(|b| b <= b' ' || b == 0x7f) {
+            return Reply::text(
+                400,
+                format!("request target: expected a path starting with /, found {url:?}"),
+            );
+        }
         let (path, query) = url.split_once('?').unwrap_or((url, ""));
         let api = matches!(
             path,
