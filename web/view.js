@@ -58,9 +58,36 @@ let mesh = { key: null, objects: new Map() }; // object index -> THREE.Mesh
 let shownFrame = null;
 const frames = new Map(); // `${shading}|${k}` -> Promise<frame>
 const meshes = new Map(); // key -> Promise<parsed mesh>
+const colorsById = new Map(); // colour id -> Uint16Array, the last few received
+let latestColors = 0; // id of the colours received last
+let uploadedColors = 0; // id of the colours on the GPU
+
+// A frame's colours: its own, else those of its colour id received before, else
+// (evicted) the frame asked for again with them.
+async function colorsOf(frame) {
+  if (frame.colors) return frame.colors;
+  if (colorsById.has(frame.colorsId)) return colorsById.get(frame.colorsId);
+  const again = parseFrame(await fetchBinary(`/api/frame?t=${frame.t}&shading=${shading()}`));
+  return keep(again).colors;
+}
+function keep(frame) {
+  if (frame.colors) {
+    colorsById.set(frame.colorsId, frame.colors);
+    if (colorsById.size > 4) colorsById.delete(colorsById.keys().next().value);
+    latestColors = Math.max(latestColors, frame.colorsId);
+  }
+  return frame;
+}
 
 function render() {
   renderer.render(scene, camera);
+}
+
+// Waits for the drawing to end (a one-pixel read), so that times measure it.
+const onePixel = new Uint8Array(4);
+function finish() {
+  const gl = renderer.getContext();
+  gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, onePixel);
 }
 
 function resize() {
@@ -99,7 +126,8 @@ function frameAt(k) {
   const key = `${shading()}|${fps()}|${k}`;
   if (!frames.has(key)) {
     const t = frameTime(k);
-    frames.set(key, fetchBinary(`/api/frame?t=${t}&shading=${shading()}`).then(parseFrame));
+    const have = colorsById.has(latestColors) ? `&have=${latestColors}` : '';
+    frames.set(key, fetchBinary(`/api/frame?t=${t}&shading=${shading()}${have}`).then((b) => keep(parseFrame(b))));
     if (frames.size > 64) frames.delete(frames.keys().next().value);
   }
   return frames.get(key);
@@ -119,6 +147,7 @@ function install(parsed) {
     scene.remove(m);
     m.geometry.dispose();
   }
+  uploadedColors = 0;
   mesh = { key: parsed.key, objects: new Map(), groups: parsed.groups };
   for (const g of parsed.groups) {
     const geometry = new THREE.BufferGeometry();
@@ -141,17 +170,21 @@ function install(parsed) {
 
 async function show(frame) {
   if (mesh.key !== frame.key) install(await meshFor(frame.key, frame.t));
+  const colors = uploadedColors === frame.colorsId ? null : await colorsOf(frame);
   material.uniforms.scale.value = frame.scale;
   for (const m of mesh.objects.values()) {
     const o = m.userData.object;
     const a = frame.transforms.subarray(12 * o, 12 * o + 12);
     m.matrix.set(a[0], a[3], a[6], a[9], a[1], a[4], a[7], a[10], a[2], a[5], a[8], a[11], 0, 0, 0, 1);
     m.matrixWorldNeedsUpdate = true;
-    const attr = m.geometry.getAttribute('color');
-    const first = 3 * m.userData.firstVertex;
-    attr.array.set(frame.colors.subarray(first, first + attr.array.length));
-    attr.needsUpdate = true;
+    if (colors) {
+      const attr = m.geometry.getAttribute('color');
+      const first = 3 * m.userData.firstVertex;
+      attr.array.set(colors.subarray(first, first + attr.array.length));
+      attr.needsUpdate = true;
+    }
   }
+  uploadedColors = frame.colorsId;
   shownFrame = frame;
   $('clock').textContent = `t = ${frame.t.toFixed(3)} s`;
   render();
@@ -180,15 +213,21 @@ async function play() {
   let due = performance.now();
   api.stats.playStarted = due;
   api.stats.playFrames = 0;
+  api.stats.waitMs = 0; // waiting for frame data
+  api.stats.drawMs = 0; // uploading and handing the draw to WebGL
   while (playing) {
     for (let j = 1; j <= AHEAD; j++) frameAt((k + j) % n);
+    const asked = performance.now();
     const frame = await frameAt(k);
+    api.stats.waitMs += performance.now() - asked;
     const wait = due - performance.now();
     if (wait > 0) await new Promise((r) => setTimeout(r, wait));
     if (!playing) break;
     $('time').value = k;
     wanted = k;
+    const drawn = performance.now();
     await show(frame);
+    api.stats.drawMs += performance.now() - drawn;
     api.stats.playFrames += 1;
     due = Math.max(due + 1000 / fps(), performance.now() - 1000 / fps());
     k = (k + 1) % n;
@@ -299,6 +338,7 @@ async function start() {
   install(await meshFor(first.key, first.t));
   placeCamera();
   await show(first);
+  finish();
   api.stats.firstFrameMs = performance.now();
   api.stats.ready = true;
   controls.addEventListener('change', render);
@@ -308,6 +348,15 @@ async function start() {
   api.inspect = inspect.json;
 }
 
+// Milliseconds to draw the scene as it is, the mean of n draws (benchmarks).
+api.timeDraw = (n) => {
+  const t0 = performance.now();
+  for (let i = 0; i < n; i++) {
+    render();
+    finish();
+  }
+  return (performance.now() - t0) / n;
+};
 api.goTo = goTo;
 api.play = play;
 api.pause = pause;

@@ -41,7 +41,8 @@ export function parseMesh(buffer) {
   return { key, groups: out };
 }
 
-// {key, t, scale, transforms: Float32Array (12 per object), colors: Uint16Array (half floats)}
+// {key, t, scale, colorsId, transforms: Float32Array (12 per object),
+//  colors: Uint16Array (half floats), or null when left out (the client has colorsId's)}
 export function parseFrame(buffer) {
   const view = new DataView(buffer);
   check(view, FRAME_MAGIC, 'frame');
@@ -52,7 +53,8 @@ export function parseFrame(buffer) {
     key: view.getBigUint64(8, true),
     t: view.getFloat64(16, true),
     scale: view.getFloat32(32, true),
+    colorsId: view.getUint32(36, true),
     transforms: new Float32Array(buffer, 40, 12 * objects),
-    colors: new Uint16Array(buffer, colorOffset, 3 * vertices),
+    colors: vertices > 0 ? new Uint16Array(buffer, colorOffset, 3 * vertices) : null,
   };
 }

@@ -10,7 +10,8 @@
 //! [`probe_frame_hits`] (the answer of `rhier probe`), the start camera and exposure
 //! those of `play` ([`default_camera`], [`auto_exposure`] on a
 //! [`DEFAULT_SIZE`] picture). The last few frames built are kept, so the mesh and the
-//! colours of one time, or several clients at one time, build it once.
+//! colours of one time, or several clients at one time, build it once; the last
+//! colours are kept while what they depend on holds ([`Viewer::frame_message`]).
 //!
 //! What it serves (an exact match on the path, nothing decoded, nothing from the
 //! disk): the embedded page ([`assets`]) and `/api/info`, `/api/inspect`,
@@ -22,9 +23,10 @@ pub mod assets;
 mod server;
 pub mod wire;
 
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 
-use glam::DVec3;
+use glam::{DAffine3, DVec3};
 use serde_json::{Value, json};
 
 use crate::error::Result;
@@ -80,6 +82,18 @@ impl Reply {
     }
 }
 
+/// The colours of the last frame message, and what they depend on.
+struct Colors {
+    /// Colour id: the same id, the same colours.
+    id: u32,
+    key: u64,
+    shading: Shading,
+    /// Each object's object → world map relative to the first object's, by columns.
+    relative: Vec<[f64; 12]>,
+    scale: f32,
+    bytes: Arc<Vec<u8>>,
+}
+
 /// The server's state: the opened file, what the page starts from, recent frames.
 pub struct Viewer {
     reader: Reader,
@@ -88,6 +102,10 @@ pub struct Viewer {
     inspect: Value,
     /// Frames built last, newest last.
     recent: Mutex<Vec<Arc<Frame>>>,
+    /// Colours of the last frame message.
+    colors: Mutex<Option<Colors>>,
+    /// The next colour id (0 is no colours).
+    next_id: AtomicU32,
 }
 
 impl Viewer {
@@ -106,6 +124,8 @@ impl Viewer {
             exposure,
             inspect,
             recent: Mutex::new(vec![Arc::new(frame)]),
+            colors: Mutex::new(None),
+            next_id: AtomicU32::new(1),
         })
     }
 
@@ -183,7 +203,7 @@ impl Viewer {
         let params = Params::parse(query)?;
         let allowed: &[&str] = match path {
             "/api/mesh" => &["t"],
-            "/api/frame" => &["t", "shading"],
+            "/api/frame" => &["t", "shading", "have"],
             "/api/probe" => &["t", "p", "n"],
             _ => &[],
         };
@@ -210,14 +230,68 @@ impl Viewer {
                         )));
                     }
                 };
-                let frame = self.frame_at(&params)?;
-                let layout = wire::Layout::of(&frame, self.reader.patches());
-                Ok(Reply::binary(wire::frame_bytes(
-                    self, &frame, &layout, shading,
-                )))
+                let have = match params.get("have") {
+                    None => 0,
+                    Some(s) => s.parse().map_err(|_| {
+                        bad(format!(
+                            "have: expected a colour id (a whole number), found {s:?}"
+                        ))
+                    })?,
+                };
+                let t = params.time(&self.reader)?;
+                self.frame_message(t, shading, have)
+                    .map(Reply::binary)
+                    .map_err(|e| Reply::text(500, format!("evaluating the frame at t = {t}: {e}")))
             }
             _ => self.probe(&params).map(|v| Reply::json(&v)),
         }
+    }
+
+    /// The frame message at `t`. Its colours are those of the last frame answered
+    /// when nothing they depend on changed: the live leaves (their key), the shading,
+    /// and the objects' placements relative to the first object's (smooth shading
+    /// averages corners that meet in world space; a rigid motion of everything
+    /// together keeps which corners meet). Else they are computed afresh, under a new
+    /// colour id. When `have` is the id of the frame's colours, the client holds them
+    /// already and they are left out of the message.
+    pub fn frame_message(&self, t: f64, shading: Shading, have: u32) -> Result<Vec<u8>> {
+        let objects = self.reader.objects();
+        let key = wire::leaf_set_key(&self.reader.leaves_at(t)?);
+        let first = objects
+            .first()
+            .map_or(DAffine3::IDENTITY, |o| o.to_world(t));
+        let inverse = first.inverse();
+        let relative: Vec<[f64; 12]> = objects
+            .iter()
+            .map(|o| (inverse * o.to_world(t)).to_cols_array())
+            .collect();
+        let hit = |c: &Option<Colors>| {
+            c.as_ref()
+                .filter(|c| c.key == key && c.shading == shading && c.relative == relative)
+                .map(|c| (c.id, c.scale, c.bytes.clone()))
+        };
+        let kept = hit(&self.colors.lock().unwrap_or_else(|p| p.into_inner()));
+        let (id, scale, bytes) = match kept {
+            Some(k) => k,
+            None => {
+                let frame = self.frame(t)?;
+                let layout = wire::Layout::of(&frame, self.reader.patches());
+                let (scale, bytes) = wire::color_section(&frame, &layout, shading);
+                let bytes = Arc::new(bytes);
+                let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+                *self.colors.lock().unwrap_or_else(|p| p.into_inner()) = Some(Colors {
+                    id,
+                    key: layout.key,
+                    shading,
+                    relative,
+                    scale,
+                    bytes: bytes.clone(),
+                });
+                (id, scale, bytes)
+            }
+        };
+        let colors: &[u8] = if have == id { &[] } else { &bytes };
+        Ok(wire::frame_bytes(objects, t, key, (id, scale), colors))
     }
 
     fn frame_at(&self, params: &Params) -> std::result::Result<Arc<Frame>, Reply> {

@@ -6,17 +6,18 @@
 //! triangles `c0 c1 c2`, `c0 c2 c3` as in [`crate::playback::raster::FrameMesh`]).
 //! [`mesh_bytes`] writes the corners in object space, so that a moving object's
 //! positions are sent once and placed at each time by its transform; the layout's
-//! `key` (leaf count and CRC-32 of every leaf's patch and parameters) tells the page
-//! when the live leaves, and so the mesh, changed. [`frame_bytes`] writes each
+//! `key` ([`leaf_set_key`]) tells the page when the live leaves, and so the mesh,
+//! changed. [`frame_bytes`] writes each
 //! object's transform at `t` and every corner's linear radiosity, taken from the
 //! `FrameMesh` that `rhier play` draws (smooth: averaged over the leaf corners that
 //! share a world position, normal and material; flat: the leaf's mean), as IEEE
-//! half floats of the radiosity over the frame's largest component (`scale`).
+//! half floats of the radiosity over the frame's largest component (`scale`), under a
+//! colour id: a client that has that id's colours is not sent them again.
 
-use super::Viewer;
 use crate::playback::Frame;
 use crate::playback::raster::{FrameMesh, Shading};
-use crate::solution::PatchGeometry;
+use crate::solution::{Leaf, PatchGeometry};
+use crate::store::reader::StoredObject;
 
 /// First bytes of a mesh message.
 pub const MESH_MAGIC: [u8; 4] = *b"RHVM";
@@ -49,7 +50,7 @@ pub struct Group {
 /// The order in which a frame's leaf corners are sent.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Layout {
-    /// Leaf count (high 32 bits) and CRC-32 of the leaves' patches and parameters.
+    /// [`leaf_set_key`] of the frame's leaves.
     pub key: u64,
     /// Groups, by increasing object.
     pub groups: Vec<Group>,
@@ -60,16 +61,13 @@ pub struct Layout {
 impl Layout {
     /// The layout of `frame`'s live leaves on `patches` (the view's).
     pub fn of(frame: &Frame, patches: &[PatchGeometry]) -> Layout {
-        let mut crc = crc32fast::Hasher::new();
         let objects = patches.iter().map(|p| p.object + 1).max().unwrap_or(0) as usize;
         let mut by_object: Vec<Vec<u32>> = vec![Vec::new(); objects];
         for (k, l) in frame.leaves.iter().enumerate() {
-            crc.update(&l.patch.to_le_bytes());
-            crc.update(bytemuck::cast_slice(&l.uv[..l.corners as usize]));
             let o = patches.get(l.patch as usize).map_or(0, |p| p.object);
             by_object[o as usize].push(k as u32);
         }
-        let key = ((frame.leaves.len() as u64) << 32) | crc.finalize() as u64;
+        let key = leaf_set_key(&frame.leaves);
         let (mut groups, mut order) = (Vec::new(), Vec::with_capacity(frame.leaves.len()));
         let (mut v, mut i) = (0u32, 0u32);
         for (object, ls) in by_object.into_iter().enumerate() {
@@ -103,6 +101,20 @@ impl Layout {
     pub fn vertices(&self) -> u32 {
         self.groups.iter().map(|g| g.vertices).sum()
     }
+}
+
+/// The key of a set of live leaves, whatever their order: their count (high 32
+/// bits) and the wrapping sum of each leaf's CRC-32 of its patch, corner parameters
+/// and time span (low 32 bits). Two different sets share a key with odds of 2⁻³².
+pub fn leaf_set_key(leaves: &[Leaf]) -> u64 {
+    let sum = leaves.iter().fold(0u32, |acc, l| {
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(&l.patch.to_le_bytes());
+        crc.update(bytemuck::cast_slice(&l.uv[..l.corners as usize]));
+        crc.update(bytemuck::cast_slice(&l.time));
+        acc.wrapping_add(crc.finalize())
+    });
+    ((leaves.len() as u64) << 32) | sum as u64
 }
 
 fn put_u32(out: &mut Vec<u8>, x: u32) {
@@ -189,37 +201,17 @@ pub fn corner_colors(frame: &Frame, shading: Shading) -> Vec<[[f64; 3]; 4]> {
         .collect()
 }
 
-/// The frame message of `frame` on `viewer`'s file: transforms and colours.
-pub fn frame_bytes(viewer: &Viewer, frame: &Frame, layout: &Layout, shading: Shading) -> Vec<u8> {
+/// The colour section of a frame message (`V` × 3 half floats in layout order,
+/// padded to 4 bytes) and its `scale`.
+pub fn color_section(frame: &Frame, layout: &Layout, shading: Shading) -> (f32, Vec<u8>) {
     let colors = corner_colors(frame, shading);
-    let vertices = layout.vertices();
     let scale = colors
         .iter()
         .flatten()
         .flatten()
         .fold(0.0f64, |a, &b| a.max(b.abs()))
         .max(f64::MIN_POSITIVE) as f32;
-    let objects = viewer.reader().objects();
-    let mut out = Vec::with_capacity(FRAME_HEADER + 48 * objects.len() + 6 * vertices as usize + 2);
-    out.extend_from_slice(&FRAME_MAGIC);
-    put_u32(&mut out, VERSION);
-    out.extend_from_slice(&layout.key.to_le_bytes());
-    out.extend_from_slice(&frame.t.to_le_bytes());
-    put_u32(&mut out, objects.len() as u32);
-    put_u32(&mut out, vertices);
-    out.extend_from_slice(&scale.to_le_bytes());
-    put_u32(&mut out, 0);
-    for o in objects {
-        let m = o.to_world(frame.t);
-        for c in m
-            .matrix3
-            .to_cols_array()
-            .into_iter()
-            .chain(m.translation.to_array())
-        {
-            out.extend_from_slice(&(c as f32).to_le_bytes());
-        }
-    }
+    let mut out = Vec::with_capacity(6 * layout.vertices() as usize + 2);
     for &k in &layout.leaves {
         let l = &frame.leaves[k as usize];
         for c in &colors[k as usize][..l.corners as usize] {
@@ -232,5 +224,40 @@ pub fn frame_bytes(viewer: &Viewer, frame: &Frame, layout: &Layout, shading: Sha
     if out.len() % 4 != 0 {
         out.extend_from_slice(&[0, 0]);
     }
+    (scale, out)
+}
+
+/// The frame message at `t`: the objects' transforms then the colour section
+/// ([`color_section`], `colors`, empty to leave it out) of the leaves whose key is
+/// `key`, with its colour id and scale `(id, scale)`.
+pub fn frame_bytes(
+    objects: &[StoredObject],
+    t: f64,
+    key: u64,
+    (id, scale): (u32, f32),
+    colors: &[u8],
+) -> Vec<u8> {
+    let mut out = Vec::with_capacity(FRAME_HEADER + 48 * objects.len() + colors.len());
+    out.extend_from_slice(&FRAME_MAGIC);
+    put_u32(&mut out, VERSION);
+    out.extend_from_slice(&key.to_le_bytes());
+    out.extend_from_slice(&t.to_le_bytes());
+    put_u32(&mut out, objects.len() as u32);
+    // Corners: 3 half floats each, the section padded to 4 bytes.
+    put_u32(&mut out, (colors.len() / 6) as u32);
+    out.extend_from_slice(&scale.to_le_bytes());
+    put_u32(&mut out, id);
+    for o in objects {
+        let m = o.to_world(t);
+        for c in m
+            .matrix3
+            .to_cols_array()
+            .into_iter()
+            .chain(m.translation.to_array())
+        {
+            out.extend_from_slice(&(c as f32).to_le_bytes());
+        }
+    }
+    out.extend_from_slice(colors);
     out
 }

@@ -231,13 +231,18 @@ async function bench(b, file, seconds) {
     const { page, loadMs } = await open(b, url, errors);
     const s = await page.evaluate(() => window.rhierView.stats);
     console.log(`first frame: ${(s.firstFrameMs / 1000).toFixed(2)} s after navigation start (${(loadMs / 1000).toFixed(2)} s from goto to drawn)`);
+    const draw = await page.evaluate(() => window.rhierView.timeDraw(10));
+    console.log(`drawing the frame shown: ${draw.toFixed(0)} ms (mean of 10)`);
     const moving = await page.evaluate(() => !document.getElementById('timeRow').hidden);
     if (moving) {
       await page.locator('#play').click();
       await page.waitForTimeout(1000 * seconds);
-      const r = await page.evaluate(() => [window.rhierView.stats.playFrames, performance.now() - window.rhierView.stats.playStarted]);
+      const r = await page.evaluate(() => {
+        const s = window.rhierView.stats;
+        return [s.playFrames, performance.now() - s.playStarted, s.waitMs, s.drawMs];
+      });
       await page.locator('#play').click();
-      console.log(`playing at 25 fps asked: ${(r[0] / (r[1] / 1000)).toFixed(1)} frames per second shown over ${(r[1] / 1000).toFixed(1)} s`);
+      console.log(`playing at 25 fps asked: ${(r[0] / (r[1] / 1000)).toFixed(1)} frames per second shown over ${(r[1] / 1000).toFixed(1)} s; per frame ${(r[2] / r[0]).toFixed(0)} ms waiting for data, ${(r[3] / r[0]).toFixed(0)} ms uploading and handing the draw over`);
     }
   } finally {
     proc.kill();

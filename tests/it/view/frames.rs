@@ -143,6 +143,29 @@ fn frames_are_what_play_draws_at_the_same_time() {
         );
     }
     assert_eq!(moved, 3, "the transforms of t > 0 differ from t = 0's");
+    // Asked again with its colour id, a frame comes without its colours; the block
+    // moving against the room, another time has other colours, under another id.
+    let id = |m: &[u8]| u32_at(m, 36);
+    let full = viewer.handle("GET", "/api/frame?t=1.3").body;
+    let short = viewer
+        .handle("GET", &format!("/api/frame?t=1.3&have={}", id(&full)))
+        .body;
+    let objects = reader.objects().len();
+    assert_eq!((id(&short), u32_at(&short, 28)), (id(&full), 0));
+    assert_eq!(
+        short[..],
+        full[..40 + 48 * objects]
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| if (28..32).contains(&i) { 0 } else { b })
+            .collect::<Vec<u8>>()[..]
+    );
+    let other = viewer
+        .handle("GET", &format!("/api/frame?t=1.5&have={}", id(&full)))
+        .body;
+    let corners = u32_at(&other, 28) as usize;
+    assert!(id(&other) != id(&full) && corners > 0);
+    assert!(other.len() >= 40 + 48 * objects + 6 * corners);
 }
 
 #[test]
