@@ -160,10 +160,10 @@ async function cornell(b) {
     check(mean < 2 && farFraction < 0.01,
       `cornell: the page's picture is rhier play's (mean |difference| ${mean.toFixed(3)} of 255, ${(100 * farFraction).toFixed(3)}% of channels off by more than 16)`);
     // The red wall (x = 556) and the green wall (x = 0) where the camera projects them.
-    const red = patchMean(img, ...project(info.camera, [553, 274, 280]).map((v, i) => v + (i === 0 ? 0 : 0)));
-    const green = patchMean(img, ...project(info.camera, [3, 274, 280]));
     const redAt = project(info.camera, [553, 274, 280]);
     const greenAt = project(info.camera, [3, 274, 280]);
+    const red = patchMean(img, ...redAt);
+    const green = patchMean(img, ...greenAt);
     check(red[0] > 1.5 * red[1] && red[0] > 1.5 * red[2],
       `cornell: red wall at pixel (${redAt.map(Math.round)}) is red (${red.map(Math.round)})`);
     check(green[1] > 1.3 * green[0] && green[1] > 1.3 * green[2],
