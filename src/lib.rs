@@ -26,6 +26,7 @@
 //! | [`shafts`] | shafts between elements (Haines & Wallace) for visibility culling |
 //! | [`store`] | the `.rhier` file: writer, reader, validation; the journal `solve --resume` continues from |
 //! | [`playback`] | evaluation of a stored solution: probes, frames, exports |
+//! | [`view`] | `rhier view`'s local web server: the page, frames and probes of one stored solution |
 //! | [`flatland`] | exact 2D radiosity with the visibility complex |
 //! | [`mod@reference`] | an independent Monte Carlo path tracer used to validate the solver |
 
@@ -42,5 +43,6 @@ pub mod shafts;
 pub mod solution;
 pub mod solver;
 pub mod store;
+pub mod view;
 
 pub use error::{Error, Result};

@@ -2,7 +2,7 @@
 //! time chunks with their element counts, solve statistics, and the memory needed to
 //! play one frame ([`rhier::store::MemoryReport`], the counters `solve --stats` prints).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use rhier::store::{MemoryReport, Reader};
 use serde::Serialize;
@@ -67,8 +67,9 @@ struct ProvenanceJson {
     fingerprint_crc32: String,
 }
 
+/// What `inspect` reports, in the order it prints it; `rhier view` serves the same.
 #[derive(Serialize)]
-struct Inspect {
+pub(crate) struct Inspect {
     file: String,
     header: HeaderJson,
     scene: SceneJson,
@@ -81,18 +82,26 @@ struct Inspect {
 
 /// Runs `rhier inspect`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    use rhier::store::format::{FLAG_COMPRESSED, FLAG_LINKS, FLAG_MOVING};
     let r = Reader::open(&args.file)?;
-    let verified_leaves = if args.no_verify {
-        None
-    } else {
-        Some(r.verify()?)
-    };
+    let report = report(&args.file, &r, !args.no_verify)?;
+    if args.json {
+        let mut text = serde_json::to_string_pretty(&report)?;
+        text.push('\n');
+        return super::probe::print_stdout(&text);
+    }
+    super::probe::print_stdout(&text(&report, r.chunks().len())?)
+}
+
+/// The report of an opened file; `verify` checks every chunk first (an error if one
+/// is corrupt).
+pub(crate) fn report(file: &Path, r: &Reader, verify: bool) -> anyhow::Result<Inspect> {
+    use rhier::store::format::{FLAG_COMPRESSED, FLAG_LINKS, FLAG_MOVING};
+    let verified_leaves = if verify { Some(r.verify()?) } else { None };
     let h = r.header();
     let s = r.stats();
     let td = r.time_domain();
     let report = Inspect {
-        file: args.file.display().to_string(),
+        file: file.display().to_string(),
         header: HeaderJson {
             version: h.version,
             min_reader_version: h.min_reader_version,
@@ -128,13 +137,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             fingerprint_crc32: format!("{:#010x}", crc32fast::hash(p.fingerprint.as_bytes())),
         }),
         verified_leaves,
-        memory: MemoryReport::from_reader(&r),
+        memory: MemoryReport::from_reader(r),
     };
-    if args.json {
-        let mut text = serde_json::to_string_pretty(&report)?;
-        text.push('\n');
-        return super::probe::print_stdout(&text);
-    }
+    Ok(report)
+}
+
+/// The text form of a report (`chunks`: the file's chunk count).
+pub(crate) fn text(report: &Inspect, chunks: usize) -> anyhow::Result<String> {
     use std::fmt::Write;
     let mut text = String::new();
     let hj = &report.header;
@@ -186,8 +195,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     match report.verified_leaves {
         Some(n) => writeln!(
             text,
-            "verified: {} chunks, {n} leaves, all checksums and records valid",
-            r.chunks().len()
+            "verified: {chunks} chunks, {n} leaves, all checksums and records valid"
         ),
         None => writeln!(
             text,
@@ -195,5 +203,5 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ),
     }?;
     write!(text, "{}", report.memory)?;
-    super::probe::print_stdout(&text)
+    Ok(text)
 }

@@ -1,7 +1,7 @@
 //! Command-line interface: clap derive, one module per subcommand (`solve` is a
 //! folder: its three ways of solving share one module of arguments, see
 //! [`solve`]). Modules import in one direction: `inspect` and `play` use `probe`'s
-//! printing, `solve`'s modes its `common`, and nothing imports back. Error context
+//! printing, `view` `inspect`'s report, `solve`'s modes its `common`, and nothing imports back. Error context
 //! (anyhow) is added here and only here; the library returns [`rhier::Error`].
 
 mod flatland;
@@ -12,6 +12,7 @@ mod play;
 mod probe;
 mod reference;
 mod solve;
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -76,6 +77,16 @@ enum Command {
     /// missing shard. Chunks are copied as stored, not re-encoded; the file appears
     /// only once whole.
     Merge(merge::Args),
+    /// Serve a stored solution to a web browser: orbit, scrub time, click to probe.
+    ///
+    /// Validates the file as `rhier inspect` does (a corrupt one is refused, status
+    /// 1), then serves a page on http://127.0.0.1:8080/ (`--host`, `--port`) and
+    /// prints its address. The page draws the solution with WebGL2 as `rhier play`
+    /// does (smooth vertex radiosity or flat per leaf, the same exposure and sRGB
+    /// curve, the same start camera), a time slider with play/pause for a moving
+    /// scene, the `rhier probe` answer of a clicked surface with its patch and leaf,
+    /// and the `inspect` report. Everything is in the binary: no network needed.
+    View(view::Args),
 }
 
 /// Runs the parsed command line.
@@ -91,5 +102,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Reference(a)) => reference::run(a),
         Some(Command::Plan(a)) => solve::plan::run(*a),
         Some(Command::Merge(a)) => merge::run(a),
+        Some(Command::View(a)) => view::run(a),
     }
 }

@@ -6,7 +6,7 @@
 //! `--exposure`, else chosen on the first frame (99th-percentile luminance → 1) and
 //! kept for the whole sequence so that brightness does not flicker. The camera is
 //! chosen on the first frame too: `--camera` of `--scene`, the file's, one inside an
-//! interior ([`interior_camera`]), else the bounding box seen down `-z`; `--eye`,
+//! interior ([`rhier::playback::raster::interior_camera`]), else the bounding box seen down `-z`; `--eye`,
 //! `--target` and `--fov` replace its parts. An all-black first frame is warned of.
 
 use std::path::PathBuf;
@@ -16,7 +16,7 @@ use glam::DVec3;
 use rhier::playback::Frame;
 use rhier::playback::export::write_gltf;
 use rhier::playback::raster::{
-    FrameMesh, Shading, auto_camera, auto_exposure, interior_camera, render, tone_map,
+    DEFAULT_SIZE, FrameMesh, Shading, auto_exposure, default_camera, render, tone_map,
 };
 use rhier::scene::Camera;
 use rhier::store::Reader;
@@ -49,10 +49,10 @@ pub struct Args {
     #[arg(short = 'o', long = "out")]
     pub out: PathBuf,
     /// Picture width in pixels (1..=4096).
-    #[arg(long, default_value_t = 640)]
+    #[arg(long, default_value_t = DEFAULT_SIZE[0])]
     pub width: u32,
     /// Picture height in pixels (1..=4096).
-    #[arg(long, default_value_t = 480)]
+    #[arg(long, default_value_t = DEFAULT_SIZE[1])]
     pub height: u32,
     /// Exposure multiplier (default: automatic, 99th-percentile luminance → 1).
     #[arg(long)]
@@ -106,10 +106,7 @@ fn choose_camera(
     frame: &Frame,
     mesh: &FrameMesh,
 ) -> anyhow::Result<Camera> {
-    let mut camera = named
-        .or(stored)
-        .or_else(|| interior_camera(mesh))
-        .unwrap_or_else(|| auto_camera(frame));
+    let mut camera = named.unwrap_or_else(|| default_camera(stored, frame, mesh));
     let direction = camera.target - camera.eye;
     if let Some(e) = args.eye {
         camera.eye = DVec3::from_array(e);

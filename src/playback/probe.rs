@@ -211,8 +211,37 @@ pub fn patch_params(patch: &WorldPatch, q: DVec3) -> (f64, f64) {
     (u.clamp(0.0, 1.0), w.clamp(0.0, 1.0))
 }
 
+/// What a probe found: the patch, the leaf (an index into [`Frame::leaves`]), the
+/// parameters `(u, v)` of the nearest point on the patch, and the radiosity there.
+/// 56 bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProbeHit {
+    /// Patch probed (index in the view's patches).
+    pub patch: u32,
+    /// Leaf evaluated, an index into the frame's leaves (`u32::MAX`: the patch's
+    /// leaves cover no point, radiosity 0; cannot happen with a valid file).
+    pub leaf: u32,
+    /// Parameters of the probed point on the patch.
+    pub uv: [f64; 2],
+    /// Radiosity there ([`crate::solution::Leaf::eval`]).
+    pub b: [f64; 3],
+}
+
 /// Probes a frame already built.
 pub fn probe_frame(name: &Path, frame: &Frame, points: &[ProbePoint]) -> Result<Vec<[f64; 3]>> {
+    Ok(probe_frame_hits(name, frame, points)?
+        .into_iter()
+        .map(|h| h.b)
+        .collect())
+}
+
+/// Probes a frame already built, saying which patch and leaf answered each point
+/// (the one code path of [`probe_frame`] and `rhier view`'s clicks).
+pub fn probe_frame_hits(
+    name: &Path,
+    frame: &Frame,
+    points: &[ProbePoint],
+) -> Result<Vec<ProbeHit>> {
     let with_leaves: Vec<u32> = (0..frame.patches.len() as u32)
         .filter(|&p| {
             !frame.patch_leaves(p as usize).is_empty()
@@ -239,8 +268,18 @@ pub fn probe_frame(name: &Path, frame: &Frame, points: &[ProbePoint]) -> Result<
             };
             let (u, v) = patch_params(&frame.patches[patch as usize], q);
             let leaves = frame.patch_leaves(patch as usize);
+            let first = frame.first_leaf[patch as usize];
             // `with_leaves` guarantees at least one leaf.
-            Ok(leaf_at(leaves, u, v).map_or([0.0; 3], |l| l.eval(u, v)))
+            let (leaf, b) = leaf_at(leaves, u, v).map_or((u32::MAX, [0.0; 3]), |l| {
+                let k = leaves.iter().position(|x| std::ptr::eq(x, l)).unwrap_or(0);
+                (first + k as u32, l.eval(u, v))
+            });
+            Ok(ProbeHit {
+                patch,
+                leaf,
+                uv: [u, v],
+                b,
+            })
         })
         .collect()
 }

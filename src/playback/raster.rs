@@ -124,6 +124,20 @@ pub fn auto_camera(frame: &Frame) -> Camera {
     }
 }
 
+/// Width and height in pixels of `rhier play`'s pictures by default, and of the
+/// picture whose 99th percentile sets the automatic exposure ([`auto_exposure`]) in
+/// `play` and `view` alike.
+pub const DEFAULT_SIZE: [u32; 2] = [640, 480];
+
+/// The camera `rhier play` and `rhier view` start from when none is named: the
+/// file's (`stored`), else one inside an interior ([`interior_camera`]), else the
+/// bounds seen down `-z` ([`auto_camera`]).
+pub fn default_camera(stored: Option<Camera>, frame: &Frame, mesh: &FrameMesh) -> Camera {
+    stored
+        .or_else(|| interior_camera(mesh))
+        .unwrap_or_else(|| auto_camera(frame))
+}
+
 /// Fraction of the surface area (facing inward, towards the bounding box's centre)
 /// above which a frame counts as an interior for [`interior_camera`].
 pub const INTERIOR_FRACTION: f64 = 0.5;

@@ -22,3 +22,4 @@ mod scene;
 mod solver;
 mod spacetime;
 mod store;
+mod view;

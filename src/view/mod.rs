@@ -1,0 +1,469 @@
+//! `rhier view`'s server: one opened `.rhier` file served to a browser page that
+//! orbits, scrubs time and probes by clicking (web/, formats/view.md).
+//!
+//! How it works: a [`Viewer`] owns the one [`Reader`] (the file mapped once, shared
+//! by every request and every client) and answers a request path with a [`Reply`]
+//! ([`Viewer::handle`], no I/O, so tests call it directly); [`serve`] runs it on a
+//! `tiny_http` server with a few worker threads. Everything it evaluates goes through
+//! playback's one code path: frames are [`Frame::build`], colours the
+//! [`crate::playback::raster::FrameMesh`] `rhier play` draws ([`wire`]), clicks
+//! [`probe_frame_hits`] (the answer of `rhier probe`), the start camera and exposure
+//! those of `play` ([`default_camera`], [`auto_exposure`] on a
+//! [`DEFAULT_SIZE`] picture). The last few frames built are kept, so the mesh and the
+//! colours of one time, or several clients at one time, build it once; the last
+//! colours are kept while what they depend on holds ([`Viewer::frame_message`]).
+//!
+//! What it serves (an exact match on the path, nothing decoded, nothing from the
+//! disk): the embedded page ([`assets`]) and `/api/info`, `/api/inspect`,
+//! `/api/mesh?t=`, `/api/frame?t=&shading=`, `/api/probe?t=&p=&n=`. Any other path is
+//! 404; a target that is not a path 400; a method other than GET 405; a bad or missing parameter 400, and a time
+//! outside the file's domain 400 with the store's message.
+
+pub mod assets;
+mod server;
+pub mod wire;
+
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex};
+
+use glam::{DAffine3, DVec3};
+use serde_json::{Value, json};
+
+use crate::error::Result;
+use crate::playback::frame::Frame;
+use crate::playback::probe::{ProbePoint, probe_frame_hits};
+use crate::playback::raster::{
+    DEFAULT_SIZE, FrameMesh, Shading, auto_exposure, default_camera, render,
+};
+use crate::scene::Camera;
+use crate::store::Reader;
+
+pub use server::serve;
+
+/// Frames kept for requests at the same time (the mesh and colours of one time).
+const KEPT_FRAMES: usize = 4;
+
+/// An answer: HTTP status, media type and body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reply {
+    /// HTTP status code.
+    pub status: u16,
+    /// `Content-Type`.
+    pub content_type: &'static str,
+    /// Body.
+    pub body: Vec<u8>,
+}
+
+impl Reply {
+    fn text(status: u16, message: impl Into<String>) -> Reply {
+        let mut body = message.into().into_bytes();
+        body.push(b'\n');
+        Reply {
+            status,
+            content_type: "text/plain; charset=utf-8",
+            body,
+        }
+    }
+
+    fn json(value: &Value) -> Reply {
+        Reply {
+            status: 200,
+            content_type: "application/json",
+            body: value.to_string().into_bytes(),
+        }
+    }
+
+    fn binary(body: Vec<u8>) -> Reply {
+        Reply {
+            status: 200,
+            content_type: "application/octet-stream",
+            body,
+        }
+    }
+}
+
+/// The colours of the last frame message, and what they depend on.
+struct Colors {
+    /// Colour id: the same id, the same colours.
+    id: u32,
+    key: u64,
+    shading: Shading,
+    /// Each object's object → world map relative to the first object's, by columns.
+    relative: Vec<[f64; 12]>,
+    scale: f32,
+    bytes: Arc<Vec<u8>>,
+}
+
+/// The server's state: the opened file, what the page starts from, recent frames.
+pub struct Viewer {
+    reader: Reader,
+    camera: Camera,
+    exposure: f64,
+    inspect: Value,
+    /// Frames built last, newest last.
+    recent: Mutex<Vec<Arc<Frame>>>,
+    /// Colours of the last frame message.
+    colors: Mutex<Option<Colors>>,
+    /// The next colour id (0 is no colours).
+    next_id: AtomicU32,
+}
+
+impl Viewer {
+    /// Serves `reader`; `inspect` is what `rhier inspect --json` reports of it
+    /// (`json`) and its text (`text`). Builds the first frame to choose the camera
+    /// and exposure as `rhier play` does.
+    pub fn new(reader: Reader, inspect: Value) -> Result<Viewer> {
+        let t = reader.time_domain().start;
+        let frame = Frame::build(&reader, t)?;
+        let mesh = FrameMesh::build(&frame, Shading::Smooth);
+        let camera = default_camera(reader.camera(), &frame, &mesh);
+        let exposure = auto_exposure(&render(&mesh, &camera, DEFAULT_SIZE[0], DEFAULT_SIZE[1]));
+        Ok(Viewer {
+            reader,
+            camera,
+            exposure,
+            inspect,
+            recent: Mutex::new(vec![Arc::new(frame)]),
+            colors: Mutex::new(None),
+            next_id: AtomicU32::new(1),
+        })
+    }
+
+    /// The opened file.
+    pub fn reader(&self) -> &Reader {
+        &self.reader
+    }
+
+    /// The start camera.
+    pub fn camera(&self) -> Camera {
+        self.camera
+    }
+
+    /// The start exposure.
+    pub fn exposure(&self) -> f64 {
+        self.exposure
+    }
+
+    /// The frame at `t`, built once while it is among the last few asked for.
+    pub fn frame(&self, t: f64) -> Result<Arc<Frame>> {
+        let kept = |recent: &Vec<Arc<Frame>>| {
+            recent
+                .iter()
+                .find(|f| f.t.to_bits() == t.to_bits())
+                .cloned()
+        };
+        if let Some(f) = kept(&self.recent.lock().unwrap_or_else(|p| p.into_inner())) {
+            return Ok(f);
+        }
+        let f = Arc::new(Frame::build(&self.reader, t)?);
+        let mut recent = self.recent.lock().unwrap_or_else(|p| p.into_inner());
+        if recent.len() >= KEPT_FRAMES {
+            recent.remove(0);
+        }
+        recent.push(f.clone());
+        Ok(f)
+    }
+
+    /// Answers a request: `method` and the request target `url` (path and query).
+    pub fn handle(&self, method: &str, url: &str) -> Reply {
+        if !url.starts_with('/') || url.bytes().any(|b| b <= b' ' || b == 0x7f) {
+            return Reply::text(
+                400,
+                format!("request target: expected a path starting with /, found {url:?}"),
+            );
+        }
+        let (path, query) = url.split_once('?').unwrap_or((url, ""));
+        let api = matches!(
+            path,
+            "/api/info" | "/api/inspect" | "/api/mesh" | "/api/frame" | "/api/probe"
+        );
+        let Some(asset) = assets::asset(path).filter(|_| query.is_empty()) else {
+            if !api {
+                return Reply::text(404, format!("not found: {path}"));
+            }
+            if method != "GET" {
+                return Reply::text(405, format!("method {method} not allowed: GET only"));
+            }
+            return match self.api(path, query) {
+                Ok(r) => r,
+                Err(e) => e,
+            };
+        };
+        if method != "GET" {
+            return Reply::text(405, format!("method {method} not allowed: GET only"));
+        }
+        Reply {
+            status: 200,
+            content_type: asset.0,
+            body: asset.1.to_vec(),
+        }
+    }
+
+    fn api(&self, path: &str, query: &str) -> std::result::Result<Reply, Reply> {
+        let params = Params::parse(query)?;
+        let allowed: &[&str] = match path {
+            "/api/mesh" => &["t"],
+            "/api/frame" => &["t", "shading", "have"],
+            "/api/probe" => &["t", "p", "n"],
+            _ => &[],
+        };
+        params.only(allowed)?;
+        match path {
+            "/api/info" => Ok(Reply::json(&self.info())),
+            "/api/inspect" => Ok(Reply::json(&self.inspect)),
+            "/api/mesh" => {
+                let frame = self.frame_at(&params)?;
+                let layout = wire::Layout::of(&frame, self.reader.patches());
+                Ok(Reply::binary(wire::mesh_bytes(
+                    &frame,
+                    self.reader.patches(),
+                    &layout,
+                )))
+            }
+            "/api/frame" => {
+                let shading = match params.get("shading") {
+                    None | Some("smooth") => Shading::Smooth,
+                    Some("flat") => Shading::Flat,
+                    Some(s) => {
+                        return Err(bad(format!(
+                            "shading: expected smooth or flat, found {s:?}"
+                        )));
+                    }
+                };
+                let have = match params.get("have") {
+                    None => 0,
+                    Some(s) => s.parse().map_err(|_| {
+                        bad(format!(
+                            "have: expected a colour id (a whole number), found {s:?}"
+                        ))
+                    })?,
+                };
+                let t = params.time(&self.reader)?;
+                self.frame_message(t, shading, have)
+                    .map(Reply::binary)
+                    .map_err(|e| Reply::text(500, format!("evaluating the frame at t = {t}: {e}")))
+            }
+            _ => self.probe(&params).map(|v| Reply::json(&v)),
+        }
+    }
+
+    /// The frame message at `t`. Its colours are those of the last frame answered
+    /// when nothing they depend on changed: the live leaves (their key), the shading,
+    /// and the objects' placements relative to the first object's (smooth shading
+    /// averages corners that meet in world space; a rigid motion of everything
+    /// together keeps which corners meet). Else they are computed afresh, under a new
+    /// colour id. When `have` is the id of the frame's colours, the client holds them
+    /// already and they are left out of the message.
+    pub fn frame_message(&self, t: f64, shading: Shading, have: u32) -> Result<Vec<u8>> {
+        let objects = self.reader.objects();
+        let key = wire::leaf_set_key(&self.reader.leaves_at(t)?);
+        let first = objects
+            .first()
+            .map_or(DAffine3::IDENTITY, |o| o.to_world(t));
+        let inverse = first.inverse();
+        let relative: Vec<[f64; 12]> = objects
+            .iter()
+            .map(|o| (inverse * o.to_world(t)).to_cols_array())
+            .collect();
+        let hit = |c: &Option<Colors>| {
+            c.as_ref()
+                .filter(|c| c.key == key && c.shading == shading && c.relative == relative)
+                .map(|c| (c.id, c.scale, c.bytes.clone()))
+        };
+        let kept = hit(&self.colors.lock().unwrap_or_else(|p| p.into_inner()));
+        let (id, scale, bytes) = match kept {
+            Some(k) => k,
+            None => {
+                let frame = self.frame(t)?;
+                let layout = wire::Layout::of(&frame, self.reader.patches());
+                let (scale, bytes) = wire::color_section(&frame, &layout, shading);
+                let bytes = Arc::new(bytes);
+                let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+                *self.colors.lock().unwrap_or_else(|p| p.into_inner()) = Some(Colors {
+                    id,
+                    key: layout.key,
+                    shading,
+                    relative,
+                    scale,
+                    bytes: bytes.clone(),
+                });
+                (id, scale, bytes)
+            }
+        };
+        let colors: &[u8] = if have == id { &[] } else { &bytes };
+        Ok(wire::frame_bytes(objects, t, key, (id, scale), colors))
+    }
+
+    fn frame_at(&self, params: &Params) -> std::result::Result<Arc<Frame>, Reply> {
+        let t = params.time(&self.reader)?;
+        self.frame(t)
+            .map_err(|e| Reply::text(500, format!("evaluating the frame at t = {t}: {e}")))
+    }
+
+    fn info(&self) -> Value {
+        let td = self.reader.time_domain();
+        let c = self.camera;
+        json!({
+            "file": self.reader.path().display().to_string(),
+            "time": [td.start, td.end],
+            "moving": self.reader.objects().iter().any(|o| o.motion.is_some()),
+            "objects": self.reader.objects().iter().map(|o| o.name.clone()).collect::<Vec<_>>(),
+            "patches": self.reader.patches().len(),
+            "camera": {
+                "eye": c.eye.to_array(),
+                "target": c.target.to_array(),
+                "up": c.up.to_array(),
+                "fov_y_degrees": c.fov_y.to_degrees(),
+            },
+            "exposure": self.exposure,
+        })
+    }
+
+    /// A click: `rhier probe`'s answer at `p` facing `n`, with the patch and leaf.
+    fn probe(&self, params: &Params) -> std::result::Result<Value, Reply> {
+        let p = params.point("p")?;
+        let n = params.point("n")?;
+        if n == DVec3::ZERO {
+            return Err(bad("n: expected a non-zero normal, found 0,0,0"));
+        }
+        let frame = self.frame_at(params)?;
+        let hit = probe_frame_hits(self.reader.path(), &frame, &[ProbePoint { p, n }])
+            .map_err(|e| Reply::text(400, e.to_string()))?[0];
+        let patch = &self.reader.patches()[hit.patch as usize];
+        let object = self
+            .reader
+            .objects()
+            .get(patch.object as usize)
+            .map_or(String::new(), |o| o.name.clone());
+        let leaf = frame.leaves.get(hit.leaf as usize).map(|l| {
+            let n = l.corners as usize;
+            json!({
+                "index": hit.leaf,
+                "corners": l.corners,
+                "uv": l.uv[..n],
+                "b": l.b[..n],
+                "time": l.time,
+            })
+        });
+        Ok(json!({
+            "t": frame.t,
+            "p": p.to_array(),
+            "n": n.to_array(),
+            "B": hit.b,
+            "patch": hit.patch,
+            "object": object,
+            "material": self.reader.materials().get(patch.material as usize).map(|m| m.name.clone()),
+            "uv": hit.uv,
+            "leaf": leaf,
+        }))
+    }
+}
+
+fn bad(message: impl Into<String>) -> Reply {
+    Reply::text(400, message)
+}
+
+/// A query string's `key=value` pairs, percent-decoded.
+struct Params(Vec<(String, String)>);
+
+impl Params {
+    fn parse(query: &str) -> std::result::Result<Params, Reply> {
+        let mut out = Vec::new();
+        for pair in query.split('&').filter(|s| !s.is_empty()) {
+            let (k, v) = pair
+                .split_once('=')
+                .ok_or_else(|| bad(format!("query: expected key=value, found {pair:?}")))?;
+            let (k, v) = (decode(k)?, decode(v)?);
+            if out.iter().any(|(j, _)| *j == k) {
+                return Err(bad(format!("query: {k} given twice")));
+            }
+            out.push((k, v));
+        }
+        Ok(Params(out))
+    }
+
+    fn only(&self, allowed: &[&str]) -> std::result::Result<(), Reply> {
+        match self.0.iter().find(|(k, _)| !allowed.contains(&k.as_str())) {
+            Some((k, _)) => Err(bad(format!(
+                "query: unknown parameter {k:?} (expected: {})",
+                if allowed.is_empty() {
+                    "none".to_string()
+                } else {
+                    allowed.join(", ")
+                }
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    fn get(&self, key: &str) -> Option<&str> {
+        self.0
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+
+    /// `t`, a finite number in the file's time domain (the store's message if not).
+    fn time(&self, reader: &Reader) -> std::result::Result<f64, Reply> {
+        let s = self
+            .get("t")
+            .ok_or_else(|| bad("t: missing (a time in seconds)"))?;
+        let t: f64 = s
+            .parse()
+            .ok()
+            .filter(|t: &f64| t.is_finite())
+            .ok_or_else(|| {
+                bad(format!(
+                    "t: expected a finite number of seconds, found {s:?}"
+                ))
+            })?;
+        crate::store::reader::check_time(reader.path(), reader.time_domain(), t)
+            .map_err(|e| bad(e.to_string()))?;
+        Ok(t)
+    }
+
+    /// `key` as three finite numbers `x,y,z`.
+    fn point(&self, key: &str) -> std::result::Result<DVec3, Reply> {
+        let s = self
+            .get(key)
+            .ok_or_else(|| bad(format!("{key}: missing (x,y,z)")))?;
+        let v: Vec<f64> = s.split(',').filter_map(|x| x.trim().parse().ok()).collect();
+        match v[..] {
+            [x, y, z] if v.iter().all(|c| c.is_finite()) && s.split(',').count() == 3 => {
+                Ok(DVec3::new(x, y, z))
+            }
+            _ => Err(bad(format!(
+                "{key}: expected three finite numbers x,y,z, found {s:?}"
+            ))),
+        }
+    }
+}
+
+/// Percent-decodes a query component (`+` is a space); 400 if malformed.
+fn decode(s: &str) -> std::result::Result<String, Reply> {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        match b[i] {
+            b'%' => {
+                let hex = b
+                    .get(i + 1..i + 3)
+                    .and_then(|h| std::str::from_utf8(h).ok())
+                    .and_then(|h| u8::from_str_radix(h, 16).ok())
+                    .ok_or_else(|| bad(format!("query: bad percent escape in {s:?}")))?;
+                out.push(hex);
+                i += 3;
+            }
+            b'+' => {
+                out.push(b' ');
+                i += 1;
+            }
+            c => {
+                out.push(c);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8(out).map_err(|_| bad(format!("query: {s:?} is not UTF-8")))
+}

@@ -1,0 +1,227 @@
+//! What `rhier view` sends, decoded from its bytes as formats/view.md says, against
+//! playback's own evaluation of the same file at the same time: the triangles and
+//! colours `rhier play` draws (`FrameMesh`, smooth and flat), and the answer of
+//! `rhier probe` with the patch and leaf that gave it.
+
+use glam::{DAffine3, DMat3, DVec3};
+use rhier::playback::frame::Frame;
+use rhier::playback::probe::{ProbePoint, probe};
+use rhier::playback::raster::{FrameMesh, Shading};
+use rhier::store::Reader;
+use rhier::view::Viewer;
+
+fn u32_at(b: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes(b[at..at + 4].try_into().unwrap())
+}
+
+fn f32_at(b: &[u8], at: usize) -> f32 {
+    f32::from_le_bytes(b[at..at + 4].try_into().unwrap())
+}
+
+/// A triangle in world space with its corners' radiosity.
+type Tri = [(DVec3, [f64; 3]); 3];
+
+/// Decodes a mesh and a frame message into world triangles with colours.
+fn decode(mesh: &[u8], frame: &[u8]) -> Vec<Tri> {
+    assert_eq!(&mesh[..4], b"RHVM");
+    assert_eq!(&frame[..4], b"RHVF");
+    assert_eq!(mesh[8..16], frame[8..16], "mesh and frame keys");
+    let groups = u32_at(mesh, 16) as usize;
+    let vertices = u32_at(mesh, 20) as usize;
+    let pos = 32 + 20 * groups;
+    let idx = pos + 12 * vertices;
+    assert_eq!(mesh.len(), idx + 4 * u32_at(mesh, 24) as usize);
+    let objects = u32_at(frame, 24) as usize;
+    assert_eq!(u32_at(frame, 28) as usize, vertices);
+    let scale = f32_at(frame, 32) as f64;
+    let col = 40 + 48 * objects;
+    let transform = |o: usize| {
+        let a: Vec<f64> = (0..12)
+            .map(|k| f32_at(frame, 40 + 48 * o + 4 * k) as f64)
+            .collect();
+        DAffine3::from_mat3_translation(
+            DMat3::from_cols_slice(&a[..9]),
+            DVec3::new(a[9], a[10], a[11]),
+        )
+    };
+    let mut out = Vec::new();
+    for g in 0..groups {
+        let r = |k: usize| u32_at(mesh, 32 + 20 * g + 4 * k) as usize;
+        let (object, first, count, first_index, indices) = (r(0), r(1), r(2), r(3), r(4));
+        let m = transform(object);
+        let corner = |i: usize| {
+            assert!(i < count);
+            let v = first + i;
+            let p = DVec3::from_array([0, 1, 2].map(|k| f32_at(mesh, pos + 12 * v + 4 * k) as f64));
+            let c = [0, 1, 2].map(|k| {
+                let at = col + 6 * v + 2 * k;
+                half::f16::from_bits(u16::from_le_bytes([frame[at], frame[at + 1]])).to_f64()
+                    * scale
+            });
+            (m.transform_point3(p), c)
+        };
+        for t in 0..indices / 3 {
+            let i = |k: usize| u32_at(mesh, idx + 4 * (first_index + 3 * t + k)) as usize;
+            out.push([corner(i(0)), corner(i(1)), corner(i(2))]);
+        }
+    }
+    out
+}
+
+/// Every sent triangle is one of play's, at the same place with the same colours
+/// (to f32 positions and half-float colours), and they are as many.
+fn assert_same_triangles(sent: &[Tri], play: &FrameMesh, what: &str) {
+    let diag = play
+        .positions
+        .iter()
+        .fold((DVec3::MAX, DVec3::MIN), |(a, b), &p| (a.min(p), b.max(p)));
+    let diag = (diag.1 - diag.0).length();
+    let mut left: Vec<Tri> = play
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| (play.positions[i as usize], play.colors[i as usize])))
+        .collect();
+    assert_eq!(sent.len(), left.len(), "{what}: triangle count");
+    let top = play.colors.iter().flatten().fold(0.0f64, |a, &b| a.max(b));
+    let mut worst = 0.0f64;
+    for s in sent {
+        let dist = |t: &Tri| (0..3).map(|k| (t[k].0 - s[k].0).length()).sum::<f64>();
+        let (j, d) = left
+            .iter()
+            .enumerate()
+            .map(|(j, t)| (j, dist(t)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap();
+        assert!(
+            d < 1e-5 * diag,
+            "{what}: no triangle of play's at {s:?} ({d})"
+        );
+        for k in 0..3 {
+            for c in 0..3 {
+                let (a, b) = (s[k].1[c], left[j][k].1[c]);
+                // Half floats: 11 significant bits, subnormal below 6e-5 of the top.
+                let err = (a - b).abs();
+                worst = worst.max(err / (b.abs() + 1e-4 * top));
+                assert!(
+                    err <= 5e-4 * b.abs() + 1e-7 * top,
+                    "{what}: {a} against {b}"
+                );
+            }
+        }
+        left.swap_remove(j);
+    }
+    assert!(worst > 0.0 || top == 0.0, "{what}: colours not compared");
+}
+
+#[test]
+fn frames_are_what_play_draws_at_the_same_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = super::moving(dir.path());
+    let reader = Reader::open(&file).unwrap();
+    let viewer = Viewer::new(Reader::open(&file).unwrap(), serde_json::Value::Null).unwrap();
+    let mut moved = 0;
+    for t in [0.0, 0.7, 1.3, 2.0] {
+        let mesh = viewer.handle("GET", &format!("/api/mesh?t={t}"));
+        assert_eq!(mesh.status, 200);
+        let frame = Frame::build(&reader, t).unwrap();
+        for (shading, name) in [(Shading::Smooth, "smooth"), (Shading::Flat, "flat")] {
+            let sent = viewer.handle("GET", &format!("/api/frame?t={t}&shading={name}"));
+            assert_eq!(sent.status, 200);
+            let tris = decode(&mesh.body, &sent.body);
+            assert_same_triangles(
+                &tris,
+                &FrameMesh::build(&frame, shading),
+                &format!("t = {t}, {name}"),
+            );
+        }
+        // The moving block's corners are sent once, in object space: its transform moves it.
+        let start = viewer.handle("GET", "/api/frame?t=0").body;
+        let now = viewer.handle("GET", &format!("/api/frame?t={t}")).body;
+        moved += usize::from(
+            start[40..40 + 48 * reader.objects().len()]
+                != now[40..40 + 48 * reader.objects().len()],
+        );
+    }
+    assert_eq!(moved, 3, "the transforms of t > 0 differ from t = 0's");
+    // Asked again with its colour id, a frame comes without its colours; the block
+    // moving against the room, another time has other colours, under another id.
+    let id = |m: &[u8]| u32_at(m, 36);
+    let full = viewer.handle("GET", "/api/frame?t=1.3").body;
+    let short = viewer
+        .handle("GET", &format!("/api/frame?t=1.3&have={}", id(&full)))
+        .body;
+    let objects = reader.objects().len();
+    assert_eq!((id(&short), u32_at(&short, 28)), (id(&full), 0));
+    assert_eq!(
+        short[..],
+        full[..40 + 48 * objects]
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| if (28..32).contains(&i) { 0 } else { b })
+            .collect::<Vec<u8>>()[..]
+    );
+    let other = viewer
+        .handle("GET", &format!("/api/frame?t=1.5&have={}", id(&full)))
+        .body;
+    let corners = u32_at(&other, 28) as usize;
+    assert!(id(&other) != id(&full) && corners > 0);
+    assert!(other.len() >= 40 + 48 * objects + 6 * corners);
+}
+
+#[test]
+fn a_click_is_the_probe_answer_with_its_patch_and_leaf() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = super::moving(dir.path());
+    let reader = Reader::open(&file).unwrap();
+    let viewer = Viewer::new(Reader::open(&file).unwrap(), serde_json::Value::Null).unwrap();
+    let points = [
+        (DVec3::new(278.0, 0.0, 200.0), DVec3::Y),
+        (DVec3::new(100.0, 300.0, 559.2), DVec3::NEG_Z),
+        (DVec3::new(556.0, 200.0, 300.0), DVec3::NEG_X),
+        (DVec3::new(0.5, 400.0, 100.0), DVec3::X),
+        (DVec3::new(278.0, 548.8, 280.0), DVec3::NEG_Y),
+    ];
+    for t in [0.0, 1.1, 2.0] {
+        let frame = Frame::build(&reader, t).unwrap();
+        for (p, n) in points {
+            let url = format!(
+                "/api/probe?t={t}&p={},{},{}&n={},{},{}",
+                p.x, p.y, p.z, n.x, n.y, n.z
+            );
+            let r = viewer.handle("GET", &url);
+            assert_eq!(r.status, 200, "{url}");
+            let v: serde_json::Value = serde_json::from_slice(&r.body).unwrap();
+            let expected = probe(&reader, &[ProbePoint { p, n }], t).unwrap()[0];
+            let b: Vec<f64> = v["B"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            // serde_json's default float parsing may be one ulp off: not a difference.
+            let close = |a: &[f64], b: &[f64]| {
+                a.iter()
+                    .zip(b)
+                    .all(|(x, y)| (x - y).abs() <= 1e-14 * y.abs().max(1e-300))
+            };
+            assert!(
+                close(&b, &expected),
+                "{url}: {b:?} against probe's {expected:?}"
+            );
+            // The leaf named is the frame's leaf on that patch, and gives that value.
+            let patch = v["patch"].as_u64().unwrap() as u32;
+            let k = v["leaf"]["index"].as_u64().unwrap() as usize;
+            let leaf = frame.leaves[k];
+            assert_eq!(leaf.patch, patch, "{url}");
+            let uv: Vec<f64> = v["uv"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            assert!(close(&leaf.eval(uv[0], uv[1]), &b), "{url}: leaf {k}");
+            let facing = frame.patches[patch as usize].normal.dot(n);
+            assert!(facing > 0.0, "{url}: patch {patch} faces away");
+        }
+    }
+}

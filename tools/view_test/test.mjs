@@ -1,0 +1,272 @@
+// The browser test of `rhier view` (issue 51): headless Chromium, driven by
+// playwright-core, loads the page `rhier view` serves and checks what it draws.
+//
+//   node tools/view_test/test.mjs [--rhier target/release/rhier]
+//       Solves the embedded Cornell box and formats/examples/cornell_moving.json
+//       (coarse), serves each, and fails (exit 1) unless: the lit room is drawn and
+//       matches `rhier play`'s picture of the same camera and size; the red and
+//       green walls are where the camera puts them; a click answers what
+//       `rhier probe` answers at the clicked point; moving the time slider changes
+//       the moving scene's picture; the page logs no console error.
+//   node tools/view_test/test.mjs --bench FILE.rhier [--seconds S]
+//       Time to the first rendered frame, and frames per second while playing
+//       (BENCHMARKS.md, "Viewer").
+//
+// Chromium is Debian's (/usr/bin/chromium, or $CHROMIUM); WebGL2 runs on SwiftShader.
+import { spawn, execFileSync } from 'node:child_process';
+import { mkdtempSync, writeFileSync, readFileSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, resolve, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { chromium } from 'playwright-core';
+import { PNG } from 'pngjs';
+
+const repo = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
+const argv = process.argv.slice(2);
+const opt = (name, def) => {
+  const i = argv.indexOf(name);
+  return i >= 0 ? argv[i + 1] : def;
+};
+const RHIER = resolve(opt('--rhier', join(repo, 'target/release/rhier')));
+const CHROMIUM = process.env.CHROMIUM || '/usr/bin/chromium';
+const WIDTH = 640;
+const HEIGHT = 480;
+const work = mkdtempSync(join(tmpdir(), 'rhier-view-test-'));
+const failures = [];
+
+function check(ok, what) {
+  console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`);
+  if (!ok) failures.push(what);
+}
+
+function rhier(...args) {
+  return execFileSync(RHIER, args, { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+}
+
+// Starts `rhier view FILE --port 0`; resolves to {url, proc} once it prints its address.
+function serve(file) {
+  return new Promise((ok, fail) => {
+    const proc = spawn(RHIER, ['view', file, '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
+    let out = '';
+    let err = '';
+    proc.stdout.on('data', (d) => {
+      out += d;
+      const m = out.match(/at (http:\/\/\S+\/)/);
+      if (m) ok({ url: m[1], proc });
+    });
+    proc.stderr.on('data', (d) => (err += d));
+    proc.on('exit', (code) => fail(new Error(`rhier view ${file} exited (${code}): ${err}`)));
+  });
+}
+
+async function browser() {
+  return chromium.launch({
+    executablePath: CHROMIUM,
+    args: [
+      '--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+      '--disable-background-networking', '--disable-component-update', '--disable-sync',
+      '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+    ],
+  });
+}
+
+// A page on `url` that records console errors; resolves once the first frame is drawn.
+async function open(b, url, errors) {
+  const page = await b.newPage({ viewport: { width: WIDTH, height: HEIGHT } });
+  page.on('console', (m) => {
+    if (m.type() === 'error') errors.push(`console: ${m.text()}`);
+  });
+  page.on('pageerror', (e) => errors.push(`page: ${e.message}`));
+  page.on('requestfailed', (r) => errors.push(`request failed: ${r.url()}`));
+  const t0 = Date.now();
+  await page.goto(url);
+  await page.waitForFunction(() => window.rhierView && window.rhierView.stats.ready, null, { timeout: 60000 });
+  return { page, loadMs: Date.now() - t0 };
+}
+
+// The canvas alone (panel hidden) as {width, height, data: RGBA}.
+async function picture(page) {
+  await page.evaluate(() => (document.getElementById('panel').style.visibility = 'hidden'));
+  const png = PNG.sync.read(await page.locator('#view').screenshot());
+  await page.evaluate(() => (document.getElementById('panel').style.visibility = 'visible'));
+  return png;
+}
+
+const pixel = (img, x, y) => {
+  const i = 4 * (Math.round(y) * img.width + Math.round(x));
+  return [img.data[i], img.data[i + 1], img.data[i + 2]];
+};
+
+// Mean of the pixels in a square of half side r around (x, y).
+function patchMean(img, x, y, r = 6) {
+  const s = [0, 0, 0];
+  let n = 0;
+  for (let dy = -r; dy <= r; dy++) {
+    for (let dx = -r; dx <= r; dx++) {
+      const p = pixel(img, x + dx, y + dy);
+      for (let k = 0; k < 3; k++) s[k] += p[k];
+      n++;
+    }
+  }
+  return s.map((v) => v / n);
+}
+
+// Pixel position of world point p seen by the served start camera (the view's
+// `rhier::playback::raster::project`).
+function project(cam, p) {
+  const sub = (a, b) => a.map((x, i) => x - b[i]);
+  const dot = (a, b) => a.reduce((s, x, i) => s + x * b[i], 0);
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const norm = (a) => a.map((x) => x / Math.hypot(...a));
+  const f = norm(sub(cam.target, cam.eye));
+  const s = norm(cross(f, cam.up));
+  const u = cross(s, f);
+  const v = sub(p, cam.eye);
+  const k = 1 / Math.tan((cam.fov_y_degrees * Math.PI) / 360);
+  const x = (dot(v, s) * k) / (WIDTH / HEIGHT) / dot(v, f);
+  const y = (dot(v, u) * k) / dot(v, f);
+  return [((x + 1) / 2) * WIDTH, ((1 - y) / 2) * HEIGHT];
+}
+
+async function cornell(b) {
+  const file = join(work, 'cornell.rhier');
+  rhier('solve', '-q', '-o', file);
+  const { url, proc } = await serve(file);
+  const errors = [];
+  try {
+    const { page } = await open(b, url, errors);
+    const info = await (await fetch(url + 'api/info')).json();
+    const img = await picture(page);
+    writeFileSync(join(work, 'cornell_view.png'), PNG.sync.write(img));
+    let lit = 0;
+    for (let i = 0; i < img.data.length; i += 4) if (img.data[i] + img.data[i + 1] + img.data[i + 2] > 30) lit++;
+    const litFraction = lit / (img.width * img.height);
+    check(litFraction > 0.5, `cornell: the lit room fills the picture (${(100 * litFraction).toFixed(1)}% lit pixels)`);
+    // Same camera, size and exposure as `rhier play`: the pictures agree.
+    const out = join(work, 'play');
+    rhier('play', file, '--time', '0', '-o', out, '--width', String(WIDTH), '--height', String(HEIGHT));
+    const ref = PNG.sync.read(readFileSync(join(out, 'frame_00000.png')));
+    let diff = 0;
+    let far = 0;
+    for (let i = 0; i < ref.data.length; i += 4) {
+      for (let k = 0; k < 3; k++) {
+        const d = Math.abs(ref.data[i + k] - img.data[i + k]);
+        diff += d;
+        if (d > 16) far++;
+      }
+    }
+    const mean = diff / (3 * WIDTH * HEIGHT);
+    const farFraction = far / (3 * WIDTH * HEIGHT);
+    check(mean < 2 && farFraction < 0.01,
+      `cornell: the page's picture is rhier play's (mean |difference| ${mean.toFixed(3)} of 255, ${(100 * farFraction).toFixed(3)}% of channels off by more than 16)`);
+    // The red wall (x = 556) and the green wall (x = 0) where the camera projects them.
+    const redAt = project(info.camera, [553, 274, 280]);
+    const greenAt = project(info.camera, [3, 274, 280]);
+    const red = patchMean(img, ...redAt);
+    const green = patchMean(img, ...greenAt);
+    check(red[0] > 1.5 * red[1] && red[0] > 1.5 * red[2],
+      `cornell: red wall at pixel (${redAt.map(Math.round)}) is red (${red.map(Math.round)})`);
+    check(green[1] > 1.3 * green[0] && green[1] > 1.3 * green[2],
+      `cornell: green wall at pixel (${greenAt.map(Math.round)}) is green (${green.map(Math.round)})`);
+    // A click on the floor answers what `rhier probe` answers at that point.
+    const floor = project(info.camera, [278, 0, 200]);
+    const before = await page.evaluate(() => window.rhierView.stats.lastProbe);
+    await page.mouse.click(floor[0], floor[1]);
+    await page.waitForFunction((b0) => window.rhierView.stats.lastProbe !== b0, before, { timeout: 20000 });
+    const hit = await page.evaluate(() => window.rhierView.stats.lastProbe);
+    const pts = join(work, 'click.json');
+    writeFileSync(pts, JSON.stringify([{ p: hit.p, n: hit.n }]));
+    const probed = JSON.parse(rhier('probe', file, '--points', pts, '--time', String(hit.t)))[0].B;
+    const shown = await page.locator('#probe').textContent();
+    check(hit.object === 'floor' && probed.every((v, i) => v === hit.B[i]) && shown.includes(hit.B[0].toPrecision(5)),
+      `cornell: click at (${floor.map(Math.round)}) probes the floor, B = [${hit.B}], rhier probe [${probed}]; patch ${hit.patch}, leaf ${hit.leaf && hit.leaf.index}`);
+    const inspect = await page.locator('#inspect').textContent();
+    const cli = rhier('inspect', file);
+    check(inspect === cli, 'cornell: the inspect panel holds what rhier inspect prints');
+    await page.close();
+  } finally {
+    proc.kill();
+  }
+  check(errors.length === 0, `cornell: no console error${errors.length ? ': ' + errors.join('; ') : ''}`);
+}
+
+async function moving(b) {
+  const file = join(work, 'moving.rhier');
+  rhier('solve', join(repo, 'formats/examples/cornell_moving.json'), '--fps', '5', '--eps', '2', '-q', '-o', file);
+  const { url, proc } = await serve(file);
+  const errors = [];
+  try {
+    const { page } = await open(b, url, errors);
+    const first = await picture(page);
+    const last = await page.evaluate(() => Number(document.getElementById('time').max));
+    check(last > 0, `moving: the time slider has ${last + 1} frames`);
+    const shown = await page.evaluate(() => window.rhierView.stats.framesShown);
+    await page.locator('#time').fill(String(last));
+    await page.waitForFunction((n) => window.rhierView.stats.framesShown > n, shown, { timeout: 30000 });
+    const clock = await page.locator('#clock').textContent();
+    const end = await picture(page);
+    let changed = 0;
+    for (let i = 0; i < first.data.length; i += 4) {
+      if (Math.abs(first.data[i] - end.data[i]) + Math.abs(first.data[i + 1] - end.data[i + 1]) + Math.abs(first.data[i + 2] - end.data[i + 2]) > 24) changed++;
+    }
+    const fraction = changed / (first.width * first.height);
+    check(fraction > 0.01, `moving: the slider at its end (${clock}) changes ${(100 * fraction).toFixed(2)}% of the pixels`);
+    // Play a while: frames keep coming.
+    await page.locator('#play').click();
+    await page.waitForTimeout(1500);
+    await page.locator('#play').click();
+    const played = await page.evaluate(() => window.rhierView.stats.playFrames);
+    check(played >= 2, `moving: play shows frames (${played} in 1.5 s)`);
+    await page.close();
+  } finally {
+    proc.kill();
+  }
+  check(errors.length === 0, `moving: no console error${errors.length ? ': ' + errors.join('; ') : ''}`);
+}
+
+async function bench(b, file, seconds) {
+  const { url, proc } = await serve(resolve(file));
+  const errors = [];
+  try {
+    const { page, loadMs } = await open(b, url, errors);
+    const s = await page.evaluate(() => window.rhierView.stats);
+    console.log(`first frame: ${(s.firstFrameMs / 1000).toFixed(2)} s after navigation start (${(loadMs / 1000).toFixed(2)} s from goto to drawn)`);
+    const draw = await page.evaluate(() => window.rhierView.timeDraw(10));
+    console.log(`drawing the frame shown: ${draw.toFixed(0)} ms (mean of 10)`);
+    const moving = await page.evaluate(() => !document.getElementById('timeRow').hidden);
+    if (moving) {
+      await page.locator('#play').click();
+      await page.waitForTimeout(1000 * seconds);
+      const r = await page.evaluate(() => {
+        const s = window.rhierView.stats;
+        return [s.playFrames, performance.now() - s.playStarted, s.waitMs, s.drawMs];
+      });
+      await page.locator('#play').click();
+      console.log(`playing at 25 fps asked: ${(r[0] / (r[1] / 1000)).toFixed(1)} frames per second shown over ${(r[1] / 1000).toFixed(1)} s; per frame ${(r[2] / r[0]).toFixed(0)} ms waiting for data, ${(r[3] / r[0]).toFixed(0)} ms uploading and handing the draw over`);
+    }
+  } finally {
+    proc.kill();
+  }
+  if (errors.length) console.log(`console errors: ${errors.join('; ')}`);
+}
+
+const b = await browser();
+try {
+  if (argv.includes('--bench')) {
+    await bench(b, opt('--bench'), Number(opt('--seconds', '5')));
+  } else {
+    await cornell(b);
+    await moving(b);
+  }
+} catch (e) {
+  failures.push(String(e.stack || e));
+  console.log(`FAIL ${e.stack || e}`);
+} finally {
+  await b.close();
+}
+if (failures.length) {
+  console.log(`${failures.length} check(s) failed; pictures in ${work}`);
+  process.exit(1);
+}
+rmSync(work, { recursive: true, force: true });
+console.log('all view checks passed');

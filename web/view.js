@@ -1,0 +1,366 @@
+// `rhier view`'s page: draws the served solution with three.js (WebGL2) as `rhier play`
+// draws it (linear vertex radiosity × exposure, then the sRGB curve; back faces culled;
+// black background), orbits from play's start camera, scrubs and plays time, and asks
+// the server for the probe answer where a surface is clicked. State for tests and
+// benchmarks is on `window.rhierView`.
+import * as THREE from 'three';
+import { OrbitControls } from '/vendor/OrbitControls.js';
+import { parseFrame, parseMesh } from '/wire.js';
+
+const $ = (id) => document.getElementById(id);
+const api = {
+  stats: { ready: false, firstFrameMs: null, framesShown: 0, playStarted: null, lastProbe: null, meshes: 0 },
+};
+window.rhierView = api;
+
+const VERTEX = `
+precision highp float;
+uniform mat4 modelViewMatrix;
+uniform mat4 projectionMatrix;
+uniform float scale;
+in vec3 position;
+in vec3 color;
+out vec3 radiosity;
+void main() {
+  radiosity = color * scale;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+}`;
+
+// rhier::playback::raster::srgb_oetf of the exposed radiosity (IEC 61966-2-1).
+const FRAGMENT = `
+precision highp float;
+uniform float exposure;
+in vec3 radiosity;
+out vec4 outColor;
+void main() {
+  vec3 x = clamp(radiosity * exposure, 0.0, 1.0);
+  vec3 srgb = mix(12.92 * x, 1.055 * pow(x, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, x));
+  outColor = vec4(srgb, 1.0);
+}`;
+
+const material = new THREE.RawShaderMaterial({
+  glslVersion: THREE.GLSL3,
+  vertexShader: VERTEX,
+  fragmentShader: FRAGMENT,
+  uniforms: { exposure: { value: 1 }, scale: { value: 1 } },
+  side: THREE.FrontSide,
+});
+
+const canvas = $('view');
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
+renderer.setPixelRatio(1);
+renderer.setClearColor(0x000000, 1);
+const scene = new THREE.Scene();
+const camera = new THREE.PerspectiveCamera(45, 1, 0.1, 1000);
+const controls = new OrbitControls(camera, canvas);
+let info = null;
+let mesh = { key: null, objects: new Map() }; // object index -> THREE.Mesh
+let shownFrame = null;
+const frames = new Map(); // `${shading}|${k}` -> Promise<frame>
+const meshes = new Map(); // key -> Promise<parsed mesh>
+const colorsById = new Map(); // colour id -> Uint16Array, the last few received
+let latestColors = 0; // id of the colours received last
+let uploadedColors = 0; // id of the colours on the GPU
+
+// A frame's colours: its own, else those of its colour id received before, else
+// (evicted) the frame asked for again with them.
+async function colorsOf(frame) {
+  if (frame.colors) return frame.colors;
+  if (colorsById.has(frame.colorsId)) return colorsById.get(frame.colorsId);
+  const again = parseFrame(await fetchBinary(`/api/frame?t=${frame.t}&shading=${shading()}`));
+  return keep(again).colors;
+}
+function keep(frame) {
+  if (frame.colors) {
+    colorsById.set(frame.colorsId, frame.colors);
+    if (colorsById.size > 4) colorsById.delete(colorsById.keys().next().value);
+    latestColors = Math.max(latestColors, frame.colorsId);
+  }
+  return frame;
+}
+
+function render() {
+  renderer.render(scene, camera);
+}
+
+// Waits for the drawing to end (a one-pixel read), so that times measure it.
+const onePixel = new Uint8Array(4);
+function finish() {
+  const gl = renderer.getContext();
+  gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, onePixel);
+}
+
+function resize() {
+  const w = canvas.clientWidth;
+  const h = canvas.clientHeight;
+  renderer.setSize(w, h, false);
+  camera.aspect = w / Math.max(1, h);
+  camera.updateProjectionMatrix();
+  render();
+}
+
+async function fetchBinary(url) {
+  const r = await fetch(url);
+  if (!r.ok) throw new Error(`${url}: ${r.status} ${await r.text()}`);
+  return r.arrayBuffer();
+}
+
+// Frame times as `rhier play --frames start..end --fps F`: start + k / F, the last clamped.
+function frameCount() {
+  const [a, b] = info.time;
+  return Math.floor((b - a) * fps() + 1e-9) + 1;
+}
+function frameTime(k) {
+  const [a, b] = info.time;
+  return Math.min(a + k / fps(), b);
+}
+function fps() {
+  const f = Number($('fps').value);
+  return f > 0 && Number.isFinite(f) ? f : 25;
+}
+function shading() {
+  return $('shading').value;
+}
+
+function frameAt(k) {
+  const key = `${shading()}|${fps()}|${k}`;
+  if (!frames.has(key)) {
+    const t = frameTime(k);
+    const have = colorsById.has(latestColors) ? `&have=${latestColors}` : '';
+    frames.set(key, fetchBinary(`/api/frame?t=${t}&shading=${shading()}${have}`).then((b) => keep(parseFrame(b))));
+    if (frames.size > 64) frames.delete(frames.keys().next().value);
+  }
+  return frames.get(key);
+}
+
+function meshFor(key, t) {
+  const k = key.toString();
+  if (!meshes.has(k)) {
+    meshes.set(k, fetchBinary(`/api/mesh?t=${t}`).then(parseMesh));
+    if (meshes.size > 4) meshes.delete(meshes.keys().next().value);
+  }
+  return meshes.get(k);
+}
+
+function install(parsed) {
+  for (const m of mesh.objects.values()) {
+    scene.remove(m);
+    m.geometry.dispose();
+  }
+  uploadedColors = 0;
+  mesh = { key: parsed.key, objects: new Map(), groups: parsed.groups };
+  for (const g of parsed.groups) {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(g.positions, 3));
+    const colors = new THREE.Float16BufferAttribute(new Uint16Array(g.positions.length), 3);
+    colors.setUsage(THREE.DynamicDrawUsage);
+    geometry.setAttribute('color', colors);
+    geometry.setIndex(new THREE.BufferAttribute(g.indices, 1));
+    geometry.computeBoundingSphere();
+    const m = new THREE.Mesh(geometry, material);
+    m.matrixAutoUpdate = false;
+    m.frustumCulled = false;
+    m.userData.object = g.object;
+    m.userData.firstVertex = g.firstVertex;
+    scene.add(m);
+    mesh.objects.set(g.object, m);
+  }
+  api.stats.meshes += 1;
+}
+
+async function show(frame) {
+  if (mesh.key !== frame.key) install(await meshFor(frame.key, frame.t));
+  const colors = uploadedColors === frame.colorsId ? null : await colorsOf(frame);
+  material.uniforms.scale.value = frame.scale;
+  for (const m of mesh.objects.values()) {
+    const o = m.userData.object;
+    const a = frame.transforms.subarray(12 * o, 12 * o + 12);
+    m.matrix.set(a[0], a[3], a[6], a[9], a[1], a[4], a[7], a[10], a[2], a[5], a[8], a[11], 0, 0, 0, 1);
+    m.matrixWorldNeedsUpdate = true;
+    if (colors) {
+      const attr = m.geometry.getAttribute('color');
+      const first = 3 * m.userData.firstVertex;
+      attr.array.set(colors.subarray(first, first + attr.array.length));
+      attr.needsUpdate = true;
+    }
+  }
+  uploadedColors = frame.colorsId;
+  shownFrame = frame;
+  $('clock').textContent = `t = ${frame.t.toFixed(3)} s`;
+  render();
+  api.stats.framesShown += 1;
+}
+
+// Shows frame k (the slider's), unless a later request overtook it.
+let wanted = 0;
+async function goTo(k) {
+  wanted = k;
+  const frame = await frameAt(k);
+  if (wanted === k) await show(frame);
+}
+
+// Playing: one frame after another at the chosen fps, never faster than the data
+// arrive; the next frames are asked for ahead of time.
+const AHEAD = 8;
+let playing = false;
+async function play() {
+  if (playing) return;
+  playing = true;
+  $('play').textContent = 'pause';
+  const n = frameCount();
+  let k = Number($('time').value);
+  if (k >= n - 1) k = 0;
+  let due = performance.now();
+  api.stats.playStarted = due;
+  api.stats.playFrames = 0;
+  api.stats.waitMs = 0; // waiting for frame data
+  api.stats.drawMs = 0; // uploading and handing the draw to WebGL
+  while (playing) {
+    for (let j = 1; j <= AHEAD; j++) frameAt((k + j) % n);
+    const asked = performance.now();
+    const frame = await frameAt(k);
+    api.stats.waitMs += performance.now() - asked;
+    const wait = due - performance.now();
+    if (wait > 0) await new Promise((r) => setTimeout(r, wait));
+    if (!playing) break;
+    $('time').value = k;
+    wanted = k;
+    const drawn = performance.now();
+    await show(frame);
+    api.stats.drawMs += performance.now() - drawn;
+    api.stats.playFrames += 1;
+    due = Math.max(due + 1000 / fps(), performance.now() - 1000 / fps());
+    k = (k + 1) % n;
+  }
+  $('play').textContent = 'play';
+}
+function pause() {
+  playing = false;
+}
+
+function setupTime() {
+  const n = frameCount();
+  $('time').max = String(n - 1);
+  $('time').disabled = n < 2;
+  $('play').disabled = n < 2;
+}
+
+// Click (not drag): the probe answer at the surface under the pointer.
+const raycaster = new THREE.Raycaster();
+let down = null;
+canvas.addEventListener('pointerdown', (e) => {
+  down = [e.clientX, e.clientY];
+});
+canvas.addEventListener('pointerup', async (e) => {
+  if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 4) return;
+  const r = canvas.getBoundingClientRect();
+  const ndc = new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1);
+  await probeAt(ndc);
+});
+
+async function probeAt(ndc) {
+  raycaster.setFromCamera(ndc, camera);
+  const hit = raycaster.intersectObjects([...mesh.objects.values()], false)[0];
+  if (!hit || !shownFrame) {
+    $('probe').textContent = 'no surface there';
+    return null;
+  }
+  const n = hit.face.normal.clone().transformDirection(hit.object.matrixWorld);
+  const p = hit.point;
+  const q = `t=${shownFrame.t}&p=${p.x},${p.y},${p.z}&n=${n.x},${n.y},${n.z}`;
+  const r = await fetch(`/api/probe?${q}`);
+  const body = await r.text();
+  if (!r.ok) {
+    $('probe').textContent = body;
+    return null;
+  }
+  const a = JSON.parse(body);
+  const fmt = (v) => v.map((x) => x.toPrecision(5)).join(', ');
+  $('probe').textContent =
+    `B = [${fmt(a.B)}] at t = ${a.t}\n` +
+    `point (${fmt(a.p)}), normal (${fmt(a.n)})\n` +
+    `patch ${a.patch} (object ${a.object}, material ${a.material}), (u, v) = (${fmt(a.uv)})\n` +
+    (a.leaf ? `leaf ${a.leaf.index}: ${a.leaf.corners} corners, time [${a.leaf.time.join(', ')}]` : 'no leaf');
+  api.stats.lastProbe = a;
+  return a;
+}
+api.probeAt = (x, y) => probeAt(new THREE.Vector2(x, y));
+
+function setExposure() {
+  const stops = Number($('stops').value);
+  material.uniforms.exposure.value = info.exposure * 2 ** stops;
+  $('stopsOut').textContent = `${stops >= 0 ? '+' : ''}${stops} EV`;
+  render();
+}
+
+function placeCamera(groups) {
+  const c = info.camera;
+  const box = new THREE.Box3();
+  for (const m of mesh.objects.values()) {
+    m.updateMatrixWorld();
+    box.expandByObject(m);
+  }
+  const sphere = box.getBoundingSphere(new THREE.Sphere());
+  const eye = new THREE.Vector3(...c.eye);
+  let target = new THREE.Vector3(...c.target);
+  const dir = target.clone().sub(eye).normalize();
+  // Orbit about the point of the view axis nearest the scene's centre, not about a
+  // target a unit away (play's interior camera), so that the view does not change.
+  const along = sphere.center.clone().sub(eye).dot(dir);
+  if (along > target.distanceTo(eye)) target = eye.clone().addScaledVector(dir, along);
+  const radius = Math.max(sphere.radius, 1e-9);
+  camera.fov = c.fov_y_degrees;
+  camera.up.set(...c.up);
+  camera.position.copy(eye);
+  camera.near = radius * 1e-3;
+  camera.far = eye.distanceTo(sphere.center) + 4 * radius;
+  camera.lookAt(target);
+  controls.target.copy(target);
+  controls.update();
+  resize();
+}
+
+async function start() {
+  info = await (await fetch('/api/info')).json();
+  $('file').textContent = info.file;
+  $('timeRow').hidden = !info.moving;
+  setupTime();
+  $('fps').addEventListener('change', () => {
+    setupTime();
+    goTo(0);
+  });
+  $('time').addEventListener('input', () => goTo(Number($('time').value)));
+  $('play').addEventListener('click', () => (playing ? pause() : play()));
+  $('shading').addEventListener('change', () => goTo(Number($('time').value)));
+  $('stops').addEventListener('input', setExposure);
+  setExposure();
+  const first = await frameAt(0);
+  install(await meshFor(first.key, first.t));
+  placeCamera();
+  await show(first);
+  finish();
+  api.stats.firstFrameMs = performance.now();
+  api.stats.ready = true;
+  controls.addEventListener('change', render);
+  window.addEventListener('resize', resize);
+  const inspect = await (await fetch('/api/inspect')).json();
+  $('inspect').textContent = inspect.text;
+  api.inspect = inspect.json;
+}
+
+// Milliseconds to draw the scene as it is, the mean of n draws (benchmarks).
+api.timeDraw = (n) => {
+  const t0 = performance.now();
+  for (let i = 0; i < n; i++) {
+    render();
+    finish();
+  }
+  return (performance.now() - t0) / n;
+};
+api.goTo = goTo;
+api.play = play;
+api.pause = pause;
+start().catch((e) => {
+  $('probe').textContent = String(e);
+  console.error(e);
+});
