@@ -50,7 +50,7 @@ mod rows;
 pub mod spacetime;
 
 pub use reconstruct::Reconstruction;
-use rows::{KeptCoef, RowEntries};
+use rows::{ClusterPart, KeptCoef, RowEntries};
 use spacetime::SpaceTimeState;
 use spacetime::interpolate::TimedEntry;
 pub use spacetime::interpolate::{
@@ -70,7 +70,7 @@ use crate::Result;
 use crate::geometry::{Patches, SceneBvh, cosine_direction, point_to_polygon, split_at_contacts};
 use crate::oracle::{self, EvalSettings, Split};
 use crate::pools::elements::{Cone, Geom, Node};
-use crate::pools::links::{Ends, Transport};
+use crate::pools::links::{Ends, Retained, Transport};
 use crate::pools::{
     ElementId, ElementKind, ElementPool, Emission, LinkId, LinkPool, LinkState, Storage,
 };
@@ -313,6 +313,11 @@ pub struct SolveOptions {
     /// radiosity varies across the part the point sees most (the Cornell ceiling
     /// by a wall; BENCHMARKS.md, "Static solver: error against run time").
     pub source_field: bool,
+    /// Keep the passive (refined) links of a static solve in the pool, for a caller
+    /// that writes every link (`--keep-links`). False, the default: each round
+    /// drops them once refined ([`crate::pools::LinkPool::drop_passive`]), which a
+    /// static solve never reads again. A space-time solve always keeps them.
+    pub keep_passive: bool,
 }
 
 impl Default for SolveOptions {
@@ -343,6 +348,7 @@ impl Default for SolveOptions {
             leaf_shapes: 0.0,
             near_gap: 0.0,
             source_field: false,
+            keep_passive: false,
             row_open_ratio: 0.25,
             cluster_open_ratio: CLUSTER_OPEN_RATIO,
         }
@@ -500,6 +506,11 @@ struct LeafSystem {
     /// Static solve: each leaf's row coefficients by chain link (`(link, coef)`,
     /// sorted by link), reused by the next round for links that did not change.
     row_cache: FastMap<u32, Vec<KeptCoef>>,
+    /// Static solve: each leaf's cluster parts by chain link (sorted by link),
+    /// reused by the next round for cluster links that did not change: recasting
+    /// them each round was a sixth of `gen_cubes 65`'s refinement rounds
+    /// (`cluster_parts`) and more in their rays (BENCHMARKS.md, "Scale").
+    cluster_cache: FastMap<u32, Vec<ClusterPart>>,
 }
 
 /// What moves in the scene and where it stands now: per patch and per cluster
@@ -735,6 +746,8 @@ impl<'a> Solver<'a> {
                 let active = self.active_links(false);
                 if !clusters_reevaluated {
                     self.reevaluate_cluster_sources(&active);
+                    // The parts kept were cast at the old estimates.
+                    self.sys.cluster_cache.clear();
                     clusters_reevaluated = true;
                 }
                 self.refine(active, thr)?
@@ -774,6 +787,7 @@ impl<'a> Solver<'a> {
                 idle += 1;
                 continue;
             }
+            self.drop_passive_links();
             self.index_links();
             let residual = self.solve_rows()?;
             b_ref = self.b_ref();
@@ -827,6 +841,7 @@ impl<'a> Solver<'a> {
             if self.split_on_spread()? == 0 {
                 break;
             }
+            self.drop_passive_links();
             self.index_links();
             let residual = self.solve_rows()?;
             let mut rec = self.round_record(round, start, (rays0, clear0), estimate, residual);
@@ -1211,6 +1226,29 @@ impl<'a> Solver<'a> {
                 wave.push(self.links.push(r, s, t)?);
             }
         }
+    }
+
+    /// A static solve drops the links it refined (unless
+    /// [`SolveOptions::keep_passive`]): the active links keep their order, and the
+    /// kept row coefficients of the last round, keyed by link, follow them to their
+    /// new ids. Links are the bulk of a large scene's memory (24 bytes each), and
+    /// dropped each round the pool holds about the active links only.
+    fn drop_passive_links(&mut self) {
+        if self.opts.keep_passive || self.has_motion() || self.st.window.is_some() {
+            return;
+        }
+        let retained = self.links.drop_passive();
+        // Each kept record follows its link to the new id, or goes with it.
+        fn follow<T>(rows: &mut FastMap<u32, Vec<T>>, link: fn(&mut T) -> &mut u32, r: &Retained) {
+            for row in rows.values_mut() {
+                row.retain_mut(|k| {
+                    let l = link(k);
+                    r.new_id(*l).map(|id| *l = id).is_some()
+                });
+            }
+        }
+        follow(&mut self.sys.row_cache, |k| &mut k.link, &retained);
+        follow(&mut self.sys.cluster_cache, |k| &mut k.link, &retained);
     }
 
     /// The active links, or only the active varying ones.

@@ -54,6 +54,8 @@ struct LeafRow {
     fresh: Vec<((u32, u32), (f32, f32))>,
     /// A static solve's coefficients by link, for the next round.
     kept: Vec<KeptCoef>,
+    /// A static solve's cluster parts by link, for the next round.
+    clusters: Vec<ClusterPart>,
     /// New opened entries for [`Window::opened`].
     opened: Vec<((u32, u32), RowEntries)>,
     /// New hidden coefficients for [`Window::hidden`].
@@ -146,6 +148,20 @@ pub(super) struct KeptCoef {
 }
 
 const _: () = assert!(std::mem::size_of::<KeptCoef>() == 12);
+
+/// One part of a cluster source as a static leaf's row took it ([`Solver::push_cluster`]),
+/// kept for the next round: `vis >= 0`, a surface part to open at `(coef, vis)`
+/// ([`Solver::push_opened`], whose opening follows the source's children as they
+/// are then); `vis < 0`, a cluster part whose entry is `coef`. 16 bytes.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ClusterPart {
+    pub(super) link: u32,
+    elem: u32,
+    coef: f32,
+    vis: f32,
+}
+
+const _: () = assert!(std::mem::size_of::<ClusterPart>() == 16);
 
 impl Solver<'_> {
     /// Visits what a leaf gathers of cluster `s` from its quadrature points `q`
@@ -254,7 +270,9 @@ impl Solver<'_> {
     /// whose estimate is zero is still opened when its receiver is a cluster: the
     /// average of a box's faces may see nothing of the floor beside the box while
     /// one face sees it at 0.4. A link too close for the cluster estimate
-    /// ([`oracle::close_cluster_factor`]) is opened the same way.
+    /// ([`oracle::close_cluster_factor`]) is opened the same way. With `kept` (a
+    /// static solve) the parts are recorded for the next round ([`ClusterPart`]).
+    #[allow(clippy::too_many_arguments)]
     fn push_cluster(
         &self,
         leaf: ElementId,
@@ -263,6 +281,7 @@ impl Solver<'_> {
         n: DVec3,
         s: u32,
         row: &mut Vec<(u32, f64)>,
+        mut kept: Option<&mut Vec<ClusterPart>>,
     ) {
         let t = &self.links.transports.as_slice()[l as usize];
         let mut vis = t.visibility as f64;
@@ -284,6 +303,20 @@ impl Solver<'_> {
             }
             if geoms[e as usize].patch != u32::MAX {
                 let (coef, v) = self.hidden_row_coef(leaf, l, e, q, n, RowMasks::None).0;
+                // Rounded once, so a reused part equals the first.
+                let (coef, v) = match kept.as_deref_mut() {
+                    Some(k) => {
+                        let (c, v) = (coef as f32, v.max(0.0) as f32);
+                        k.push(ClusterPart {
+                            link: l,
+                            elem: e,
+                            coef: c,
+                            vis: v,
+                        });
+                        (c as f64, v as f64)
+                    }
+                    None => (coef, v),
+                };
                 self.push_opened(q, n, e, coef, v, row, None);
                 return;
             }
@@ -311,9 +344,48 @@ impl Solver<'_> {
                     .sum()
             };
             if v > 0.0 {
-                row.push((e, coef * v));
+                let entry = match kept.as_deref_mut() {
+                    Some(k) => {
+                        let c = (coef * v) as f32;
+                        k.push(ClusterPart {
+                            link: l,
+                            elem: e,
+                            coef: c,
+                            vis: -1.0,
+                        });
+                        c as f64
+                    }
+                    None => coef * v,
+                };
+                row.push((e, entry));
             }
         });
+    }
+
+    /// The row entries of cluster link `l` from the parts an earlier round kept
+    /// (`parts`, sorted by link; [`ClusterPart`]); false if it kept none for `l`
+    /// (a link new since, or one whose parts all gave nothing: those are cast
+    /// again, which finds nothing again).
+    fn push_kept_cluster(
+        &self,
+        q: &oracle::Samples,
+        n: DVec3,
+        l: u32,
+        parts: &[ClusterPart],
+        row: &mut Vec<(u32, f64)>,
+        kept: &mut Vec<ClusterPart>,
+    ) -> bool {
+        let from = parts.partition_point(|p| p.link < l);
+        let to = from + parts[from..].partition_point(|p| p.link == l);
+        for p in &parts[from..to] {
+            if p.vis < 0.0 {
+                row.push((p.elem, p.coef as f64));
+            } else {
+                self.push_opened(q, n, p.elem, p.coef as f64, p.vis as f64, row, None);
+            }
+        }
+        kept.extend_from_slice(&parts[from..to]);
+        to > from
     }
 
     /// A leaf's row coefficient for the partly hidden chain link `l` to surface
@@ -708,6 +780,7 @@ impl Solver<'_> {
         let leaf_ray = self.ray_id(leaf.0);
         let rho_leaf = self.rho_of(leaf);
         let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
+        let clusters_before = self.sys.cluster_cache.get(&leaf.0).filter(|_| keep_rows);
         // A static leaf (of the window's base or made again by this
         // frame) reuses the factors to the static base elements its
         // sources open into.
@@ -722,7 +795,13 @@ impl Solver<'_> {
             let s = ends[l as usize].source;
             let gs = &geoms[s as usize];
             if gs.patch == u32::MAX {
-                self.push_cluster(leaf, l, &q, n, s, &mut out.row);
+                let reused = clusters_before.is_some_and(|parts| {
+                    self.push_kept_cluster(&q, n, l, parts, &mut out.row, &mut out.clusters)
+                });
+                if !reused {
+                    let kept = Some(&mut out.clusters).filter(|_| keep_rows);
+                    self.push_cluster(leaf, l, &q, n, s, &mut out.row, kept);
+                }
                 continue;
             }
             if let Some(k) =
@@ -799,6 +878,8 @@ impl Solver<'_> {
             self.push_opened(&q, n, s, coef, vis, &mut out.row, memo.as_mut());
         }
         out.kept.sort_unstable_by_key(|x| x.link);
+        // Stable: a link's parts stay in the order its row took them.
+        out.clusters.sort_by_key(|x| x.link);
         out.factors = memo.map(|m| m.fresh).unwrap_or_default();
         out
     }
@@ -906,6 +987,7 @@ impl Solver<'_> {
     fn store_leaf_rows(&mut self, rows: Vec<LeafRow>, keep_rows: bool) {
         self.clear_rows();
         self.sys.row_cache.clear();
+        self.sys.cluster_cache.clear();
         self.st.frame_rows.0.clear();
         self.st.rows_between = 0;
         let leaves = std::mem::take(&mut self.sys.leaves);
@@ -914,6 +996,7 @@ impl Solver<'_> {
                 row,
                 fresh,
                 kept,
+                clusters,
                 opened: fresh_opened,
                 hidden: fresh_hidden,
                 masks: fresh_masks,
@@ -953,6 +1036,9 @@ impl Solver<'_> {
             }
             if keep_rows {
                 self.sys.row_cache.insert(leaf.0, kept);
+                if !clusters.is_empty() {
+                    self.sys.cluster_cache.insert(leaf.0, clusters);
+                }
             }
             self.push_row(row);
         }

@@ -553,8 +553,12 @@ impl Args {
     /// The solver settings the arguments ask for (shared by every mode of `solve`),
     /// checked against their domains ([`SolveOptions::validate`]).
     pub fn solve_options(&self) -> anyhow::Result<SolveOptions> {
-        self.accuracy
-            .solve_options(self.resources.storage(false, None))
+        let mut opts = self
+            .accuracy
+            .solve_options(self.resources.storage(false, None))?;
+        // `--keep-links` writes every link, the passive ones too.
+        opts.keep_passive = self.output.keep_links;
+        Ok(opts)
     }
 
     /// The time settings the arguments ask for, checked

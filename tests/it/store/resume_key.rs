@@ -78,9 +78,14 @@ fn in_key() -> Vec<(&'static str, Change)> {
 /// The fields left out of the key, with a change of each: exactly those
 /// [`SOLVE_OPTIONS_NOT_IN_KEY`] and [`SPACE_TIME_OPTIONS_NOT_IN_KEY`] name.
 fn not_in_key() -> Vec<(&'static str, Change)> {
-    vec![("solve.storage", |o, _| {
-        o.storage = Storage::Mmap(std::env::temp_dir())
-    })]
+    vec![
+        ("solve.storage", |o, _| {
+            o.storage = Storage::Mmap(std::env::temp_dir())
+        }),
+        ("solve.keep_passive", |o, _| {
+            o.keep_passive = !o.keep_passive
+        }),
+    ]
 }
 
 /// The fields of both structs, as `solve.NAME` / `space_time.NAME`, with values.
