@@ -647,12 +647,17 @@ impl Solver<'_> {
     }
 
     /// What the row rays of chain link `l` (source `s`) hash their jitter from:
-    /// the link's id for a link of the shared part, else its source's
-    /// [`Solver::ray_id`] (a leaf's chain links have distinct sources).
+    /// for a link of the shared part (every link of a static solve), its ends'
+    /// [`Solver::ray_id`]s, which do not change when a static solve drops its
+    /// passive links and renumbers the rest ([`crate::pools::LinkPool::drop_passive`]), so a
+    /// static solve casts the rays the space-time solve of the same scene casts;
+    /// for a link a frame made, its source's (a leaf's chain links have distinct
+    /// sources).
     fn row_link_id(&self, l: u32, s: u32) -> u64 {
         let shared = self.st.window.as_ref().map_or(0, |w| w.base.links_len);
         if shared == 0 || (l as usize) < shared {
-            u64::from(l)
+            let r = self.links.ends.as_slice()[l as usize].receiver;
+            oracle::hash3(self.ray_id(r), self.ray_id(s), 0x11e4)
         } else {
             self.ray_id(s) ^ 1 << 62
         }
