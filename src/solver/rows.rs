@@ -235,6 +235,12 @@ impl Solver<'_> {
         }
         let node = elems.nodes.as_slice()[s as usize];
         if sides[..q.count].contains(&0) && node.child_count > 0 {
+            if let Some(k) = self.facet_factors(q, n, s, c, r) {
+                if k.iter().any(|&ki| ki > 0.0) {
+                    part(s, k);
+                }
+                return;
+            }
             for ch in node.first_child..node.first_child + node.child_count {
                 self.cluster_parts(q, n, ch, part);
             }
@@ -255,6 +261,54 @@ impl Solver<'_> {
             *ki = projected * cos / (std::f64::consts::PI * d2);
         }
         part(s, k);
+    }
+
+    /// The factors from the points `q` (normal `n`) to cluster `s` (bounding
+    /// sphere `c`, `r`) taken whole by its facets ([`super::facets`]): `None`
+    /// without [`SolveOptions::cluster_facets`], in a scene with motion, for a cluster with no facets, where a point is nearer
+    /// than [`SolveOptions::cluster_open_ratio`] allows, or where a facet cannot
+    /// tell which side of its patches a point is on. Each facet in front of a
+    /// point gives `A_f (n_f · v) cos θ / (π d²)` from its centroid, the
+    /// receiver's cosine clipped to the cluster's sphere as the cone's estimate
+    /// clips it.
+    pub(super) fn facet_factors(
+        &self,
+        q: &oracle::Samples,
+        n: DVec3,
+        s: u32,
+        c: DVec3,
+        r: f64,
+    ) -> Option<[f64; 4]> {
+        if !self.opts.cluster_facets || self.has_motion() {
+            return None;
+        }
+        let facets = self.facets.of(s);
+        if facets.is_empty() {
+            return None;
+        }
+        let ratio = self.opts.cluster_open_ratio;
+        let mut k = [0.0; 4];
+        for (ki, &x) in k.iter_mut().zip(&q.points).take(q.count) {
+            let d = (x - c).length();
+            if d.is_nan() || r >= ratio * d {
+                return None;
+            }
+            // The offsets are kept in f32.
+            let tol = 1e-6 * (self.patches.diameter + x.abs().max_element());
+            for f in facets {
+                if !super::facets::side(f, x, tol)? {
+                    continue;
+                }
+                let w = x - DVec3::from_array(f.centroid.map(f64::from));
+                let d2 = w.length_squared();
+                let v = w / d2.sqrt();
+                let nf = DVec3::from_array(f.normal.map(f64::from));
+                let projected = f.area as f64 * nf.dot(v).max(0.0);
+                let cos = clipped_cosine(-n.dot(v), (r * r / d2).min(1.0));
+                *ki += projected * cos / (std::f64::consts::PI * d2);
+            }
+        }
+        Some(k)
     }
 
     /// A leaf's row entries for the chain link `l` to cluster `s`: the parts of

@@ -57,6 +57,9 @@ fn in_key() -> Vec<(&'static str, Change)> {
         ("solve.source_field", |o, _| {
             o.source_field = !o.source_field
         }),
+        ("solve.cluster_facets", |o, _| {
+            o.cluster_facets = !o.cluster_facets
+        }),
         ("solve.near_gap", |o, _| o.near_gap += 0.1),
         ("space_time.fps", |_, s| s.fps *= 2.0),
         ("space_time.window", |_, s| s.window = Some(0.5)),
