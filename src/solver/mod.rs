@@ -321,8 +321,8 @@ pub struct SolveOptions {
     pub keep_passive: bool,
     /// Leaf rows and final gathers take a cluster of several orientations whole
     /// where its facets say which side of each patch a point is on
-    /// ([`facets`]), instead of opening it down to its surfaces. Off by default:
-    /// on `gen_cubes 20` it halves the time and the peak memory and takes the
+    /// (`src/solver/facets.rs`), instead of opening it down to its surfaces. Off
+    /// by default: on `gen_cubes 20` it halves the time and the peak memory and takes the
     /// error off the emitters from 2.9% to 3.7% (the ceiling gathers the boxes at
     /// their mean, not their bright tops; BENCHMARKS.md, "Scale"). Scenes without
     /// motion only.
