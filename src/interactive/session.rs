@@ -107,7 +107,10 @@ pub struct Session<'a> {
 impl<'a> Session<'a> {
     /// Solves `stage` with `opts` (every object at its scene pose) and starts a
     /// session on it.
-    pub fn start(stage: &'a Stage, opts: SolveOptions, settings: Settings) -> Result<Self> {
+    pub fn start(stage: &'a Stage, mut opts: SolveOptions, settings: Settings) -> Result<Self> {
+        // Moves refine the hierarchy further: keep the refined links a static solve
+        // would drop ([`SolveOptions::keep_passive`]).
+        opts.keep_passive = true;
         let mut solver = Solver::new(&stage.scene, opts)?;
         if stage.scene.has_emitter() {
             solver.run(|_, _| {})?;

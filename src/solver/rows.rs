@@ -54,6 +54,8 @@ struct LeafRow {
     fresh: Vec<((u32, u32), (f32, f32))>,
     /// A static solve's coefficients by link, for the next round.
     kept: Vec<KeptCoef>,
+    /// A static solve's cluster parts by link, for the next round.
+    clusters: Vec<ClusterPart>,
     /// New opened entries for [`Window::opened`].
     opened: Vec<((u32, u32), RowEntries)>,
     /// New hidden coefficients for [`Window::hidden`].
@@ -147,6 +149,20 @@ pub(super) struct KeptCoef {
 
 const _: () = assert!(std::mem::size_of::<KeptCoef>() == 12);
 
+/// One part of a cluster source as a static leaf's row took it ([`Solver::push_cluster`]),
+/// kept for the next round: `vis >= 0`, a surface part to open at `(coef, vis)`
+/// ([`Solver::push_opened`], whose opening follows the source's children as they
+/// are then); `vis < 0`, a cluster part whose entry is `coef`. 16 bytes.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ClusterPart {
+    pub(super) link: u32,
+    elem: u32,
+    coef: f32,
+    vis: f32,
+}
+
+const _: () = assert!(std::mem::size_of::<ClusterPart>() == 16);
+
 impl Solver<'_> {
     /// Visits what a leaf gathers of cluster `s` from its quadrature points `q`
     /// (normal `n`), unoccluded, handing each part to `part` with its factor at
@@ -219,6 +235,12 @@ impl Solver<'_> {
         }
         let node = elems.nodes.as_slice()[s as usize];
         if sides[..q.count].contains(&0) && node.child_count > 0 {
+            if let Some(k) = self.facet_factors(q, n, s, c, r) {
+                if k.iter().any(|&ki| ki > 0.0) {
+                    part(s, k);
+                }
+                return;
+            }
             for ch in node.first_child..node.first_child + node.child_count {
                 self.cluster_parts(q, n, ch, part);
             }
@@ -241,6 +263,54 @@ impl Solver<'_> {
         part(s, k);
     }
 
+    /// The factors from the points `q` (normal `n`) to cluster `s` (bounding
+    /// sphere `c`, `r`) taken whole by its facets ([`super::facets`]): `None`
+    /// without [`SolveOptions::cluster_facets`], in a scene with motion, for a cluster with no facets, where a point is nearer
+    /// than [`SolveOptions::cluster_open_ratio`] allows, or where a facet cannot
+    /// tell which side of its patches a point is on. Each facet in front of a
+    /// point gives `A_f (n_f · v) cos θ / (π d²)` from its centroid, the
+    /// receiver's cosine clipped to the cluster's sphere as the cone's estimate
+    /// clips it.
+    pub(super) fn facet_factors(
+        &self,
+        q: &oracle::Samples,
+        n: DVec3,
+        s: u32,
+        c: DVec3,
+        r: f64,
+    ) -> Option<[f64; 4]> {
+        if !self.opts.cluster_facets || self.has_motion() {
+            return None;
+        }
+        let facets = self.facets.of(s);
+        if facets.is_empty() {
+            return None;
+        }
+        let ratio = self.opts.cluster_open_ratio;
+        let mut k = [0.0; 4];
+        for (ki, &x) in k.iter_mut().zip(&q.points).take(q.count) {
+            let d = (x - c).length();
+            if d.is_nan() || r >= ratio * d {
+                return None;
+            }
+            // The offsets are kept in f32.
+            let tol = 1e-6 * (self.patches.diameter + x.abs().max_element());
+            for f in facets {
+                if !super::facets::side(f, x, tol)? {
+                    continue;
+                }
+                let w = x - DVec3::from_array(f.centroid.map(f64::from));
+                let d2 = w.length_squared();
+                let v = w / d2.sqrt();
+                let nf = DVec3::from_array(f.normal.map(f64::from));
+                let projected = f.area as f64 * nf.dot(v).max(0.0);
+                let cos = clipped_cosine(-n.dot(v), (r * r / d2).min(1.0));
+                *ki += projected * cos / (std::f64::consts::PI * d2);
+            }
+        }
+        Some(k)
+    }
+
     /// A leaf's row entries for the chain link `l` to cluster `s`: the parts of
     /// [`Solver::cluster_parts`], each a row entry of its own (a surface part
     /// opened further as [`Solver::push_opened`] opens surface sources), each with
@@ -254,7 +324,9 @@ impl Solver<'_> {
     /// whose estimate is zero is still opened when its receiver is a cluster: the
     /// average of a box's faces may see nothing of the floor beside the box while
     /// one face sees it at 0.4. A link too close for the cluster estimate
-    /// ([`oracle::close_cluster_factor`]) is opened the same way.
+    /// ([`oracle::close_cluster_factor`]) is opened the same way. With `kept` (a
+    /// static solve) the parts are recorded for the next round ([`ClusterPart`]).
+    #[allow(clippy::too_many_arguments)]
     fn push_cluster(
         &self,
         leaf: ElementId,
@@ -263,6 +335,7 @@ impl Solver<'_> {
         n: DVec3,
         s: u32,
         row: &mut Vec<(u32, f64)>,
+        mut kept: Option<&mut Vec<ClusterPart>>,
     ) {
         let t = &self.links.transports.as_slice()[l as usize];
         let mut vis = t.visibility as f64;
@@ -284,6 +357,20 @@ impl Solver<'_> {
             }
             if geoms[e as usize].patch != u32::MAX {
                 let (coef, v) = self.hidden_row_coef(leaf, l, e, q, n, RowMasks::None).0;
+                // Rounded once, so a reused part equals the first.
+                let (coef, v) = match kept.as_deref_mut() {
+                    Some(k) => {
+                        let (c, v) = (coef as f32, v.max(0.0) as f32);
+                        k.push(ClusterPart {
+                            link: l,
+                            elem: e,
+                            coef: c,
+                            vis: v,
+                        });
+                        (c as f64, v as f64)
+                    }
+                    None => (coef, v),
+                };
                 self.push_opened(q, n, e, coef, v, row, None);
                 return;
             }
@@ -311,9 +398,48 @@ impl Solver<'_> {
                     .sum()
             };
             if v > 0.0 {
-                row.push((e, coef * v));
+                let entry = match kept.as_deref_mut() {
+                    Some(k) => {
+                        let c = (coef * v) as f32;
+                        k.push(ClusterPart {
+                            link: l,
+                            elem: e,
+                            coef: c,
+                            vis: -1.0,
+                        });
+                        c as f64
+                    }
+                    None => coef * v,
+                };
+                row.push((e, entry));
             }
         });
+    }
+
+    /// The row entries of cluster link `l` from the parts an earlier round kept
+    /// (`parts`, sorted by link; [`ClusterPart`]); false if it kept none for `l`
+    /// (a link new since, or one whose parts all gave nothing: those are cast
+    /// again, which finds nothing again).
+    fn push_kept_cluster(
+        &self,
+        q: &oracle::Samples,
+        n: DVec3,
+        l: u32,
+        parts: &[ClusterPart],
+        row: &mut Vec<(u32, f64)>,
+        kept: &mut Vec<ClusterPart>,
+    ) -> bool {
+        let from = parts.partition_point(|p| p.link < l);
+        let to = from + parts[from..].partition_point(|p| p.link == l);
+        for p in &parts[from..to] {
+            if p.vis < 0.0 {
+                row.push((p.elem, p.coef as f64));
+            } else {
+                self.push_opened(q, n, p.elem, p.coef as f64, p.vis as f64, row, None);
+            }
+        }
+        kept.extend_from_slice(&parts[from..to]);
+        to > from
     }
 
     /// A leaf's row coefficient for the partly hidden chain link `l` to surface
@@ -575,12 +701,17 @@ impl Solver<'_> {
     }
 
     /// What the row rays of chain link `l` (source `s`) hash their jitter from:
-    /// the link's id for a link of the shared part, else its source's
-    /// [`Solver::ray_id`] (a leaf's chain links have distinct sources).
+    /// for a link of the shared part (every link of a static solve), its ends'
+    /// [`Solver::ray_id`]s, which do not change when a static solve drops its
+    /// passive links and renumbers the rest ([`crate::pools::LinkPool::drop_passive`]), so a
+    /// static solve casts the rays the space-time solve of the same scene casts;
+    /// for a link a frame made, its source's (a leaf's chain links have distinct
+    /// sources).
     fn row_link_id(&self, l: u32, s: u32) -> u64 {
         let shared = self.st.window.as_ref().map_or(0, |w| w.base.links_len);
         if shared == 0 || (l as usize) < shared {
-            u64::from(l)
+            let r = self.links.ends.as_slice()[l as usize].receiver;
+            oracle::hash3(self.ray_id(r), self.ray_id(s), 0x11e4)
         } else {
             self.ray_id(s) ^ 1 << 62
         }
@@ -708,6 +839,7 @@ impl Solver<'_> {
         let leaf_ray = self.ray_id(leaf.0);
         let rho_leaf = self.rho_of(leaf);
         let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
+        let clusters_before = self.sys.cluster_cache.get(&leaf.0).filter(|_| keep_rows);
         // A static leaf (of the window's base or made again by this
         // frame) reuses the factors to the static base elements its
         // sources open into.
@@ -722,7 +854,13 @@ impl Solver<'_> {
             let s = ends[l as usize].source;
             let gs = &geoms[s as usize];
             if gs.patch == u32::MAX {
-                self.push_cluster(leaf, l, &q, n, s, &mut out.row);
+                let reused = clusters_before.is_some_and(|parts| {
+                    self.push_kept_cluster(&q, n, l, parts, &mut out.row, &mut out.clusters)
+                });
+                if !reused {
+                    let kept = Some(&mut out.clusters).filter(|_| keep_rows);
+                    self.push_cluster(leaf, l, &q, n, s, &mut out.row, kept);
+                }
                 continue;
             }
             if let Some(k) =
@@ -799,6 +937,8 @@ impl Solver<'_> {
             self.push_opened(&q, n, s, coef, vis, &mut out.row, memo.as_mut());
         }
         out.kept.sort_unstable_by_key(|x| x.link);
+        // Stable: a link's parts stay in the order its row took them.
+        out.clusters.sort_by_key(|x| x.link);
         out.factors = memo.map(|m| m.fresh).unwrap_or_default();
         out
     }
@@ -906,6 +1046,7 @@ impl Solver<'_> {
     fn store_leaf_rows(&mut self, rows: Vec<LeafRow>, keep_rows: bool) {
         self.clear_rows();
         self.sys.row_cache.clear();
+        self.sys.cluster_cache.clear();
         self.st.frame_rows.0.clear();
         self.st.rows_between = 0;
         let leaves = std::mem::take(&mut self.sys.leaves);
@@ -914,6 +1055,7 @@ impl Solver<'_> {
                 row,
                 fresh,
                 kept,
+                clusters,
                 opened: fresh_opened,
                 hidden: fresh_hidden,
                 masks: fresh_masks,
@@ -953,6 +1095,9 @@ impl Solver<'_> {
             }
             if keep_rows {
                 self.sys.row_cache.insert(leaf.0, kept);
+                if !clusters.is_empty() {
+                    self.sys.cluster_cache.insert(leaf.0, clusters);
+                }
             }
             self.push_row(row);
         }

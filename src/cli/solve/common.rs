@@ -342,6 +342,18 @@ pub struct AccuracyArgs {
     /// `--leaf-shapes` on the leaves it shapes.
     #[arg(long)]
     pub source_field: bool,
+    /// Take a cluster whose patches face a few ways (a box, a group of boxes)
+    /// whole in the leaf rows and final gathers wherever each of its orientations
+    /// is wholly in front of or behind the point, instead of opening it down to
+    /// its faces.
+    ///
+    /// Faster and leaner in rooms cluttered with boxes (`gen_cubes 20`: half the
+    /// time and peak memory), less accurate: the cluster is gathered at its mean
+    /// radiosity, so a ceiling over boxes sees their sides as bright as their tops
+    /// (error off the emitters 2.9% → 3.7%; BENCHMARKS.md, "Scale"). Static scenes;
+    /// a scene with motion ignores it.
+    #[arg(long)]
+    pub cluster_facets: bool,
     /// Solve a reconstruction point that faces a surface across a gap narrower than
     /// this fraction of the square root of the surface's area together with its foot
     /// on that surface (0: never).
@@ -553,8 +565,12 @@ impl Args {
     /// The solver settings the arguments ask for (shared by every mode of `solve`),
     /// checked against their domains ([`SolveOptions::validate`]).
     pub fn solve_options(&self) -> anyhow::Result<SolveOptions> {
-        self.accuracy
-            .solve_options(self.resources.storage(false, None))
+        let mut opts = self
+            .accuracy
+            .solve_options(self.resources.storage(false, None))?;
+        // `--keep-links` writes every link, the passive ones too.
+        opts.keep_passive = self.output.keep_links;
+        Ok(opts)
     }
 
     /// The time settings the arguments ask for, checked
@@ -600,6 +616,7 @@ impl AccuracyArgs {
             split_spread: a.split_spread,
             leaf_shapes: a.leaf_shapes,
             source_field: a.source_field,
+            cluster_facets: a.cluster_facets,
             near_gap: a.near_gap,
             max_rounds: a.max_rounds,
             target_error: a.target_error,

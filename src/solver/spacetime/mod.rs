@@ -175,6 +175,9 @@ pub const SOLVE_OPTIONS_NOT_IN_KEY: &[&str] = &[
     // both; tests/it/cli/spacetime.rs compares the files), and a space-time solve's
     // default, files in the journal directory, names the output's directory.
     "storage",
+    // A space-time solve keeps its passive links whatever it says (only a static
+    // solve drops them, `Solver::drop_passive_links`).
+    "keep_passive",
 ];
 
 /// Fields of [`SpaceTimeOptions`] left out of [`result_settings`]: none.

@@ -57,6 +57,9 @@ fn in_key() -> Vec<(&'static str, Change)> {
         ("solve.source_field", |o, _| {
             o.source_field = !o.source_field
         }),
+        ("solve.cluster_facets", |o, _| {
+            o.cluster_facets = !o.cluster_facets
+        }),
         ("solve.near_gap", |o, _| o.near_gap += 0.1),
         ("space_time.fps", |_, s| s.fps *= 2.0),
         ("space_time.window", |_, s| s.window = Some(0.5)),
@@ -78,9 +81,14 @@ fn in_key() -> Vec<(&'static str, Change)> {
 /// The fields left out of the key, with a change of each: exactly those
 /// [`SOLVE_OPTIONS_NOT_IN_KEY`] and [`SPACE_TIME_OPTIONS_NOT_IN_KEY`] name.
 fn not_in_key() -> Vec<(&'static str, Change)> {
-    vec![("solve.storage", |o, _| {
-        o.storage = Storage::Mmap(std::env::temp_dir())
-    })]
+    vec![
+        ("solve.storage", |o, _| {
+            o.storage = Storage::Mmap(std::env::temp_dir())
+        }),
+        ("solve.keep_passive", |o, _| {
+            o.keep_passive = !o.keep_passive
+        }),
+    ]
 }
 
 /// The fields of both structs, as `solve.NAME` / `space_time.NAME`, with values.
