@@ -763,24 +763,6 @@ impl Solver<'_> {
     /// `spheres`, every element's bounding sphere (worth it where many points are
     /// gathered, see [`GatherLimits::spheres`]).
     pub(super) fn gather_limits(&self, b_ref: f64, spheres: bool) -> GatherLimits {
-        let nodes = self.elems.nodes.as_slice();
-        let b = self.elems.radiosities.as_slice();
-        let mut lo = b.to_vec();
-        let mut hi = b.to_vec();
-        for i in (0..nodes.len()).rev() {
-            let nd = nodes[i];
-            for c in nd.first_child..nd.first_child + nd.child_count {
-                for k in 0..3 {
-                    lo[i][k] = lo[i][k].min(lo[c as usize][k]);
-                    hi[i][k] = hi[i][k].max(hi[c as usize][k]);
-                }
-            }
-        }
-        let spread = lo
-            .iter()
-            .zip(&hi)
-            .map(|(l, h)| (0..3).map(|k| h[k] - l[k]).fold(0.0f32, f32::max))
-            .collect();
         GatherLimits {
             faint: self.opts.faint_source * b_ref,
             open_spread: if self.opts.open_spread > 0.0 {
@@ -788,7 +770,7 @@ impl Solver<'_> {
             } else {
                 f64::INFINITY
             },
-            spread,
+            spread: self.radiosity_spread(),
             near_gap: self.opts.near_gap,
             shapes: Default::default(),
             spheres: if spheres {
@@ -802,6 +784,28 @@ impl Solver<'_> {
                 Vec::new()
             },
         }
+    }
+
+    /// Per element: `ΔB_s`, the largest channel's spread (max − min) of the leaf
+    /// radiosities under it as the pool holds them now (0 for a leaf).
+    pub(super) fn radiosity_spread(&self) -> Vec<f32> {
+        let nodes = self.elems.nodes.as_slice();
+        let b = self.elems.radiosities.as_slice();
+        let mut lo = b.to_vec();
+        let mut hi = b.to_vec();
+        for i in (0..nodes.len()).rev() {
+            let nd = nodes[i];
+            for c in nd.first_child..nd.first_child + nd.child_count {
+                for k in 0..3 {
+                    lo[i][k] = lo[i][k].min(lo[c as usize][k]);
+                    hi[i][k] = hi[i][k].max(hi[c as usize][k]);
+                }
+            }
+        }
+        lo.iter()
+            .zip(&hi)
+            .map(|(l, h)| (0..3).map(|k| h[k] - l[k]).fold(0.0f32, f32::max))
+            .collect()
     }
 
     /// True if surface source `s` is no emitter and can hand the point `x` less

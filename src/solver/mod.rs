@@ -104,6 +104,17 @@ const FRAME_PASSES: usize = 3;
 /// lost.
 const ROW_OPEN_MIN_COEF: f64 = 1e-2;
 
+/// A static solve's leaf row also opens a surface source whose mean misses more
+/// than this fraction of the RMS reflected radiosity: `K · (r/d) · ΔB_s`, the
+/// entry's coefficient times the kernel's relative change across the source (its
+/// bounding radius `r` over its distance `d` from the leaf's nearest quadrature
+/// point) times the spread of the leaves' radiosities under it. A big floor lit
+/// from above is bright under the lamp: a leaf above it sees that bright middle
+/// most, and its mean hands every leaf of the ceiling too little (all surfaces
+/// of the empty Cornell box read 0.3–1.1% dark from it at every `eps`;
+/// BENCHMARKS.md, "Static solver: error against run time").
+const ROW_OPEN_SPREAD: f64 = 1e-4;
+
 /// A partly hidden leaf-row entry whose unoccluded coefficient is at most this is
 /// not checked at the leaf's corners (`Solver::hidden_row_coef`): it holds too
 /// little of the leaf's view for a missed shadow edge to matter, and in clutter
@@ -111,9 +122,10 @@ const ROW_OPEN_MIN_COEF: f64 = 1e-2;
 /// generated clutter scenes markedly (BENCHMARKS.md, "Scale (generated scenes)").
 const ROW_CORNER_MIN_COEF: f64 = 1e-2;
 
-/// Default of [`SolveOptions::open_spread`] (tuned in BENCHMARKS.md, "Sources whose
-/// radiosity varies").
-pub const OPEN_SPREAD: f64 = 0.05;
+/// Default of [`SolveOptions::open_spread`]: 0.05 left the empty Cornell box's
+/// ceiling 0.1–0.2% darker than 0.02 does, for no time the whole run shows
+/// (BENCHMARKS.md, "Static solver: error against run time (Cornell box)").
+pub const OPEN_SPREAD: f64 = 0.02;
 
 /// A point the per-round error estimate gathers at ([`Solver::run`]). 48 bytes.
 #[derive(Clone, Copy, Debug)]
@@ -524,6 +536,11 @@ struct LeafSystem {
     /// them each round was a sixth of `gen_cubes 65`'s refinement rounds
     /// (`cluster_parts`) and more in their rays (BENCHMARKS.md, "Scale").
     cluster_cache: FastMap<u32, Vec<ClusterPart>>,
+    /// Static solve: each element's radiosity spread `ΔB_s` as the last solve left
+    /// it ([`Solver::radiosity_spread`]) and the limit a leaf row opens a source by
+    /// it ([`ROW_OPEN_SPREAD`]); empty and infinite elsewhere. 4 bytes per element.
+    row_spread: Vec<f32>,
+    row_spread_limit: f64,
 }
 
 /// What moves in the scene and where it stands now: per patch and per cluster

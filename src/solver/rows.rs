@@ -592,7 +592,9 @@ impl Solver<'_> {
 
     /// Pushes a leaf's row entry for source `s` (coefficient `coef`, visible
     /// fraction `vis`), opening a surface source into its children while it looks
-    /// large from the leaf ([`SolveOptions::row_open_ratio`]).
+    /// large from the leaf ([`SolveOptions::row_open_ratio`]) or, in a static solve,
+    /// while its mean misses more than [`ROW_OPEN_SPREAD`] of the light the entry
+    /// carries (`coef · (r/d) · ΔB_s`, the spread as the last solve left it).
     ///
     /// Why: the leaf system gathers a source's *average* radiosity. Where a big
     /// source is linked whole to some receivers and in pieces to others (a floor
@@ -629,14 +631,16 @@ impl Solver<'_> {
         let gs = &self.elems.geoms.as_slice()[s as usize];
         let node = self.elems.nodes.as_slice()[s as usize];
         let ratio = self.opts.row_open_ratio;
-        let open = node.child_count > 0
-            && gs.patch != u32::MAX
-            && ratio > 0.0
-            && coef > ROW_OPEN_MIN_COEF
-            && {
-                let (c, rad) = oracle::sphere(gs);
-                (0..q.count).any(|i| rad > ratio * q.points[i].distance(c))
-            };
+        let open = node.child_count > 0 && gs.patch != u32::MAX && {
+            let (c, rad) = oracle::sphere(gs);
+            let near = (0..q.count)
+                .map(|i| q.points[i].distance(c))
+                .fold(f64::INFINITY, f64::min);
+            let large = ratio > 0.0 && coef > ROW_OPEN_MIN_COEF && rad > ratio * near;
+            // What the source's mean misses ([`ROW_OPEN_SPREAD`]).
+            let spread = self.sys.row_spread.get(s as usize).copied().unwrap_or(0.0) as f64;
+            large || coef * (rad / near.max(rad)) * spread > self.sys.row_spread_limit
+        };
         if !open {
             row.push((s, coef));
             return;
@@ -770,6 +774,15 @@ impl Solver<'_> {
     /// solve from the radiosity it depends on (`Solver::refresh_cluster_rows`).
     pub(super) fn compute_leaf_rows(&mut self) {
         self.intern_frame_elements();
+        // A static solve opens sources by their spread too ([`ROW_OPEN_SPREAD`]),
+        // as the last solve left them.
+        if self.has_motion() || self.st.window.is_some() {
+            self.sys.row_spread = Vec::new();
+            self.sys.row_spread_limit = f64::INFINITY;
+        } else {
+            self.sys.row_spread = self.radiosity_spread();
+            self.sys.row_spread_limit = ROW_OPEN_SPREAD * self.rms_radiosity();
+        }
         let elems = &self.elems;
         let geoms = elems.geoms.as_slice();
         let ends = self.links.ends.as_slice();

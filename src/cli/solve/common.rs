@@ -287,8 +287,13 @@ pub struct AccuracyArgs {
     /// point-to-polygon form factors. A cell splits while the gather at its centre
     /// differs from its corners' interpolant by more than this, so the mesh follows
     /// room edges, contact lines and shadows. Smaller: finer cells, more gathers.
-    #[arg(long, default_value_t = SolveOptions::default().recon_tol)]
-    pub recon_tol: f64,
+    ///
+    /// Default: `--eps` / 10, between 0.002 and 0.02 (0.02 at the default `--eps`),
+    /// so that the stored answer's error keeps falling with `--eps`: a cell's
+    /// bilinear interpolant reads low where the radiosity is concave, by about
+    /// this tolerance (BENCHMARKS.md, "Static solver: error against run time").
+    #[arg(long)]
+    pub recon_tol: Option<f64>,
     /// Reconstruction tolerance on the surfaces of moving objects (default:
     /// `--recon-tol`).
     ///
@@ -602,6 +607,13 @@ impl AnimationArgs {
     }
 }
 
+/// The reconstruction tolerance when `--recon-tol` is not given: `eps / 10`,
+/// between 0.002 and [`SolveOptions::default`]'s (0.02).
+pub fn default_recon_tol(eps: f64) -> f64 {
+    let coarsest = SolveOptions::default().recon_tol;
+    (eps / 10.0).clamp(0.002, coarsest)
+}
+
 impl AccuracyArgs {
     /// The solve's settings these flags give, with the pools in `storage`; checked.
     pub fn solve_options(&self, storage: Storage) -> anyhow::Result<SolveOptions> {
@@ -610,7 +622,7 @@ impl AccuracyArgs {
             storage,
             eps: a.eps,
             min_size: a.min_size,
-            recon_tol: a.recon_tol,
+            recon_tol: a.recon_tol.unwrap_or_else(|| default_recon_tol(a.eps)),
             recon_tol_moving: a.recon_tol_moving,
             power_size: a.power_size,
             split_spread: a.split_spread,
