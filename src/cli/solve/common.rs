@@ -342,7 +342,8 @@ pub struct AccuracyArgs {
     /// part of it nearest, whose radiosity the leaf's mean misses. The second gather
     /// takes each leaf source cell by cell from the first reconstruction where it
     /// looks large from the point, by quadrants elsewhere: on the empty Cornell box
-    /// 1.26% → 0.97% off the lamp at eps 0.5, for about twice the time
+    /// about a fifth less error off the lamp at eps 0.5 (1.26% → 0.97% when it was
+    /// measured, build 1114711), for about twice the time
     /// (BENCHMARKS.md, "Static solver: error against run time"). It replaces
     /// `--leaf-shapes` on the leaves it shapes.
     #[arg(long)]
