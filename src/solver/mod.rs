@@ -500,6 +500,10 @@ struct LeafSystem {
     /// Static solve: each leaf's row coefficients by chain link (`(link, coef)`,
     /// sorted by link), reused by the next round for links that did not change.
     row_cache: FastMap<u32, Vec<KeptCoef>>,
+    /// Interactive moves: each leaf's cluster-source entries by chain link
+    /// (sorted by link), reused by the next move for links it did not touch
+    /// ([`Solver::settle_local`]).
+    cluster_cache: FastMap<u32, Vec<(u32, RowEntries)>>,
 }
 
 /// What moves in the scene and where it stands now: per patch and per cluster

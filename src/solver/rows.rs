@@ -47,13 +47,16 @@ pub(super) enum RowMasks {
 /// What one leaf's row computation hands back ([`Solver::compute_leaf_rows`]): the
 /// row, and what the caches are to keep of it.
 #[derive(Default)]
-struct LeafRow {
+pub(super) struct LeafRow {
     /// The row's entries `(source, coefficient)`.
-    row: Vec<(u32, f64)>,
+    pub(super) row: Vec<(u32, f64)>,
+    /// With `keep_clusters`: each cluster source's entries by chain link, sorted
+    /// by link, for the next move (`super::moves`).
+    pub(super) clusters: Vec<(u32, RowEntries)>,
     /// New constant-link coefficients for [`Window::rows`].
     fresh: Vec<((u32, u32), (f32, f32))>,
     /// A static solve's coefficients by link, for the next round.
-    kept: Vec<KeptCoef>,
+    pub(super) kept: Vec<KeptCoef>,
     /// New opened entries for [`Window::opened`].
     opened: Vec<((u32, u32), RowEntries)>,
     /// New hidden coefficients for [`Window::hidden`].
@@ -90,6 +93,8 @@ struct RowInputs<'r> {
     rays_per_point: u32,
     factors: Option<(&'r KeyMap<f64>, usize)>,
     keep_rows: bool,
+    /// Keep each cluster source's entries by chain link too (`Solver::rows_of`).
+    keep_clusters: bool,
     timed: bool,
     passed: Option<&'r KeyedCoefs>,
     radiosities: &'r [[f32; 3]],
@@ -672,6 +677,7 @@ impl Solver<'_> {
             rays_per_point,
             factors,
             keep_rows,
+            keep_clusters: false,
             timed,
             passed,
             radiosities,
@@ -685,6 +691,35 @@ impl Solver<'_> {
         self.store_leaf_rows(rows, keep_rows);
     }
 
+    /// The rows of `leaves` alone, computed as [`Solver::compute_leaf_rows`]
+    /// computes them outside a space-time window, reusing the surface entries
+    /// kept in the row cache as a static solve does: an interactive move
+    /// recomputes only the rows whose chain links it changed, and in them only the
+    /// entries of those links (`super::moves`). Each row comes with the entries
+    /// to keep for it.
+    pub(super) fn rows_of(&self, leaves: &[ElementId]) -> Vec<LeafRow> {
+        let inputs = RowInputs {
+            geoms: self.elems.geoms.as_slice(),
+            ends: self.links.ends.as_slice(),
+            tr: self.links.transports.as_slice(),
+            cache: None,
+            opened: None,
+            hidden: None,
+            masks: None,
+            rays_per_point: self.opts.rays_per_point,
+            factors: None,
+            keep_rows: true,
+            keep_clusters: true,
+            timed: false,
+            passed: None,
+            radiosities: self.elems.radiosities.as_slice(),
+        };
+        leaves
+            .par_iter()
+            .map(|&leaf| self.leaf_row(&inputs, leaf))
+            .collect()
+    }
+
     /// One leaf's row ([`Solver::compute_leaf_rows`]): each chain link's source
     /// opened at its coefficient over the leaf, from the caches where they hold.
     fn leaf_row(&self, inputs: &RowInputs, leaf: ElementId) -> LeafRow {
@@ -696,6 +731,7 @@ impl Solver<'_> {
             opened,
             factors,
             keep_rows,
+            keep_clusters,
             timed,
             ..
         } = *inputs;
@@ -708,6 +744,11 @@ impl Solver<'_> {
         let leaf_ray = self.ray_id(leaf.0);
         let rho_leaf = self.rho_of(leaf);
         let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
+        let clusters_before = self
+            .sys
+            .cluster_cache
+            .get(&leaf.0)
+            .filter(|_| keep_clusters);
         // A static leaf (of the window's base or made again by this
         // frame) reuses the factors to the static base elements its
         // sources open into.
@@ -722,7 +763,18 @@ impl Solver<'_> {
             let s = ends[l as usize].source;
             let gs = &geoms[s as usize];
             if gs.patch == u32::MAX {
+                let kept = clusters_before
+                    .and_then(|c| c.binary_search_by_key(&l, |x| x.0).ok().map(|i| &c[i].1));
+                if let Some(entries) = kept {
+                    out.row.extend_from_slice(entries);
+                    out.clusters.push((l, entries.clone()));
+                    continue;
+                }
+                let at = out.row.len();
                 self.push_cluster(leaf, l, &q, n, s, &mut out.row);
+                if keep_clusters {
+                    out.clusters.push((l, out.row[at..].into()));
+                }
                 continue;
             }
             if let Some(k) =
@@ -799,6 +851,7 @@ impl Solver<'_> {
             self.push_opened(&q, n, s, coef, vis, &mut out.row, memo.as_mut());
         }
         out.kept.sort_unstable_by_key(|x| x.link);
+        out.clusters.sort_unstable_by_key(|x| x.0);
         out.factors = memo.map(|m| m.fresh).unwrap_or_default();
         out
     }
@@ -921,6 +974,7 @@ impl Solver<'_> {
                 timed,
                 between,
                 passed,
+                ..
             } = out;
             self.st.frame_rows.0.extend(timed);
             self.st.rows_between += between;
@@ -1301,7 +1355,7 @@ impl Solver<'_> {
 
     /// Solves the leaf system with GMRES from the current radiosities; writes the
     /// result into the pool (leaves and pulled inner elements). Returns the residual.
-    fn solve_leaves(&mut self) -> Result<f64> {
+    pub(super) fn solve_leaves(&mut self) -> Result<f64> {
         let nl = self.sys.leaves.len();
         let n = self.elems.len();
         let mut rhs = vec![0.0; nl * 3];
