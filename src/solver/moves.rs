@@ -263,6 +263,9 @@ impl<'a> Solver<'a> {
         let (mut rows_s, mut solve_s) = (0.0, 0.0);
         let thr0 = self.opts.eps * self.b_ref();
         let mut dirty = vec![Dirty::Clean; self.elems.len()];
+        // The links whose kept row entries are stale: everywhere (`All`), or in
+        // the rows of the leaves near the moved objects (`Near`).
+        let mut stale: FastMap<u32, Dirty> = FastMap::default();
         {
             let ends = self.links.ends.as_slice();
             let geoms = self.elems.geoms.as_slice();
@@ -277,10 +280,10 @@ impl<'a> Solver<'a> {
                     Dirty::Near
                 };
                 dirty[r] = dirty[r].max(level);
+                stale.insert(l.0, level);
             }
         }
         let mut wave = changed;
-        let mut stale: ahash::AHashSet<u32> = dirty_links.iter().map(|x| x.0.0).collect();
         for pass in 0..MOVE_PASSES {
             let thr = self.opts.eps * self.b_ref();
             let links0 = self.links.len();
@@ -368,7 +371,7 @@ impl<'a> Solver<'a> {
         &mut self,
         dirty: &[Dirty],
         near: &[(glam::DVec3, glam::DVec3)],
-        stale: &ahash::AHashSet<u32>,
+        stale: &FastMap<u32, Dirty>,
     ) -> u64 {
         let old_leaves = std::mem::take(&mut self.sys.leaves);
         let old_index = std::mem::take(&mut self.sys.leaf_index);
@@ -418,11 +421,18 @@ impl<'a> Solver<'a> {
         let redo: Vec<ElementId> = leaves.iter().copied().filter(|&l| is_dirty(l)).collect();
         // The kept entries of the links evaluated again are stale.
         for l in &redo {
+            let (lo, hi) = super::geom_box(&geoms[l.ix()]);
+            let near = crate::shafts::meets_any(lo, hi, near);
+            let keep = |link: u32| match stale.get(&link) {
+                Some(Dirty::All) => false,
+                Some(Dirty::Near) => !near,
+                _ => true,
+            };
             if let Some(kept) = self.sys.row_cache.get_mut(&l.0) {
-                kept.retain(|k| !stale.contains(&k.link));
+                kept.retain(|k| keep(k.link));
             }
             if let Some(kept) = self.sys.cluster_cache.get_mut(&l.0) {
-                kept.retain(|k| !stale.contains(&k.0));
+                kept.retain(|k| keep(k.0));
             }
         }
         let fresh = self.rows_of(&redo);
