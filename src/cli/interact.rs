@@ -11,7 +11,7 @@ use anyhow::Context;
 use rhier::interactive::predict::Method;
 use rhier::interactive::record::Recorder;
 use rhier::interactive::store::{Keep, Policy};
-use rhier::interactive::{MoveStats, Session, Settings, Stage, Traversal, parse_move};
+use rhier::interactive::{MoveStats, Session, Settings, Stage, Traversal, Update, parse_move};
 use rhier::playback::probe::{ProbePoint, probe, read_probe_points};
 use rhier::pools::Storage;
 use rhier::store::Reader;
@@ -28,6 +28,12 @@ pub enum ShaftStoreKind {
 }
 
 /// How a move finds the links it affects.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum UpdateKind {
+    Local,
+    Full,
+}
+
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum TraversalKind {
     /// Shafts and boxes: only the links the move can affect.
@@ -101,6 +107,17 @@ pub struct Args {
     /// How a move finds the links it affects.
     #[arg(long, value_enum, default_value = "shafts")]
     pub traversal: TraversalKind,
+    /// How a move brings the leaf system up to date: local or full.
+    ///
+    /// local: only the rows of the leaves under the links the move evaluated
+    /// again, added or split are computed again; every other row is kept from the
+    /// move before, and the leaf system is solved warm-started from the last
+    /// radiosity.
+    ///
+    /// full: every leaf row is computed again at every refine-and-solve pass (as
+    /// slow as solving again; kept to measure the local update against).
+    #[arg(long, value_enum, default_value = "local")]
+    pub update: UpdateKind,
     /// No progress lines on stderr.
     #[arg(short, long)]
     pub quiet: bool,
@@ -294,5 +311,9 @@ fn settings(args: &Args) -> anyhow::Result<Settings> {
         predict,
         ahead: args.predict_ahead,
         scale: args.predict_scale,
+        update: match args.update {
+            UpdateKind::Local => Update::Local,
+            UpdateKind::Full => Update::Full,
+        },
     })
 }

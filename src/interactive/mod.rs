@@ -27,6 +27,6 @@ pub mod stats;
 pub mod store;
 
 pub use moves::{ObjectMove, Pose, parse_move};
-pub use session::{Session, Settings, Traversal};
+pub use session::{Session, Settings, Traversal, Update};
 pub use stage::Stage;
 pub use stats::MoveStats;

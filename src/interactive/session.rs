@@ -12,8 +12,11 @@
 //!    affected if the box of its ends meets one;
 //! 3. evaluates the affected active links again (visibility and form factor),
 //!    adds the children a refined link whose end moved had dropped as empty and
-//!    that exchange light now, then refines and solves the leaf system again,
-//!    warm-started ([`crate::solver::Solver`]'s `settle`);
+//!    that exchange light now, then refines the links whose transport changed and
+//!    brings the leaf system up to date ([`Update::Local`]: only the rows under
+//!    the links it touched are computed again, and in them only those links'
+//!    entries; the solve is warm-started from the last radiosity —
+//!    [`crate::solver::Solver`]'s `settle_local`);
 //! 4. makes ready, in one more pass over the links as the refinement left them,
 //!    the shafts of the links whose ends' box meets a predicted box of the next
 //!    moves or a moved object's box now (the next move's old box): the manager's
@@ -51,6 +54,17 @@ pub enum Traversal {
     Every,
 }
 
+/// How a move brings the leaf system up to date.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Update {
+    /// Only the rows of the leaves under the links the move changed are computed
+    /// again, the others kept ([`crate::solver::Solver`]'s `settle_local`).
+    Local,
+    /// Every leaf row is computed again at every pass (the first version's way,
+    /// kept to measure against).
+    Full,
+}
+
 /// The settings of a session beyond the solve's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
@@ -64,6 +78,8 @@ pub struct Settings {
     pub ahead: u32,
     /// Scale of the predicted boxes.
     pub scale: f64,
+    /// How the leaf system is brought up to date.
+    pub update: Update,
 }
 
 impl Default for Settings {
@@ -74,6 +90,7 @@ impl Default for Settings {
             predict: Method::Linear,
             ahead: 1,
             scale: 1.1,
+            update: Update::Local,
         }
     }
 }
@@ -200,6 +217,7 @@ impl<'a> Session<'a> {
             }
         }
         let before: Vec<[u32; 4]> = active.iter().map(|&l| self.transport_bits(l)).collect();
+        let f_old: Vec<f32> = before.iter().map(|b| f32::from_bits(b[0])).collect();
         self.solver.reevaluate_links(&active);
         self.changed = active
             .iter()
@@ -210,9 +228,22 @@ impl<'a> Session<'a> {
         self.affected = found.affected.iter().map(|l| l.0).collect();
         let added = self.solver.complete_children(&passive, &mut self.pairs)?;
         let links_before = self.solver.links.len();
-        let mut wave = active.clone();
-        wave.extend(&added);
-        let settled = self.solver.settle(wave)?;
+        let settled = match self.settings.update {
+            Update::Local => {
+                let mut wave: Vec<(LinkId, f32)> =
+                    active.iter().copied().zip(f_old.iter().copied()).collect();
+                wave.extend(added.iter().map(|&l| (l, 0.0)));
+                let near: Vec<Aabb> = old.iter().chain(&new).map(|&b| grown(b)).collect();
+                let mut changed: Vec<LinkId> = self.changed.iter().map(|&l| LinkId(l)).collect();
+                changed.extend(&added);
+                self.solver.settle_local(changed, wave, &near)?
+            }
+            Update::Full => {
+                let mut wave = active.clone();
+                wave.extend(&added);
+                self.solver.settle(wave)?
+            }
+        };
         let ends = self.solver.links.ends.as_slice();
         for (i, e) in ends.iter().enumerate().skip(links_before) {
             self.pairs.insert((e.receiver, e.source), i as u32);
@@ -255,6 +286,10 @@ impl<'a> Session<'a> {
             links_refined: settled.refined,
             links_reactivated: 0,
             links_total: links as u64,
+            rows_recomputed: settled.rows,
+            rows_s: settled.rows_s,
+            gmres_s: settled.solve_s,
+            leaves_total: self.solver.leaf_count() as u64,
             evicted_during_move: c0.collected,
             traversal_s,
             shaft_s: self.shafts.seconds,
@@ -406,6 +441,14 @@ fn geom_box(g: &Geom) -> Aabb {
             let c = DVec3::from_array(*c);
             (lo.min(c), hi.max(c))
         })
+}
+
+/// Box `b` grown on every side by its largest extent: the neighbourhood where a
+/// moved object's own light and shadow change rows that a cluster link carries
+/// ([`crate::solver::Solver`]'s `settle_local`).
+fn grown(b: Aabb) -> Aabb {
+    let pad = DVec3::splat((b.1 - b.0).max_element());
+    (b.0 - pad, b.1 + pad)
 }
 
 fn union(a: Aabb, b: Aabb) -> Aabb {

@@ -45,6 +45,14 @@ pub struct MoveStats {
     pub links_reactivated: u64,
     /// Links in the pool after the move.
     pub links_total: u64,
+    /// Leaf rows computed by the move (the others kept from the move before).
+    pub rows_recomputed: u64,
+    /// Leaves in the leaf system after the move.
+    pub leaves_total: u64,
+    /// Of `solve_s`, seconds computing and copying leaf rows (`--update local`).
+    pub rows_s: f64,
+    /// Of `solve_s`, seconds in the linear solves (`--update local`).
+    pub gmres_s: f64,
     /// Shafts the budget evicted during the traversal (before the collector).
     pub evicted_during_move: u64,
     /// Seconds of the traversal, shaft building and restoring left out.
@@ -68,14 +76,18 @@ impl MoveStats {
     /// The short line printed on stderr.
     pub fn summary(&self) -> String {
         format!(
-            "move {:4}  {:8.4} s (traverse {:.4}, shafts {:.4}, solve {:.4})  {} links affected, {} refined  shafts: {} built, {} existing, {} restored, {} resident ({} KiB of {} KiB for all)",
+            "move {:4}  {:8.4} s (traverse {:.4}, shafts {:.4}, solve {:.4}: rows {:.4}, gmres {:.4})  {} links affected, {} refined, {} of {} rows  shafts: {} built, {} existing, {} restored, {} resident ({} KiB of {} KiB for all)",
             self.r#move,
             self.total_s,
             self.traversal_s,
             self.shaft_s,
             self.solve_s,
+            self.rows_s,
+            self.gmres_s,
             self.links_affected,
             self.links_refined,
+            self.rows_recomputed,
+            self.leaves_total,
             self.shafts_built,
             self.shafts_existing,
             self.shafts_restored,

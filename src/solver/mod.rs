@@ -541,6 +541,10 @@ struct LeafSystem {
     /// it ([`ROW_OPEN_SPREAD`]); empty and infinite elsewhere. 4 bytes per element.
     row_spread: Vec<f32>,
     row_spread_limit: f64,
+    /// Interactive moves: each leaf's cluster-source entries by chain link
+    /// (sorted by link), reused by the next move for links it did not touch
+    /// ([`Solver::settle_local`]).
+    move_cluster_cache: FastMap<u32, Vec<(u32, RowEntries)>>,
 }
 
 /// What moves in the scene and where it stands now: per patch and per cluster
@@ -1283,6 +1287,7 @@ impl<'a> Solver<'a> {
         }
         follow(&mut self.sys.row_cache, |k| &mut k.link, &retained);
         follow(&mut self.sys.cluster_cache, |k| &mut k.link, &retained);
+        follow(&mut self.sys.move_cluster_cache, |k| &mut k.0, &retained);
     }
 
     /// The active links, or only the active varying ones.

@@ -30,6 +30,20 @@ use crate::pools::{ElementId, LinkId, LinkState};
 /// Most refine-and-solve passes one move runs ([`Solver::settle`]).
 pub const MOVE_PASSES: usize = 3;
 
+/// A later pass of [`Solver::settle_local`] refines the links of the sources whose
+/// radiosity the solve raised by more than this fraction: a link's error bound
+/// grows with its source's radiosity, and one that rose less stays within a
+/// hair of the threshold it met before.
+pub const SOURCE_RISE: f32 = 0.01;
+
+/// A link with a cluster end that a move evaluated again dirties every row under
+/// its receiver only when the light it hands on changed by more than this
+/// fraction of the refinement threshold `eps · B_ref` (a change below is within
+/// the error the hierarchy allows the link); otherwise only the rows of the
+/// leaves near the moved objects ([`Solver::settle_local`]). Links between two
+/// surfaces always dirty their receiver's rows.
+pub const MOVE_CHANGE: f64 = 0.1;
+
 /// What [`Solver::settle`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Settled {
@@ -37,6 +51,24 @@ pub struct Settled {
     pub refined: u64,
     /// Relative residual of the last linear solve.
     pub residual: f64,
+    /// Leaf rows computed (every row of every pass for [`Solver::settle`]).
+    pub rows: u64,
+    /// Seconds computing and copying leaf rows ([`Solver::settle_local`] only).
+    pub rows_s: f64,
+    /// Seconds in the linear solves ([`Solver::settle_local`] only).
+    pub solve_s: f64,
+}
+
+/// How far a move dirtied the rows of the leaves under an element
+/// ([`Solver::settle_local`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Dirty {
+    /// Rows kept.
+    Clean,
+    /// Rows of the leaves that meet a box near the moved objects computed again.
+    Near,
+    /// Every row under it computed again.
+    All,
 }
 
 impl<'a> Solver<'a> {
@@ -167,6 +199,7 @@ impl<'a> Solver<'a> {
         let passive0 = self.links.counts().1;
         let mut residual = f64::NAN;
         let mut wave = wave;
+        let mut rows = 0;
         for pass in 0..MOVE_PASSES {
             let thr = self.opts.eps * self.b_ref();
             let changed = self.refine(wave, thr)?;
@@ -175,6 +208,7 @@ impl<'a> Solver<'a> {
             }
             self.index_links();
             residual = self.solve_rows()?;
+            rows += self.sys.leaves.len() as u64;
             wave = self.active_links(false);
             if pass == 0 {
                 // A cluster source's coefficient depends on its radiosity (its
@@ -185,7 +219,276 @@ impl<'a> Solver<'a> {
         Ok(Settled {
             refined: self.links.counts().1 - passive0,
             residual,
+            rows,
+            rows_s: 0.0,
+            solve_s: 0.0,
         })
+    }
+
+    /// [`Solver::settle`] for a move whose links the session found: the leaf
+    /// system of the last move is kept, and only what the move changed is done
+    /// again (paper 000 section 2: the update touches the links the move affects).
+    ///
+    /// `dirty_links`: the links the move evaluated again or added, each with its factor
+    /// before (0 for an added link); `changed`: those whose transport changed, and
+    /// the added ones. Each pass refines the links of `changed` (later
+    /// passes: the active links whose source's radiosity the last solve raised by
+    /// more than [`SOURCE_RISE`], the only ones the new radiosity can push over the
+    /// threshold), then recomputes the rows of the *dirty* leaves only
+    /// ([`Solver::rows_of`]): new leaves; leaves under the receiver of a link that
+    /// was split or added, or of a wave link between two surfaces, or of a wave
+    /// link with a cluster end whose light changed by more than [`MOVE_CHANGE`] of
+    /// the threshold; and, under the other wave links with a cluster end, the
+    /// leaves that meet a box of `near` (the moved objects' boxes before and after,
+    /// grown: where a cluster source is opened down to the moved surfaces, or their
+    /// shadow falls close). Every other row is copied from the last move: its chain
+    /// links and their shafts are untouched, so are its coefficients. The leaf
+    /// system is then solved by GMRES warm-started from the radiosity the last move
+    /// left. A balanced system keeps its row scales and gains; a recomputed row
+    /// takes the scale that makes it sum to 1 where balancing scaled it before.
+    ///
+    /// What is not done again: cluster-source links the move did not affect keep
+    /// the estimate of the radiosity they were evaluated with (a fresh solve
+    /// evaluates them once more after its first solve), and a row whose source was
+    /// split keeps the source whole instead of opening it into the new children.
+    pub(crate) fn settle_local(
+        &mut self,
+        changed: Vec<LinkId>,
+        dirty_links: Vec<(LinkId, f32)>,
+        near: &[(glam::DVec3, glam::DVec3)],
+    ) -> Result<Settled> {
+        let passive0 = self.links.counts().1;
+        let mut residual = f64::NAN;
+        let mut rows_done = 0u64;
+        let (mut rows_s, mut solve_s) = (0.0, 0.0);
+        let thr0 = self.opts.eps * self.b_ref();
+        let mut dirty = vec![Dirty::Clean; self.elems.len()];
+        // The links whose kept row entries are stale: everywhere (`All`), or in
+        // the rows of the leaves near the moved objects (`Near`).
+        let mut stale: FastMap<u32, Dirty> = FastMap::default();
+        {
+            let ends = self.links.ends.as_slice();
+            let geoms = self.elems.geoms.as_slice();
+            for &(l, f_old) in &dirty_links {
+                let e = ends[l.ix()];
+                let r = e.receiver as usize;
+                let surfaces =
+                    geoms[r].patch != u32::MAX && geoms[e.source as usize].patch != u32::MAX;
+                let level = if surfaces || self.light_change(l, f_old) > MOVE_CHANGE * thr0 {
+                    Dirty::All
+                } else {
+                    Dirty::Near
+                };
+                dirty[r] = dirty[r].max(level);
+                stale.insert(l.0, level);
+            }
+        }
+        let mut wave = changed;
+        for pass in 0..MOVE_PASSES {
+            let thr = self.opts.eps * self.b_ref();
+            let links0 = self.links.len();
+            if pass > 0 {
+                dirty = vec![Dirty::Clean; self.elems.len()];
+            }
+            let active_before: Vec<bool> = {
+                let tr = self.links.transports.as_slice();
+                wave.iter()
+                    .map(|l| tr[l.ix()].state() == LinkState::Active)
+                    .collect()
+            };
+            let changed = self.refine(wave.clone(), thr)?;
+            if pass > 0 && !changed {
+                break;
+            }
+            dirty.resize(self.elems.len(), Dirty::Clean);
+            {
+                let ends = self.links.ends.as_slice();
+                let tr = self.links.transports.as_slice();
+                for (l, was) in wave.iter().zip(active_before) {
+                    if was && tr[l.ix()].state() != LinkState::Active {
+                        dirty[ends[l.ix()].receiver as usize] = Dirty::All;
+                    }
+                }
+                for e in &ends[links0..] {
+                    dirty[e.receiver as usize] = Dirty::All;
+                }
+            }
+            let before: Vec<[f32; 3]> = self.elems.radiosities.as_slice().to_vec();
+            let t = std::time::Instant::now();
+            rows_done += self.update_rows(&dirty, near, &stale);
+            stale.clear();
+            rows_s += t.elapsed().as_secs_f64();
+            let t = std::time::Instant::now();
+            residual = self.solve_leaves()?;
+            solve_s += t.elapsed().as_secs_f64();
+            wave = self.risen_sources(&before);
+        }
+        Ok(Settled {
+            refined: self.links.counts().1 - passive0,
+            residual,
+            rows: rows_done,
+            rows_s,
+            solve_s,
+        })
+    }
+
+    /// How much the light link `l` hands its receiver changed when its factor
+    /// went from `f_old` to what it is now: `ρ_r B_s |Δf|` (largest channel).
+    fn light_change(&self, l: LinkId, f_old: f32) -> f64 {
+        let e = self.links.ends.as_slice()[l.ix()];
+        let f = self.links.transports.as_slice()[l.ix()].f;
+        let b = self.elems.radiosities.as_slice()[e.source as usize];
+        let bmax = b.iter().copied().fold(0.0f32, f32::max) as f64;
+        self.rho_of(ElementId(e.receiver)) * bmax * f64::from((f - f_old).abs())
+    }
+
+    /// The active links whose source's radiosity (largest channel) rose by more
+    /// than [`SOURCE_RISE`] of itself over `before` (elements past `before`: new,
+    /// never).
+    fn risen_sources(&self, before: &[[f32; 3]]) -> Vec<LinkId> {
+        let b = self.elems.radiosities.as_slice();
+        let max = |v: &[f32; 3]| v.iter().copied().fold(0.0f32, f32::max);
+        let risen: Vec<bool> = before
+            .iter()
+            .zip(b)
+            .map(|(o, n)| max(n) > max(o) * (1.0 + SOURCE_RISE) + f32::MIN_POSITIVE)
+            .collect();
+        let ends = self.links.ends.as_slice();
+        let tr = self.links.transports.as_slice();
+        (0..tr.len() as u32)
+            .map(LinkId)
+            .filter(|l| {
+                tr[l.ix()].state() == LinkState::Active
+                    && risen.get(ends[l.ix()].source as usize) == Some(&true)
+            })
+            .collect()
+    }
+
+    /// Re-indexes the active links and rebuilds the leaf system's rows, keeping
+    /// the rows of the leaves that are neither new nor under an element flagged in
+    /// `dirty` (module docs, [`Solver::settle_local`]). Returns the rows computed.
+    fn update_rows(
+        &mut self,
+        dirty: &[Dirty],
+        near: &[(glam::DVec3, glam::DVec3)],
+        stale: &FastMap<u32, Dirty>,
+    ) -> u64 {
+        let old_leaves = std::mem::take(&mut self.sys.leaves);
+        let old_index = std::mem::take(&mut self.sys.leaf_index);
+        let old_start = std::mem::take(&mut self.sys.row_start);
+        let old_sources = std::mem::take(&mut self.sys.row_sources);
+        let old_coefs = std::mem::take(&mut self.sys.row_coefs);
+        let old_scale = std::mem::take(&mut self.sys.row_scale);
+        let old_gain = std::mem::take(&mut self.sys.leaf_gain);
+        let had_rows = old_start.len() == old_leaves.len() + 1;
+        self.index_links();
+        let nodes = self.elems.nodes.as_slice();
+        let geoms = self.elems.geoms.as_slice();
+        // The old leaf a leaf was or lies under (its row's and gain's heir).
+        let old_of = |e: u32| -> Option<usize> {
+            let mut a = e;
+            loop {
+                match old_index.get(a as usize) {
+                    Some(&i) if i != u32::MAX => return Some(i as usize),
+                    _ => {}
+                }
+                a = nodes[a as usize].parent;
+                if a == u32::MAX {
+                    return None;
+                }
+            }
+        };
+        let is_dirty = |leaf: ElementId| -> bool {
+            if !had_rows || old_index.get(leaf.ix()).is_none_or(|&i| i == u32::MAX) {
+                return true;
+            }
+            let mut a = leaf.0;
+            let mut level = Dirty::Clean;
+            while a != u32::MAX {
+                level = level.max(dirty.get(a as usize).copied().unwrap_or(Dirty::Clean));
+                a = nodes[a as usize].parent;
+            }
+            match level {
+                Dirty::All => true,
+                Dirty::Near => {
+                    let (lo, hi) = super::geom_box(&geoms[leaf.ix()]);
+                    crate::shafts::meets_any(lo, hi, near)
+                }
+                Dirty::Clean => false,
+            }
+        };
+        let leaves = self.sys.leaves.clone();
+        let redo: Vec<ElementId> = leaves.iter().copied().filter(|&l| is_dirty(l)).collect();
+        // The kept entries of the links evaluated again are stale.
+        for l in &redo {
+            let (lo, hi) = super::geom_box(&geoms[l.ix()]);
+            let near = crate::shafts::meets_any(lo, hi, near);
+            let keep = |link: u32| match stale.get(&link) {
+                Some(Dirty::All) => false,
+                Some(Dirty::Near) => !near,
+                _ => true,
+            };
+            if let Some(kept) = self.sys.row_cache.get_mut(&l.0) {
+                kept.retain(|k| keep(k.link));
+            }
+            if let Some(kept) = self.sys.move_cluster_cache.get_mut(&l.0) {
+                kept.retain(|k| keep(k.0));
+            }
+        }
+        let fresh = self.rows_of(&redo);
+        let balanced = !old_scale.is_empty();
+        let mut fresh = redo.iter().zip(fresh);
+        let mut next = fresh.next();
+        let (mut scale, mut gain) = (Vec::new(), Vec::new());
+        let nl = leaves.len();
+        self.sys.row_start = Vec::with_capacity(nl + 1);
+        self.sys.row_start.push(0);
+        self.sys.row_sources = Vec::with_capacity(old_sources.len());
+        self.sys.row_coefs = Vec::with_capacity(old_coefs.len());
+        for &leaf in &leaves {
+            let heir = old_of(leaf.0);
+            match next {
+                Some((&l, ref mut fresh_row)) if l == leaf => {
+                    let row = std::mem::take(&mut fresh_row.row);
+                    self.sys
+                        .row_cache
+                        .insert(l.0, std::mem::take(&mut fresh_row.kept));
+                    self.sys
+                        .move_cluster_cache
+                        .insert(l.0, std::mem::take(&mut fresh_row.move_clusters));
+                    self.sys.row_sources.extend(row.iter().map(|e| e.0));
+                    self.sys.row_coefs.extend(row.iter().map(|e| e.1));
+                    if balanced {
+                        let was = heir.map_or(1.0, |i| old_scale[i]);
+                        let sum: f64 = row.iter().map(|e| e.1).sum();
+                        let scaled = was != 1.0 && sum > 0.0;
+                        scale.push(if scaled { 1.0 / sum } else { 1.0 });
+                    }
+                    next = fresh.next();
+                }
+                _ => {
+                    let i = heir.expect("a kept row has its old leaf");
+                    let (r0, r1) = (old_start[i] as usize, old_start[i + 1] as usize);
+                    self.sys.row_sources.extend_from_slice(&old_sources[r0..r1]);
+                    self.sys.row_coefs.extend_from_slice(&old_coefs[r0..r1]);
+                    if balanced {
+                        scale.push(old_scale[i]);
+                    }
+                }
+            }
+            if balanced {
+                gain.push(heir.map_or(1.0, |i| old_gain[i]));
+            }
+            self.sys.row_start.push(self.sys.row_sources.len() as u32);
+        }
+        self.sys.row_scale = scale;
+        self.sys.leaf_gain = gain;
+        redo.len() as u64
+    }
+
+    /// Leaves in the leaf system as last solved.
+    pub(crate) fn leaf_count(&self) -> usize {
+        self.sys.leaves.len()
     }
 
     /// The links by their ends `(receiver, source) → link`.

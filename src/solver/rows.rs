@@ -47,13 +47,16 @@ pub(super) enum RowMasks {
 /// What one leaf's row computation hands back ([`Solver::compute_leaf_rows`]): the
 /// row, and what the caches are to keep of it.
 #[derive(Default)]
-struct LeafRow {
+pub(super) struct LeafRow {
     /// The row's entries `(source, coefficient)`.
-    row: Vec<(u32, f64)>,
+    pub(super) row: Vec<(u32, f64)>,
+    /// With `keep_clusters`: each cluster source's entries by chain link, sorted
+    /// by link, for the next move (`super::moves`).
+    pub(super) move_clusters: Vec<(u32, RowEntries)>,
     /// New constant-link coefficients for [`Window::rows`].
     fresh: Vec<((u32, u32), (f32, f32))>,
     /// A static solve's coefficients by link, for the next round.
-    kept: Vec<KeptCoef>,
+    pub(super) kept: Vec<KeptCoef>,
     /// A static solve's cluster parts by link, for the next round.
     clusters: Vec<ClusterPart>,
     /// New opened entries for [`Window::opened`].
@@ -92,6 +95,8 @@ struct RowInputs<'r> {
     rays_per_point: u32,
     factors: Option<(&'r KeyMap<f64>, usize)>,
     keep_rows: bool,
+    /// Keep each cluster source's entries by chain link too (`Solver::rows_of`).
+    keep_clusters: bool,
     timed: bool,
     passed: Option<&'r KeyedCoefs>,
     radiosities: &'r [[f32; 3]],
@@ -816,6 +821,7 @@ impl Solver<'_> {
             rays_per_point,
             factors,
             keep_rows,
+            keep_clusters: false,
             timed,
             passed,
             radiosities,
@@ -829,6 +835,35 @@ impl Solver<'_> {
         self.store_leaf_rows(rows, keep_rows);
     }
 
+    /// The rows of `leaves` alone, computed as [`Solver::compute_leaf_rows`]
+    /// computes them outside a space-time window, reusing the surface entries
+    /// kept in the row cache as a static solve does: an interactive move
+    /// recomputes only the rows whose chain links it changed, and in them only the
+    /// entries of those links (`super::moves`). Each row comes with the entries
+    /// to keep for it.
+    pub(super) fn rows_of(&self, leaves: &[ElementId]) -> Vec<LeafRow> {
+        let inputs = RowInputs {
+            geoms: self.elems.geoms.as_slice(),
+            ends: self.links.ends.as_slice(),
+            tr: self.links.transports.as_slice(),
+            cache: None,
+            opened: None,
+            hidden: None,
+            masks: None,
+            rays_per_point: self.opts.rays_per_point,
+            factors: None,
+            keep_rows: true,
+            keep_clusters: true,
+            timed: false,
+            passed: None,
+            radiosities: self.elems.radiosities.as_slice(),
+        };
+        leaves
+            .par_iter()
+            .map(|&leaf| self.leaf_row(&inputs, leaf))
+            .collect()
+    }
+
     /// One leaf's row ([`Solver::compute_leaf_rows`]): each chain link's source
     /// opened at its coefficient over the leaf, from the caches where they hold.
     fn leaf_row(&self, inputs: &RowInputs, leaf: ElementId) -> LeafRow {
@@ -840,6 +875,7 @@ impl Solver<'_> {
             opened,
             factors,
             keep_rows,
+            keep_clusters,
             timed,
             ..
         } = *inputs;
@@ -852,7 +888,18 @@ impl Solver<'_> {
         let leaf_ray = self.ray_id(leaf.0);
         let rho_leaf = self.rho_of(leaf);
         let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
-        let clusters_before = self.sys.cluster_cache.get(&leaf.0).filter(|_| keep_rows);
+        // A static solve reuses its cluster parts from round to round; an
+        // interactive move (`keep_clusters`) the entries of the links it left.
+        let clusters_before = self
+            .sys
+            .cluster_cache
+            .get(&leaf.0)
+            .filter(|_| keep_rows && !keep_clusters);
+        let moved_before = self
+            .sys
+            .move_cluster_cache
+            .get(&leaf.0)
+            .filter(|_| keep_clusters);
         // A static leaf (of the window's base or made again by this
         // frame) reuses the factors to the static base elements its
         // sources open into.
@@ -867,12 +914,23 @@ impl Solver<'_> {
             let s = ends[l as usize].source;
             let gs = &geoms[s as usize];
             if gs.patch == u32::MAX {
+                let kept = moved_before
+                    .and_then(|c| c.binary_search_by_key(&l, |x| x.0).ok().map(|i| &c[i].1));
+                if let Some(entries) = kept {
+                    out.row.extend_from_slice(entries);
+                    out.move_clusters.push((l, entries.clone()));
+                    continue;
+                }
+                let at = out.row.len();
                 let reused = clusters_before.is_some_and(|parts| {
                     self.push_kept_cluster(&q, n, l, parts, &mut out.row, &mut out.clusters)
                 });
                 if !reused {
-                    let kept = Some(&mut out.clusters).filter(|_| keep_rows);
+                    let kept = Some(&mut out.clusters).filter(|_| keep_rows && !keep_clusters);
                     self.push_cluster(leaf, l, &q, n, s, &mut out.row, kept);
+                }
+                if keep_clusters {
+                    out.move_clusters.push((l, out.row[at..].into()));
                 }
                 continue;
             }
@@ -952,6 +1010,7 @@ impl Solver<'_> {
         out.kept.sort_unstable_by_key(|x| x.link);
         // Stable: a link's parts stay in the order its row took them.
         out.clusters.sort_by_key(|x| x.link);
+        out.move_clusters.sort_unstable_by_key(|x| x.0);
         out.factors = memo.map(|m| m.fresh).unwrap_or_default();
         out
     }
@@ -1076,6 +1135,7 @@ impl Solver<'_> {
                 timed,
                 between,
                 passed,
+                ..
             } = out;
             self.st.frame_rows.0.extend(timed);
             self.st.rows_between += between;
@@ -1459,7 +1519,7 @@ impl Solver<'_> {
 
     /// Solves the leaf system with GMRES from the current radiosities; writes the
     /// result into the pool (leaves and pulled inner elements). Returns the residual.
-    fn solve_leaves(&mut self) -> Result<f64> {
+    pub(super) fn solve_leaves(&mut self) -> Result<f64> {
         let nl = self.sys.leaves.len();
         let n = self.elems.len();
         let mut rhs = vec![0.0; nl * 3];

@@ -145,6 +145,7 @@ fn settings(traversal: Traversal) -> Settings {
         predict: Method::Linear,
         ahead: 1,
         scale: 1.1,
+        ..Settings::default()
     }
 }
 

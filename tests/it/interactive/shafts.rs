@@ -38,6 +38,7 @@ fn session(stage: &Stage, predict: Method, policy: Policy) -> Session<'_> {
         predict,
         ahead: 1,
         scale: 1.1,
+        ..Settings::default()
     };
     Session::start(stage, options(), settings).unwrap()
 }
