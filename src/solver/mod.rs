@@ -541,6 +541,8 @@ struct LeafSystem {
     /// it ([`ROW_OPEN_SPREAD`]); empty and infinite elsewhere. 4 bytes per element.
     row_spread: Vec<f32>,
     row_spread_limit: f64,
+    /// How many leaves there were when `row_spread` was taken.
+    row_spread_leaves: usize,
     /// Interactive moves: each leaf's cluster-source entries by chain link
     /// (sorted by link), reused by the next move for links it did not touch
     /// ([`Solver::settle_local`]).
@@ -1431,6 +1433,16 @@ impl<'a> Solver<'a> {
         self.bvh.for_each_triangle_in_box(lo, hi, |patch, _| {
             self.motion.moving_patch.get(patch as usize) == Some(&true)
         })
+    }
+
+    /// True inside a space-time window that spans time (its frames between
+    /// interpolate stored values); false in a static solve and in a window of one
+    /// instant, which is solved as the static solve is.
+    fn window_spans_time(&self) -> bool {
+        self.st
+            .window
+            .as_ref()
+            .is_some_and(|w| w.span[1] > w.span[0])
     }
 
     /// True if the scene has moving patches.

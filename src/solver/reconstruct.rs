@@ -528,12 +528,7 @@ impl Solver<'_> {
         // interpolate the points' gathered values, which would then disagree with
         // the stored cells. A window of one instant (a static scene solved in
         // space-time) has none, and is shifted as the static solve is.
-        if self
-            .st
-            .window
-            .as_ref()
-            .is_some_and(|w| w.span[1] > w.span[0])
-        {
+        if self.window_spans_time() {
             return Vec::new();
         }
         let f = MEAN_SHIFT;

@@ -780,11 +780,19 @@ impl Solver<'_> {
     pub(super) fn compute_leaf_rows(&mut self) {
         self.intern_frame_elements();
         // A static solve opens sources by their spread too ([`ROW_OPEN_SPREAD`]),
-        // as the last solve left them.
-        if self.has_motion() || self.st.window.is_some() {
+        // as the last solve left them; so does a space-time window of one instant
+        // (a static scene solved in space-time), which must equal it.
+        // A window's frame passes go on while refinement changes links, where the
+        // static solve's rounds stop: rows rebuilt over the same leaves keep the
+        // spread they were built with, so that such a pass changes nothing.
+        let same_leaves = self.st.window.is_some()
+            && !self.sys.row_spread.is_empty()
+            && self.sys.row_spread_leaves == self.sys.leaves.len();
+        if self.has_motion() || self.window_spans_time() {
             self.sys.row_spread = Vec::new();
             self.sys.row_spread_limit = f64::INFINITY;
-        } else {
+        } else if !same_leaves {
+            self.sys.row_spread_leaves = self.sys.leaves.len();
             self.sys.row_spread = self.radiosity_spread();
             self.sys.row_spread_limit = ROW_OPEN_SPREAD * self.rms_radiosity();
         }
