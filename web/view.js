@@ -1,8 +1,9 @@
 // `rhier view`'s page: draws the served solution with three.js (WebGL2) as `rhier play`
 // draws it (linear vertex radiosity × exposure, then the sRGB curve; back faces culled;
-// black background), orbits from play's start camera, scrubs and plays time, and asks
-// the server for the probe answer where a surface is clicked. State for tests and
-// benchmarks is on `window.rhierView`.
+// black background), orbits from play's start camera (OrbitControls) and flies with the
+// keys (WASD/arrows, Q/E, shift: camera and orbit target move together, R: back to the
+// start), scrubs and plays time, and asks the server for the probe answer where a
+// surface is clicked. State for tests and benchmarks is on `window.rhierView`.
 import * as THREE from 'three';
 import { OrbitControls } from '/vendor/OrbitControls.js';
 import { parseFrame, parseMesh } from '/wire.js';
@@ -54,6 +55,7 @@ const scene = new THREE.Scene();
 const camera = new THREE.PerspectiveCamera(45, 1, 0.1, 1000);
 const controls = new OrbitControls(camera, canvas);
 let info = null;
+let bounds = new THREE.Sphere(); // the scene at the first frame: fly speed, clip planes
 let mesh = { key: null, objects: new Map() }; // object index -> THREE.Mesh
 let shownFrame = null;
 const frames = new Map(); // `${shading}|${k}` -> Promise<frame>
@@ -80,6 +82,7 @@ function keep(frame) {
 }
 
 function render() {
+  clip();
   renderer.render(scene, camera);
 }
 
@@ -309,15 +312,87 @@ function placeCamera(groups) {
   const along = sphere.center.clone().sub(eye).dot(dir);
   if (along > target.distanceTo(eye)) target = eye.clone().addScaledVector(dir, along);
   const radius = Math.max(sphere.radius, 1e-9);
+  bounds = new THREE.Sphere(sphere.center, radius);
   camera.fov = c.fov_y_degrees;
   camera.up.set(...c.up);
   camera.position.copy(eye);
   camera.near = radius * 1e-3;
-  camera.far = eye.distanceTo(sphere.center) + 4 * radius;
   camera.lookAt(target);
   controls.target.copy(target);
   controls.update();
+  controls.saveState();
   resize();
+}
+
+// Flying: while a key is held the camera and its orbit target move together, forward
+// and back along the view direction (W/S, up/down arrows), sideways (A/D, left/right)
+// and down/up (Q/E), at a quarter of the scene's bounding radius per second, four
+// times that with shift; dragging still orbits about the (moved) target. R goes back
+// to the start camera.
+const MOVES = {
+  KeyW: [0, 0, 1], ArrowUp: [0, 0, 1], KeyS: [0, 0, -1], ArrowDown: [0, 0, -1],
+  KeyD: [1, 0, 0], ArrowRight: [1, 0, 0], KeyA: [-1, 0, 0], ArrowLeft: [-1, 0, 0],
+  KeyE: [0, 1, 0], KeyQ: [0, -1, 0],
+};
+const held = new Set();
+let fast = false;
+let lastStep = null; // time of the last step; null when no step is coming
+function typing(e) {
+  return e.target instanceof HTMLElement && e.target.matches('input, select, textarea');
+}
+function onKeyDown(e) {
+  if (typing(e) || e.ctrlKey || e.metaKey || e.altKey) return;
+  fast = e.shiftKey;
+  if (e.code === 'KeyR') {
+    held.clear();
+    controls.reset();
+    return;
+  }
+  if (!MOVES[e.code]) return;
+  e.preventDefault();
+  held.add(e.code);
+  if (lastStep === null) {
+    lastStep = performance.now() - 1000 / 60;
+    requestAnimationFrame(step);
+  }
+}
+function onKeyUp(e) {
+  fast = e.shiftKey;
+  held.delete(e.code);
+}
+function step(now) {
+  if (held.size === 0) {
+    lastStep = null;
+    return;
+  }
+  // A slow frame moves at most 0.1 s worth: a stall does not throw the camera away.
+  const dt = Math.min(Math.max(now - lastStep, 0) / 1000, 0.1);
+  lastStep = now;
+  const forward = camera.getWorldDirection(new THREE.Vector3());
+  const right = forward.clone().cross(camera.up).normalize();
+  const up = camera.up.clone().normalize();
+  const move = new THREE.Vector3();
+  for (const code of held) {
+    const [x, y, z] = MOVES[code];
+    move.addScaledVector(right, x).addScaledVector(up, y).addScaledVector(forward, z);
+  }
+  if (move.lengthSq() > 0) {
+    move.setLength(bounds.radius * 0.25 * (fast ? 4 : 1) * dt);
+    camera.position.add(move);
+    controls.target.add(move);
+    controls.update();
+  }
+  requestAnimationFrame(step);
+}
+
+// Clip planes that keep the scene in view wherever the camera has gone.
+function clip() {
+  if (bounds.isEmpty()) return; // nothing placed yet
+  const far = camera.position.distanceTo(bounds.center) + 4 * bounds.radius;
+  if (far !== camera.far) {
+    camera.far = far;
+    camera.updateProjectionMatrix();
+  }
 }
 
 async function start() {
@@ -343,6 +418,9 @@ async function start() {
   api.stats.ready = true;
   controls.addEventListener('change', render);
   window.addEventListener('resize', resize);
+  window.addEventListener('keydown', onKeyDown);
+  window.addEventListener('keyup', onKeyUp);
+  window.addEventListener('blur', () => held.clear());
   const inspect = await (await fetch('/api/inspect')).json();
   $('inspect').textContent = inspect.text;
   api.inspect = inspect.json;
@@ -357,6 +435,13 @@ api.timeDraw = (n) => {
   }
   return (performance.now() - t0) / n;
 };
+// The camera shown now, in the form of /api/info's `camera` (tests).
+api.view = () => ({
+  eye: camera.position.toArray(),
+  target: controls.target.toArray(),
+  up: camera.up.toArray(),
+  fov_y_degrees: camera.fov,
+});
 api.goTo = goTo;
 api.play = play;
 api.pause = pause;

@@ -6,8 +6,11 @@
 //       (coarse), serves each, and fails (exit 1) unless: the lit room is drawn and
 //       matches `rhier play`'s picture of the same camera and size; the red and
 //       green walls are where the camera puts them; a click answers what
-//       `rhier probe` answers at the clicked point; moving the time slider changes
-//       the moving scene's picture; the page logs no console error.
+//       `rhier probe` answers at the clicked point; flying with the keys (W, D, E)
+//       moves the camera and its orbit target the way the key says, the back wall
+//       grows as the moved camera says, and R gives back the start picture; moving
+//       the time slider changes the moving scene's picture; the page logs no console
+//       error.
 //   node tools/view_test/test.mjs --bench FILE.rhier [--seconds S]
 //       Time to the first rendered frame, and frames per second while playing
 //       (BENCHMARKS.md, "Viewer").
@@ -111,13 +114,15 @@ function patchMean(img, x, y, r = 6) {
   return s.map((v) => v / n);
 }
 
-// Pixel position of world point p seen by the served start camera (the view's
-// `rhier::playback::raster::project`).
+const sub = (a, b) => a.map((x, i) => x - b[i]);
+const dot = (a, b) => a.reduce((s, x, i) => s + x * b[i], 0);
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+const norm = (a) => a.map((x) => x / Math.hypot(...a));
+
+// Pixel position of world point p seen by camera `cam` ({eye, target, up,
+// fov_y_degrees}: the served start camera, or the page's camera now), the view's
+// `rhier::playback::raster::project`.
 function project(cam, p) {
-  const sub = (a, b) => a.map((x, i) => x - b[i]);
-  const dot = (a, b) => a.reduce((s, x, i) => s + x * b[i], 0);
-  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-  const norm = (a) => a.map((x) => x / Math.hypot(...a));
   const f = norm(sub(cam.target, cam.eye));
   const s = norm(cross(f, cam.up));
   const u = cross(s, f);
@@ -183,11 +188,86 @@ async function cornell(b) {
     const inspect = await page.locator('#inspect').textContent();
     const cli = rhier('inspect', file);
     check(inspect === cli, 'cornell: the inspect panel holds what rhier inspect prints');
+    await fly(page, img, info.camera);
     await page.close();
   } finally {
     proc.kill();
   }
   check(errors.length === 0, `cornell: no console error${errors.length ? ': ' + errors.join('; ') : ''}`);
+}
+
+// Holds `key` (with shift if asked) for `ms` and returns the page's camera and how far its eye and target
+// moved, in the start camera's frame: [right, up, forward] (f × up, up, f).
+async function hold(page, key, ms, cam0, shift = false) {
+  const before = await page.evaluate(() => window.rhierView.view());
+  if (shift) await page.keyboard.down('Shift');
+  await page.keyboard.down(key);
+  await page.waitForTimeout(ms);
+  await page.keyboard.up(key);
+  if (shift) await page.keyboard.up('Shift');
+  await page.waitForTimeout(100);
+  const after = await page.evaluate(() => window.rhierView.view());
+  const f = norm(sub(cam0.target, cam0.eye));
+  const r = norm(cross(f, cam0.up));
+  const u = cross(r, f);
+  const frame = (d) => [dot(d, r), dot(d, u), dot(d, f)];
+  return { after, eye: frame(sub(after.eye, before.eye)), target: frame(sub(after.target, before.target)) };
+}
+
+// The back wall's width in pixels on the row through its middle (x = 278,
+// y = 274, z = 559): from its middle out to the first red pixel one way and the
+// first green pixel the other, as measured on `img` and as camera `cam` projects
+// the corners x = 556 and x = 0.
+function backWall(img, cam) {
+  const [cx, cy] = project(cam, [278, 274, 559]);
+  const redX = project(cam, [556, 274, 559])[0];
+  const greenX = project(cam, [0, 274, 559])[0];
+  const scan = (towards, is) => {
+    const step = Math.sign(towards - cx);
+    for (let x = Math.round(cx); x >= 0 && x < img.width; x += step) if (is(pixel(img, x, cy))) return x;
+    return NaN;
+  };
+  const red = scan(redX, ([r, g, b]) => r > 1.5 * g && r > 1.5 * b);
+  const green = scan(greenX, ([r, g, b]) => g > 1.3 * r && g > 1.3 * b);
+  return { seen: Math.abs(red - green), said: Math.abs(redX - greenX) };
+}
+
+// Flying with the keys: shift+W moves eye and orbit target forward together, and the
+// picture is the moved camera's (back wall wider, walls where it projects them);
+// D moves right, E up; R gives back the start camera and picture.
+async function fly(page, start, cam0) {
+  const moved = (m) => `eye moved (${m.eye.map((x) => x.toFixed(1))}), target (${m.target.map((x) => x.toFixed(1))}) [right, up, forward]`;
+  const same = (m) => m.eye.every((x, i) => Math.abs(x - m.target[i]) < 1e-6 * (1 + Math.abs(x)));
+  const along = (m, k) => m.eye[k] > 10 && m.eye.every((x, i) => i === k || Math.abs(x) < 1e-6 * m.eye[k]);
+  const w = await hold(page, 'w', 500, cam0, true);
+  check(along(w, 2) && same(w), `fly: shift+W moves forward: ${moved(w)}`);
+  const img = await picture(page);
+  writeFileSync(join(work, 'cornell_forward.png'), PNG.sync.write(img));
+  const wall0 = backWall(start, cam0);
+  const wall1 = backWall(img, w.after);
+  const near = (x) => Math.abs(x.seen - x.said) <= 4;
+  check(near(wall0) && near(wall1) && wall1.seen > wall0.seen + 10,
+    `fly: the back wall grows from ${wall0.seen} to ${wall1.seen} pixels wide (the cameras say ${wall0.said.toFixed(1)}, ${wall1.said.toFixed(1)})`);
+  const redAt = project(w.after, [553, 274, 280]);
+  const greenAt = project(w.after, [3, 274, 280]);
+  const red = patchMean(img, ...redAt);
+  const green = patchMean(img, ...greenAt);
+  check(red[0] > 1.5 * red[1] && red[0] > 1.5 * red[2] && green[1] > 1.3 * green[0] && green[1] > 1.3 * green[2],
+    `fly: after W the red wall is at pixel (${redAt.map(Math.round)}) (${red.map(Math.round)}), the green at (${greenAt.map(Math.round)}) (${green.map(Math.round)})`);
+  const d = await hold(page, 'd', 400, cam0);
+  check(along(d, 0) && same(d), `fly: D moves right: ${moved(d)}`);
+  const e = await hold(page, 'e', 400, cam0);
+  check(along(e, 1) && same(e), `fly: E moves up: ${moved(e)}`);
+  await page.keyboard.press('r');
+  await page.waitForTimeout(100);
+  const back = await page.evaluate(() => window.rhierView.view());
+  const again = await picture(page);
+  let diff = 0;
+  for (let i = 0; i < again.data.length; i += 4) for (let k = 0; k < 3; k++) diff += Math.abs(again.data[i + k] - start.data[i + k]);
+  const mean = diff / (3 * WIDTH * HEIGHT);
+  const eyeOff = Math.hypot(...sub(back.eye, cam0.eye));
+  check(mean < 0.01 && eyeOff < 1e-6 * Math.hypot(...cam0.eye),
+    `fly: R goes back to the start view (eye ${eyeOff.toExponential(1)} from the start camera's, picture mean |difference| ${mean.toFixed(4)} of 255)`);
 }
 
 async function moving(b) {
