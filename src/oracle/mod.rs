@@ -8,8 +8,8 @@
 //! ([`Shaft`]): clear → `V = 1`, no ray. Otherwise each quadrature point casts jittered
 //! rays to stratified points of the source, weighted by the point kernel. The error
 //! bound is the oracle of Hanrahan, Salzman & Aupperle (1991) on `ρ ΔK B`: `ΔK` is
-//! the spread of `F(x → A_s)·V(x)` over the receiver's quadrature points and corners,
-//! plus the unresolved part of a partial visibility.
+//! the spread of `F(x → A_s)·V(x)` over the receiver's quadrature points, corners
+//! and centre, plus the unresolved part of a partial visibility.
 //!
 //! **Links with a cluster.** A receiving cluster's surfaces see on average a quarter
 //! of the normal irradiance (Cauchy's mean projected area; Sillion 1995, "A unified
@@ -653,14 +653,21 @@ fn evaluate_surfaces(
     for (f, &x) in fq.iter_mut().zip(&q.points).take(q.count) {
         *f = point_to_polygon(x, nr, &pols);
     }
-    // Unoccluded spread over quadrature points and corners.
+    // Unoccluded spread over quadrature points, corners and the centre. The
+    // centre: a source centred over a large receiver (a lamp over the middle of a
+    // floor) peaks there, and the quadrature points and corners, placed
+    // symmetrically around it, all see the same lower factor; the spread read 0.009
+    // for a 1 m² lamp 3 m over a 6 × 6 m floor whose factor ranges 0.004–0.035, and
+    // the floor stayed whole with its direct light 18% short (issue 45).
     let mut fmin = f64::INFINITY;
     let mut fmax: f64 = 0.0;
     for &x in fq[..q.count].iter() {
         fmin = fmin.min(x);
         fmax = fmax.max(x);
     }
-    for &c in polr.corners() {
+    let corners = polr.corners();
+    let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
+    for &c in corners.iter().chain(std::iter::once(&centre)) {
         let f = point_to_polygon(c, nr, &pols);
         fmin = fmin.min(f);
         fmax = fmax.max(f);
