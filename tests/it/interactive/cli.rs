@@ -25,6 +25,17 @@ fn base(cmd: &mut std::process::Command) -> &mut std::process::Command {
         ])
 }
 
+/// Two probe points (the floor and the left wall) written in `dir`.
+fn probe_points(dir: &std::path::Path) -> std::path::PathBuf {
+    let points = dir.join("p.json");
+    std::fs::write(
+        &points,
+        r#"[{"p": [270, 0, 100], "n": [0, 1, 0]}, {"p": [0, 270, 270], "n": [1, 0, 0]}]"#,
+    )
+    .unwrap();
+    points
+}
+
 #[test]
 fn a_bad_move_names_its_line_and_the_session_file_keeps_the_good_ones() {
     let dir = tempfile::tempdir().unwrap();
@@ -38,12 +49,7 @@ fn a_bad_move_names_its_line_and_the_session_file_keeps_the_good_ones() {
          {\"object\": \"short_block\", \"translation\": [60, 0, 0]}\n",
     )
     .unwrap();
-    let points = dir.path().join("p.json");
-    std::fs::write(
-        &points,
-        r#"[{"p": [270, 0, 100], "n": [0, 1, 0]}, {"p": [0, 270, 270], "n": [1, 0, 0]}]"#,
-    )
-    .unwrap();
+    let points = probe_points(dir.path());
     let (out, stats, probes) = (
         dir.path().join("s.rhier"),
         dir.path().join("s.jsonl"),
@@ -189,12 +195,7 @@ fn the_pools_follow_rhier_storage_and_give_the_same_answer() {
          {\"object\": \"short_block\", \"translation\": [40, 0, 10]}\n",
     )
     .unwrap();
-    let points = dir.path().join("p.json");
-    std::fs::write(
-        &points,
-        r#"[{"p": [270, 0, 100], "n": [0, 1, 0]}, {"p": [0, 270, 270], "n": [1, 0, 0]}]"#,
-    )
-    .unwrap();
+    let points = probe_points(dir.path());
     let scratch = dir.path().join("scratch");
     std::fs::create_dir(&scratch).unwrap();
     let run = |storage: &str, out: &std::path::Path| {
