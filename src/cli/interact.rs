@@ -169,7 +169,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         None => args.scene.load()?,
     };
-    let opts = args.accuracy.solve_options(Storage::default())?;
+    // The solver's pools on the backend `RHIER_STORAGE` names (RAM by default), as
+    // a static solve without `--storage` places them.
+    let storage = Storage::from_env().with_context(|| format!("reading {}", Storage::ENV))?;
+    let opts = args.accuracy.solve_options(storage)?;
     let stage = Stage::new(&scene, args.movable.as_deref())?;
     let points = match &args.probe {
         Some(p) => Some(read_probe_points(p)?),

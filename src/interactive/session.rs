@@ -9,7 +9,8 @@
 //!    forgotten); a link between two surfaces whose box meets an old or new box is
 //!    tested with its shaft (from the [`ShaftStore`], built on the fly if missing)
 //!    and affected if the shaft meets the box; a link with a cluster end is
-//!    affected if the box of its ends meets one;
+//!    tested the same way with the shaft between its ends' boxes
+//!    ([`crate::shafts::box_shaft_misses`], made on the spot, not stored);
 //! 3. evaluates the affected active links again (visibility and form factor),
 //!    adds the children a refined link whose end moved had dropped as empty and
 //!    that exchange light now, then refines the links whose transport changed and
@@ -41,7 +42,7 @@ use super::store::{Policy, SHAFT_BYTES, ShaftStore};
 use crate::Result;
 use crate::pools::elements::Geom;
 use crate::pools::{LinkId, LinkState};
-use crate::shafts::Shaft;
+use crate::shafts::{Shaft, box_shaft_misses};
 use crate::solution::Solution;
 use crate::solver::{FastMap, SolveOptions, Solver};
 
@@ -357,19 +358,26 @@ impl<'a> Session<'a> {
                 }
                 continue;
             }
-            if gr.patch == u32::MAX || gs.patch == u32::MAX {
-                // A cluster end: the box of both ends is the test.
-                f.affected.push(LinkId(l));
-                continue;
-            }
-            let shaft = self.shafts.get(l, true, || shaft_between(gr, gs));
+            // A cluster end: the shaft between the ends' boxes, made on the spot
+            // (twelve lines; no store).
+            let boxes = gr.patch == u32::MAX || gs.patch == u32::MAX;
+            let shaft = if boxes {
+                None
+            } else {
+                Some(self.shafts.get(l, true, || shaft_between(gr, gs)))
+            };
+            let (br, bs) = (geom_box(gr), geom_box(gs));
             let mut hit = false;
             for (k, b) in now.iter().enumerate() {
                 if !meets_any(reach, std::slice::from_ref(b)) {
                     continue;
                 }
                 f.tests += 1;
-                if !shaft.misses_box(b.0, b.1) {
+                let misses = match &shaft {
+                    Some(s) => s.misses_box(b.0, b.1),
+                    None => box_shaft_misses(br, bs, *b),
+                };
+                if !misses {
                     hit = true;
                     if k < old.len() {
                         f.at_old += 1;

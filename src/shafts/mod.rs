@@ -24,6 +24,9 @@ use glam::DVec3;
 
 use crate::geometry::SceneBvh;
 
+mod boxes;
+pub use boxes::box_shaft_misses;
+
 /// Most planes a shaft keeps (two quads: 8 edges × 4 corners candidates, few survive).
 const MAX_PLANES: usize = 16;
 

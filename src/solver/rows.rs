@@ -50,8 +50,8 @@ pub(super) enum RowMasks {
 pub(super) struct LeafRow {
     /// The row's entries `(source, coefficient)`.
     pub(super) row: Vec<(u32, f64)>,
-    /// With `keep_clusters`: each cluster source's entries by chain link, sorted
-    /// by link, for the next move (`super::moves`).
+    /// With `keep_clusters`: each chain link's entries (surface or cluster
+    /// source), sorted by link, for the next move (`super::moves`).
     pub(super) move_clusters: Vec<(u32, RowEntries)>,
     /// New constant-link coefficients for [`Window::rows`].
     fresh: Vec<((u32, u32), (f32, f32))>,
@@ -921,15 +921,21 @@ impl Solver<'_> {
             let t = &tr[l as usize];
             let s = ends[l as usize].source;
             let gs = &geoms[s as usize];
+            // An interactive move keeps every entry of the links it left, surface
+            // sources' opened entries as well as clusters': a recomputed row pays
+            // only for the links the move touched.
+            let kept = moved_before
+                .and_then(|c| c.binary_search_by_key(&l, |x| x.0).ok().map(|i| &c[i].1));
+            if let Some(entries) = kept {
+                out.row.extend_from_slice(entries);
+                out.move_clusters.push((l, entries.clone()));
+                let coef =
+                    before.and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]));
+                out.kept.extend(coef);
+                continue;
+            }
+            let at = out.row.len();
             if gs.patch == u32::MAX {
-                let kept = moved_before
-                    .and_then(|c| c.binary_search_by_key(&l, |x| x.0).ok().map(|i| &c[i].1));
-                if let Some(entries) = kept {
-                    out.row.extend_from_slice(entries);
-                    out.move_clusters.push((l, entries.clone()));
-                    continue;
-                }
-                let at = out.row.len();
                 let reused = clusters_before.is_some_and(|parts| {
                     self.push_kept_cluster(&q, n, l, parts, &mut out.row, &mut out.clusters)
                 });
@@ -955,6 +961,9 @@ impl Solver<'_> {
                     &mut out.row,
                     memo.as_mut(),
                 );
+                if keep_clusters {
+                    out.move_clusters.push((l, out.row[at..].into()));
+                }
                 continue;
             }
             // Constant link, static leaf: the coefficient of an earlier
@@ -1014,6 +1023,9 @@ impl Solver<'_> {
                 coef
             };
             self.push_opened(&q, n, s, coef, vis, &mut out.row, memo.as_mut());
+            if keep_clusters {
+                out.move_clusters.push((l, out.row[at..].into()));
+            }
         }
         out.kept.sort_unstable_by_key(|x| x.link);
         // Stable: a link's parts stay in the order its row took them.

@@ -1,7 +1,8 @@
 //! The `rhier interact` command line: a bad move stops the session with exit 1,
 //! naming the line, and leaves a valid session file up to the last good move; a
 //! move is applied and reported before the next line is read (a pipe); `--from`
-//! refuses a file solved without `--keep-links`.
+//! refuses a file solved without `--keep-links`; the solver's pools follow
+//! `RHIER_STORAGE`.
 
 use std::io::{BufRead, BufReader, Write};
 use std::process::Stdio;
@@ -24,6 +25,17 @@ fn base(cmd: &mut std::process::Command) -> &mut std::process::Command {
         ])
 }
 
+/// Two probe points (the floor and the left wall) written in `dir`.
+fn probe_points(dir: &std::path::Path) -> std::path::PathBuf {
+    let points = dir.join("p.json");
+    std::fs::write(
+        &points,
+        r#"[{"p": [270, 0, 100], "n": [0, 1, 0]}, {"p": [0, 270, 270], "n": [1, 0, 0]}]"#,
+    )
+    .unwrap();
+    points
+}
+
 #[test]
 fn a_bad_move_names_its_line_and_the_session_file_keeps_the_good_ones() {
     let dir = tempfile::tempdir().unwrap();
@@ -37,12 +49,7 @@ fn a_bad_move_names_its_line_and_the_session_file_keeps_the_good_ones() {
          {\"object\": \"short_block\", \"translation\": [60, 0, 0]}\n",
     )
     .unwrap();
-    let points = dir.path().join("p.json");
-    std::fs::write(
-        &points,
-        r#"[{"p": [270, 0, 100], "n": [0, 1, 0]}, {"p": [0, 270, 270], "n": [1, 0, 0]}]"#,
-    )
-    .unwrap();
+    let points = probe_points(dir.path());
     let (out, stats, probes) = (
         dir.path().join("s.rhier"),
         dir.path().join("s.jsonl"),
@@ -176,4 +183,49 @@ fn from_a_file_without_links_is_refused_with_the_way_out() {
     let err = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(1), "{err}");
     assert!(err.contains("--keep-links"), "{err}");
+}
+
+#[test]
+fn the_pools_follow_rhier_storage_and_give_the_same_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let moves = dir.path().join("m.jsonl");
+    std::fs::write(
+        &moves,
+        "{\"object\": \"short_block\", \"translation\": [20, 0, 0]}\n\
+         {\"object\": \"short_block\", \"translation\": [40, 0, 10]}\n",
+    )
+    .unwrap();
+    let points = probe_points(dir.path());
+    let scratch = dir.path().join("scratch");
+    std::fs::create_dir(&scratch).unwrap();
+    let run = |storage: &str, out: &std::path::Path| {
+        base(&mut rhier())
+            .env("RHIER_STORAGE", storage)
+            .arg("--moves")
+            .arg(&moves)
+            .arg("--probe")
+            .arg(&points)
+            .arg("--probe-out")
+            .arg(out)
+            .arg("-q")
+            .output()
+            .unwrap()
+    };
+    let (ram, mapped) = (dir.path().join("ram.jsonl"), dir.path().join("mmap.jsonl"));
+    let r = run("ram", &ram);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let m = run(&format!("mmap:{}", scratch.display()), &mapped);
+    assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
+    // The backend holds the same records: the same answer, bit for bit.
+    let (a, b) = (
+        std::fs::read_to_string(&ram).unwrap(),
+        std::fs::read_to_string(&mapped).unwrap(),
+    );
+    assert_eq!(a.lines().count(), 3, "{a}");
+    assert_eq!(a, b);
+    // A value it cannot use is refused, naming the variable.
+    let bad = run("tape", &dir.path().join("bad.jsonl"));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(1), "{err}");
+    assert!(err.contains("RHIER_STORAGE"), "{err}");
 }
