@@ -962,8 +962,9 @@ const SIZE_TIE: f64 = 1e-9;
 
 /// Chooses which end of a link to split: the larger one that can split (a surface
 /// element can split while its children keep at least `min_area`; a cluster always
-/// has children), sizes equal within `SIZE_TIE` (1e-9) splitting the receiver. `force` is set for links that must not stay (cluster self-links,
-/// clusters too close for the isotropic estimate).
+/// has children), sizes equal within `SIZE_TIE` (1e-9) splitting the receiver.
+/// `force` is set for links that must not stay (cluster self-links, clusters too
+/// close for the isotropic estimate).
 pub fn choose_split(elems: &ElementPool, r: ElementId, s: ElementId, min_area: f64) -> Split {
     let can = |e: ElementId| match elems.kind(e) {
         ElementKind::Cluster => true,
