@@ -110,6 +110,12 @@ struct Part {
     tris: Vec<Triangle>,
     /// Patch of each triangle in `tris`.
     tri_patch: Vec<u32>,
+    /// `tris` in f64 (part space): what shafts cull ([`SceneBvh::for_each_triangle_in_box`]).
+    /// The f32 corners are off by up to 6e-8 of the coordinates, far above a
+    /// shaft's tolerance (1e-9 of its box), and off differently in another unit:
+    /// a block's face on the floor's plane was in front of a shaft's end in
+    /// millimetres and behind it in metres (issue 45, part 3).
+    tris64: Vec<[DVec3; 3]>,
     /// World → part space (identity for the static part).
     world_to_local: DAffine3,
     /// Part → world.
@@ -126,8 +132,7 @@ struct Part {
 
 impl Part {
     fn build(
-        tris: Vec<Triangle>,
-        tri_patch: Vec<u32>,
+        (tris, tri_patch, tris64): Tris,
         local_to_world: DAffine3,
         object: u32,
         unit: f64,
@@ -146,10 +151,16 @@ impl Part {
             .iter()
             .map(|&i| (tris[i as usize], tri_patch[i as usize]))
             .unzip();
+        let tris64 = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| tris64[i as usize])
+            .collect();
         let mut part = Part {
             bvh,
             tris,
             tri_patch,
+            tris64,
             world_to_local: local_to_world.inverse(),
             local_to_world,
             object,
@@ -235,31 +246,33 @@ impl SceneBvh {
     /// object space placed by the object's motion at `t`.
     pub fn build(scene: &Scene, patches: &Patches, t: f64) -> SceneBvh {
         let mut parts = Vec::new();
-        let (mut st, mut sp) = (Vec::new(), Vec::new());
-        let mut moving: Vec<(Vec<Triangle>, Vec<u32>)> =
-            vec![(Vec::new(), Vec::new()); scene.objects.len()];
+        let mut st = Tris::default();
+        let mut moving: Vec<Tris> = vec![Tris::default(); scene.objects.len()];
         let unit = unit_scale(patches.diameter);
         for i in 0..patches.len() {
             let obj = patches.objects[i] as usize;
             if scene.objects.get(obj).is_some_and(|o| o.is_moving()) {
                 let g = &patches.geometry[i];
-                let (tris, tp) = &mut moving[obj];
-                push_triangles(&g.vertices[..g.corners as usize], unit, i as u32, tris, tp);
+                push_triangles(
+                    &g.vertices[..g.corners as usize],
+                    unit,
+                    i as u32,
+                    &mut moving[obj],
+                );
             } else {
                 let corners = patches.polys[i].corners();
-                push_triangles(corners, unit, i as u32, &mut st, &mut sp);
+                push_triangles(corners, unit, i as u32, &mut st);
             }
         }
-        for (obj, (tris, tp)) in moving.into_iter().enumerate() {
+        for (obj, tris) in moving.into_iter().enumerate() {
             parts.extend(Part::build(
                 tris,
-                tp,
                 scene.objects[obj].to_world(t) * from_unit(unit),
                 obj as u32,
                 unit,
             ));
         }
-        parts.extend(Part::build(st, sp, from_unit(unit), u32::MAX, unit));
+        parts.extend(Part::build(st, from_unit(unit), u32::MAX, unit));
         SceneBvh { parts }
     }
 
@@ -267,13 +280,13 @@ impl SceneBvh {
     /// frame solved as a static scene ([`crate::solver::Solver::freeze_motion`])
     /// sees the same triangles as the static scene of that frame would.
     pub fn build_static(patches: &Patches) -> SceneBvh {
-        let (mut st, mut sp) = (Vec::new(), Vec::new());
+        let mut st = Tris::default();
         let unit = unit_scale(patches.diameter);
         for i in 0..patches.len() {
-            push_triangles(patches.polys[i].corners(), unit, i as u32, &mut st, &mut sp);
+            push_triangles(patches.polys[i].corners(), unit, i as u32, &mut st);
         }
         SceneBvh {
-            parts: Part::build(st, sp, from_unit(unit), u32::MAX, unit)
+            parts: Part::build(st, from_unit(unit), u32::MAX, unit)
                 .into_iter()
                 .collect(),
         }
@@ -508,11 +521,9 @@ impl SceneBvh {
                     let id = state.primitive_id as usize;
                     let tri = &part.tris[id];
                     if tri.aabb().intersect_aabb(&aabb) {
-                        let w = |v: Vec3A| {
-                            part.local_to_world
-                                .transform_point3(DVec3::new(v.x as f64, v.y as f64, v.z as f64))
-                        };
-                        if !f(part.tri_patch[id], [w(tri.v0), w(tri.v1), w(tri.v2)]) {
+                        let w = |v: DVec3| part.local_to_world.transform_point3(v);
+                        let [a, b, c] = part.tris64[id];
+                        if !f(part.tri_patch[id], [w(a), w(b), w(c)]) {
                             go_on = false;
                             break;
                         }
@@ -540,6 +551,7 @@ impl SceneBvh {
                     + std::mem::size_of_val(p.bvh.primitive_indices.as_slice())
                     + std::mem::size_of_val(p.tris.as_slice())
                     + std::mem::size_of_val(p.tri_patch.as_slice())
+                    + std::mem::size_of_val(p.tris64.as_slice())
             })
             .sum()
     }
@@ -566,7 +578,11 @@ fn from_unit(unit: f64) -> DAffine3 {
     DAffine3::from_scale(DVec3::splat(1.0 / unit))
 }
 
-fn push_triangles(v: &[DVec3], unit: f64, patch: u32, tris: &mut Vec<Triangle>, tp: &mut Vec<u32>) {
+/// Triangles of a part as they are gathered: f32 corners for the BVH, the patch of
+/// each, and the f64 corners (part space).
+type Tris = (Vec<Triangle>, Vec<u32>, Vec<[DVec3; 3]>);
+
+fn push_triangles(v: &[DVec3], unit: f64, patch: u32, (tris, tp, t64): &mut Tris) {
     let f = |p: DVec3| {
         let p = p * unit;
         Vec3A::new(p.x as f32, p.y as f32, p.z as f32)
@@ -577,6 +593,7 @@ fn push_triangles(v: &[DVec3], unit: f64, patch: u32, tris: &mut Vec<Triangle>, 
             v1: f(v[k]),
             v2: f(v[k + 1]),
         });
+        t64.push([v[0] * unit, v[k] * unit, v[k + 1] * unit]);
         tp.push(patch);
     }
 }

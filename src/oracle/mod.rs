@@ -960,16 +960,24 @@ pub fn size(elems: &ElementPool, e: ElementId) -> f64 {
     }
 }
 
+/// Sizes within this fraction of each other are equal to [`choose_split`]: two
+/// ends of one size (twin clusters of a symmetric room, equal tiles) split the
+/// receiver, and an element whose children would have exactly `min_area` may
+/// split. Compared exactly, the rounding of a scene scaled by 1000 chose the other
+/// end and built another hierarchy (issue 45, part 3).
+const SIZE_TIE: f64 = 1e-9;
+
 /// Chooses which end of a link to split: the larger one that can split (a surface
 /// element can split while its children keep at least `min_area`; a cluster always
-/// has children). `force` is set for links that must not stay (cluster self-links,
-/// clusters too close for the isotropic estimate).
+/// has children), sizes equal within `SIZE_TIE` (1e-9) splitting the receiver.
+/// `force` is set for links that must not stay (cluster self-links, clusters too
+/// close for the isotropic estimate).
 pub fn choose_split(elems: &ElementPool, r: ElementId, s: ElementId, min_area: f64) -> Split {
     let can = |e: ElementId| match elems.kind(e) {
         ElementKind::Cluster => true,
         ElementKind::Surface => {
             elems.nodes.as_slice()[e.ix()].child_count > 0
-                || elems.geoms.as_slice()[e.ix()].area >= 4.0 * min_area
+                || elems.geoms.as_slice()[e.ix()].area >= 4.0 * min_area * (1.0 - SIZE_TIE)
         }
     };
     let (cr, cs) = (can(r), can(s));
@@ -981,7 +989,7 @@ pub fn choose_split(elems: &ElementPool, r: ElementId, s: ElementId, min_area: f
         (true, false) => Split::Receiver,
         (false, true) => Split::Source,
         (true, true) => {
-            if size(elems, r) >= size(elems, s) {
+            if size(elems, r) >= size(elems, s) * (1.0 - SIZE_TIE) {
                 Split::Receiver
             } else {
                 Split::Source

@@ -61,6 +61,18 @@ pub fn build(
     Ok(Some(root))
 }
 
+/// Relative tolerance of the cluster split's comparisons ([`split_median`]):
+/// extents within it of each other are equal, and centroids are ordered on a grid
+/// of this fraction of the split axis's extent. Coplanar tiles and symmetric rooms
+/// put many centroids (and a room's width and depth) at exactly equal values, and a
+/// scene scaled by 1000 rounds them apart in either order: compared exactly, the
+/// cluster tree of the same scene in millimetres and in metres differed, and with
+/// it every refinement decision (issue 45, part 3).
+const SPLIT_TOLERANCE: f64 = 1.0 / (1u64 << 30) as f64;
+
+/// Splits `members` at the median centroid along the longest axis of the
+/// centroids' box. Ties (within [`SPLIT_TOLERANCE`]) go to the first axis and to
+/// the lower patch index, so the tree depends on the scene's shape, not its unit.
 fn split_median(patches: &Patches, mut members: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
     let c = |i: u32| patches.polys[i as usize].centroid();
     let mut lo = DVec3::splat(f64::INFINITY);
@@ -70,17 +82,25 @@ fn split_median(patches: &Patches, mut members: Vec<u32>) -> (Vec<u32>, Vec<u32>
         hi = hi.max(c(m));
     }
     let ext = hi - lo;
-    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+    let at_least = |a: f64, b: f64| a >= b * (1.0 - SPLIT_TOLERANCE);
+    let axis = if at_least(ext.x, ext.y) && at_least(ext.x, ext.z) {
         0
-    } else if ext.y >= ext.z {
+    } else if at_least(ext.y, ext.z) {
         1
     } else {
         2
     };
+    // Centroids on a grid of `SPLIT_TOLERANCE · extent` (integers below 2^31).
+    let step = ext[axis] * SPLIT_TOLERANCE;
+    let key = |i: u32| {
+        if step > 0.0 {
+            ((c(i)[axis] - lo[axis]) / step).round() as u64
+        } else {
+            0
+        }
+    };
     let mid = members.len() / 2;
-    members.select_nth_unstable_by(mid, |&a, &b| {
-        c(a)[axis].total_cmp(&c(b)[axis]).then(a.cmp(&b))
-    });
+    members.select_nth_unstable_by_key(mid, |&a| (key(a), a));
     let right = members.split_off(mid);
     (members, right)
 }
