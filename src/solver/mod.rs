@@ -335,8 +335,10 @@ pub struct SolveOptions {
     /// Leaf rows and final gathers take a cluster of several orientations whole
     /// where its facets say which side of each patch a point is on
     /// (`src/solver/facets.rs`), each facet at its own radiosity, instead of
-    /// opening it down to its surfaces. On by default (BENCHMARKS.md, "Scale", for
-    /// its time and error on `gen_cubes`). Scenes without motion only.
+    /// opening it down to its surfaces. Off by default: faster and as accurate on
+    /// `gen_cubes 20`, but at `gen_cubes 65` a facet counts the boxes of its cluster
+    /// that hide each other, and the leaf system made 12% more light than was
+    /// emitted (BENCHMARKS.md, "Scale"). Scenes without motion only.
     pub cluster_facets: bool,
 }
 
@@ -369,7 +371,7 @@ impl Default for SolveOptions {
             near_gap: 0.0,
             source_field: false,
             keep_passive: false,
-            cluster_facets: true,
+            cluster_facets: false,
             row_open_ratio: 0.25,
             cluster_open_ratio: CLUSTER_OPEN_RATIO,
         }
@@ -2412,10 +2414,8 @@ mod tests {
     #[test]
     fn a_facet_gathers_its_own_patches_and_hands_back_the_transpose() {
         let scene = crate::scene::cornell_box(true);
-        let opts = SolveOptions {
-            cluster_facets: true,
-            ..SolveOptions::default()
-        };
+        let mut opts = SolveOptions::default();
+        opts.cluster_facets = true;
         let s = Solver::new(&scene, opts).unwrap();
         let geoms = s.elems.geoms.as_slice();
         let nodes = s.elems.nodes.as_slice();
