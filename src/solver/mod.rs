@@ -2331,6 +2331,14 @@ mod tests {
         assert!(clipped_cosine(0.0, 0.04) > 0.04);
     }
 
+    /// The default options with the cluster facets on.
+    fn facet_opts() -> SolveOptions {
+        SolveOptions {
+            cluster_facets: true,
+            ..SolveOptions::default()
+        }
+    }
+
     /// A cluster of the Cornell blocks taken whole by its facets gives what its
     /// patches give (brute force: the exact factor of each patch under it, faces
     /// turned away included as 0), to the point-source estimate's error, at points
@@ -2338,11 +2346,7 @@ mod tests {
     #[test]
     fn a_cluster_taken_whole_by_its_facets_gives_what_its_patches_give() {
         let scene = crate::scene::cornell_box(true);
-        let opts = SolveOptions {
-            cluster_facets: true,
-            ..SolveOptions::default()
-        };
-        let s = Solver::new(&scene, opts).unwrap();
+        let s = Solver::new(&scene, facet_opts()).unwrap();
         let geoms = s.elems.geoms.as_slice();
         let nodes = s.elems.nodes.as_slice();
         let (mut used, mut worst, mut total) = (0, 0.0f64, 0.0);
@@ -2414,9 +2418,7 @@ mod tests {
     #[test]
     fn a_facet_gathers_its_own_patches_and_hands_back_the_transpose() {
         let scene = crate::scene::cornell_box(true);
-        let mut opts = SolveOptions::default();
-        opts.cluster_facets = true;
-        let s = Solver::new(&scene, opts).unwrap();
+        let s = Solver::new(&scene, facet_opts()).unwrap();
         let geoms = s.elems.geoms.as_slice();
         let nodes = s.elems.nodes.as_slice();
         let n = geoms.len();
