@@ -21,9 +21,13 @@
 //! ([`crate::oracle::point_cluster_visibility`]). The facets hold where the
 //! patches stand at the start: a scene with motion does not use them.
 //!
-//! What it costs: the cluster is gathered at its mean radiosity, not each
-//! orientation at its own, so a ceiling over boxes takes their dark sides for
-//! their bright tops; hence opt-in ([`super::SolveOptions::cluster_facets`]).
+//! Each facet is a source of its own, gathered at its own radiosity: the area mean
+//! of the patch roots and sub-cluster facets it sums ([`ClusterFacets::pull`],
+//! run after the hierarchy's pull; [`ClusterFacets::push_down`] its transpose).
+//! Row entries and final-gather terms name a facet by [`FACET_BIT`] and its index.
+//! Gathered at the cluster's mean instead, a ceiling over boxes took their dark
+//! sides for their bright tops (`tools/gen_cubes.py 20`: 3.66% off the emitters
+//! against 2.93% with the clusters opened, BENCHMARKS.md "Scale").
 
 use glam::DVec3;
 
@@ -35,6 +39,10 @@ pub const MAX_FACETS: usize = 8;
 
 /// Normals closer than this (`1 − cos`) share a facet.
 const SAME_NORMAL: f64 = 1e-9;
+
+/// A row entry's or a gather term's source with this bit set is facet
+/// `id & !FACET_BIT` ([`ClusterFacets::pull`]), not an element.
+pub const FACET_BIT: u32 = 1 << 31;
 
 /// The patches of one cluster facing one way. 36 bytes.
 #[derive(Clone, Copy, Debug)]
@@ -53,9 +61,10 @@ pub struct Facet {
 
 const _: () = assert!(std::mem::size_of::<Facet>() == 36);
 
-/// A facet as [`ClusterFacets::build`] sums it: normal, area, area moment, and
-/// the slab `[lo, hi]`.
-type Acc = (DVec3, f64, DVec3, f64, f64);
+/// A facet as [`ClusterFacets::build`] sums it: normal, area, area moment, the
+/// slab `[lo, hi]`, and its members `(child element, the child's facet index or
+/// `u32::MAX` for a patch root, area)`.
+type Acc = (DVec3, f64, DVec3, f64, f64, Vec<(u32, u32, f64)>);
 
 /// The facets of every cluster built at the start, as ranges of one array.
 #[derive(Debug, Default)]
@@ -64,6 +73,14 @@ pub struct ClusterFacets {
     /// normals); elements past `start.len() - 1` have none.
     start: Vec<u32>,
     facets: Vec<Facet>,
+    /// `members_start[f]..members_start[f + 1]` are facet `f`'s members in
+    /// `members`.
+    members_start: Vec<u32>,
+    /// `(source, area share)`: a patch root's element id, or [`FACET_BIT`] | a
+    /// sub-cluster's facet. 8 bytes each.
+    members: Vec<(u32, f32)>,
+    /// The cluster each facet belongs to.
+    owner: Vec<u32>,
 }
 
 impl ClusterFacets {
@@ -91,7 +108,8 @@ impl ClusterFacets {
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), d| {
                         (a.min(d), b.max(d))
                     });
-                lists[e] = Some(vec![(nrm, g.area, centroid * g.area, lo, hi)]);
+                let me = vec![(e as u32, u32::MAX, g.area)];
+                lists[e] = Some(vec![(nrm, g.area, centroid * g.area, lo, hi, me)]);
                 continue;
             }
             let node = nodes[e];
@@ -102,15 +120,18 @@ impl ClusterFacets {
                     ok = false;
                     break;
                 };
-                for &(nrm, a, m, lo, hi) in list {
+                let patch_root = geoms[ch as usize].patch != u32::MAX;
+                for (j, &(nrm, a, m, lo, hi, _)) in list.iter().enumerate() {
+                    let member = (ch, if patch_root { u32::MAX } else { j as u32 }, a);
                     match out.iter_mut().find(|f| f.0.dot(nrm) > 1.0 - SAME_NORMAL) {
                         Some(f) => {
                             f.1 += a;
                             f.2 += m;
                             f.3 = f.3.min(lo);
                             f.4 = f.4.max(hi);
+                            f.5.push(member);
                         }
-                        None => out.push((nrm, a, m, lo, hi)),
+                        None => out.push((nrm, a, m, lo, hi, vec![member])),
                     }
                 }
                 if out.len() > MAX_FACETS {
@@ -129,19 +150,112 @@ impl ClusterFacets {
             if geoms[e].patch != u32::MAX {
                 continue;
             }
-            for &(nrm, a, m, lo, hi) in list.iter().flatten() {
-                let c = if a > 0.0 { m / a } else { m };
+            for (nrm, a, m, lo, hi, _) in list.iter().flatten() {
+                let c = if *a > 0.0 { *m / *a } else { *m };
                 facets.push(Facet {
                     normal: nrm.as_vec3().to_array(),
-                    area: a as f32,
+                    area: *a as f32,
                     centroid: c.as_vec3().to_array(),
-                    lo: lo as f32,
-                    hi: hi as f32,
+                    lo: *lo as f32,
+                    hi: *hi as f32,
                 });
             }
         }
         start.push(facets.len() as u32);
-        ClusterFacets { start, facets }
+        let mut members_start = Vec::with_capacity(facets.len() + 1);
+        let mut members = Vec::new();
+        let mut owner = Vec::with_capacity(facets.len());
+        for (e, list) in lists.iter().enumerate() {
+            if geoms[e].patch != u32::MAX {
+                continue;
+            }
+            for (_, a, _, _, _, ms) in list.iter().flatten() {
+                members_start.push(members.len() as u32);
+                owner.push(e as u32);
+                for &(ch, j, am) in ms {
+                    let src = if j == u32::MAX {
+                        ch
+                    } else {
+                        FACET_BIT | (start[ch as usize] + j)
+                    };
+                    let w = if *a > 0.0 { am / *a } else { 0.0 };
+                    members.push((src, w as f32));
+                }
+            }
+        }
+        members_start.push(members.len() as u32);
+        ClusterFacets {
+            start,
+            facets,
+            members_start,
+            members,
+            owner,
+        }
+    }
+
+    /// How many facets there are.
+    pub fn count(&self) -> usize {
+        self.facets.len()
+    }
+
+    /// The cluster facet `f` belongs to.
+    pub fn owner(&self, f: u32) -> u32 {
+        self.owner[f as usize]
+    }
+
+    /// The index of cluster `e`'s first facet (its facets follow on).
+    pub fn first(&self, e: u32) -> u32 {
+        self.start[e as usize]
+    }
+
+    /// Each facet's radiosity, the area mean of its members, from the elements'
+    /// `b` as [`super::pull`] left them. Sub-cluster facets come after their
+    /// parents', so a reverse sweep is bottom-up.
+    pub fn pull(&self, b: &[[f64; 3]], out: &mut Vec<[f64; 3]>) {
+        out.clear();
+        out.resize(self.facets.len(), [0.0; 3]);
+        for f in (0..self.facets.len()).rev() {
+            let (m0, m1) = (
+                self.members_start[f] as usize,
+                self.members_start[f + 1] as usize,
+            );
+            let mut acc = [0.0; 3];
+            for &(src, w) in &self.members[m0..m1] {
+                let v = if src & FACET_BIT != 0 {
+                    out[(src & !FACET_BIT) as usize]
+                } else {
+                    b[src as usize]
+                };
+                for k in 0..3 {
+                    acc[k] += w as f64 * v[k];
+                }
+            }
+            out[f] = acc;
+        }
+    }
+
+    /// The transpose of [`ClusterFacets::pull`] on one value per source: what each
+    /// facet holds (`facet`, emptied) is handed to its members in the weights the
+    /// pull gives them, into the elements' `v` (patch roots), before
+    /// [`super::push_down`] takes it on to the leaves.
+    pub fn push_down(&self, facet: &mut [f64], v: &mut [f64]) {
+        for f in 0..self.facets.len() {
+            let x = std::mem::take(&mut facet[f]);
+            if x == 0.0 {
+                continue;
+            }
+            let (m0, m1) = (
+                self.members_start[f] as usize,
+                self.members_start[f + 1] as usize,
+            );
+            for &(src, w) in &self.members[m0..m1] {
+                if src & FACET_BIT != 0 {
+                    facet[(src & !FACET_BIT) as usize] += x * w as f64;
+                } else {
+                    v[src as usize] += x * w as f64;
+                }
+            }
+        }
     }
 
     /// The facets of cluster `e` (empty: it has none).

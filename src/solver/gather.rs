@@ -83,13 +83,12 @@ impl Terms {
     /// `Σ factor · visibility · B_element` into `sum`, with the factors rounded as
     /// [`PointCache`] keeps them, so that a point gathers the same value whether its
     /// terms were kept or computed afresh.
-    fn gather(&self, geoms: &[Geom], b: &[[f32; 3]], sum: &mut PointGather) {
+    fn gather(&self, s: &Solver, sum: &mut PointGather) {
         for &(e, f) in &self.fixed {
-            sum.add(&geoms[e as usize], b[e as usize], e, f64::from(f as f32));
+            s.add_term(sum, e, f64::from(f as f32));
         }
         for &(t, v) in &self.masked {
-            let e = t.elem as usize;
-            sum.add(&geoms[e], b[e], t.elem, t.f as f64 * v);
+            s.add_term(sum, t.elem, t.f as f64 * v);
         }
     }
 }
@@ -224,6 +223,21 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
 }
 
 impl Solver<'_> {
+    /// Adds the term `fv · B_e` of source `e` to `sum`: an element, or a facet
+    /// ([`FACET_BIT`]) at its own radiosity, placed as its cluster.
+    #[inline]
+    fn add_term(&self, sum: &mut PointGather, e: u32, fv: f64) {
+        let geoms = self.elems.geoms.as_slice();
+        let b = self.elems.radiosities.as_slice();
+        if e & FACET_BIT != 0 {
+            let f = e & !FACET_BIT;
+            let g = &geoms[self.facets.owner(f) as usize];
+            sum.add(g, self.facet_b[f as usize], e, fv);
+        } else {
+            sum.add(&geoms[e as usize], b[e as usize], e, fv);
+        }
+    }
+
     /// Rays from a reconstruction point to the surface element `gs` (4× to emitters).
     fn corner_rays_to(&self, gs: &Geom) -> u32 {
         let emitter = self.patches.emissions[gs.patch as usize]
@@ -646,8 +660,7 @@ impl Solver<'_> {
             let ck = (s as u32) << 1 | clear as u32;
             if let Some((fixed, masked)) = keep.and(cached).and_then(|c| c.get(ck)) {
                 for t in fixed {
-                    let e = t.elem as usize;
-                    sum.add(&geoms[e], b[e], t.elem, t.f as f64);
+                    self.add_term(&mut sum, t.elem, t.f as f64);
                 }
                 for t in masked {
                     let gs = &geoms[t.elem as usize];
@@ -660,8 +673,7 @@ impl Solver<'_> {
                     } else {
                         f64::from(t.vis_static)
                     };
-                    let e = t.elem as usize;
-                    sum.add(&geoms[e], b[e], t.elem, t.f as f64 * v);
+                    self.add_term(&mut sum, t.elem, t.f as f64 * v);
                 }
                 continue;
             }
@@ -703,7 +715,7 @@ impl Solver<'_> {
                     term.1 *= v;
                 }
             }
-            terms.gather(geoms, b, &mut sum);
+            terms.gather(self, &mut sum);
             // Terms on elements of this frame's refinement are not kept: the
             // next frame drops those elements.
             if let Some(w) = keep.filter(|_| admit || cached.is_some()) {

@@ -50,6 +50,7 @@ pub mod report;
 mod rows;
 pub mod spacetime;
 
+use facets::{FACET_BIT, MAX_FACETS};
 pub use reconstruct::Reconstruction;
 use rows::{ClusterPart, KeptCoef, RowEntries};
 use spacetime::SpaceTimeState;
@@ -333,11 +334,11 @@ pub struct SolveOptions {
     pub keep_passive: bool,
     /// Leaf rows and final gathers take a cluster of several orientations whole
     /// where its facets say which side of each patch a point is on
-    /// (`src/solver/facets.rs`), instead of opening it down to its surfaces. Off
-    /// by default: on `gen_cubes 20` it halves the time and the peak memory and takes the
-    /// error off the emitters from 2.9% to 3.7% (the ceiling gathers the boxes at
-    /// their mean, not their bright tops; BENCHMARKS.md, "Scale"). Scenes without
-    /// motion only.
+    /// (`src/solver/facets.rs`), each facet at its own radiosity, instead of
+    /// opening it down to its surfaces. Off by default: faster and as accurate on
+    /// `gen_cubes 20`, but at `gen_cubes 65` a facet counts the boxes of its cluster
+    /// that hide each other, and the leaf system made 12% more light than was
+    /// emitted (BENCHMARKS.md, "Scale"). Scenes without motion only.
     pub cluster_facets: bool,
 }
 
@@ -491,6 +492,8 @@ pub struct Solver<'a> {
     /// The facets of the clusters as they stood at the start or at
     /// [`Solver::freeze_motion`] ([`facets`]; unused in a scene with motion).
     facets: facets::ClusterFacets,
+    /// Each facet's radiosity as [`Solver::pull_pool`] last pulled it.
+    facet_b: Vec<[f32; 3]>,
     /// The leaf system: the leaves and their rows.
     sys: LeafSystem,
     /// Active links by receiver.
@@ -657,6 +660,7 @@ impl<'a> Solver<'a> {
             rho_max,
             emits_under: Vec::new(),
             facets: facets::ClusterFacets::default(),
+            facet_b: Vec::new(),
             sys: LeafSystem::default(),
             link_index: LinkIndex::default(),
             shapes: HashMap::new(),
@@ -1813,6 +1817,9 @@ impl<'a> Solver<'a> {
         for (out, v) in self.elems.radiosities.as_mut_slice().iter_mut().zip(&b) {
             *out = [v[0] as f32, v[1] as f32, v[2] as f32];
         }
+        let mut fb = Vec::new();
+        self.facets.pull(&b, &mut fb);
+        self.facet_b = fb.iter().map(|v| v.map(|x| x as f32)).collect();
         // Directional power, bottom-up: a surface's own, a cluster the sum of its
         // children's (surface children below a patch root are not needed); summed in
         // f64, stored in f32.
@@ -1988,6 +1995,17 @@ fn pull(nodes: &[Node], geoms: &[Geom], b: &mut [[f64; 3]]) {
     }
 }
 
+/// The value of row source or gather term `s`: element `s`'s in `b`, or, with
+/// [`FACET_BIT`], its facet's in `fb` ([`facets::ClusterFacets::pull`]).
+#[inline]
+fn source_value<T: Copy>(b: &[T], fb: &[T], s: u32) -> T {
+    if s & FACET_BIT != 0 {
+        fb[(s & !FACET_BIT) as usize]
+    } else {
+        b[s as usize]
+    }
+}
+
 /// The transpose of [`pull`] on one value per element: what an element holds is
 /// handed to its children in the weights the pull gives them (area over the
 /// children's summed area), down to the leaves.
@@ -2088,7 +2106,10 @@ mod tests {
             pulled[l.ix()] = [*g, 0.0, 0.0];
         }
         pull(nodes, geoms, &mut pulled);
+        let mut fb = Vec::new();
+        s.facets.pull(&pulled, &mut fb);
         let mut mass = vec![0.0; geoms.len()];
+        let mut facet_mass = vec![0.0; s.facets.count()];
         let mut gathers = vec![0.0; nl];
         let (mut area, mut scaled) = (0.0, 0.0);
         let mut worst_row: f64 = 0.0;
@@ -2099,9 +2120,15 @@ mod tests {
             );
             let a = geoms[s.sys.leaves[li].ix()].area;
             for k in r0..r1 {
-                let src = s.sys.row_sources[k] as usize;
-                gathers[li] += s.sys.row_scale[li] * s.sys.row_coefs[k] * pulled[src][0];
-                mass[src] += a * s.sys.row_scale[li] * s.sys.row_coefs[k];
+                let src = s.sys.row_sources[k];
+                let v = source_value(&pulled, &fb, src)[0];
+                gathers[li] += s.sys.row_scale[li] * s.sys.row_coefs[k] * v;
+                let m = a * s.sys.row_scale[li] * s.sys.row_coefs[k];
+                if src & FACET_BIT != 0 {
+                    facet_mass[(src & !FACET_BIT) as usize] += m;
+                } else {
+                    mass[src as usize] += m;
+                }
             }
             area += a;
             if s.sys.row_scale[li] != 1.0 {
@@ -2109,6 +2136,7 @@ mod tests {
                 worst_row = worst_row.max((gathers[li] - 1.0).abs());
             }
         }
+        s.facets.push_down(&mut facet_mass, &mut mass);
         push_down(nodes, geoms, &mut mass);
         let mut worst_col: f64 = 0.0;
         for ((leaf, gain), gathered) in s.sys.leaves.iter().zip(&s.sys.leaf_gain).zip(&gathers) {
@@ -2204,7 +2232,10 @@ mod tests {
                 s.sys.row_start[li + 1] as usize,
             );
             let row: f64 = (r0..r1)
-                .filter(|&k| geoms[s.sys.row_sources[k] as usize].patch == 0)
+                .filter(|&k| {
+                    let src = s.sys.row_sources[k];
+                    src & FACET_BIT == 0 && geoms[src as usize].patch == 0
+                })
                 .map(|k| s.sys.row_coefs[k])
                 .sum();
             eprintln!("leaf {li}: covered {covered:.2}, row {row:.4}, exact {exact:.4}");
@@ -2300,6 +2331,14 @@ mod tests {
         assert!(clipped_cosine(0.0, 0.04) > 0.04);
     }
 
+    /// The default options with the cluster facets on.
+    fn facet_opts() -> SolveOptions {
+        SolveOptions {
+            cluster_facets: true,
+            ..SolveOptions::default()
+        }
+    }
+
     /// A cluster of the Cornell blocks taken whole by its facets gives what its
     /// patches give (brute force: the exact factor of each patch under it, faces
     /// turned away included as 0), to the point-source estimate's error, at points
@@ -2307,11 +2346,7 @@ mod tests {
     #[test]
     fn a_cluster_taken_whole_by_its_facets_gives_what_its_patches_give() {
         let scene = crate::scene::cornell_box(true);
-        let opts = SolveOptions {
-            cluster_facets: true,
-            ..SolveOptions::default()
-        };
-        let s = Solver::new(&scene, opts).unwrap();
+        let s = Solver::new(&scene, facet_opts()).unwrap();
         let geoms = s.elems.geoms.as_slice();
         let nodes = s.elems.nodes.as_slice();
         let (mut used, mut worst, mut total) = (0, 0.0f64, 0.0);
@@ -2344,9 +2379,10 @@ mod tests {
                     weights: [1.0, 0.0, 0.0, 0.0],
                     count: 1,
                 };
-                let Some(k) = s.facet_factors(&q, n, e as u32, c, r) else {
+                let Some((ks, count)) = s.facet_factors(&q, n, e as u32, c, r) else {
                     continue;
                 };
+                let k: [f64; 4] = std::array::from_fn(|i| ks[..count].iter().map(|f| f.1[i]).sum());
                 let exact: f64 = under
                     .iter()
                     .map(|&p| {
@@ -2373,6 +2409,72 @@ mod tests {
         assert!(used >= 100, "{used} points taken whole by facets");
         // Measured: 997 points, worst 2.3%.
         assert!(worst < 0.05, "worst relative difference {worst}");
+    }
+
+    /// Each facet's radiosity ([`facets::ClusterFacets::pull`]) is the area mean of
+    /// the patches under its cluster that face its way (brute force over the
+    /// subtree), and [`facets::ClusterFacets::push_down`] is its transpose:
+    /// `⟨pull b, m⟩ = ⟨b, push m⟩` for arbitrary `b` and `m`.
+    #[test]
+    fn a_facet_gathers_its_own_patches_and_hands_back_the_transpose() {
+        let scene = crate::scene::cornell_box(true);
+        let s = Solver::new(&scene, facet_opts()).unwrap();
+        let geoms = s.elems.geoms.as_slice();
+        let nodes = s.elems.nodes.as_slice();
+        let n = geoms.len();
+        // Arbitrary values on the leaves, pulled up the hierarchy.
+        let mut b: Vec<[f64; 3]> = (0..n)
+            .map(|e| {
+                let h = oracle::hash3(7, e as u64, 1) as f64 / u64::MAX as f64;
+                [h, 1.0 - h, 0.5 * h]
+            })
+            .collect();
+        pull(nodes, geoms, &mut b);
+        let mut fb = Vec::new();
+        s.facets.pull(&b, &mut fb);
+        assert!(s.facets.count() >= 10, "{} facets", s.facets.count());
+        let mut checked = 0;
+        for e in 0..n as u32 {
+            for (j, f) in s.facets.of(e).iter().enumerate() {
+                let nf = DVec3::from_array(f.normal.map(f64::from));
+                let (mut acc, mut area) = (0.0, 0.0);
+                let mut stack = vec![e];
+                while let Some(x) = stack.pop() {
+                    let g = &geoms[x as usize];
+                    if g.patch != u32::MAX {
+                        // The facet keeps its normal in f32.
+                        if DVec3::from_array(g.normal).dot(nf) > 1.0 - 1e-6 {
+                            acc += g.area * b[x as usize][1];
+                            area += g.area;
+                        }
+                    } else {
+                        let nd = nodes[x as usize];
+                        stack.extend(nd.first_child..nd.first_child + nd.child_count);
+                    }
+                }
+                let got = fb[(s.facets.first(e) + j as u32) as usize][1];
+                assert!(
+                    (got - acc / area).abs() < 1e-6,
+                    "cluster {e} facet {j}: {got} against {}",
+                    acc / area
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked >= 10);
+        // The transpose, on the first channel.
+        let m: Vec<f64> = (0..s.facets.count())
+            .map(|f| oracle::hash3(9, f as u64, 2) as f64 / u64::MAX as f64)
+            .collect();
+        let lhs: f64 = fb.iter().zip(&m).map(|(v, w)| v[0] * w).sum();
+        let mut fm = m.clone();
+        let mut v = vec![0.0; n];
+        s.facets.push_down(&mut fm, &mut v);
+        let rhs: f64 = (0..n).map(|e| v[e] * b[e][0]).sum();
+        assert!(
+            (lhs - rhs).abs() < 1e-9 * lhs.abs().max(1.0),
+            "{lhs} against {rhs}"
+        );
     }
 
     #[test]

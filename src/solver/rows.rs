@@ -240,9 +240,11 @@ impl Solver<'_> {
         }
         let node = elems.nodes.as_slice()[s as usize];
         if sides[..q.count].contains(&0) && node.child_count > 0 {
-            if let Some(k) = self.facet_factors(q, n, s, c, r) {
-                if k.iter().any(|&ki| ki > 0.0) {
-                    part(s, k);
+            if let Some((ks, count)) = self.facet_factors(q, n, s, c, r) {
+                for &(f, k) in &ks[..count] {
+                    if k.iter().any(|&ki| ki > 0.0) {
+                        part(FACET_BIT | f, k);
+                    }
                 }
                 return;
             }
@@ -268,14 +270,16 @@ impl Solver<'_> {
         part(s, k);
     }
 
-    /// The factors from the points `q` (normal `n`) to cluster `s` (bounding
-    /// sphere `c`, `r`) taken whole by its facets ([`super::facets`]): `None`
-    /// without [`SolveOptions::cluster_facets`], in a scene with motion, for a cluster with no facets, where a point is nearer
-    /// than [`SolveOptions::cluster_open_ratio`] allows, or where a facet cannot
-    /// tell which side of its patches a point is on. Each facet in front of a
-    /// point gives `A_f (n_f · v) cos θ / (π d²)` from its centroid, the
-    /// receiver's cosine clipped to the cluster's sphere as the cone's estimate
-    /// clips it.
+    /// The factors from the points `q` (normal `n`) to each facet of cluster `s`
+    /// (bounding sphere `c`, `r`) taken whole ([`super::facets`]): `(facet, factor
+    /// at each point)` for the first `count` of them; `None` without
+    /// [`SolveOptions::cluster_facets`], in a scene with motion, for a cluster with
+    /// no facets, where a point is nearer than [`SolveOptions::cluster_open_ratio`]
+    /// allows, or where a facet cannot tell which side of its patches a point is
+    /// on. Each facet in front of a point gives `A_f (n_f · v) cos θ / (π d²)` from
+    /// its centroid, the receiver's cosine clipped to the cluster's sphere as the
+    /// cone's estimate clips it; each is a source of its own, at its own radiosity.
+    #[allow(clippy::type_complexity)]
     pub(super) fn facet_factors(
         &self,
         q: &oracle::Samples,
@@ -283,7 +287,7 @@ impl Solver<'_> {
         s: u32,
         c: DVec3,
         r: f64,
-    ) -> Option<[f64; 4]> {
+    ) -> Option<([(u32, [f64; 4]); MAX_FACETS], usize)> {
         if !self.opts.cluster_facets || self.has_motion() {
             return None;
         }
@@ -291,16 +295,18 @@ impl Solver<'_> {
         if facets.is_empty() {
             return None;
         }
+        let first = self.facets.first(s);
         let ratio = self.opts.cluster_open_ratio;
-        let mut k = [0.0; 4];
-        for (ki, &x) in k.iter_mut().zip(&q.points).take(q.count) {
+        let mut ks: [(u32, [f64; 4]); MAX_FACETS] =
+            std::array::from_fn(|j| (first + j as u32, [0.0; 4]));
+        for (i, &x) in q.points.iter().enumerate().take(q.count) {
             let d = (x - c).length();
             if d.is_nan() || r >= ratio * d {
                 return None;
             }
             // The offsets are kept in f32.
             let tol = 1e-6 * (self.patches.diameter + x.abs().max_element());
-            for f in facets {
+            for (j, f) in facets.iter().enumerate() {
                 if !super::facets::side(f, x, tol)? {
                     continue;
                 }
@@ -310,10 +316,10 @@ impl Solver<'_> {
                 let nf = DVec3::from_array(f.normal.map(f64::from));
                 let projected = f.area as f64 * nf.dot(v).max(0.0);
                 let cos = clipped_cosine(-n.dot(v), (r * r / d2).min(1.0));
-                *ki += projected * cos / (std::f64::consts::PI * d2);
+                ks[j].1[i] = projected * cos / (std::f64::consts::PI * d2);
             }
         }
-        Some(k)
+        Some((ks, facets.len()))
     }
 
     /// A leaf's row entries for the chain link `l` to cluster `s`: the parts of
@@ -355,12 +361,15 @@ impl Solver<'_> {
         }
         let geoms = self.elems.geoms.as_slice();
         let patch = geoms[leaf.ix()].patch;
+        // The facets of one cluster come one after another and share its rays.
+        let mut facet_vis: Option<(u32, f64)> = None;
         self.cluster_parts(q, n, s, &mut |e, k| {
             let coef: f64 = (0..q.count).map(|i| q.weights[i] * k[i]).sum::<f64>();
             if coef <= 0.0 {
                 return;
             }
-            if geoms[e as usize].patch != u32::MAX {
+            let facet = e & FACET_BIT != 0;
+            if !facet && geoms[e as usize].patch != u32::MAX {
                 let (coef, v) = self.hidden_row_coef(leaf, l, e, q, n, RowMasks::None).0;
                 // Rounded once, so a reused part equals the first.
                 let (coef, v) = match kept.as_deref_mut() {
@@ -379,9 +388,16 @@ impl Solver<'_> {
                 self.push_opened(q, n, e, coef, v, row, None);
                 return;
             }
-            let v: f64 = {
+            // A facet is seen by its cluster's rays.
+            let ce = if facet {
+                self.facets.owner(e & !FACET_BIT)
+            } else {
+                e
+            };
+            let memo = facet_vis.filter(|&(c, _)| facet && c == ce);
+            let v: f64 = memo.map(|m| m.1).unwrap_or_else(|| {
                 let m = (self.opts.cluster_rays / q.count as u32).max(1);
-                let key = oracle::hash3(self.opts.seed ^ 0xc105, e as u64, patch as u64);
+                let key = oracle::hash3(self.opts.seed ^ 0xc105, ce as u64, patch as u64);
                 // A point whose rays all fall below its horizon or on faces
                 // turned away counts none: it takes the link's fraction, not 0
                 // (the estimate still gives it the part of the sphere above).
@@ -393,7 +409,7 @@ impl Solver<'_> {
                             q.points[i],
                             n,
                             patch,
-                            ElementId(e),
+                            ElementId(ce),
                             m,
                             oracle::hash3(key, i as u64, 3),
                             SOURCES_BY_POWER,
@@ -401,7 +417,10 @@ impl Solver<'_> {
                         q.weights[i] * if rays > 0 { v } else { vis }
                     })
                     .sum()
-            };
+            });
+            if facet {
+                facet_vis = Some((ce, v));
+            }
             if v > 0.0 {
                 let entry = match kept.as_deref_mut() {
                     Some(k) => {
@@ -1225,6 +1244,8 @@ impl Solver<'_> {
             scratch_b[l.ix()] = [g * x[li * 3], g * x[li * 3 + 1], g * x[li * 3 + 2]];
         }
         pull(nodes, geoms, scratch_b);
+        let mut fb = Vec::new();
+        self.facets.pull(scratch_b, &mut fb);
         // Gather each leaf's row, then B − ρ H.
         let b = &*scratch_b;
         out.par_chunks_mut(3)
@@ -1240,8 +1261,9 @@ impl Solver<'_> {
                     .iter()
                     .zip(&self.sys.row_coefs[r0..r1])
                 {
+                    let bs = source_value(b, &fb, *s);
                     for k in 0..3 {
-                        h[k] += c * b[*s as usize][k];
+                        h[k] += c * bs[k];
                     }
                 }
                 let rho = self.patches.rhos[geoms[self.sys.leaves[li].ix()].patch as usize];
@@ -1363,28 +1385,41 @@ impl Solver<'_> {
         };
         // Row sums of `K` weighed by the pulled gains.
         let mut pulled = vec![[0.0; 3]; geoms.len()];
+        let mut fb = Vec::new();
+        let facets = &self.facets;
         let mut row_sums = |g: &[f64]| -> Vec<f64> {
             pulled.fill([0.0; 3]);
             for (&l, gl) in self.sys.leaves.iter().zip(g) {
                 pulled[l.ix()] = [*gl, 0.0, 0.0];
             }
             pull(nodes, geoms, &mut pulled);
-            let pulled = &pulled;
+            facets.pull(&pulled, &mut fb);
+            let (pulled, fb) = (&pulled, &fb);
             (0..nl)
                 .into_par_iter()
-                .map(|li| rows(li).map(|(s, c)| c * pulled[*s as usize][0]).sum())
+                .map(|li| {
+                    rows(li)
+                        .map(|(s, c)| c * source_value(pulled, fb, *s)[0])
+                        .sum()
+                })
                 .collect()
         };
         // Column masses `Σ_i A_i r_i K̃_iℓ`.
         let mut mass = vec![0.0; geoms.len()];
+        let mut facet_mass = vec![0.0; facets.count()];
         let mut col_masses = |r: &[f64]| -> Vec<f64> {
             mass.fill(0.0);
             for li in 0..nl {
                 let w = areas[li] * r[li];
                 for (s, c) in rows(li) {
-                    mass[*s as usize] += w * c;
+                    if *s & FACET_BIT != 0 {
+                        facet_mass[(*s & !FACET_BIT) as usize] += w * c;
+                    } else {
+                        mass[*s as usize] += w * c;
+                    }
                 }
             }
+            facets.push_down(&mut facet_mass, &mut mass);
             push_down(nodes, geoms, &mut mass);
             self.sys.leaves.iter().map(|l| mass[l.ix()]).collect()
         };
@@ -1482,6 +1517,8 @@ impl Solver<'_> {
             }
             pull(self.elems.nodes.as_slice(), geoms, &mut b);
         }
+        let mut fb = Vec::new();
+        self.facets.pull(&b, &mut fb);
         let (mut absorbed, mut emitted) = (0.0, 0.0);
         for (li, &leaf) in self.sys.leaves.iter().enumerate() {
             let (r0, r1) = (
@@ -1496,8 +1533,9 @@ impl Solver<'_> {
                 .iter()
                 .zip(&self.sys.row_coefs[r0..r1])
             {
+                let bs = source_value(&b, &fb, *s);
                 for k in 0..3 {
-                    h[k] += r * c * b[*s as usize][k];
+                    h[k] += r * c * bs[k];
                 }
             }
             for ((hk, rho), e) in h

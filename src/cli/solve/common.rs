@@ -350,15 +350,17 @@ pub struct AccuracyArgs {
     pub source_field: bool,
     /// Take a cluster whose patches face a few ways (a box, a group of boxes)
     /// whole in the leaf rows and final gathers wherever each of its orientations
-    /// is wholly in front of or behind the point, instead of opening it down to
-    /// its faces.
+    /// is wholly in front of or behind the point, each orientation at its own
+    /// radiosity, instead of opening it down to its faces.
     ///
-    /// Faster and leaner in rooms cluttered with boxes (`gen_cubes 20`: half the
-    /// time and peak memory), less accurate: the cluster is gathered at its mean
-    /// radiosity, so a ceiling over boxes sees their sides as bright as their tops
-    /// (error off the emitters 2.9% → 3.7%; BENCHMARKS.md, "Scale"). Static scenes;
-    /// a scene with motion ignores it.
-    #[arg(long)]
+    /// Faster and leaner in rooms cluttered with boxes, and as accurate at
+    /// `gen_cubes 20` (107 CPU s against 197, 2.67% off the emitters against
+    /// 2.85%), but at `gen_cubes 65` a facet counts boxes of its cluster that hide
+    /// each other and the solve is refused (its leaf system makes 12% more light than
+    /// is emitted; BENCHMARKS.md, "Scale"). Static scenes; a scene with motion
+    /// ignores it.
+    #[arg(long, default_value_t = SolveOptions::default().cluster_facets,
+          num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
     pub cluster_facets: bool,
     /// Solve a reconstruction point that faces a surface across a gap narrower than
     /// this fraction of the square root of the surface's area together with its foot
