@@ -3,14 +3,19 @@
 // black background), orbits from play's start camera (OrbitControls) and flies with the
 // keys (WASD/arrows, Q/E, shift: camera and orbit target move together, R: back to the
 // start), scrubs and plays time, and asks the server for the probe answer where a
-// surface is clicked. State for tests and benchmarks is on `window.rhierView`.
+// surface is clicked. Dragging with the right button turns the camera where it
+// stands (mouse-look). State for tests and benchmarks is on `window.rhierView`.
 import * as THREE from 'three';
 import { OrbitControls } from '/vendor/OrbitControls.js';
 import { parseFrame, parseMesh } from '/wire.js';
 
 const $ = (id) => document.getElementById(id);
 const api = {
-  stats: { ready: false, firstFrameMs: null, framesShown: 0, playStarted: null, lastProbe: null, meshes: 0 },
+  stats: { ready: false, firstFrameMs: null, framesShown: 0, playStarted: null, lastProbe: null, meshes: 0, times: {} },
+  // stats.times: milliseconds spent, and answers received, by kind: `frame` and `mesh` from asking
+  // to parsed (the server's time, the transfer and the parse), `install` (a new
+  // mesh to the GPU), `upload` (colours and transforms), `draw` (handing the draw
+  // to WebGL) (benchmarks).
 };
 window.rhierView = api;
 
@@ -58,6 +63,7 @@ let info = null;
 let bounds = new THREE.Sphere(); // the scene at the first frame: fly speed, clip planes
 let mesh = { key: null, objects: new Map() }; // object index -> THREE.Mesh
 let shownFrame = null;
+const AHEAD = 8; // frames asked for ahead while playing
 const frames = new Map(); // `${shading}|${k}` -> Promise<frame>
 const meshes = new Map(); // key -> Promise<parsed mesh>
 const colorsById = new Map(); // colour id -> Uint16Array, the last few received
@@ -102,6 +108,18 @@ function resize() {
   render();
 }
 
+function spent(kind, t0) {
+  const t = (api.stats.times[kind] ||= { ms: 0, n: 0 });
+  t.ms += performance.now() - t0;
+  t.n += 1;
+}
+async function timedFetch(kind, url, parse) {
+  const t0 = performance.now();
+  const out = parse(await fetchBinary(url));
+  spent(kind, t0);
+  return out;
+}
+
 async function fetchBinary(url) {
   const r = await fetch(url);
   if (!r.ok) throw new Error(`${url}: ${r.status} ${await r.text()}`);
@@ -130,7 +148,10 @@ function frameAt(k) {
   if (!frames.has(key)) {
     const t = frameTime(k);
     const have = colorsById.has(latestColors) ? `&have=${latestColors}` : '';
-    frames.set(key, fetchBinary(`/api/frame?t=${t}&shading=${shading()}${have}`).then((b) => keep(parseFrame(b))));
+    // A frame whose live leaves differ from the mesh's has its mesh asked for too.
+    const frame = timedFetch('frame', `/api/frame?t=${t}&shading=${shading()}${have}`, parseFrame).then(keep);
+    frame.then((f) => mesh.key !== f.key && meshFor(f.key, f.t)).catch(() => {});
+    frames.set(key, frame);
     if (frames.size > 64) frames.delete(frames.keys().next().value);
   }
   return frames.get(key);
@@ -139,8 +160,9 @@ function frameAt(k) {
 function meshFor(key, t) {
   const k = key.toString();
   if (!meshes.has(k)) {
-    meshes.set(k, fetchBinary(`/api/mesh?t=${t}`).then(parseMesh));
-    if (meshes.size > 4) meshes.delete(meshes.keys().next().value);
+    meshes.set(k, timedFetch('mesh', `/api/mesh?t=${t}`, parseMesh));
+    // As many as the frames asked ahead can need, each live-leaf change its own.
+    if (meshes.size > AHEAD + 2) meshes.delete(meshes.keys().next().value);
   }
   return meshes.get(k);
 }
@@ -172,8 +194,14 @@ function install(parsed) {
 }
 
 async function show(frame) {
-  if (mesh.key !== frame.key) install(await meshFor(frame.key, frame.t));
+  if (mesh.key !== frame.key) {
+    const parsed = await meshFor(frame.key, frame.t);
+    const t0 = performance.now();
+    install(parsed);
+    spent('install', t0);
+  }
   const colors = uploadedColors === frame.colorsId ? null : await colorsOf(frame);
+  const t0 = performance.now();
   material.uniforms.scale.value = frame.scale;
   for (const m of mesh.objects.values()) {
     const o = m.userData.object;
@@ -190,7 +218,10 @@ async function show(frame) {
   uploadedColors = frame.colorsId;
   shownFrame = frame;
   $('clock').textContent = `t = ${frame.t.toFixed(3)} s`;
+  spent('upload', t0);
+  const t1 = performance.now();
   render();
+  spent('draw', t1);
   api.stats.framesShown += 1;
 }
 
@@ -203,8 +234,7 @@ async function goTo(k) {
 }
 
 // Playing: one frame after another at the chosen fps, never faster than the data
-// arrive; the next frames are asked for ahead of time.
-const AHEAD = 8;
+// arrive; the next AHEAD frames (and their meshes) are asked for ahead of time.
 let playing = false;
 async function play() {
   if (playing) return;
@@ -252,10 +282,10 @@ function setupTime() {
 const raycaster = new THREE.Raycaster();
 let down = null;
 canvas.addEventListener('pointerdown', (e) => {
-  down = [e.clientX, e.clientY];
+  down = e.button === 0 ? [e.clientX, e.clientY] : null;
 });
 canvas.addEventListener('pointerup', async (e) => {
-  if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 4) return;
+  if (e.button !== 0 || !down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 4) return;
   const r = canvas.getBoundingClientRect();
   const ndc = new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1);
   await probeAt(ndc);
@@ -383,6 +413,42 @@ function step(now) {
     controls.update();
   }
   requestAnimationFrame(step);
+}
+
+// Looking: dragging with the right button turns the camera where it stands, LOOK
+// radians per pixel: right/left about the up direction, up/down about the right one
+// (kept short of straight up or down); the orbit target turns with it at its
+// distance, so that W then flies where the camera looks. (OrbitControls' right-button
+// pan is left to shift/ctrl + left drag.)
+const LOOK = Math.PI / 720; // 0.25° a pixel
+const STEEPEST = Math.PI / 2 - 0.01;
+controls.mouseButtons.RIGHT = null;
+let looking = null; // the pointer's last position while the right button is down
+canvas.addEventListener('pointerdown', (e) => {
+  if (e.button !== 2) return;
+  looking = [e.clientX, e.clientY];
+  canvas.setPointerCapture(e.pointerId);
+});
+canvas.addEventListener('pointermove', (e) => {
+  if (!looking) return;
+  const [dx, dy] = [e.clientX - looking[0], e.clientY - looking[1]];
+  looking = [e.clientX, e.clientY];
+  turn(-dx * LOOK, -dy * LOOK);
+});
+canvas.addEventListener('pointerup', (e) => {
+  if (e.button === 2) looking = null;
+});
+function turn(yaw, pitch) {
+  const up = camera.up.clone().normalize();
+  const offset = controls.target.clone().sub(camera.position);
+  const distance = offset.length();
+  const dir = offset.normalize().applyAxisAngle(up, yaw);
+  const right = dir.clone().cross(up).normalize();
+  const elevation = Math.asin(THREE.MathUtils.clamp(dir.dot(up), -1, 1));
+  const to = THREE.MathUtils.clamp(elevation + pitch, -STEEPEST, STEEPEST);
+  dir.applyAxisAngle(right, to - elevation);
+  controls.target.copy(camera.position).addScaledVector(dir, distance);
+  controls.update();
 }
 
 // Clip planes that keep the scene in view wherever the camera has gone.

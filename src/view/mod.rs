@@ -41,7 +41,7 @@ use crate::store::Reader;
 pub use server::serve;
 
 /// Frames kept for requests at the same time (the mesh and colours of one time).
-const KEPT_FRAMES: usize = 4;
+const KEPT_FRAMES: usize = 12;
 
 /// An answer: HTTP status, media type and body.
 #[derive(Clone, Debug, PartialEq)]
