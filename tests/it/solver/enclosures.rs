@@ -55,7 +55,8 @@ fn check_uniform(name: &str, polys: &[Polygon], rhos: &[f64], tol: f64) {
 /// The rows of a tiled room sum to 1: at `ρ = 0.5` (no balancing at this level of
 /// error), every corner of the room tiled 8 × 8 per wall is within 1% of 2. Before
 /// the cluster estimate was confined to clusters facing the point whole, this room
-/// came out at 7.1–7.7 for the exact 5 at `ρ = 0.8`.
+/// came out at 7.1–7.7 for the exact 5 at `ρ = 0.8`. The tilings and the mixed
+/// box hold 1% up to `ρ = 0.999` (measured 2026-11-29: worst 0.62%, at 0.9).
 #[test]
 fn tiled_rooms_reach_e_over_one_minus_rho() {
     let (lo, hi) = (DVec3::ZERO, DVec3::new(6.0, 3.0, 6.0));
@@ -65,12 +66,17 @@ fn tiled_rooms_reach_e_over_one_minus_rho() {
         Tiling::TJunctions(4),
     ] {
         let polys = shapes::tiled_box(lo, hi, tiling, true, M);
-        check_uniform(&format!("room {tiling:?}"), &polys, &[0.5, 0.8], 0.01);
+        check_uniform(
+            &format!("room {tiling:?}"),
+            &polys,
+            &[0.5, 0.8, 0.9, 0.99, 0.999],
+            0.01,
+        );
     }
     check_uniform(
         "mixed triangles and quads",
         &shapes::mixed_box(lo, hi, 4, M),
-        &[0.8],
+        &[0.8, 0.99, 0.999],
         0.01,
     );
 }
