@@ -44,6 +44,28 @@ const SAME_NORMAL: f64 = 1e-9;
 /// `id & !FACET_BIT` ([`ClusterFacets::pull`]), not an element.
 pub const FACET_BIT: u32 = 1 << 31;
 
+/// The value of row source, gather term or facet member `s`: element `s`'s in
+/// `b`, or, with [`FACET_BIT`], its facet's in `fb` ([`ClusterFacets::pull`]).
+#[inline]
+pub fn source_value<T: Copy>(b: &[T], fb: &[T], s: u32) -> T {
+    if s & FACET_BIT != 0 {
+        fb[(s & !FACET_BIT) as usize]
+    } else {
+        b[s as usize]
+    }
+}
+
+/// The slot of `s` as [`source_value`] reads it, to add to (column masses, the
+/// transpose of a pull).
+#[inline]
+pub fn source_slot<'a, T>(b: &'a mut [T], fb: &'a mut [T], s: u32) -> &'a mut T {
+    if s & FACET_BIT != 0 {
+        &mut fb[(s & !FACET_BIT) as usize]
+    } else {
+        &mut b[s as usize]
+    }
+}
+
 /// The patches of one cluster facing one way. 36 bytes.
 #[derive(Clone, Copy, Debug)]
 pub struct Facet {
@@ -221,11 +243,7 @@ impl ClusterFacets {
             );
             let mut acc = [0.0; 3];
             for &(src, w) in &self.members[m0..m1] {
-                let v = if src & FACET_BIT != 0 {
-                    out[(src & !FACET_BIT) as usize]
-                } else {
-                    b[src as usize]
-                };
+                let v = source_value(b, out, src);
                 for k in 0..3 {
                     acc[k] += w as f64 * v[k];
                 }
@@ -249,11 +267,7 @@ impl ClusterFacets {
                 self.members_start[f + 1] as usize,
             );
             for &(src, w) in &self.members[m0..m1] {
-                if src & FACET_BIT != 0 {
-                    facet[(src & !FACET_BIT) as usize] += x * w as f64;
-                } else {
-                    v[src as usize] += x * w as f64;
-                }
+                *source_slot(v, facet, src) += x * w as f64;
             }
         }
     }

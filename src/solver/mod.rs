@@ -50,7 +50,7 @@ pub mod report;
 mod rows;
 pub mod spacetime;
 
-use facets::{FACET_BIT, MAX_FACETS};
+use facets::{FACET_BIT, MAX_FACETS, source_slot, source_value};
 pub use reconstruct::Reconstruction;
 use rows::{ClusterPart, KeptCoef, RowEntries};
 use spacetime::SpaceTimeState;
@@ -1995,17 +1995,6 @@ fn pull(nodes: &[Node], geoms: &[Geom], b: &mut [[f64; 3]]) {
     }
 }
 
-/// The value of row source or gather term `s`: element `s`'s in `b`, or, with
-/// [`FACET_BIT`], its facet's in `fb` ([`facets::ClusterFacets::pull`]).
-#[inline]
-fn source_value<T: Copy>(b: &[T], fb: &[T], s: u32) -> T {
-    if s & FACET_BIT != 0 {
-        fb[(s & !FACET_BIT) as usize]
-    } else {
-        b[s as usize]
-    }
-}
-
 /// The transpose of [`pull`] on one value per element: what an element holds is
 /// handed to its children in the weights the pull gives them (area over the
 /// children's summed area), down to the leaves.
@@ -2124,11 +2113,7 @@ mod tests {
                 let v = source_value(&pulled, &fb, src)[0];
                 gathers[li] += s.sys.row_scale[li] * s.sys.row_coefs[k] * v;
                 let m = a * s.sys.row_scale[li] * s.sys.row_coefs[k];
-                if src & FACET_BIT != 0 {
-                    facet_mass[(src & !FACET_BIT) as usize] += m;
-                } else {
-                    mass[src as usize] += m;
-                }
+                *source_slot(&mut mass, &mut facet_mass, src) += m;
             }
             area += a;
             if s.sys.row_scale[li] != 1.0 {

@@ -1412,11 +1412,7 @@ impl Solver<'_> {
             for li in 0..nl {
                 let w = areas[li] * r[li];
                 for (s, c) in rows(li) {
-                    if *s & FACET_BIT != 0 {
-                        facet_mass[(*s & !FACET_BIT) as usize] += w * c;
-                    } else {
-                        mass[*s as usize] += w * c;
-                    }
+                    *source_slot(&mut mass, &mut facet_mass, *s) += w * c;
                 }
             }
             facets.push_down(&mut facet_mass, &mut mass);
