@@ -178,7 +178,8 @@ function pooled(object, vertices, indices) {
   let m = pool.get(object);
   if (m && m.geometry.getAttribute('position').count >= vertices && m.geometry.index.count >= indices) return m;
   if (m) m.geometry.dispose();
-  const room = (n) => Math.ceil(n * 1.5);
+  // Exactly the first mesh's size (a still scene's one mesh), half again when outgrown.
+  const room = (n) => (m ? Math.ceil(n * 1.5) : n);
   const geometry = new THREE.BufferGeometry();
   const attribute = (a, size) => new THREE.BufferAttribute(a, size).setUsage(THREE.DynamicDrawUsage);
   geometry.setAttribute('position', attribute(new Float32Array(3 * room(vertices)), 3));
