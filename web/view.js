@@ -167,26 +167,61 @@ function meshFor(key, t) {
   return meshes.get(k);
 }
 
-function install(parsed) {
-  for (const m of mesh.objects.values()) {
-    scene.remove(m);
-    m.geometry.dispose();
+// Each object's mesh is kept across meshes (`pool`): a new mesh of the object is copied
+// into its buffers and only the part in use is uploaded (`addUpdateRange`) and drawn
+// (`setDrawRange`); the buffers are allocated anew, half again as large, only when
+// a mesh outgrows them. A moving scene whose live leaves change every frame thus
+// reuses its GPU buffers instead of allocating new ones each frame.
+const pool = new Map(); // object index -> THREE.Mesh, in the scene or not
+
+function pooled(object, vertices, indices) {
+  let m = pool.get(object);
+  if (m && m.geometry.getAttribute('position').count >= vertices && m.geometry.index.count >= indices) return m;
+  if (m) m.geometry.dispose();
+  // Exactly the first mesh's size (a still scene's one mesh), half again when outgrown.
+  const room = (n) => (m ? Math.ceil(n * 1.5) : n);
+  const geometry = new THREE.BufferGeometry();
+  const attribute = (a, size) => new THREE.BufferAttribute(a, size).setUsage(THREE.DynamicDrawUsage);
+  geometry.setAttribute('position', attribute(new Float32Array(3 * room(vertices)), 3));
+  const colors = new THREE.Float16BufferAttribute(new Uint16Array(3 * room(vertices)), 3);
+  geometry.setAttribute('color', colors.setUsage(THREE.DynamicDrawUsage));
+  geometry.setIndex(attribute(new Uint32Array(room(indices)), 1));
+  if (!m) {
+    m = new THREE.Mesh(geometry, material);
+    m.matrixAutoUpdate = false;
+    m.frustumCulled = false;
+    pool.set(object, m);
+  } else {
+    m.geometry = geometry;
   }
+  return m;
+}
+
+// Copies `data` to the start of `attr` and uploads that part only.
+function fill(attr, data) {
+  attr.array.set(data);
+  attr.clearUpdateRanges();
+  attr.addUpdateRange(0, data.length);
+  attr.needsUpdate = true;
+}
+
+function install(parsed) {
+  for (const m of mesh.objects.values()) scene.remove(m);
   uploadedColors = 0;
   mesh = { key: parsed.key, objects: new Map(), groups: parsed.groups };
   for (const g of parsed.groups) {
-    const geometry = new THREE.BufferGeometry();
-    geometry.setAttribute('position', new THREE.BufferAttribute(g.positions, 3));
-    const colors = new THREE.Float16BufferAttribute(new Uint16Array(g.positions.length), 3);
-    colors.setUsage(THREE.DynamicDrawUsage);
-    geometry.setAttribute('color', colors);
-    geometry.setIndex(new THREE.BufferAttribute(g.indices, 1));
-    geometry.computeBoundingSphere();
-    const m = new THREE.Mesh(geometry, material);
-    m.matrixAutoUpdate = false;
-    m.frustumCulled = false;
+    const vertices = g.positions.length / 3;
+    const m = pooled(g.object, vertices, g.indices.length);
+    const geometry = m.geometry;
+    fill(geometry.getAttribute('position'), g.positions);
+    fill(geometry.index, g.indices);
+    geometry.setDrawRange(0, g.indices.length);
+    // Bounds of the part in use (what computeBoundingBox would give the mesh alone).
+    geometry.boundingBox = new THREE.Box3().setFromArray(g.positions);
+    geometry.boundingSphere = geometry.boundingBox.getBoundingSphere(new THREE.Sphere());
     m.userData.object = g.object;
     m.userData.firstVertex = g.firstVertex;
+    m.userData.vertices = vertices;
     scene.add(m);
     mesh.objects.set(g.object, m);
   }
@@ -209,10 +244,8 @@ async function show(frame) {
     m.matrix.set(a[0], a[3], a[6], a[9], a[1], a[4], a[7], a[10], a[2], a[5], a[8], a[11], 0, 0, 0, 1);
     m.matrixWorldNeedsUpdate = true;
     if (colors) {
-      const attr = m.geometry.getAttribute('color');
       const first = 3 * m.userData.firstVertex;
-      attr.array.set(colors.subarray(first, first + attr.array.length));
-      attr.needsUpdate = true;
+      fill(m.geometry.getAttribute('color'), colors.subarray(first, first + 3 * m.userData.vertices));
     }
   }
   uploadedColors = frame.colorsId;

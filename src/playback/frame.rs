@@ -5,11 +5,14 @@
 //! corners; since the map is affine, the bilinear (quad) or affine (triangle)
 //! parameterisation commutes with it, so [`WorldPatch::point`] is exact.
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
 use super::SolutionView;
 use crate::error::Result;
 use crate::solution::Leaf;
+use crate::store::{Live, Stretch};
 
 /// A patch in world space at the frame's time. 128 bytes (4 + 4 + 4 × 24 + 24).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,8 +58,11 @@ pub struct Frame {
     pub t: f64,
     /// Patches in world space, indexed like the view's patches.
     pub patches: Vec<WorldPatch>,
-    /// Leaves live at `t`, sorted by patch.
-    pub leaves: Vec<Leaf>,
+    /// Leaves live at `t`, in canonical order (by patch first), shared with the
+    /// view's other frames of the same stretch.
+    pub leaves: Arc<[Leaf]>,
+    /// The stretch of time over which these leaves are the live ones.
+    pub stretch: Stretch,
     /// `first_leaf[p]..first_leaf[p + 1]` are patch `p`'s leaves (length patches + 1).
     pub first_leaf: Vec<u32>,
 }
@@ -64,7 +70,9 @@ pub struct Frame {
 impl Frame {
     /// Builds the frame of `view` at `t`.
     pub fn build(view: &impl SolutionView, t: f64) -> Result<Frame> {
-        let mut leaves = view.leaves_at(t)?;
+        // In canonical order (patch, start time, first corner) whatever the view, so
+        // that a solution and its file pick the same leaf where two domains touch.
+        let Live { stretch, leaves } = view.live_at(t)?;
         let patches: Vec<WorldPatch> = view
             .patches()
             .iter()
@@ -84,20 +92,8 @@ impl Frame {
                 }
             })
             .collect();
-        // A canonical order (patch, start time, first corner), whatever order the view
-        // hands leaves in, so that a solution and its file pick the same leaf where
-        // two domains touch.
-        leaves.sort_by(|a, b| {
-            a.patch
-                .cmp(&b.patch)
-                .then(a.time[0].total_cmp(&b.time[0]))
-                .then(a.uv[0][1].total_cmp(&b.uv[0][1]))
-                .then(a.uv[0][0].total_cmp(&b.uv[0][0]))
-                .then(a.uv[1][0].total_cmp(&b.uv[1][0]))
-                .then(a.uv[2][1].total_cmp(&b.uv[2][1]))
-        });
         let mut first_leaf = vec![0u32; patches.len() + 1];
-        for l in &leaves {
+        for l in leaves.iter() {
             if let Some(c) = first_leaf.get_mut(l.patch as usize + 1) {
                 *c += 1;
             }
@@ -109,6 +105,7 @@ impl Frame {
             t,
             patches,
             leaves,
+            stretch,
             first_leaf,
         })
     }

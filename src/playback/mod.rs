@@ -26,7 +26,7 @@ use glam::DAffine3;
 use crate::error::Result;
 use crate::scene::{Camera, TimeDomain};
 use crate::solution::{Leaf, PatchGeometry, Solution};
-use crate::store::Reader;
+use crate::store::{Live, Reader};
 
 pub use frame::{Frame, WorldPatch};
 pub use probe::{ProbePoint, probe, read_probe_points, write_probe_results};
@@ -43,9 +43,15 @@ pub trait SolutionView {
     fn patches(&self) -> &[PatchGeometry];
     /// Object → world map of `object` at time `t`.
     fn object_to_world(&self, object: u32, t: f64) -> DAffine3;
-    /// The leaves live at `t` ([`Leaf::is_live`]); an error if `t` is outside the
-    /// time domain or the data behind the view is corrupt.
-    fn leaves_at(&self, t: f64) -> Result<Vec<Leaf>>;
+    /// The leaves live at `t` ([`Leaf::is_live`]) in canonical order, with the stretch
+    /// of time over which they are the live ones ([`Live`]); an error if `t` is
+    /// outside the time domain or the data behind the view is corrupt.
+    fn live_at(&self, t: f64) -> Result<Live>;
+
+    /// The leaves of [`SolutionView::live_at`], copied.
+    fn leaves_at(&self, t: f64) -> Result<Vec<Leaf>> {
+        Ok(self.live_at(t)?.leaves.to_vec())
+    }
 }
 
 impl SolutionView for Solution {
@@ -72,15 +78,9 @@ impl SolutionView for Solution {
             .map_or(DAffine3::IDENTITY, |o| o.to_world(t))
     }
 
-    fn leaves_at(&self, t: f64) -> Result<Vec<Leaf>> {
+    fn live_at(&self, t: f64) -> Result<Live> {
         crate::store::reader::check_time(self.name(), self.scene.time, t)?;
-        let end = self.scene.time.end;
-        Ok(self
-            .leaves
-            .iter()
-            .filter(|l| l.is_live(t, end))
-            .copied()
-            .collect())
+        Ok(Live::scan(&self.leaves, t, self.scene.time.end))
     }
 }
 
@@ -107,7 +107,7 @@ impl SolutionView for Reader {
             .map_or(DAffine3::IDENTITY, |o| o.to_world(t))
     }
 
-    fn leaves_at(&self, t: f64) -> Result<Vec<Leaf>> {
-        Reader::leaves_at(self, t)
+    fn live_at(&self, t: f64) -> Result<Live> {
+        Reader::live_at(self, t)
     }
 }

@@ -5,7 +5,8 @@
 //! [`mod@format`] holds the header and section-table layout, [`records`] the rkyv records
 //! of each section, [`writer`] streams a file chunk by chunk in time order and makes it
 //! valid only when finished (temporary name, fsync, rename), [`reader`] maps a file and
-//! validates it before any rkyv access, and [`memory`] holds the named counters that
+//! validates it before any rkyv access and keeps the leaves live at recent times with
+//! the stretch over which they hold ([`live`]), and [`memory`] holds the named counters that
 //! `inspect` and `solve --stats` print, and [`journal`] keeps the finished windows of a space-time
 //! solve in progress so that `solve --resume` can continue it; [`merge`] joins the
 //! files of a solve run as shards into one.
@@ -15,6 +16,7 @@
 
 pub mod format;
 pub mod journal;
+pub mod live;
 pub mod memory;
 pub mod merge;
 pub mod reader;
@@ -23,6 +25,7 @@ pub mod samples;
 pub mod writer;
 
 pub use format::{Codec, Header, SectionEntry, SectionKind};
+pub use live::{Live, Stretch};
 pub use memory::MemoryReport;
 pub use reader::{Reader, StoredObject};
 pub use records::LinkRecord;

@@ -12,8 +12,11 @@
 //! What it does not do: it never trusts a length before comparing it to the bytes that
 //! exist; decompression grows its buffer with the data actually produced and stops at
 //! the stated raw length, so a lying length cannot cause a huge allocation. It keeps
-//! only the chunks decoded by the last [`Reader::leaves_at`] (so that playing frames
-//! in order decodes the long-lived chunks once); memory stays that of one frame.
+//! only the chunks decoded by the last live set it read (so that playing frames in
+//! order decodes the long-lived chunks once) and the last few live sets with the
+//! stretch of time over which each holds ([`super::live`], [`Reader::live_at`]), so
+//! that frames inside one stretch find their leaves without reading or filtering;
+//! memory stays that of a few frames.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -22,6 +25,7 @@ use glam::DAffine3;
 use rkyv::rancor;
 
 use super::format::{Codec, ENTRY_LEN, HEADER_LEN, Header, SectionEntry, SectionKind, crc32};
+use super::live::{Live, Stretch};
 use super::records::{
     ArchivedChunkIndexRecord, ArchivedLeafRecord, ArchivedPatchRecord, ArchivedSceneRecord,
     ArchivedStatsRecord, ChunkRecord, ProvenanceRecord,
@@ -31,6 +35,10 @@ use crate::scene::{
     Camera, Material, MaterialId, MotionKey, MotionTrack, Object, Polygon, Scene, TimeDomain,
 };
 use crate::solution::{Leaf, PatchGeometry, Solution, SolveStats};
+
+/// Live sets a reader keeps ([`Reader::live_at`]): the frames a viewer asks for
+/// around one time, and a mesh asked for with its frame, find theirs kept.
+const KEPT_SETS: usize = 4;
 
 /// Largest zstd window (log2 bytes) a reader accepts: bounds the decoder's memory.
 pub const ZSTD_WINDOW_LOG_MAX: u32 = 27;
@@ -81,8 +89,10 @@ pub struct Reader {
     stats: SolveStats,
     /// The provenance section's record (a space-time solve of version 2 or later).
     provenance: Option<ProvenanceRecord>,
-    /// Chunks decoded by the last `leaves_at`: `(chunk, leaves)`.
+    /// Chunks decoded by the last set read: `(chunk, leaves)`.
     recent: std::sync::Mutex<Vec<(usize, std::sync::Arc<Vec<Leaf>>)>>,
+    /// The last few live sets found, most recently used last.
+    live: std::sync::Mutex<Vec<Live>>,
 }
 
 impl std::fmt::Debug for Reader {
@@ -186,6 +196,7 @@ impl Reader {
             stats: SolveStats::default(),
             provenance: None,
             recent: std::sync::Mutex::new(Vec::new()),
+            live: std::sync::Mutex::new(Vec::new()),
         };
         reader.load_scene(i_scene)?;
         reader.load_patches(i_patches)?;
@@ -581,9 +592,11 @@ impl Reader {
     }
 
     /// Indices of the chunks that may hold leaves live at `t` (see
-    /// [`super::records::ChunkRecord`]): a binary search plus the carried chunks.
+    /// [`super::records::ChunkRecord`]): a binary search plus the carried chunks. Times
+    /// are compared in `f32`, as [`Leaf::is_live`] compares them: a time just under a
+    /// chunk's start that rounds to it finds that chunk's leaves starting there.
     pub fn chunks_for(&self, t: f64) -> Vec<usize> {
-        let n = self.chunks.partition_point(|c| c.t0 <= t);
+        let n = self.chunks.partition_point(|c| c.t0 as f32 <= t as f32);
         if n == 0 {
             return Vec::new();
         }
@@ -599,15 +612,67 @@ impl Reader {
             .collect()
     }
 
-    /// The leaves live at `t` ([`Leaf::is_live`]), reading only the chunks that need it.
+    /// The leaves live at `t` ([`Leaf::is_live`]), reading only the chunks that need it,
+    /// in canonical order ([`super::live::canonical_order`]).
     pub fn leaves_at(&self, t: f64) -> Result<Vec<Leaf>> {
+        Ok(self.live_at(t)?.leaves.to_vec())
+    }
+
+    /// The leaves live at `t` and the stretch of time over which they are
+    /// ([`super::live`]): taken from the last few sets found when one of their
+    /// stretches holds `t`, else read from the chunks that may hold them
+    /// ([`Reader::chunks_for`]) and kept.
+    pub fn live_at(&self, t: f64) -> Result<Live> {
         check_time(&self.path, self.time, t)?;
         // A poisoned lock only means another thread panicked mid-update: start afresh.
+        let kept = |m: &'_ std::sync::Mutex<Vec<Live>>| {
+            let mut g = m.lock().unwrap_or_else(|p| {
+                let mut g = p.into_inner();
+                g.clear();
+                g
+            });
+            let hit = g.iter().position(|l| l.stretch.contains(t));
+            hit.map(|i| {
+                // Most recently used last.
+                let l = g.remove(i);
+                g.push(l.clone());
+                l
+            })
+        };
+        if let Some(l) = kept(&self.live) {
+            return Ok(l);
+        }
+        let live = self.read_live(t)?;
+        let mut g = self.live.lock().unwrap_or_else(|p| p.into_inner());
+        if g.len() >= KEPT_SETS {
+            g.remove(0);
+        }
+        g.push(live.clone());
+        Ok(live)
+    }
+
+    /// [`Reader::live_at`] read from the chunks.
+    fn read_live(&self, t: f64) -> Result<Live> {
         let mut recent = self.recent.lock().unwrap_or_else(|p| {
             let mut g = p.into_inner();
             g.clear();
             g
         });
+        // The chunk range of `t`, as chunks_for finds it.
+        let tf = t as f32;
+        let t_end = self.time.end as f32;
+        let n = self.chunks.partition_point(|c| c.t0 as f32 <= tf);
+        let mut stretch = Stretch::whole(n as u32);
+        if let Some(c) = self.chunks.get(n) {
+            stretch.cut_start(tf, c.t0 as f32);
+        }
+        if let Some(i) = n.checked_sub(1) {
+            stretch.cut_start(tf, self.chunks[i].t0 as f32);
+            // The chunks chunks_for drops or keeps by their reach.
+            for c in &self.chunks[self.chunks[i].carry_from as usize..i] {
+                stretch.cut_end(tf, c.reach as f32, t_end);
+            }
+        }
         let mut kept = Vec::new();
         let mut out = Vec::new();
         for k in self.chunks_for(t) {
@@ -615,11 +680,16 @@ impl Reader {
                 Some((_, l)) => l.clone(),
                 None => std::sync::Arc::new(self.chunk_leaves(k)?),
             };
-            out.extend(leaves.iter().filter(|l| l.is_live(t, self.time.end)));
+            for l in leaves.iter() {
+                stretch.cut(tf, l.time, t_end);
+                if l.is_live(t, self.time.end) {
+                    out.push(*l);
+                }
+            }
             kept.push((k, leaves));
         }
         *recent = kept;
-        Ok(out)
+        Ok(Live::new(stretch, out))
     }
 
     /// Validates every chunk (checksum, decompression, rkyv, leaf invariants) and

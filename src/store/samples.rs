@@ -324,3 +324,31 @@ pub fn tiled_box(m: u32, n: u32) -> Solution {
     }
     static_solution("tiled box", polygons, n)
 }
+
+/// [`tiled_box`] (`m × m` tiles a wall, one leaf each) turning a quarter turn about
+/// its centre and `y` over `[0, 2]` s, every leaf holding the whole time: one rigid
+/// motion of the whole scene (the viewer benchmark's moving scene).
+pub fn turning_tiled_box(m: u32) -> Solution {
+    let mut sol = tiled_box(m, 1);
+    sol.scene.time = TimeDomain {
+        start: 0.0,
+        end: 2.0,
+    };
+    let c = DVec3::splat(0.5);
+    let key = |t: f64| {
+        let rotation = DQuat::from_rotation_y(t * std::f64::consts::FRAC_PI_4);
+        MotionKey {
+            t,
+            translation: c - rotation * c,
+            rotation,
+            scale: DVec3::ONE,
+        }
+    };
+    sol.scene.objects[0].motion = Some(MotionTrack {
+        keys: (0..=4).map(|k| key(k as f64 * 0.5)).collect(),
+    });
+    for l in &mut sol.leaves {
+        l.time = [0.0, 2.0];
+    }
+    sol
+}

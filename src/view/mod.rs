@@ -99,6 +99,8 @@ pub struct Viewer {
     reader: Reader,
     camera: Camera,
     exposure: f64,
+    /// The diagonal of the first frame's bounds: the scene's size.
+    extent: f64,
     inspect: Value,
     /// Frames built last, newest last.
     recent: Mutex<Vec<Arc<Frame>>>,
@@ -118,10 +120,12 @@ impl Viewer {
         let mesh = FrameMesh::build(&frame, Shading::Smooth);
         let camera = default_camera(reader.camera(), &frame, &mesh);
         let exposure = auto_exposure(&render(&mesh, &camera, DEFAULT_SIZE[0], DEFAULT_SIZE[1]));
+        let extent = frame.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length());
         Ok(Viewer {
             reader,
             camera,
             exposure,
+            extent,
             inspect,
             recent: Mutex::new(vec![Arc::new(frame)]),
             colors: Mutex::new(None),
@@ -248,15 +252,17 @@ impl Viewer {
     }
 
     /// The frame message at `t`. Its colours are those of the last frame answered
-    /// when nothing they depend on changed: the live leaves (their key), the shading,
-    /// and the objects' placements relative to the first object's (smooth shading
-    /// averages corners that meet in world space; a rigid motion of everything
-    /// together keeps which corners meet). Else they are computed afresh, under a new
-    /// colour id. When `have` is the id of the frame's colours, the client holds them
+    /// when nothing they depend on changed: the live leaves (the id of their stretch
+    /// of time, [`crate::store::Stretch::id`]), the shading, and the objects'
+    /// placements relative to the first object's, to rounding (1e-12, and 1e-12 of
+    /// the scene's size for translations: smooth shading averages corners that meet
+    /// in world space; a rigid motion of everything together keeps which corners
+    /// meet). Else they are computed afresh, under a new colour id. When `have` is the id of the frame's colours, the client holds them
     /// already and they are left out of the message.
     pub fn frame_message(&self, t: f64, shading: Shading, have: u32) -> Result<Vec<u8>> {
         let objects = self.reader.objects();
-        let key = wire::leaf_set_key(&self.reader.leaves_at(t)?);
+        // The set's stretch names it: found among the reader's kept sets, no leaf read.
+        let key = self.reader.live_at(t)?.stretch.id();
         let first = objects
             .first()
             .map_or(DAffine3::IDENTITY, |o| o.to_world(t));
@@ -267,7 +273,11 @@ impl Viewer {
             .collect();
         let hit = |c: &Option<Colors>| {
             c.as_ref()
-                .filter(|c| c.key == key && c.shading == shading && c.relative == relative)
+                .filter(|c| {
+                    c.key == key
+                        && c.shading == shading
+                        && same_placements(&c.relative, &relative, self.extent)
+                })
                 .map(|c| (c.id, c.scale, c.bytes.clone()))
         };
         let kept = hit(&self.colors.lock().unwrap_or_else(|p| p.into_inner()));
@@ -357,6 +367,21 @@ impl Viewer {
             "leaf": leaf,
         }))
     }
+}
+
+/// Placements relative to the first object's (`a`, `b`: 3×3 by columns, then the
+/// translation) that agree to rounding: within 1e-12 (the matrix) and 1e-12 of the
+/// scene's size `extent` (the translation), 10⁵ times under the 1e-7 of the size to
+/// which smooth shading rounds positions to find corners that meet. A whole scene
+/// turning together stays at the identity only to rounding, time after time.
+fn same_placements(a: &[[f64; 12]], b: &[[f64; 12]], extent: f64) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| {
+            x.iter().zip(y).enumerate().all(|(i, (p, q))| {
+                let tol = if i < 9 { 1e-12 } else { 1e-12 * extent };
+                (p - q).abs() <= tol
+            })
+        })
 }
 
 fn bad(message: impl Into<String>) -> Reply {

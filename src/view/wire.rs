@@ -6,7 +6,8 @@
 //! triangles `c0 c1 c2`, `c0 c2 c3` as in [`crate::playback::raster::FrameMesh`]).
 //! [`mesh_bytes`] writes the corners in object space, so that a moving object's
 //! positions are sent once and placed at each time by its transform; the layout's
-//! `key` ([`leaf_set_key`]) tells the page when the live leaves, and so the mesh,
+//! `key`, the id of the stretch of time over which the live leaves hold
+//! ([`crate::store::Stretch::id`]), tells the page when they, and so the mesh,
 //! changed. [`frame_bytes`] writes each
 //! object's transform at `t` and every corner's linear radiosity, taken from the
 //! `FrameMesh` that `rhier play` draws (smooth: averaged over the leaf corners that
@@ -16,7 +17,7 @@
 
 use crate::playback::Frame;
 use crate::playback::raster::{FrameMesh, Shading};
-use crate::solution::{Leaf, PatchGeometry};
+use crate::solution::PatchGeometry;
 use crate::store::reader::StoredObject;
 
 /// First bytes of a mesh message.
@@ -50,7 +51,7 @@ pub struct Group {
 /// The order in which a frame's leaf corners are sent.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Layout {
-    /// [`leaf_set_key`] of the frame's leaves.
+    /// The id of the frame's live-leaf set ([`crate::store::Stretch::id`]).
     pub key: u64,
     /// Groups, by increasing object.
     pub groups: Vec<Group>,
@@ -67,7 +68,6 @@ impl Layout {
             let o = patches.get(l.patch as usize).map_or(0, |p| p.object);
             by_object[o as usize].push(k as u32);
         }
-        let key = leaf_set_key(&frame.leaves);
         let (mut groups, mut order) = (Vec::new(), Vec::with_capacity(frame.leaves.len()));
         let (mut v, mut i) = (0u32, 0u32);
         for (object, ls) in by_object.into_iter().enumerate() {
@@ -91,7 +91,7 @@ impl Layout {
             order.extend(ls);
         }
         Layout {
-            key,
+            key: frame.stretch.id(),
             groups,
             leaves: order,
         }
@@ -101,20 +101,6 @@ impl Layout {
     pub fn vertices(&self) -> u32 {
         self.groups.iter().map(|g| g.vertices).sum()
     }
-}
-
-/// The key of a set of live leaves, whatever their order: their count (high 32
-/// bits) and the wrapping sum of each leaf's CRC-32 of its patch, corner parameters
-/// and time span (low 32 bits). Two different sets share a key with odds of 2⁻³².
-pub fn leaf_set_key(leaves: &[Leaf]) -> u64 {
-    let sum = leaves.iter().fold(0u32, |acc, l| {
-        let mut crc = crc32fast::Hasher::new();
-        crc.update(&l.patch.to_le_bytes());
-        crc.update(bytemuck::cast_slice(&l.uv[..l.corners as usize]));
-        crc.update(bytemuck::cast_slice(&l.time));
-        acc.wrapping_add(crc.finalize())
-    });
-    ((leaves.len() as u64) << 32) | sum as u64
 }
 
 fn put_u32(out: &mut Vec<u8>, x: u32) {

@@ -1,8 +1,9 @@
-//! What several test modules share: the `rhier` binary, the example files, scenes
+//! What several test modules share: the `rhier` binary (run, or spawned and killed
+//! when dropped), the example files, scenes
 //! built in code (boxes, enclosures, random flatland scenes) and a seeded generator.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Child, Command, Stdio};
 
 use glam::DVec3;
 use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
@@ -10,6 +11,42 @@ use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
 /// A command that runs the `rhier` binary cargo built for these tests.
 pub fn rhier() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rhier"))
+}
+
+/// A running `rhier` process, killed and reaped when dropped, so that a failing test
+/// leaves none behind; it derefs to its [`Child`].
+pub struct Running(Child);
+
+impl std::ops::Deref for Running {
+    type Target = Child;
+    fn deref(&self) -> &Child {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Running {
+    fn deref_mut(&mut self) -> &mut Child {
+        &mut self.0
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        // Already ended (waited for by the test) is fine: nothing to kill.
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Starts `cmd` (a [`rhier`] command) with its stdin, stdout and stderr piped.
+pub fn spawn_piped(cmd: &mut Command) -> Running {
+    Running(
+        cmd.stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("rhier starts"),
+    )
 }
 
 /// The path of `formats/examples/<name>`, the example files the formats' docs show.

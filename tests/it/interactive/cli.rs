@@ -5,11 +5,10 @@
 //! `RHIER_STORAGE`.
 
 use std::io::{BufRead, BufReader, Write};
-use std::process::Stdio;
 
 use rhier::store::Reader;
 
-use crate::common::{example, rhier};
+use crate::common::{example, rhier, spawn_piped};
 
 /// The flags every run here shares: the Cornell box with its blocks, coarse.
 fn base(cmd: &mut std::process::Command) -> &mut std::process::Command {
@@ -132,13 +131,8 @@ fn a_bad_move_names_its_line_and_the_session_file_keeps_the_good_ones() {
 
 #[test]
 fn a_move_is_answered_before_the_next_line_is_read() {
-    let mut child = base(&mut rhier())
-        .args(["--moves", "-", "--stats", "/dev/stdout", "-q"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child =
+        spawn_piped(base(&mut rhier()).args(["--moves", "-", "--stats", "/dev/stdout", "-q"]));
     let mut stdin = child.stdin.take().unwrap();
     let mut stdout = BufReader::new(child.stdout.take().unwrap());
     for (i, x) in [10, 30].iter().enumerate() {

@@ -3,6 +3,7 @@
 //! mutation.
 
 mod fuzz;
+mod live;
 mod resume_key;
 mod roundtrip;
 mod samples;

@@ -1,13 +1,15 @@
 //! What `rhier view` sends, decoded from its bytes as formats/view.md says, against
 //! playback's own evaluation of the same file at the same time: the triangles and
 //! colours `rhier play` draws (`FrameMesh`, smooth and flat), and the answer of
-//! `rhier probe` with the patch and leaf that gave it.
+//! `rhier probe` with the patch and leaf that gave it; a scene turning as one keeps
+//! its mesh and colours, which are those computed afresh at each time.
 
 use glam::{DAffine3, DMat3, DVec3};
 use rhier::playback::frame::Frame;
 use rhier::playback::probe::{ProbePoint, probe};
 use rhier::playback::raster::{FrameMesh, Shading};
-use rhier::store::Reader;
+use rhier::store::samples::turning_tiled_box;
+use rhier::store::{Reader, WriteOptions, write_solution};
 use rhier::view::Viewer;
 
 fn u32_at(b: &[u8], at: usize) -> u32 {
@@ -223,5 +225,33 @@ fn a_click_is_the_probe_answer_with_its_patch_and_leaf() {
             let facing = frame.patches[patch as usize].normal.dot(n);
             assert!(facing > 0.0, "{url}: patch {patch} faces away");
         }
+    }
+}
+
+#[test]
+fn a_scene_turning_as_one_keeps_its_mesh_and_colours() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("turning.rhier");
+    write_solution(&file, &turning_tiled_box(6), WriteOptions::default()).unwrap();
+    let viewer = Viewer::new(Reader::open(&file).unwrap(), serde_json::Value::Null).unwrap();
+    let first = viewer.handle("GET", "/api/frame?t=0").body;
+    let (key, id) = (&first[8..16], u32_at(&first, 36));
+    let colors = &first[40 + 48..];
+    assert!(u32_at(&first, 28) as usize >= 4 * 6 * 36 && colors.iter().any(|&b| b != 0));
+    for k in 1..=50 {
+        let t = k as f64 / 25.0;
+        // Kept: the same live leaves (key), the same colour id, no colours sent.
+        let kept = viewer
+            .handle("GET", &format!("/api/frame?t={t}&have={id}"))
+            .body;
+        assert_eq!(
+            (&kept[8..16], u32_at(&kept, 36), u32_at(&kept, 28)),
+            (key, id, 0),
+            "t = {t}"
+        );
+        // And they are the colours computed afresh at that time.
+        let fresh = Viewer::new(Reader::open(&file).unwrap(), serde_json::Value::Null).unwrap();
+        let own = fresh.handle("GET", &format!("/api/frame?t={t}")).body;
+        assert_eq!(&own[40 + 48..], colors, "t = {t}");
     }
 }

@@ -6,32 +6,17 @@
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::path::Path;
-use std::process::{Child, Stdio};
 
-use crate::common::rhier;
+use crate::common::{Running, rhier, spawn_piped};
 
-/// A running `rhier view FILE --port 0`, killed when dropped.
+/// A running `rhier view FILE --port 0` (killed when dropped) and its port.
 struct View {
-    child: Child,
+    child: Running,
     port: u16,
 }
 
-impl Drop for View {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
 fn serve(file: &Path) -> View {
-    let mut child = rhier()
-        .arg("view")
-        .arg(file)
-        .args(["--port", "0"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = spawn_piped(rhier().arg("view").arg(file).args(["--port", "0"]));
     let mut line = String::new();
     BufReader::new(child.stdout.take().unwrap())
         .read_line(&mut line)
