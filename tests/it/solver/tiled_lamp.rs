@@ -7,7 +7,7 @@ use crate::common::shapes::{self, Tiling};
 use glam::DVec3;
 use rhier::playback::probe::{ProbePoint, probe};
 use rhier::scene::{Material, MaterialId, Object, Scene};
-use rhier::solver::{SolveOptions, solve};
+use rhier::solver::{SolveOptions, Solver, StopReason, solve};
 
 /// The room with its walls tiled by `tiling`.
 fn lamp_room(tiling: Tiling) -> Scene {
@@ -184,3 +184,34 @@ fn the_tiled_room_approaches_the_path_tracer_as_eps_falls() {
     }
 }
 
+/// The default stopping follows the round's error estimate: the one-quad room's
+/// links are all under eps 0.5 after one level while its estimate reads about
+/// 3.6%, above the `eps/20` = 2.5% that eps promises, so it refines on below eps
+/// until the estimate is under the promise; the tiled room's estimate (under 0.1%)
+/// is already under it, and it stops at eps.
+#[test]
+fn the_default_solve_refines_below_eps_while_its_estimate_is_above_the_promise() {
+    let opts = SolveOptions::default();
+    let promised = opts.promised_error();
+    assert!((promised - opts.eps / 20.0).abs() < 1e-12, "{promised}");
+    let run = |tiling| {
+        let scene = lamp_room(tiling);
+        let mut s = Solver::new(&scene, SolveOptions::default()).expect("solver");
+        let records = s.run(|_, _| {}).expect("run");
+        let estimates: Vec<f64> = records.iter().map(|r| r.estimated_error).collect();
+        eprintln!("{tiling:?}: {:?}, estimates {estimates:?}", s.stop_reason());
+        (s.stop_reason(), estimates)
+    };
+    let (stop, estimates) = run(Tiling::Quads(1));
+    assert!(
+        matches!(stop, StopReason::PromiseMet { halvings } if halvings >= 1),
+        "{stop:?}"
+    );
+    let first = estimates.iter().copied().find(|e| e.is_finite()).unwrap();
+    let last = *estimates.last().unwrap();
+    assert!(first > promised, "first estimate {first}");
+    assert!(last <= promised, "last estimate {last}");
+    let (stop, estimates) = run(Tiling::Quads(6));
+    assert_eq!(stop, StopReason::Refined, "estimates {estimates:?}");
+    assert!(*estimates.last().unwrap() <= promised);
+}
