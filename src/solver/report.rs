@@ -131,6 +131,14 @@ pub enum StopReason {
         /// Links above the threshold that stayed whole.
         links: u64,
     },
+    /// No link is left above a finer `eps` that the error estimate asked for:
+    /// with no `--target-error`, the estimate was still above what `--eps`
+    /// promises ([`crate::solver::SolveOptions::promised_error`]) once every link
+    /// was under `--eps`, and `eps` was halved `halvings` times.
+    PromiseMet {
+        /// Times `eps` was halved below `--eps`.
+        halvings: u32,
+    },
     /// `--time-budget` ran out.
     TimeBudget,
     /// `--max-rounds` rounds were solved.
@@ -146,6 +154,10 @@ impl StopReason {
             StopReason::Refined => "no link left above --eps".into(),
             StopReason::MinSize { links } => format!(
                 "no link left to refine: {links} link(s) above --eps have both ends at the --min-size floor (a smaller --min-size refines further)"
+            ),
+            StopReason::PromiseMet { halvings } => format!(
+                "estimated error under what --eps promises (eps/20), after refining to eps/{}",
+                1u64 << halvings.min(63)
             ),
             StopReason::TimeBudget => "time budget spent (--time-budget)".into(),
             StopReason::RoundLimit => "round limit reached (--max-rounds)".into(),

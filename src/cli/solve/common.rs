@@ -265,7 +265,11 @@ pub struct AccuracyArgs {
     /// Smaller refines the hierarchy further: more elements and links, a smaller
     /// error, more time. A static solve refines in levels: up to two rounds at
     /// `2 eps`, then rounds at `eps`; the estimated error it prints is the change of
-    /// the answer between the two levels (see `--target-error`). In a space-time
+    /// the answer between the two levels (see `--target-error`). Without
+    /// `--target-error`, `eps` promises an estimated error of `eps/20`: a static
+    /// solve whose estimate is still above it once every link is under `eps` halves
+    /// `eps` until it is not, within `--max-rounds` (a one-quad-per-wall room whose
+    /// coarse links miss its lamp's light). In a space-time
     /// solve the room's error often follows `--recon-tol` more than `--eps`.
     #[arg(long, default_value_t = SolveOptions::default().eps)]
     pub eps: f64,

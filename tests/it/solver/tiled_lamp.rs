@@ -7,7 +7,7 @@ use crate::common::shapes::{self, Tiling};
 use glam::DVec3;
 use rhier::playback::probe::{ProbePoint, probe};
 use rhier::scene::{Material, MaterialId, Object, Scene};
-use rhier::solver::{SolveOptions, solve};
+use rhier::solver::{SolveOptions, Solver, StopReason, solve};
 
 /// The room with its walls tiled by `tiling`.
 fn lamp_room(tiling: Tiling) -> Scene {
@@ -127,6 +127,22 @@ fn the_tiling_of_the_walls_changes_little() {
 /// mean) moved the worst point only to 3.4–3.7%; with 157 links against the tiled
 /// room's 10,811 its sources stay coarse (cluster estimates, whole walls), which
 /// is where to look next.
+///
+/// With the estimate in the stopping rule (2026-11-29, `PROMISED_PER_EPS`): the
+/// one-quad room's estimate reads 3.6% at eps 0.5, above the 2.5% that eps
+/// promises, so it refines on to eps 0.25 (682 leaves, 1,153 links, estimate
+/// 1.3%) and stops there; still 2.1–4.3% under the tiled room at every point.
+/// Its leaf system absorbs 0.962–0.968 of the emitted power, the tiled room's
+/// 0.989 before balancing: the one-quad room loses light the tiled room does not.
+/// Where, most likely: the ceiling leaves straddling the outline of the lamp hung
+/// 1 cm under it (its edges at 2.5 and 3.5 m fall on the tiled room's half-tile
+/// splits, never on a split of the one 6 m quad), which send light into the
+/// lamp's back. The estimate does not count that deficit because the closure test
+/// finds the room open (its rays from the ceiling above the lamp meet the lamp's
+/// back), and the tiled room's 128 samples miss that spot: it is judged closed
+/// and balanced. Forced closed, the one-quad room is balanced at eps 0.5 and
+/// lands −3.4% to +4.6% from the tiled room (worse). With `--target-error 0.01`:
+/// 8 rounds (the limit), 1.81% apart; at eps 0.1 both, 1.18%.
 #[test]
 #[ignore = "one quad per wall is 4.3% from the tiled room at eps 0.5 (issue 45)"]
 fn one_quad_per_wall_agrees_with_the_tiled_room() {
@@ -166,4 +182,36 @@ fn the_tiled_room_approaches_the_path_tracer_as_eps_falls() {
         assert!(rms < last + 0.002, "eps {eps}: {rms} after {last}");
         last = rms;
     }
+}
+
+/// The default stopping follows the round's error estimate: the one-quad room's
+/// links are all under eps 0.5 after one level while its estimate reads about
+/// 3.6%, above the `eps/20` = 2.5% that eps promises, so it refines on below eps
+/// until the estimate is under the promise; the tiled room's estimate (under 0.1%)
+/// is already under it, and it stops at eps.
+#[test]
+fn the_default_solve_refines_below_eps_while_its_estimate_is_above_the_promise() {
+    let opts = SolveOptions::default();
+    let promised = opts.promised_error();
+    assert!((promised - opts.eps / 20.0).abs() < 1e-12, "{promised}");
+    let run = |tiling| {
+        let scene = lamp_room(tiling);
+        let mut s = Solver::new(&scene, SolveOptions::default()).expect("solver");
+        let records = s.run(|_, _| {}).expect("run");
+        let estimates: Vec<f64> = records.iter().map(|r| r.estimated_error).collect();
+        eprintln!("{tiling:?}: {:?}, estimates {estimates:?}", s.stop_reason());
+        (s.stop_reason(), estimates)
+    };
+    let (stop, estimates) = run(Tiling::Quads(1));
+    assert!(
+        matches!(stop, StopReason::PromiseMet { halvings } if halvings >= 1),
+        "{stop:?}"
+    );
+    let first = estimates.iter().copied().find(|e| e.is_finite()).unwrap();
+    let last = *estimates.last().unwrap();
+    assert!(first > promised, "first estimate {first}");
+    assert!(last <= promised, "last estimate {last}");
+    let (stop, estimates) = run(Tiling::Quads(6));
+    assert_eq!(stop, StopReason::Refined, "estimates {estimates:?}");
+    assert!(*estimates.last().unwrap() <= promised);
 }
