@@ -2333,22 +2333,12 @@ mod tests {
         let scene = crate::scene::cornell_box(true);
         let s = Solver::new(&scene, facet_opts()).unwrap();
         let geoms = s.elems.geoms.as_slice();
-        let nodes = s.elems.nodes.as_slice();
         let (mut used, mut worst, mut total) = (0, 0.0f64, 0.0);
         for e in 0..geoms.len() {
             if geoms[e].patch != u32::MAX || s.facets.of(e as u32).len() < 2 {
                 continue;
             }
-            let mut under = Vec::new();
-            let mut stack = vec![e as u32];
-            while let Some(x) = stack.pop() {
-                let nd = nodes[x as usize];
-                if geoms[x as usize].patch != u32::MAX {
-                    under.push(x);
-                } else {
-                    stack.extend(nd.first_child..nd.first_child + nd.child_count);
-                }
-            }
+            let under = patches_under(&s, e as u32);
             let (c, r) = oracle::sphere(&geoms[e]);
             for j in 0..64 {
                 // Fibonacci directions, distances 5r..8r, normals tilted off the
