@@ -563,7 +563,7 @@ pub fn cluster_visibility(
 /// normal, patch skipped by the ray), weighted by the point-to-point kernel; pairs
 /// facing away cast nothing, and if every pair does the visibility is 0. Returns
 /// `(visibility, rays cast)`.
-fn kernel_weighted_visibility(
+pub(crate) fn kernel_weighted_visibility(
     bvh: &SceneBvh,
     m: u32,
     mut ends: impl FnMut(u64) -> ((DVec3, DVec3, u32), (DVec3, DVec3, u32)),

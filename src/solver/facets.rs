@@ -16,10 +16,12 @@
 //! opened as before. Where every facet tells, the cluster's projected area toward
 //! `x` is exactly `Σ A_f max(0, n_f · v_f)` over its facets (`v_f` towards `x` from
 //! the facet's centroid), the vector-area estimate of Sillion (1995, §4) split by
-//! orientation so that back faces count nothing; the parts hidden behind other
-//! parts are left to the cluster's visibility rays, which stop at any patch
-//! ([`crate::oracle::point_cluster_visibility`]). The facets hold where the
-//! patches stand at the start: a scene with motion does not use them.
+//! orientation so that back faces count nothing. What hides a facet, other
+//! patches of its own cluster included, is left to rays aimed at the facet's own
+//! patches ([`ClusterFacets::point_on`]), a visible fraction per facet: one
+//! fraction for the cluster, its rays drawn by power, took a side hidden behind
+//! the next box as visible as the lit tops the rays mostly went to. The facets
+//! hold where the patches stand at the start: a scene with motion does not use them.
 //!
 //! Each facet is a source of its own, gathered at its own radiosity: the area mean
 //! of the patch roots and sub-cluster facets it sums ([`ClusterFacets::pull`],
@@ -31,6 +33,7 @@
 
 use glam::DVec3;
 
+use crate::oracle;
 use crate::pools::ElementPool;
 
 /// Most distinct normals a cluster may hold to have facets (an axis-aligned room
@@ -269,6 +272,46 @@ impl ClusterFacets {
             for &(src, w) in &self.members[m0..m1] {
                 *source_slot(v, facet, src) += x * w as f64;
             }
+        }
+    }
+
+    /// A point of facet `f`'s patches drawn by area from the hash `h`, its normal
+    /// and its patch: the members are drawn by their area shares, down through
+    /// sub-cluster facets to a patch root, and a point of that patch by
+    /// [`oracle::point_in`]. The rays of a facet's visible fraction go there.
+    pub fn point_on(&self, elems: &ElementPool, f: u32, h: u64) -> (DVec3, DVec3, u32) {
+        let geoms = elems.geoms.as_slice();
+        let mut cur = f as usize;
+        let mut level = 0;
+        loop {
+            let (m0, m1) = (
+                self.members_start[cur] as usize,
+                self.members_start[cur + 1] as usize,
+            );
+            let u = (oracle::hash3(h, level, 0xfac) >> 11) as f64 / (1u64 << 53) as f64;
+            let mut acc = 0.0;
+            let mut pick = self.members[m1 - 1].0;
+            for &(src, w) in &self.members[m0..m1] {
+                acc += w as f64;
+                if u < acc {
+                    pick = src;
+                    break;
+                }
+            }
+            if pick & FACET_BIT != 0 {
+                cur = (pick & !FACET_BIT) as usize;
+                level += 1;
+                continue;
+            }
+            let g = &geoms[pick as usize];
+            let hp = oracle::hash3(h, level, 0x9e1);
+            let su = (hp & 0xffff_ffff) as f64 / 4294967296.0;
+            let sv = (hp >> 32) as f64 / 4294967296.0;
+            return (
+                oracle::point_in(g, &oracle::poly(g), su, sv),
+                DVec3::from_array(g.normal),
+                g.patch,
+            );
         }
     }
 

@@ -2383,22 +2383,12 @@ mod tests {
         let scene = crate::scene::cornell_box(true);
         let s = Solver::new(&scene, facet_opts()).unwrap();
         let geoms = s.elems.geoms.as_slice();
-        let nodes = s.elems.nodes.as_slice();
         let (mut used, mut worst, mut total) = (0, 0.0f64, 0.0);
         for e in 0..geoms.len() {
             if geoms[e].patch != u32::MAX || s.facets.of(e as u32).len() < 2 {
                 continue;
             }
-            let mut under = Vec::new();
-            let mut stack = vec![e as u32];
-            while let Some(x) = stack.pop() {
-                let nd = nodes[x as usize];
-                if geoms[x as usize].patch != u32::MAX {
-                    under.push(x);
-                } else {
-                    stack.extend(nd.first_child..nd.first_child + nd.child_count);
-                }
-            }
+            let under = patches_under(&s, e as u32);
             let (c, r) = oracle::sphere(&geoms[e]);
             for j in 0..64 {
                 // Fibonacci directions, distances 5r..8r, normals tilted off the
@@ -2444,6 +2434,242 @@ mod tests {
         assert!(used >= 100, "{used} points taken whole by facets");
         // Measured: 997 points, worst 2.3%.
         assert!(worst < 0.05, "worst relative difference {worst}");
+    }
+
+    /// A 4 × 4 grid of unit cubes (gaps of half a side) under a lamp: six quads
+    /// a cube, counter-clockwise seen from outside, as `tools/gen_cubes.py` writes.
+    fn cube_grid() -> Scene {
+        use crate::scene::{Material, MaterialId, Object, Polygon};
+        let quad = |v: [[f64; 3]; 4], m: u32| Polygon {
+            vertices: v.iter().map(|&p| DVec3::from_array(p)).collect(),
+            material: MaterialId(m),
+        };
+        let mut polygons = Vec::new();
+        for i in 0..4 {
+            for j in 0..4 {
+                let (x0, z0) = (1.5 * i as f64, 1.5 * j as f64);
+                let (x1, z1, y1) = (x0 + 1.0, z0 + 1.0, 1.0);
+                polygons.extend([
+                    quad([[x0, y1, z0], [x0, y1, z1], [x1, y1, z1], [x1, y1, z0]], 0),
+                    quad(
+                        [[x0, y1, z0], [x1, y1, z0], [x1, 0.0, z0], [x0, 0.0, z0]],
+                        0,
+                    ),
+                    quad(
+                        [[x1, y1, z1], [x0, y1, z1], [x0, 0.0, z1], [x1, 0.0, z1]],
+                        0,
+                    ),
+                    quad(
+                        [[x0, y1, z1], [x0, y1, z0], [x0, 0.0, z0], [x0, 0.0, z1]],
+                        0,
+                    ),
+                    quad(
+                        [[x1, y1, z0], [x1, y1, z1], [x1, 0.0, z1], [x1, 0.0, z0]],
+                        0,
+                    ),
+                    quad(
+                        [[x1, 0.0, z0], [x1, 0.0, z1], [x0, 0.0, z1], [x0, 0.0, z0]],
+                        0,
+                    ),
+                ]);
+            }
+        }
+        let lamp = quad(
+            [
+                [2.0, 9.0, 2.0],
+                [4.0, 9.0, 2.0],
+                [4.0, 9.0, 4.0],
+                [2.0, 9.0, 4.0],
+            ],
+            1,
+        );
+        let object = |name: &str, polygons| Object {
+            name: name.into(),
+            polygons,
+            motion: None,
+        };
+        Scene {
+            materials: vec![
+                Material {
+                    name: "white".into(),
+                    rho: [0.7; 3],
+                    emission: [0.0; 3],
+                },
+                Material {
+                    name: "lamp".into(),
+                    rho: [0.0; 3],
+                    emission: [10.0; 3],
+                },
+            ],
+            objects: vec![object("cubes", polygons), object("lamp", vec![lamp])],
+            ..Scene::default()
+        }
+    }
+
+    /// The factor from `x` (normal `n`) to what it sees of the patches `under`
+    /// among all the patches `all` (the first quad each ray meets, back faces
+    /// counting nothing): 64 × 64 stratified directions over the cone of the
+    /// sphere `(c, r)`.
+    fn traced_factor(
+        geoms: &[Geom],
+        (all, under): (&[u32], &[u32]),
+        x: DVec3,
+        n: DVec3,
+        (c, r): (DVec3, f64),
+    ) -> f64 {
+        let w = c - x;
+        let d = w.length();
+        let axis = w / d;
+        let cos_a = (1.0 - (r / d).powi(2)).max(0.0).sqrt();
+        let (u, v) = axis.any_orthonormal_pair();
+        let (k, mut sum) = (64, 0.0);
+        for a in 0..k {
+            for b in 0..k {
+                let ct = 1.0 - (a as f64 + 0.5) / k as f64 * (1.0 - cos_a);
+                let st = (1.0 - ct * ct).max(0.0).sqrt();
+                let phi = std::f64::consts::TAU * (b as f64 + 0.5) / k as f64;
+                let dir = axis * ct + (u * phi.cos() + v * phi.sin()) * st;
+                let mut best = (f64::INFINITY, false);
+                for &p in all {
+                    let g = &geoms[p as usize];
+                    let nf = DVec3::from_array(g.normal);
+                    let p0 = DVec3::from_array(g.corners[0]);
+                    let den = nf.dot(dir);
+                    if den.abs() < 1e-12 {
+                        continue;
+                    }
+                    let t = nf.dot(p0 - x) / den;
+                    if t <= 0.0 || t >= best.0 {
+                        continue;
+                    }
+                    let hit = x + dir * t;
+                    let m = g.n as usize;
+                    let inside = (0..m).all(|i| {
+                        let e0 = DVec3::from_array(g.corners[i]);
+                        let e1 = DVec3::from_array(g.corners[(i + 1) % m]);
+                        (e1 - e0).cross(hit - e0).dot(nf) >= 0.0
+                    });
+                    if inside {
+                        best = (t, den < 0.0 && under.contains(&p));
+                    }
+                }
+                if best.1 {
+                    sum += n.dot(dir).max(0.0);
+                }
+            }
+        }
+        let solid = std::f64::consts::TAU * (1.0 - cos_a);
+        sum * solid / (std::f64::consts::PI * (k * k) as f64)
+    }
+
+    /// The patch roots under element `e`.
+    fn patches_under(s: &Solver, e: u32) -> Vec<u32> {
+        let (geoms, nodes) = (s.elems.geoms.as_slice(), s.elems.nodes.as_slice());
+        let mut under = Vec::new();
+        let mut stack = vec![e];
+        while let Some(x) = stack.pop() {
+            let nd = nodes[x as usize];
+            if geoms[x as usize].patch != u32::MAX {
+                under.push(x);
+            } else {
+                stack.extend(nd.first_child..nd.first_child + nd.child_count);
+            }
+        }
+        under
+    }
+
+    /// A cluster of cubes that hide each other, taken whole by its facets, each
+    /// facet seen by rays to its own patches ([`facets::ClusterFacets::point_on`],
+    /// 256 here), gives what a point sees of it (traced, [`traced_factor`], every
+    /// cube blocking). One visible fraction for the whole cluster, its rays drawn
+    /// by power as before, counted a side face hidden behind the next cube as
+    /// visible as the lit tops.
+    #[test]
+    fn a_cluster_of_boxes_taken_whole_counts_what_each_facet_shows() {
+        let scene = cube_grid();
+        let s = Solver::new(&scene, facet_opts()).unwrap();
+        let geoms = s.elems.geoms.as_slice();
+        let all = patches_under(&s, 0);
+        let (mut used, mut sum_err, mut sum_shared) = (0, 0.0, 0.0);
+        let (mut worst, mut worst_shared) = (0.0f64, 0.0f64);
+        for e in 0..geoms.len() as u32 {
+            if geoms[e as usize].patch != u32::MAX || s.facets.of(e).len() < 3 {
+                continue;
+            }
+            let under = patches_under(&s, e);
+            // Clusters of cube faces only (the lamp hangs at y = 9).
+            if under.len() < 8 || under.iter().any(|&p| geoms[p as usize].corners[0][1] > 2.0) {
+                continue;
+            }
+            let (c, r) = oracle::sphere(&geoms[e as usize]);
+            for j in 0..24 {
+                // Level with the cubes and above them; along the rows and across.
+                let elev: f64 = [0.0, 0.25, 0.6, 1.0][j % 4];
+                let azim: f64 = [0.0, 0.3, 0.785, 1.2, 1.571, 2.5][j / 4];
+                let dir = DVec3::new(elev.cos() * azim.cos(), elev.sin(), elev.cos() * azim.sin());
+                let x = c + dir * r * 6.0;
+                let n = -dir;
+                let q = oracle::Samples {
+                    points: [x; 4],
+                    weights: [1.0, 0.0, 0.0, 0.0],
+                    count: 1,
+                };
+                let Some((ks, count)) = s.facet_factors(&q, n, e, c, r) else {
+                    continue;
+                };
+                let mut k = 0.0;
+                for &(f, kf) in &ks[..count] {
+                    if kf[0] <= 0.0 {
+                        continue;
+                    }
+                    let (v, _) = oracle::kernel_weighted_visibility(&s.bvh, 256, |i| {
+                        (
+                            (x, n, u32::MAX),
+                            s.facets
+                                .point_on(&s.elems, f, oracle::hash3(7, f as u64, i)),
+                        )
+                    });
+                    k += kf[0] * v;
+                }
+                let (v_shared, _) = oracle::point_cluster_visibility(
+                    &s.elems,
+                    &s.bvh,
+                    x,
+                    n,
+                    u32::MAX,
+                    ElementId(e),
+                    256,
+                    11,
+                    SOURCES_BY_POWER,
+                );
+                let shared = ks[..count].iter().map(|f| f.1[0]).sum::<f64>() * v_shared;
+                let seen = traced_factor(geoms, (&all, &under), x, n, (c, r));
+                if seen < 1e-4 {
+                    // Hidden behind other cubes: both nearly nothing.
+                    assert!(k < 1e-3 && shared < 1e-3, "{k} and {shared} for {seen}");
+                    continue;
+                }
+                used += 1;
+                sum_err += (k / seen - 1.0).abs();
+                sum_shared += (shared / seen - 1.0).abs();
+                worst = worst.max((k / seen - 1.0).abs());
+                worst_shared = worst_shared.max((shared / seen - 1.0).abs());
+            }
+        }
+        let used_f = used as f64;
+        eprintln!(
+            "{used} points: per facet mean {:.3} worst {worst:.3}; shared mean {:.3} worst \
+             {worst_shared:.3}",
+            sum_err / used_f,
+            sum_shared / used_f
+        );
+        assert!(used >= 24, "{used} points taken whole by facets");
+        assert!(sum_err / used_f < 0.1, "mean {}", sum_err / used_f);
+        assert!(worst < 0.3, "worst {worst}");
+        assert!(
+            sum_shared / used_f > 2.0 * sum_err / used_f,
+            "the shared fraction is no worse"
+        );
     }
 
     /// Each facet's radiosity ([`facets::ClusterFacets::pull`]) is the area mean of

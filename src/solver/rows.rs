@@ -361,8 +361,6 @@ impl Solver<'_> {
         }
         let geoms = self.elems.geoms.as_slice();
         let patch = geoms[leaf.ix()].patch;
-        // The facets of one cluster come one after another and share its rays.
-        let mut facet_vis: Option<(u32, f64)> = None;
         self.cluster_parts(q, n, s, &mut |e, k| {
             let coef: f64 = (0..q.count).map(|i| q.weights[i] * k[i]).sum::<f64>();
             if coef <= 0.0 {
@@ -388,39 +386,41 @@ impl Solver<'_> {
                 self.push_opened(q, n, e, coef, v, row, None);
                 return;
             }
-            // A facet is seen by its cluster's rays.
-            let ce = if facet {
-                self.facets.owner(e & !FACET_BIT)
-            } else {
-                e
-            };
-            let memo = facet_vis.filter(|&(c, _)| facet && c == ce);
-            let v: f64 = memo.map(|m| m.1).unwrap_or_else(|| {
-                let m = (self.opts.cluster_rays / q.count as u32).max(1);
-                let key = oracle::hash3(self.opts.seed ^ 0xc105, ce as u64, patch as u64);
-                // A point whose rays all fall below its horizon or on faces
-                // turned away counts none: it takes the link's fraction, not 0
-                // (the estimate still gives it the part of the sphere above).
-                (0..q.count)
-                    .map(|i| {
-                        let (v, rays) = oracle::point_cluster_visibility(
+            // A facet is seen by rays to its own patches (drawn by area), a
+            // cluster by its rays (drawn by power).
+            let m = (self.opts.cluster_rays / q.count as u32).max(1);
+            let key = oracle::hash3(self.opts.seed ^ 0xc105, e as u64, patch as u64);
+            // A point whose rays all fall below its horizon or on faces
+            // turned away counts none: it takes the link's fraction, not 0
+            // (the estimate still gives it the part of the sphere above).
+            let v: f64 = (0..q.count)
+                .map(|i| {
+                    let (x, h) = (q.points[i], oracle::hash3(key, i as u64, 3));
+                    let (v, rays) = if facet {
+                        oracle::kernel_weighted_visibility(&self.bvh, m, |j| {
+                            let y = self.facets.point_on(
+                                &self.elems,
+                                e & !FACET_BIT,
+                                oracle::hash3(h, j, 2),
+                            );
+                            ((x, n, patch), y)
+                        })
+                    } else {
+                        oracle::point_cluster_visibility(
                             &self.elems,
                             &self.bvh,
-                            q.points[i],
+                            x,
                             n,
                             patch,
-                            ElementId(ce),
+                            ElementId(e),
                             m,
-                            oracle::hash3(key, i as u64, 3),
+                            h,
                             SOURCES_BY_POWER,
-                        );
-                        q.weights[i] * if rays > 0 { v } else { vis }
-                    })
-                    .sum()
-            });
-            if facet {
-                facet_vis = Some((ce, v));
-            }
+                        )
+                    };
+                    q.weights[i] * if rays > 0 { v } else { vis }
+                })
+                .sum();
             if v > 0.0 {
                 let entry = match kept.as_deref_mut() {
                     Some(k) => {
