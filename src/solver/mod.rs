@@ -1672,8 +1672,8 @@ impl<'a> Solver<'a> {
     /// cluster estimate at each point, or the link's factor at every point for a
     /// link too close for it. The leaf system only knows a leaf's mean; this is
     /// what the mean hides ([`Solver::split_on_spread`]).
-    fn leaf_spread(&self, leaf: ElementId) -> f64 {
-        let (h, q) = self.leaf_point_light(leaf);
+    fn leaf_spread(&self, leaf: ElementId, fb: &[[f32; 3]]) -> f64 {
+        let (h, q) = self.leaf_point_light(leaf, fb);
         let g = &self.elems.geoms.as_slice()[leaf.ix()];
         let rho = self.patches.rhos[g.patch as usize];
         (0..3)
@@ -1705,6 +1705,7 @@ impl<'a> Solver<'a> {
     /// their shape, and split on their spread").
     fn leaf_shapes(&self) -> HashMap<u32, [f32; 4]> {
         let geoms = self.elems.geoms.as_slice();
+        let fb = self.facet_radiosities();
         self.sys
             .leaves
             .par_iter()
@@ -1713,7 +1714,7 @@ impl<'a> Solver<'a> {
                 if g.n != 4 || g.area >= self.power_area {
                     return None;
                 }
-                let (h, q) = self.leaf_point_light(leaf);
+                let (h, q) = self.leaf_point_light(leaf, &fb);
                 let p = g.patch as usize;
                 let (rho, em) = (self.patches.rhos[p], self.patches.emissions[p]);
                 let means: [f64; 3] = std::array::from_fn(|c| {
@@ -1735,10 +1736,31 @@ impl<'a> Solver<'a> {
             .collect()
     }
 
+    /// Each cluster facet's radiosity from the pool's ([`ClusterFacets::pull`]), for
+    /// reading a source id that may be a facet ([`source_value`]).
+    ///
+    /// [`ClusterFacets::pull`]: facets::ClusterFacets::pull
+    fn facet_radiosities(&self) -> Vec<[f32; 3]> {
+        if self.facets.count() == 0 {
+            return Vec::new();
+        }
+        let b: Vec<[f64; 3]> = (self.elems.radiosities.as_slice().iter())
+            .map(|v| v.map(f64::from))
+            .collect();
+        let mut fb = Vec::new();
+        self.facets.pull(&b, &mut fb);
+        fb.iter().map(|v| v.map(|x| x as f32)).collect()
+    }
+
     /// The light leaf `leaf`'s row hands each of its quadrature points, `Σ_s F(x_q →
     /// s) V(x_q, s) B_s` per channel (see [`Solver::leaf_spread`]), and those points
-    /// ([`oracle::samples`]).
-    fn leaf_point_light(&self, leaf: ElementId) -> ([[f64; 3]; 4], oracle::Samples) {
+    /// ([`oracle::samples`]); `fb` holds the facets' radiosities
+    /// ([`Solver::facet_radiosities`]), as a cluster source may hand its facets.
+    fn leaf_point_light(
+        &self,
+        leaf: ElementId,
+        fb: &[[f32; 3]],
+    ) -> ([[f64; 3]; 4], oracle::Samples) {
         let geoms = self.elems.geoms.as_slice();
         let ends = self.links.ends.as_slice();
         let tr = self.links.transports.as_slice();
@@ -1757,7 +1779,7 @@ impl<'a> Solver<'a> {
                 if t.f > 0.0 {
                     let vis = t.visibility as f64;
                     self.cluster_parts(&q, n, s, &mut |e, k| {
-                        let be = b[e as usize];
+                        let be = source_value(b, fb, e);
                         for (hi, ki) in h.iter_mut().zip(k).take(q.count) {
                             for c in 0..3 {
                                 hi[c] += ki * vis * be[c] as f64;
@@ -1815,6 +1837,7 @@ impl<'a> Solver<'a> {
         let limit = self.opts.split_spread * self.b_ref();
         let floor = (self.opts.recon_min_size * self.patches.diameter).powi(2);
         let geoms = self.elems.geoms.as_slice();
+        let fb = self.facet_radiosities();
         let this = &*self;
         let split: Vec<ElementId> = self
             .sys
@@ -1823,7 +1846,9 @@ impl<'a> Solver<'a> {
             .copied()
             .filter(|&leaf| {
                 let g = &geoms[leaf.ix()];
-                g.area < this.power_area && g.area / 4.0 >= floor && this.leaf_spread(leaf) > limit
+                g.area < this.power_area
+                    && g.area / 4.0 >= floor
+                    && this.leaf_spread(leaf, &fb) > limit
             })
             .collect();
         for &leaf in &split {
@@ -2670,6 +2695,58 @@ mod tests {
             sum_shared / used_f > 2.0 * sum_err / used_f,
             "the shared fraction is no worse"
         );
+    }
+
+    /// The light a leaf's row hands its quadrature points
+    /// ([`Solver::leaf_point_light`], what `--split-spread` and `--leaf-shapes`
+    /// read) takes a cluster source's facets at their own radiosity: its weighted
+    /// mean gives back the row's own gather, facet sources included. It once read
+    /// a facet id as an element id, out of the pool's bounds, so `--cluster-facets`
+    /// with `--split-spread` panicked (on `gen_cubes 6`).
+    #[test]
+    fn a_leafs_point_light_reads_facet_sources_as_its_row_does() {
+        let scene = cube_grid();
+        let mut s = Solver::new(&scene, facet_opts()).unwrap();
+        s.run(|_, _| {}).unwrap();
+        let fb = s.facet_radiosities();
+        let b = s.elems.radiosities.as_slice();
+        let (mut with_facets, mut diff, mut total) = (0, 0.0, 0.0);
+        for (li, &leaf) in s.sys.leaves.iter().enumerate() {
+            let (r0, r1) = (
+                s.sys.row_start[li] as usize,
+                s.sys.row_start[li + 1] as usize,
+            );
+            let sources = &s.sys.row_sources[r0..r1];
+            if !sources.iter().any(|&x| x & FACET_BIT != 0) {
+                continue;
+            }
+            with_facets += 1;
+            let row: f64 = sources
+                .iter()
+                .zip(&s.sys.row_coefs[r0..r1])
+                .map(|(&x, c)| c * source_value(b, &fb, x)[0] as f64)
+                .sum();
+            let (h, q) = s.leaf_point_light(leaf, &fb);
+            let mean: f64 = (0..q.count).map(|i| q.weights[i] * h[i][0]).sum();
+            diff += (mean - row).abs();
+            total += row;
+        }
+        eprintln!(
+            "{with_facets} leaves gather facets; point light vs row: {:.4} of the row",
+            diff / total
+        );
+        assert!(with_facets >= 16, "{with_facets} rows take facets");
+        assert!(diff < 0.05 * total, "{diff} apart over {total}");
+        // The split reads every leaf's point light (it splits none here).
+        let mut split = Solver::new(
+            &scene,
+            SolveOptions {
+                split_spread: 0.05,
+                ..facet_opts()
+            },
+        )
+        .unwrap();
+        split.run(|_, _| {}).unwrap();
     }
 
     /// Each facet's radiosity ([`facets::ClusterFacets::pull`]) is the area mean of
