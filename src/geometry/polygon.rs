@@ -113,6 +113,37 @@ impl Poly {
         }
         out
     }
+
+    /// [`Poly::clip_front`] with corners within `tol` of the plane taken as on it:
+    /// kept, on both sides, and no edge cut next to them. Compared exactly, a
+    /// corner a rounding off the plane either stayed alone or came back twice (the
+    /// corner and a cut point a rounding away from it): a contact line through a
+    /// floor tile's corner made a quad with a repeated corner in metres and a
+    /// triangle in millimetres, and the hierarchies differed (issue 45, part 3).
+    pub fn clip_front_within(&self, x: DVec3, n: DVec3, tol: f64) -> Poly {
+        let mut out = Poly {
+            v: [DVec3::ZERO; MAX_CORNERS],
+            n: 0,
+        };
+        let c = self.corners();
+        let k = c.len();
+        for i in 0..k {
+            let a = c[i];
+            let b = c[(i + 1) % k];
+            let da = n.dot(a - x);
+            let db = n.dot(b - x);
+            if da >= -tol && out.n < MAX_CORNERS {
+                out.v[out.n] = a;
+                out.n += 1;
+            }
+            if ((da > tol && db < -tol) || (da < -tol && db > tol)) && out.n < MAX_CORNERS {
+                let s = da / (da - db);
+                out.v[out.n] = a + s * (b - a);
+                out.n += 1;
+            }
+        }
+        out
+    }
 }
 
 /// Area-weighted centroid of the convex planar polygon with corners `c` (the mean
