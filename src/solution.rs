@@ -227,11 +227,23 @@ impl Solution {
     }
 }
 
+/// How far outside a leaf's domain, in the patch's parameters, [`leaf_at`] still
+/// takes a point as in it: far above the round-off of a point's parameters
+/// (`1e-16` relative, in any unit), far below any leaf. A point on the edge of two
+/// leaves (a probe at the middle of a patch, on its first split) is in both; taken
+/// exactly, its parameters' round-off chose one leaf in metres and the other in
+/// millimetres, and the reconstruction's values jump there by up to 1% (issue 45,
+/// part 3).
+pub const LEAF_EDGE_TOLERANCE: f64 = 1e-9;
+
 /// The leaf of `leaves` (one patch's) holding `(u, v)`: the first whose domain
-/// contains it, else the first within `1e-6` (a point in a crack between f32
-/// domains), else the one whose domain centre is nearest.
+/// contains it within [`LEAF_EDGE_TOLERANCE`], else the first within `1e-6` (a
+/// point in a crack between f32 domains), else the one whose domain centre is
+/// nearest.
 pub fn leaf_at(leaves: &[Leaf], u: f64, v: f64) -> Option<&Leaf> {
-    let found = leaves.iter().find(|l| l.contains(u, v, 0.0));
+    let found = leaves
+        .iter()
+        .find(|l| l.contains(u, v, LEAF_EDGE_TOLERANCE));
     found
         .or_else(|| leaves.iter().find(|l| l.contains(u, v, 1e-6)))
         .or_else(|| {

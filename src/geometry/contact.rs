@@ -194,8 +194,10 @@ fn contacts(
         hi = hi.max(c);
     }
     let pad = DVec3::splat(tol * 2.0 + near_gap);
-    // In first-met order, each once (a floor under a field of boxes meets
-    // every box: a linear `contains` made this quadratic).
+    // In patch order, each once. Not in the order the BVH meets them: that order
+    // follows the f32 tree, which another unit's rounding builds otherwise, and
+    // the order of the cuts decides the pieces' order and corners (issue 45,
+    // part 3).
     let mut seen = Vec::new();
     bvh.for_each_triangle_in_box(lo - pad, hi + pad, |j, _| {
         let j = j as usize;
@@ -204,8 +206,8 @@ fn contacts(
         }
         true
     });
-    let mut met = std::collections::HashSet::with_capacity(seen.len());
-    seen.retain(|&j| met.insert(j));
+    seen.sort_unstable();
+    seen.dedup();
     for &j in &seen {
         let other = &patches.polys[j];
         let nj = patches.normals[j];
@@ -293,7 +295,7 @@ fn cut_by_lines(poly: Poly, n: DVec3, lines: Vec<(DVec3, DVec3)>, tol: f64) -> V
                 continue;
             }
             for side in [cut_n, -cut_n] {
-                let half = piece.clip_front(p0, side);
+                let half = piece.clip_front_within(p0, side, tol);
                 if half.n >= 3 && half.area() > tol * tol {
                     next.push(half);
                 }

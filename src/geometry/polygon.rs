@@ -90,6 +90,35 @@ impl Poly {
     /// The part of the polygon on the side `n · (p - x) >= 0` of the plane through `x`
     /// with normal `n` (Sutherland–Hodgman against one plane).
     pub fn clip_front(&self, x: DVec3, n: DVec3) -> Poly {
+        self.clip(x, n, |da| da >= 0.0, |da, db| (da >= 0.0) != (db >= 0.0))
+    }
+
+    /// [`Poly::clip_front`] with corners within `tol` of the plane taken as on it:
+    /// kept, on both sides, and no edge cut next to them. Compared exactly, a
+    /// corner a rounding off the plane either stayed alone or came back twice (the
+    /// corner and a cut point a rounding away from it): a contact line through a
+    /// floor tile's corner made a quad with a repeated corner in metres and a
+    /// triangle in millimetres, and the hierarchies differed (issue 45, part 3).
+    pub fn clip_front_within(&self, x: DVec3, n: DVec3, tol: f64) -> Poly {
+        self.clip(
+            x,
+            n,
+            |da| da >= -tol,
+            |da, db| (da > tol && db < -tol) || (da < -tol && db > tol),
+        )
+    }
+
+    /// Sutherland–Hodgman against the plane through `x` with normal `n`: corner `a`
+    /// is kept if `keep(n · (a - x))`, and the edge `a b` is cut if `cuts` of both
+    /// ends' distances.
+    #[inline]
+    fn clip(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        keep: impl Fn(f64) -> bool,
+        cuts: impl Fn(f64, f64) -> bool,
+    ) -> Poly {
         let mut out = Poly {
             v: [DVec3::ZERO; MAX_CORNERS],
             n: 0,
@@ -101,11 +130,11 @@ impl Poly {
             let b = c[(i + 1) % k];
             let da = n.dot(a - x);
             let db = n.dot(b - x);
-            if da >= 0.0 && out.n < MAX_CORNERS {
+            if keep(da) && out.n < MAX_CORNERS {
                 out.v[out.n] = a;
                 out.n += 1;
             }
-            if (da >= 0.0) != (db >= 0.0) && out.n < MAX_CORNERS {
+            if cuts(da, db) && out.n < MAX_CORNERS {
                 let s = da / (da - db);
                 out.v[out.n] = a + s * (b - a);
                 out.n += 1;
@@ -167,5 +196,31 @@ mod tests {
         assert!((c.area() - 1.0).abs() < 1e-15);
         let none = p.clip_front(DVec3::new(2.0, 0.0, 0.0), DVec3::X);
         assert_eq!(none.n, 0);
+    }
+
+    /// A cut along a diagonal whose corners lie a rounding off the line gives two
+    /// triangles, each with the diagonal's corners once, whichever side the
+    /// rounding puts them (exactly, one half has a repeated corner).
+    #[test]
+    fn clipping_within_a_tolerance_keeps_corners_on_the_line_once() {
+        let p = Poly::new(&[
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ]);
+        let m = DVec3::new(1.0, -1.0, 0.0).normalize();
+        for off in [-1e-17, 0.0, 1e-17] {
+            let x = DVec3::new(off, 0.0, 0.0);
+            for side in [m, -m] {
+                let half = p.clip_front_within(x, side, 1e-9);
+                assert_eq!(half.n, 3, "{off} {side}: {:?}", half.corners());
+                assert!((half.area() - 0.5).abs() < 1e-15);
+            }
+        }
+        // Exactly, each corner on the line comes back as a cut point too.
+        let exact = p.clip_front(DVec3::ZERO, -m);
+        assert_eq!(exact.n, 5);
+        assert_eq!((exact.v[0], exact.v[2]), (exact.v[1], exact.v[3]));
     }
 }

@@ -13,6 +13,10 @@
 //! shadow cache, 1986). On ACTOR a third of the rays are blocked and two thirds of
 //! those by the triangle cached; the answers are the traversal's.
 //!
+//! Occlusion is decided in f64: the f32 BVH finds the candidate triangles, and each
+//! is tested on its f64 corners ([`SceneBvh::occluded_cached`]), so that the answer
+//! does not depend on how the scene's unit rounds to f32.
+//!
 //! What it does not do: it never decides what a segment's end points may hit. Callers
 //! pass segments between two surface points; the ends are trimmed by a fraction of the
 //! segment's length so the surfaces they start and end on do not count.
@@ -110,7 +114,8 @@ struct Part {
     tris: Vec<Triangle>,
     /// Patch of each triangle in `tris`.
     tri_patch: Vec<u32>,
-    /// `tris` in f64 (part space): what shafts cull ([`SceneBvh::for_each_triangle_in_box`]).
+    /// `tris` in f64 (part space): what shafts cull ([`SceneBvh::for_each_triangle_in_box`])
+    /// and what occlusion tests ([`SceneBvh::occluded_cached`]).
     /// The f32 corners are off by up to 6e-8 of the coordinates, far above a
     /// shaft's tolerance (1e-9 of its box), and off differently in another unit:
     /// a block's face on the floor's plane was in front of a shaft's end in
@@ -223,9 +228,43 @@ impl Part {
         false
     }
 
+    /// Parameter in `[tmin, tmax]` where the segment `o + s·d` (part space, f64)
+    /// meets triangle `id` in f64 (Möller & Trumbore 1997, edges included), or
+    /// infinity. See [`SceneBvh::occluded_cached`] for why f64.
+    fn hit64(&self, id: usize, o: DVec3, d: DVec3, tmin: f64, tmax: f64) -> f64 {
+        let [v0, v1, v2] = self.tris64[id];
+        let (e1, e2) = (v1 - v0, v2 - v0);
+        let p = d.cross(e2);
+        let det = e1.dot(p);
+        if det == 0.0 {
+            return f64::INFINITY;
+        }
+        let inv = 1.0 / det;
+        let c = o - v0;
+        let u = c.dot(p) * inv;
+        let q = c.cross(e1);
+        let v = d.dot(q) * inv;
+        if u < 0.0 || v < 0.0 || u + v > 1.0 {
+            return f64::INFINITY;
+        }
+        let t = e2.dot(q) * inv;
+        if t >= tmin && t <= tmax {
+            t
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The segment `o + s·d` in part space.
+    fn local(&self, o: DVec3, d: DVec3) -> (DVec3, DVec3) {
+        (
+            self.world_to_local.transform_point3(o),
+            self.world_to_local.transform_vector3(d),
+        )
+    }
+
     fn local_ray(&self, o: DVec3, d: DVec3, tmin: f64, tmax: f64) -> Ray {
-        let lo = self.world_to_local.transform_point3(o);
-        let ld = self.world_to_local.transform_vector3(d);
+        let (lo, ld) = self.local(o, d);
         Ray::new(
             Vec3A::new(lo.x as f32, lo.y as f32, lo.z as f32),
             Vec3A::new(ld.x as f32, ld.y as f32, ld.z as f32),
@@ -346,6 +385,14 @@ impl SceneBvh {
     /// [`SceneBvh::occluded_by`], testing `last`'s triangle first and leaving in it
     /// the triangle that blocks this segment, if any ([`LastHit`]: the answer is
     /// that of [`SceneBvh::occluded_by`] whatever `last` holds, up to its f32 note).
+    ///
+    /// The f32 BVH only finds the candidates: whether a triangle blocks is decided
+    /// in f64 on its f64 corners, and the ray is cast from `2 NODE_EPSILON` behind
+    /// `a` so that no node near the trim is dropped. Decided in f32, a hit within
+    /// the f32 round-off of the trim (a corner's gather point 10⁻⁴ m from a box,
+    /// rays to the wall 1 m behind it crossing the box's face at `s ≈ 1.00007·10⁻⁴`)
+    /// counted in metres and not in kilometres, and the corner's value changed by
+    /// 5% (issue 45, part 3).
     pub fn occluded_cached(
         &self,
         a: DVec3,
@@ -356,15 +403,19 @@ impl SceneBvh {
     ) -> bool {
         let d = b - a;
         let (s0, s1) = (SEGMENT_TRIM, 1.0 - SEGMENT_TRIM);
+        // Cast from `2 NODE_EPSILON` behind `a` ([`SceneBvh::closest_hit`]), so
+        // that no node is dropped near the trim: the f64 test decides there.
+        let back = 2.0 * NODE_EPSILON;
+        let o = a - d * back;
+        let (t0, t1) = (s0 + back, s1 + back);
         if let Some(part) = self.parts.get(last.part as usize)
             && which.admits(part)
-            && let Some(tri) = part.tris.get(last.tri as usize)
+            && (last.tri as usize) < part.tris.len()
         {
             let p = part.tri_patch[last.tri as usize];
             if p != skip[0] && p != skip[1] {
-                let ray = part.local_ray(a, d, s0, s1);
-                // The traversal's test of a hit (obvhs `ray_traverse_miss`).
-                if tri.intersect(&ray) < ray.tmax {
+                let (lo, ld) = part.local(o, d);
+                if part.hit64(last.tri as usize, lo, ld, t0, t1).is_finite() {
                     return true;
                 }
             }
@@ -377,18 +428,20 @@ impl SceneBvh {
             if moving && part.misses_box(a, d, s0, s1) {
                 continue;
             }
-            let ray = part.local_ray(a, d, s0, s1);
+            let ray = part.local_ray(o, d, t0, t1);
+            let (lo, ld) = part.local(o, d);
             let mut blocker = u32::MAX;
-            let hit = !part.bvh.ray_traverse_miss(ray, |r, id| {
+            let hit = !part.bvh.ray_traverse_miss(ray, |_, id| {
                 let p = part.tri_patch[id];
                 if p == skip[0] || p == skip[1] {
                     return f32::INFINITY;
                 }
-                let t = part.tris[id].intersect(r);
-                if t < r.tmax {
+                if part.hit64(id, lo, ld, t0, t1).is_finite() {
                     blocker = id as u32;
+                    0.0
+                } else {
+                    f32::INFINITY
                 }
-                t
             });
             if hit {
                 *last = LastHit {
