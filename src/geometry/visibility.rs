@@ -410,12 +410,18 @@ impl SceneBvh {
         let (t0, t1) = (s0 + back, s1 + back);
         if let Some(part) = self.parts.get(last.part as usize)
             && which.admits(part)
-            && (last.tri as usize) < part.tris.len()
+            && let Some(tri) = part.tris.get(last.tri as usize)
         {
             let p = part.tri_patch[last.tri as usize];
             if p != skip[0] && p != skip[1] {
+                // Blocked only where the f32 test also hits: the f32 node boxes
+                // can hide from the traversal a grazing hit only the f64 test
+                // makes, and then the traversal, not the cache, must decide.
+                let ray = part.local_ray(o, d, t0, t1);
                 let (lo, ld) = part.local(o, d);
-                if part.hit64(last.tri as usize, lo, ld, t0, t1).is_finite() {
+                if tri.intersect(&ray) < ray.tmax
+                    && part.hit64(last.tri as usize, lo, ld, t0, t1).is_finite()
+                {
                     return true;
                 }
             }
