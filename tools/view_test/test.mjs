@@ -1,7 +1,7 @@
 // The browser test of `rhier view` (issue 51): headless Chromium, driven by
 // playwright-core, loads the page `rhier view` serves and checks what it draws.
 //
-//   node tools/view_test/test.mjs [--rhier target/release/rhier]
+//   node tools/view_test/test.mjs [--rhier $CARGO_TARGET_DIR/release/rhier (default target/)]
 //       Solves the embedded Cornell box and formats/examples/cornell_moving.json
 //       (coarse), serves each, and fails (exit 1) unless: the lit room is drawn and
 //       matches `rhier play`'s picture of the same camera and size; the red and
@@ -31,7 +31,9 @@ const opt = (name, def) => {
   const i = argv.indexOf(name);
   return i >= 0 ? argv[i + 1] : def;
 };
-const RHIER = resolve(opt('--rhier', join(repo, 'target/release/rhier')));
+// Where cargo built it: $CARGO_TARGET_DIR if set, as `.ci/run`'s cargo commands use it.
+const target = process.env.CARGO_TARGET_DIR || join(repo, 'target');
+const RHIER = resolve(opt('--rhier', join(target, 'release/rhier')));
 const CHROMIUM = process.env.CHROMIUM || '/usr/bin/chromium';
 const WIDTH = 640;
 const HEIGHT = 480;
