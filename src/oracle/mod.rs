@@ -499,6 +499,13 @@ fn descend(elems: &ElementPool, e: ElementId, h: u64, by_power: bool) -> (DVec3,
         // A childless cluster (no surface under it): its centre, no facing.
         return (sphere(g).0, DVec3::ZERO, u32::MAX);
     }
+    patch_point(g, h, level)
+}
+
+/// The uniform point of surface element `g` (by its parameters) that a descent
+/// reaching it at depth `level` with jitter `h` draws, with its normal and patch
+/// ([`surface_point`], and a cluster facet's [`crate::solver`] rays).
+pub fn patch_point(g: &Geom, h: u64, level: u64) -> (DVec3, DVec3, u32) {
     let hp = hash3(h, level, 0x9e1);
     let su = (hp & 0xffff_ffff) as f64 / 4294967296.0;
     let sv = (hp >> 32) as f64 / 4294967296.0;

@@ -278,7 +278,7 @@ impl ClusterFacets {
     /// A point of facet `f`'s patches drawn by area from the hash `h`, its normal
     /// and its patch: the members are drawn by their area shares, down through
     /// sub-cluster facets to a patch root, and a point of that patch by
-    /// [`oracle::point_in`]. The rays of a facet's visible fraction go there.
+    /// [`oracle::patch_point`]. The rays of a facet's visible fraction go there.
     pub fn point_on(&self, elems: &ElementPool, f: u32, h: u64) -> (DVec3, DVec3, u32) {
         let geoms = elems.geoms.as_slice();
         let mut cur = f as usize;
@@ -303,15 +303,7 @@ impl ClusterFacets {
                 level += 1;
                 continue;
             }
-            let g = &geoms[pick as usize];
-            let hp = oracle::hash3(h, level, 0x9e1);
-            let su = (hp & 0xffff_ffff) as f64 / 4294967296.0;
-            let sv = (hp >> 32) as f64 / 4294967296.0;
-            return (
-                oracle::point_in(g, &oracle::poly(g), su, sv),
-                DVec3::from_array(g.normal),
-                g.patch,
-            );
+            return oracle::patch_point(&geoms[pick as usize], h, level);
         }
     }
 
