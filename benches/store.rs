@@ -132,7 +132,7 @@ fn probe_throughput(c: &mut Criterion) {
         s = s
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
+        rhier::oracle::unit(s)
     };
     let points: Vec<ProbePoint> = (0..10_000)
         .map(|k| {

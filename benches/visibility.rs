@@ -91,7 +91,7 @@ fn boxes_scene(n: usize) -> Scene {
 }
 
 fn segments(p: &Patches, count: usize) -> Vec<(DVec3, DVec3)> {
-    let u = |h: u64| (h >> 11) as f64 / (1u64 << 53) as f64;
+    let u = rhier::oracle::unit;
     (0..count as u64)
         .map(|k| {
             let i = (hash3(1, k, 0) % p.len() as u64) as usize;

@@ -160,7 +160,7 @@ mod tests {
             h ^= h << 13;
             h ^= h >> 7;
             h ^= h << 17;
-            (h >> 11) as f64 / (1u64 << 53) as f64
+            crate::oracle::unit(h)
         };
         let mut worst = 0.0f64;
         for _ in 0..200_000 {

@@ -481,7 +481,7 @@ fn descend(elems: &ElementPool, e: ElementId, h: u64, by_power: bool) -> (DVec3,
         } else {
             kids.clone().map(area).sum()
         };
-        let u = (hash3(h, level, 0x5a3) >> 11) as f64 / (1u64 << 53) as f64 * total;
+        let u = unit(hash3(h, level, 0x5a3)) * total;
         let mut acc = 0.0;
         let mut pick = kids.start;
         for c in kids {
@@ -942,6 +942,12 @@ pub fn hash3(a: u64, b: u64, c: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+/// A number uniform in `[0, 1)` from the top 53 bits of a hash word: every jitter,
+/// sample and test generator turns its words into numbers this way.
+pub fn unit(h: u64) -> f64 {
+    (h >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// What to do with a link whose error exceeds the threshold.

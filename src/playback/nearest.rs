@@ -241,7 +241,7 @@ mod tests {
         *s = s
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
-        (*s >> 11) as f64 / (1u64 << 53) as f64
+        crate::oracle::unit(*s)
     }
 
     #[test]

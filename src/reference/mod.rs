@@ -21,7 +21,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::geometry::{Patches, SceneBvh, cosine_direction, nearest_facing};
-use crate::oracle::hash3;
+use crate::oracle::{hash3, unit as uniform};
 use crate::scene::Scene;
 
 /// A reference value with its standard error.
@@ -37,10 +37,6 @@ struct Emitters {
     patches: Vec<usize>,
     cdf: Vec<f64>,
     total: f64,
-}
-
-fn uniform(h: u64) -> f64 {
-    (h >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// Uniform point on patch `i` from two uniforms (quads split into two triangles by area).

@@ -501,7 +501,7 @@ mod tests {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
+            crate::oracle::unit(state)
         }
     }
 

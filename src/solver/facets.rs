@@ -288,7 +288,7 @@ impl ClusterFacets {
                 self.members_start[cur] as usize,
                 self.members_start[cur + 1] as usize,
             );
-            let u = (oracle::hash3(h, level, 0xfac) >> 11) as f64 / (1u64 << 53) as f64;
+            let u = oracle::unit(oracle::hash3(h, level, 0xfac));
             let mut acc = 0.0;
             let mut pick = self.members[m1 - 1].0;
             for &(src, w) in &self.members[m0..m1] {

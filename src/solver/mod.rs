@@ -1007,9 +1007,7 @@ impl<'a> Solver<'a> {
         let mut acc = 0.0;
         let mut p = 0;
         for i in 0..count {
-            let r = |k: u64| {
-                (oracle::hash3(self.opts.seed, i as u64, k) >> 11) as f64 / (1u64 << 53) as f64
-            };
+            let r = |k: u64| oracle::unit(oracle::hash3(self.opts.seed, i as u64, k));
             let target = (i as f64 + r(1)) / count as f64 * total;
             while p + 1 < self.patches.len() && acc + self.patches.areas[p] < target {
                 acc += self.patches.areas[p];

@@ -3,12 +3,8 @@
 
 use glam::DVec3;
 use rhier::geometry::{Patches, SceneBvh};
-use rhier::oracle::hash3;
+use rhier::oracle::{hash3, unit as u};
 use rhier::shafts::Shaft;
-
-fn u(h: u64) -> f64 {
-    (h >> 11) as f64 / (1u64 << 53) as f64
-}
 
 fn tri_box_overlap_aabb(t: &[DVec3; 3], lo: DVec3, hi: DVec3) -> bool {
     let tl = t[0].min(t[1]).min(t[2]);

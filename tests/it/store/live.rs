@@ -14,7 +14,7 @@ fn lcg(s: &mut u64) -> f64 {
     *s = s
         .wrapping_mul(6364136223846793005)
         .wrapping_add(1442695040888963407);
-    (*s >> 11) as f64 / (1u64 << 53) as f64
+    rhier::oracle::unit(*s)
 }
 
 /// The `f32` next to `x` on the side of `dir` (`f32::next_up` is past the MSRV).

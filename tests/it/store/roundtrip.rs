@@ -16,7 +16,7 @@ fn lcg(s: &mut u64) -> f64 {
     *s = s
         .wrapping_mul(6364136223846793005)
         .wrapping_add(1442695040888963407);
-    (*s >> 11) as f64 / (1u64 << 53) as f64
+    rhier::oracle::unit(*s)
 }
 
 /// Random points on the inside of the walls, slightly off the surface, with the

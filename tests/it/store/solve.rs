@@ -54,7 +54,7 @@ fn solve_file_probe_equals_the_solves_probe() {
         s = s
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
+        rhier::oracle::unit(s)
     };
     let points: Vec<ProbePoint> = (0..150)
         .map(|k| ProbePoint {
