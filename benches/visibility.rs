@@ -81,11 +81,7 @@ fn boxes_scene(n: usize) -> Scene {
             rho: [0.5; 3],
             emission: [1.0; 3],
         }],
-        objects: vec![Object {
-            name: "room".into(),
-            polygons: polys,
-            motion: None,
-        }],
+        objects: vec![Object::still("room", polys)],
         ..Default::default()
     }
 }

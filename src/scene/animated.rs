@@ -194,14 +194,6 @@ fn solid(material: MaterialId, lo: DVec3, hi: DVec3, faces: &[Face]) -> Vec<Poly
         .collect()
 }
 
-fn object(name: &str, polygons: Vec<Polygon>) -> Object {
-    Object {
-        name: name.to_string(),
-        polygons,
-        motion: None,
-    }
-}
-
 /// Material ids of the shared room (each scene lists its materials sorted by name, as
 /// the native JSON reader returns them).
 struct RoomMaterials {
@@ -240,8 +232,8 @@ fn room(m: &RoomMaterials) -> Vec<Object> {
         }
     }
     vec![
-        object("floor", vec![inner(m.floor, Face::NegY)]),
-        object(
+        Object::still("floor", vec![inner(m.floor, Face::NegY)]),
+        Object::still(
             "ceiling",
             vec![
                 ceil([0.0, xm], [0.0, LAMP_Z[0]]),
@@ -250,13 +242,13 @@ fn room(m: &RoomMaterials) -> Vec<Object> {
                 ceil([LAMP_X[1], xm], LAMP_Z),
             ],
         ),
-        object(
+        Object::still(
             "ceiling_light",
             vec![ceil_panel(m.lamp, LAMP_X, LAMP_Z, ym)],
         ),
-        object("left_wall", vec![inner(m.wall, Face::NegX)]),
-        object("front_wall", vec![inner(m.wall, Face::NegZ)]),
-        object("desk", desk),
+        Object::still("left_wall", vec![inner(m.wall, Face::NegX)]),
+        Object::still("front_wall", vec![inner(m.wall, Face::NegZ)]),
+        Object::still("desk", desk),
     ]
 }
 
@@ -380,12 +372,12 @@ pub fn actor_scene(frames: u32) -> Scene {
     let time = domain(frames);
     let mut objects = room(&m);
     let right = box_face(m.wall, DVec3::ZERO, v(5.0, 2.7, 4.0), Face::PosX, false);
-    objects.push(object("right_wall", vec![right]));
+    objects.push(Object::still("right_wall", vec![right]));
     let (back, pane) = wall_with_hole(m.wall, window, true, WINDOW_X, WINDOW_Y);
-    objects.push(object("back_wall", back));
-    objects.push(object("window", vec![pane]));
+    objects.push(Object::still("back_wall", back));
+    objects.push(Object::still("window", vec![pane]));
     // Shelf against the left wall, on the floor (no back or bottom face).
-    objects.push(object(
+    objects.push(Object::still(
         "shelf",
         solid(
             m.desk,
@@ -452,10 +444,10 @@ pub fn light_scene(frames: u32) -> Scene {
     let time = domain(frames);
     let mut objects = room(&m);
     let back = box_face(m.wall, DVec3::ZERO, v(5.0, 2.7, 4.0), Face::PosZ, false);
-    objects.push(object("back_wall", vec![back]));
+    objects.push(Object::still("back_wall", vec![back]));
     let (right, lamp) = wall_with_hole(m.wall, wall_lamp, false, WALL_LAMP_Z, WALL_LAMP_Y);
-    objects.push(object("right_wall", right));
-    objects.push(object("wall_lamp", vec![lamp]));
+    objects.push(Object::still("right_wall", right));
+    objects.push(Object::still("wall_lamp", vec![lamp]));
     // The board: 3 cm thick, 1.4 m tall from y = 0.4, 1 m wide along z; it slides
     // along z at x = 4.55 (its back 0.435 m from the wall lamp).
     let board = solid(panel, v(-0.015, 0.4, -0.5), v(0.015, 1.8, 0.5), &ALL_FACES);

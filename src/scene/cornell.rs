@@ -44,14 +44,6 @@ fn poly(material: MaterialId, vertices: &[[f64; 3]]) -> Polygon {
     }
 }
 
-fn object(name: &str, polygons: Vec<Polygon>) -> Object {
-    Object {
-        name: name.to_string(),
-        polygons,
-        motion: None,
-    }
-}
-
 /// A ceiling rectangle `[x0, x1] x [z0, z1]` at y = 548.8, counter-clockwise seen from
 /// below (the published ceiling's vertex order).
 fn ceiling_rect(material: MaterialId, x: [f64; 2], z: [f64; 2]) -> Polygon {
@@ -71,29 +63,17 @@ fn ceiling_rect(material: MaterialId, x: [f64; 2], z: [f64; 2]) -> Polygon {
 /// block. Static; camera = the published camera; no warnings.
 pub fn cornell_box(blocks: bool) -> Scene {
     let materials = vec![
-        Material {
-            name: "green".into(),
-            rho: [0.14, 0.45, 0.091],
-            emission: [0.0; 3],
-        },
+        Material::diffuse("green", [0.14, 0.45, 0.091]),
         Material {
             name: "light".into(),
             rho: [0.78, 0.78, 0.78],
             emission: [17.0, 12.0, 4.0],
         },
-        Material {
-            name: "red".into(),
-            rho: [0.63, 0.065, 0.05],
-            emission: [0.0; 3],
-        },
-        Material {
-            name: "white".into(),
-            rho: [0.73, 0.71, 0.68],
-            emission: [0.0; 3],
-        },
+        Material::diffuse("red", [0.63, 0.065, 0.05]),
+        Material::diffuse("white", [0.73, 0.71, 0.68]),
     ];
     let mut objects = vec![
-        object(
+        Object::still(
             "floor",
             vec![poly(
                 WHITE,
@@ -105,7 +85,7 @@ pub fn cornell_box(blocks: bool) -> Scene {
                 ],
             )],
         ),
-        object(
+        Object::still(
             "ceiling",
             vec![
                 // In front of the light (z < 227) and behind it (z > 332), full width.
@@ -116,7 +96,7 @@ pub fn cornell_box(blocks: bool) -> Scene {
                 ceiling_rect(WHITE, [LIGHT_X[1], CEILING_X[1]], LIGHT_Z),
             ],
         ),
-        object(
+        Object::still(
             "light",
             vec![poly(
                 LIGHT,
@@ -128,7 +108,7 @@ pub fn cornell_box(blocks: bool) -> Scene {
                 ],
             )],
         ),
-        object(
+        Object::still(
             "back_wall",
             vec![poly(
                 WHITE,
@@ -140,7 +120,7 @@ pub fn cornell_box(blocks: bool) -> Scene {
                 ],
             )],
         ),
-        object(
+        Object::still(
             "right_wall",
             vec![poly(
                 GREEN,
@@ -152,7 +132,7 @@ pub fn cornell_box(blocks: bool) -> Scene {
                 ],
             )],
         ),
-        object(
+        Object::still(
             "left_wall",
             // The published quad 0-1-2-3 split along its diagonal 0-2.
             vec![
@@ -176,7 +156,7 @@ pub fn cornell_box(blocks: bool) -> Scene {
         ),
     ];
     if blocks {
-        objects.push(object(
+        objects.push(Object::still(
             "short_block",
             vec![
                 poly(
@@ -226,7 +206,7 @@ pub fn cornell_box(blocks: bool) -> Scene {
                 ),
             ],
         ));
-        objects.push(object(
+        objects.push(Object::still(
             "tall_block",
             vec![
                 poly(

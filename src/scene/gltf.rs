@@ -468,11 +468,10 @@ impl<'a> Reader<'a> {
                 let material = match prim.material().index() {
                     Some(m) => MaterialId(m as u32),
                     None => *default_material.get_or_insert_with(|| {
-                        materials.push(Material {
-                            name: unique_name("default", &materials),
-                            rho: [DEFAULT_RHO; 3],
-                            emission: [0.0; 3],
-                        });
+                        materials.push(Material::diffuse(
+                            unique_name("default", &materials),
+                            [DEFAULT_RHO; 3],
+                        ));
                         MaterialId(materials.len() as u32 - 1)
                     }),
                 };

@@ -47,6 +47,15 @@ pub struct Material {
 }
 
 impl Material {
+    /// A material that reflects `rho` and emits nothing.
+    pub fn diffuse(name: impl Into<String>, rho: [f64; 3]) -> Material {
+        Material {
+            name: name.into(),
+            rho,
+            emission: [0.0; 3],
+        }
+    }
+
     /// True if any channel emits.
     pub fn is_emitter(&self) -> bool {
         self.emission.iter().any(|&e| e > 0.0)
@@ -200,6 +209,15 @@ pub struct Object {
 }
 
 impl Object {
+    /// An object that does not move: its polygons are in world space.
+    pub fn still(name: impl Into<String>, polygons: Vec<Polygon>) -> Object {
+        Object {
+            name: name.into(),
+            polygons,
+            motion: None,
+        }
+    }
+
     /// Object → world map at time `t` (identity when static).
     pub fn to_world(&self, t: f64) -> DAffine3 {
         self.motion.as_ref().map_or(DAffine3::IDENTITY, |m| m.at(t))

@@ -134,20 +134,15 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
         let material = match mesh.material_id {
             Some(m) if m < materials.len() => MaterialId(m as u32),
             _ => *default_material.get_or_insert_with(|| {
-                materials.push(Material {
-                    name: unique_name("default", &materials),
-                    rho: [DEFAULT_RHO; 3],
-                    emission: [0.0; 3],
-                });
+                materials.push(Material::diffuse(
+                    unique_name("default", &materials),
+                    [DEFAULT_RHO; 3],
+                ));
                 MaterialId(materials.len() as u32 - 1)
             }),
         };
         let o = *by_name.entry(model.name.clone()).or_insert_with(|| {
-            objects.push(Object {
-                name: model.name.clone(),
-                polygons: Vec::new(),
-                motion: None,
-            });
+            objects.push(Object::still(model.name.clone(), Vec::new()));
             sources.push(Vec::new());
             objects.len() - 1
         });

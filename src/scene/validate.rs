@@ -561,14 +561,13 @@ mod tests {
                 rho: [0.5; 3],
                 emission: [1.0; 3],
             }],
-            objects: vec![Object {
-                name: "o".into(),
-                polygons: vec![Polygon {
+            objects: vec![Object::still(
+                "o",
+                vec![Polygon {
                     vertices: v.iter().map(|a| DVec3::from_array(*a)).collect(),
                     material: MaterialId(0),
                 }],
-                motion: None,
-            }],
+            )],
             ..Scene::default()
         }
     }
@@ -619,14 +618,13 @@ mod tests {
         let mut key = MotionKey::identity(0.0);
         key.rotation = DQuat::from_xyzw(0.0, 0.0, 0.0, 1.0005);
         s.objects[0].motion = Some(MotionTrack { keys: vec![key] });
-        s.objects.push(Object {
-            name: "flat".into(),
-            polygons: vec![Polygon {
+        s.objects.push(Object::still(
+            "flat",
+            vec![Polygon {
                 vertices: vec![DVec3::ZERO, DVec3::X, DVec3::X * 2.0],
                 material: MaterialId(0),
             }],
-            motion: None,
-        });
+        ));
         let s = validate(s, Path::new("t.json")).unwrap();
         let q = s.objects[0].motion.as_ref().unwrap().keys[0].rotation;
         assert_eq!(q, DQuat::IDENTITY);

@@ -2506,25 +2506,19 @@ mod tests {
             ],
             1,
         );
-        let object = |name: &str, polygons| Object {
-            name: name.into(),
-            polygons,
-            motion: None,
-        };
         Scene {
             materials: vec![
-                Material {
-                    name: "white".into(),
-                    rho: [0.7; 3],
-                    emission: [0.0; 3],
-                },
+                Material::diffuse("white", [0.7; 3]),
                 Material {
                     name: "lamp".into(),
                     rho: [0.0; 3],
                     emission: [10.0; 3],
                 },
             ],
-            objects: vec![object("cubes", polygons), object("lamp", vec![lamp])],
+            objects: vec![
+                Object::still("cubes", polygons),
+                Object::still("lamp", vec![lamp]),
+            ],
             ..Scene::default()
         }
     }

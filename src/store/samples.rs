@@ -72,11 +72,7 @@ fn plate() -> Vec<DVec3> {
 
 fn materials() -> Vec<Material> {
     vec![
-        Material {
-            name: "white".into(),
-            rho: [0.7, 0.7, 0.7],
-            emission: [0.0; 3],
-        },
+        Material::diffuse("white", [0.7, 0.7, 0.7]),
         Material {
             name: "light".into(),
             rho: [0.0; 3],
@@ -166,11 +162,7 @@ fn static_solution(name: &str, polygons: Vec<Polygon>, n: u32) -> Solution {
     let scene = Scene {
         time: TimeDomain::default(),
         materials: materials(),
-        objects: vec![Object {
-            name: name.into(),
-            polygons,
-            motion: None,
-        }],
+        objects: vec![Object::still(name, polygons)],
         camera: None,
         warnings: Vec::new(),
     };

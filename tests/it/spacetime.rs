@@ -325,11 +325,7 @@ fn a_static_scene_makes_no_varying_link_and_equals_the_static_solve() {
 /// the first. Nothing in the second room can change.
 fn two_rooms() -> Scene {
     use rhier::scene::{Material, MaterialId, Object, Polygon, TimeDomain};
-    let white = Material {
-        name: "white".into(),
-        rho: [0.7, 0.7, 0.7],
-        emission: [0.0; 3],
-    };
+    let white = Material::diffuse("white", [0.7, 0.7, 0.7]);
     let lamp = Material {
         name: "lamp".into(),
         rho: [0.5, 0.5, 0.5],
@@ -356,9 +352,9 @@ fn two_rooms() -> Scene {
             DVec3::new(mid.x + 0.2, hi.y - 1e-3, mid.z + 0.2),
             DVec3::new(mid.x + 0.2, hi.y - 1e-3, mid.z - 0.2),
         ];
-        Object {
-            name: name.into(),
-            polygons: vec![
+        Object::still(
+            name,
+            vec![
                 q([c(0, 0, 0), c(1, 0, 0), c(1, 0, 1), c(0, 0, 1)], 0),
                 q([c(0, 1, 0), c(0, 1, 1), c(1, 1, 1), c(1, 1, 0)], 0),
                 q([c(0, 0, 0), c(0, 0, 1), c(0, 1, 1), c(0, 1, 0)], 0),
@@ -367,8 +363,7 @@ fn two_rooms() -> Scene {
                 q([c(0, 0, 1), c(1, 0, 1), c(1, 1, 1), c(0, 1, 1)], 0),
                 q(lamp_quad, 1),
             ],
-            motion: None,
-        }
+        )
     };
     let a = room("room_a", DVec3::ZERO, DVec3::new(2.0, 2.0, 2.0));
     let b = room(

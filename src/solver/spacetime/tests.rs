@@ -84,16 +84,15 @@ fn trough(blade: bool, split: bool) -> Scene {
         motion: track(&[0.0, 1.0]),
     });
     if blade {
-        scene.objects.push(Object {
-            name: "blade".into(),
-            polygons: vec![quad([
+        scene.objects.push(Object::still(
+            "blade",
+            vec![quad([
                 [260., 160., 330.],
                 [260., 548., 330.],
                 [260., 548., 350.],
                 [260., 160., 350.],
             ])],
-            motion: None,
-        });
+        ));
     }
     scene
 }

@@ -116,11 +116,7 @@ pub fn uniform_enclosure(rho: f64, e: f64, scale: f64, n: usize) -> Scene {
             rho: [rho; 3],
             emission: [e; 3],
         }],
-        objects: vec![Object {
-            name: "box".into(),
-            polygons: polys,
-            motion: None,
-        }],
+        objects: vec![Object::still("box", polys)],
         ..Default::default()
     }
 }

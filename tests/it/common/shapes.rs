@@ -312,11 +312,7 @@ pub fn uniform_scene(polygons: Vec<Polygon>, rho: f64, e: f64) -> Scene {
             rho: [rho; 3],
             emission: [e; 3],
         }],
-        objects: vec![Object {
-            name: "enclosure".into(),
-            polygons,
-            motion: None,
-        }],
+        objects: vec![Object::still("enclosure", polygons)],
         ..Default::default()
     }
 }
@@ -373,18 +369,7 @@ pub fn touching_boxes() -> Scene {
             material("lamp", [0.0; 3], [10.0; 3]),
             material("red", [0.6, 0.1, 0.1], [0.0; 3]),
         ],
-        objects: vec![
-            Object {
-                name: "room".into(),
-                polygons: room,
-                motion: None,
-            },
-            Object {
-                name: "boxes".into(),
-                polygons: boxes,
-                motion: None,
-            },
-        ],
+        objects: vec![Object::still("room", room), Object::still("boxes", boxes)],
         ..Default::default()
     }
 }

@@ -90,16 +90,8 @@ fn boxes_and_panel() -> Scene {
     polys.push(panel(false));
     polys.push(panel(true));
     Scene {
-        materials: vec![Material {
-            name: "white".into(),
-            rho: [0.7; 3],
-            emission: [0.0; 3],
-        }],
-        objects: vec![Object {
-            name: "room".into(),
-            polygons: polys,
-            motion: None,
-        }],
+        materials: vec![Material::diffuse("white", [0.7; 3])],
+        objects: vec![Object::still("room", polys)],
         ..Default::default()
     }
 }

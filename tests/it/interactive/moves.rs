@@ -11,7 +11,7 @@ use rhier::interactive::predict::Method;
 use rhier::interactive::store::Policy;
 use rhier::interactive::{ObjectMove, Pose, Session, Settings, Stage, Traversal};
 use rhier::playback::probe::{ProbePoint, probe};
-use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
+use rhier::scene::{Material, MaterialId, Object, Scene};
 use rhier::solver::SolveOptions;
 
 use crate::common::shapes::{Tiling, tiled_box, tiled_rect};
@@ -40,18 +40,13 @@ pub fn room(tiling: Tiling, y: f64) -> Scene {
         rho,
         emission,
     };
-    let object = |name: &str, polygons: Vec<Polygon>| Object {
-        name: name.into(),
-        polygons,
-        motion: None,
-    };
     Scene {
         materials: vec![
             material("white", [0.7; 3], [0.0; 3]),
             material("lamp", [0.0; 3], [10.0; 3]),
             material("red", [0.6, 0.2, 0.2], [0.0; 3]),
         ],
-        objects: vec![object("room", walls), object("crate", crate_)],
+        objects: vec![Object::still("room", walls), Object::still("crate", crate_)],
         ..Default::default()
     }
 }

@@ -24,22 +24,17 @@ fn quad(z: f64, facing_up: bool) -> Vec<DVec3> {
 fn two_plates() -> Solution {
     let polys = [quad(0.0, true), quad(0.1, false)];
     let scene = Scene {
-        materials: vec![Material {
-            name: "m".into(),
-            rho: [0.5; 3],
-            emission: [0.0; 3],
-        }],
-        objects: vec![Object {
-            name: "plates".into(),
-            polygons: polys
+        materials: vec![Material::diffuse("m", [0.5; 3])],
+        objects: vec![Object::still(
+            "plates",
+            polys
                 .iter()
                 .map(|v| Polygon {
                     vertices: v.clone(),
                     material: MaterialId(0),
                 })
                 .collect(),
-            motion: None,
-        }],
+        )],
         ..Scene::default()
     };
     let patches: Vec<PatchGeometry> = polys

@@ -26,19 +26,14 @@ fn wall(b: f64, n: u32) -> (Solution, Camera) {
         DVec3::new(-1.0, 1.0, 0.0),
     ];
     let scene = Scene {
-        materials: vec![Material {
-            name: "white".into(),
-            rho: [0.8; 3],
-            emission: [0.0; 3],
-        }],
-        objects: vec![Object {
-            name: "wall".into(),
-            polygons: vec![Polygon {
+        materials: vec![Material::diffuse("white", [0.8; 3])],
+        objects: vec![Object::still(
+            "wall",
+            vec![Polygon {
                 vertices: v.to_vec(),
                 material: MaterialId(0),
             }],
-            motion: None,
-        }],
+        )],
         ..Scene::default()
     };
     let patch = PatchGeometry {
@@ -343,18 +338,10 @@ fn smooth_shading_averages_only_within_a_material() {
         ];
         let mut leaves = uniform_leaves(0, &patches[0], 1, [0.0, 0.0], |_| [1.0; 3]);
         leaves.extend(uniform_leaves(1, &patches[1], 1, [0.0, 0.0], |_| [5.0; 3]));
-        let m = Material {
-            name: "m".into(),
-            rho: [0.5; 3],
-            emission: [0.0; 3],
-        };
+        let m = Material::diffuse("m", [0.5; 3]);
         let scene = Scene {
             materials: vec![m.clone(), m],
-            objects: vec![Object {
-                name: "o".into(),
-                polygons: Vec::new(),
-                motion: None,
-            }],
+            objects: vec![Object::still("o", Vec::new())],
             ..Scene::default()
         };
         let sol = Solution {

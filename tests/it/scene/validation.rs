@@ -263,11 +263,9 @@ fn repeated_polygons_are_dropped_with_a_warning() {
 fn a_repeated_floor_does_not_double_its_light() {
     let mut twice = scene::cornell_box(false);
     let floor = twice.objects[0].polygons[0].clone();
-    twice.objects.push(Object {
-        name: "floor again".into(),
-        polygons: vec![floor],
-        motion: None,
-    });
+    twice
+        .objects
+        .push(Object::still("floor again", vec![floor]));
     let twice = rhier::scene::validate::validate(twice, Path::new("twice.json")).unwrap();
     assert_eq!(twice, {
         let mut once = scene::cornell_box(false);
@@ -403,14 +401,13 @@ fn nan_and_inf_in_a_built_scene_are_refused() {
                 rho: [0.5; 3],
                 emission: [1.0; 3],
             }],
-            objects: vec![Object {
-                name: "o".into(),
-                polygons: vec![Polygon {
+            objects: vec![Object::still(
+                "o",
+                vec![Polygon {
                     vertices: vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, bad, 0.0)],
                     material: MaterialId(0),
                 }],
-                motion: None,
-            }],
+            )],
             ..Scene::default()
         };
         let err = scene::validate::validate(s, Path::new("built")).unwrap_err();
@@ -427,14 +424,13 @@ fn nan_and_inf_in_a_built_scene_are_refused() {
 #[test]
 fn material_index_out_of_range_is_refused() {
     let s = Scene {
-        objects: vec![Object {
-            name: "o".into(),
-            polygons: vec![Polygon {
+        objects: vec![Object::still(
+            "o",
+            vec![Polygon {
                 vertices: vec![DVec3::ZERO, DVec3::X, DVec3::Y],
                 material: MaterialId(3),
             }],
-            motion: None,
-        }],
+        )],
         ..Scene::default()
     };
     let err = scene::validate::validate(s, Path::new("built")).unwrap_err();

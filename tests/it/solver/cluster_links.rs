@@ -9,11 +9,7 @@ use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
 use rhier::solver::{SolveOptions, Solver};
 
 fn white() -> Material {
-    Material {
-        name: "white".into(),
-        rho: [0.7, 0.7, 0.7],
-        emission: [0.0; 3],
-    }
+    Material::diffuse("white", [0.7, 0.7, 0.7])
 }
 
 fn lamp() -> Material {
@@ -65,11 +61,7 @@ fn room(name: &str, lo: DVec3, hi: DVec3, lit: bool, skip: Option<usize>) -> Obj
             1,
         ));
     }
-    Object {
-        name: name.into(),
-        polygons,
-        motion: None,
-    }
+    Object::still(name, polygons)
 }
 
 /// Room A (lit) and room B, 6 apart along x; `walls`: closed, else the facing walls
@@ -223,26 +215,10 @@ fn flat_lamp() -> Scene {
     Scene {
         materials: vec![white(), lamp()],
         objects: vec![
-            Object {
-                name: "lamp".into(),
-                polygons: lamp_quads,
-                motion: None,
-            },
-            Object {
-                name: "head".into(),
-                polygons: vec![head],
-                motion: None,
-            },
-            Object {
-                name: "edge".into(),
-                polygons: vec![edge],
-                motion: None,
-            },
-            Object {
-                name: "far".into(),
-                polygons: far,
-                motion: None,
-            },
+            Object::still("lamp", lamp_quads),
+            Object::still("head", vec![head]),
+            Object::still("edge", vec![edge]),
+            Object::still("far", far),
         ],
         ..Scene::default()
     }
@@ -350,11 +326,7 @@ fn write_light_at_t0() {
 /// so the cluster tree puts the two quads and the blocker in one cluster (the
 /// blocker turns its back on the receiver: its samples weigh nothing).
 fn half_hidden() -> Scene {
-    let black = Material {
-        name: "black".into(),
-        rho: [0.0; 3],
-        emission: [0.0; 3],
-    };
+    let black = Material::diffuse("black", [0.0; 3]);
     let at = |x0: f64, x1: f64, h: f64, z: f64, m: u32| {
         quad(
             [
@@ -377,21 +349,16 @@ fn half_hidden() -> Scene {
             2,
         )
     };
-    let object = |name: &str, polygons: Vec<Polygon>| Object {
-        name: name.into(),
-        polygons,
-        motion: None,
-    };
     Scene {
         materials: vec![white(), lamp(), black],
         objects: vec![
-            object(
+            Object::still(
                 "pair",
                 vec![at(-0.4, -0.2, 0.1, 0.0, 1), at(0.2, 0.4, 0.1, 0.0, 0)],
             ),
-            object("blocker", vec![down(0.1, 0.5, 0.2, 1.0)]),
-            object("receiver", vec![down(-0.02, 0.02, 0.02, 6.0)]),
-            object(
+            Object::still("blocker", vec![down(0.1, 0.5, 0.2, 1.0)]),
+            Object::still("receiver", vec![down(-0.02, 0.02, 0.02, 6.0)]),
+            Object::still(
                 "far",
                 vec![down(1.0, 1.2, 0.1, 7.0), down(-1.2, -1.0, 0.1, 8.0)],
             ),

@@ -33,18 +33,9 @@ fn tunnel_and_car() -> Scene {
         ],
         material: MaterialId(1),
     };
-    let object = |name: &str, polygons| Object {
-        name: name.into(),
-        polygons,
-        motion: None,
-    };
     Scene {
         materials: vec![
-            Material {
-                name: "white".into(),
-                rho: [0.6; 3],
-                emission: [0.0; 3],
-            },
+            Material::diffuse("white", [0.6; 3]),
             Material {
                 name: "lamp".into(),
                 rho: [0.0; 3],
@@ -52,9 +43,9 @@ fn tunnel_and_car() -> Scene {
             },
         ],
         objects: vec![
-            object("tunnel", tunnel),
-            object("car", car),
-            object("lamp", vec![lamp]),
+            Object::still("tunnel", tunnel),
+            Object::still("car", car),
+            Object::still("lamp", vec![lamp]),
         ],
         ..Scene::default()
     }

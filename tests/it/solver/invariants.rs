@@ -22,27 +22,15 @@ fn lit_box() -> Scene {
     let polys = common::closed_box(DVec3::ZERO, DVec3::ONE, 2, |f| if f == 1 { 1 } else { 0 });
     let mut scene = Scene {
         materials: vec![
-            Material {
-                name: "white".into(),
-                rho: [0.7, 0.5, 0.3],
-                emission: [0.0; 3],
-            },
-            Material {
-                name: "ceiling".into(),
-                rho: [0.6; 3],
-                emission: [0.0; 3],
-            },
+            Material::diffuse("white", [0.7, 0.5, 0.3]),
+            Material::diffuse("ceiling", [0.6; 3]),
             Material {
                 name: "lamp".into(),
                 rho: [0.2; 3],
                 emission: [10.0, 8.0, 6.0],
             },
         ],
-        objects: vec![Object {
-            name: "box".into(),
-            polygons: polys,
-            motion: None,
-        }],
+        objects: vec![Object::still("box", polys)],
         ..Default::default()
     };
     // One ceiling quad emits.

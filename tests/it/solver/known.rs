@@ -68,11 +68,7 @@ fn the_leaf_system_conserves_energy() {
             mat("green", [0.1, 0.6, 0.1], 0.0),
             mat("lamp", [0.5; 3], 20.0),
         ],
-        objects: vec![Object {
-            name: "room".into(),
-            polygons: polys,
-            motion: None,
-        }],
+        objects: vec![Object::still("room", polys)],
         ..Default::default()
     };
     for eps in [0.1, 0.05] {
@@ -323,18 +319,7 @@ fn closed_room_with_a_box(rho: f64) -> rhier::scene::Scene {
     };
     Scene {
         materials: vec![mat("white", 0.0), mat("lamp", 20.0)],
-        objects: vec![
-            Object {
-                name: "room".into(),
-                polygons: room,
-                motion: None,
-            },
-            Object {
-                name: "cube".into(),
-                polygons: cube,
-                motion: None,
-            },
-        ],
+        objects: vec![Object::still("room", room), Object::still("cube", cube)],
         ..Default::default()
     }
 }

@@ -23,22 +23,14 @@ fn lamp_room(tiling: Tiling) -> Scene {
     ));
     Scene {
         materials: vec![
-            Material {
-                name: "white".into(),
-                rho: [0.7; 3],
-                emission: [0.0; 3],
-            },
+            Material::diffuse("white", [0.7; 3]),
             Material {
                 name: "lamp".into(),
                 rho: [0.0; 3],
                 emission: [30.0; 3],
             },
         ],
-        objects: vec![Object {
-            name: "room".into(),
-            polygons,
-            motion: None,
-        }],
+        objects: vec![Object::still("room", polygons)],
         ..Default::default()
     }
 }
