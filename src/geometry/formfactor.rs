@@ -19,7 +19,7 @@
 //!
 //! A source small against its distance and wholly above `x`'s horizon is integrated
 //! instead by Gauss–Legendre quadrature of the point kernel over its bilinear
-//! parametrisation ([`far_factor`]): with no clipping the integrand
+//! parametrisation (`far_factor`): with no clipping the integrand
 //! `(n · (y − x)) · h / (π |y − x|⁴)` is smooth (the first factor linear, `h` the
 //! height of `x` over the source's plane), and the rule's relative error falls as
 //! the sixth power of `radius / distance` (3 × 3 points). Measured against the
@@ -65,7 +65,7 @@ pub fn cosine_direction(n: DVec3, u1: f64, u2: f64) -> DVec3 {
 /// Unoccluded form factor from the differential area at `x` with unit normal `n` to
 /// the one-sided polygon `src` (counter-clockwise seen from its front): exact (the
 /// contour integral, [`point_to_polygon_exact`]) unless the source is far and wholly
-/// above the horizon, where [`far_factor`]'s quadrature is within 3e-5 of it.
+/// above the horizon, where a Gauss quadrature (`far_factor`) is within 3e-5 of it.
 pub fn point_to_polygon(x: DVec3, n: DVec3, src: &Poly) -> f64 {
     if src.n < 3 {
         return 0.0;
@@ -102,7 +102,7 @@ pub fn point_to_polygon_exact(x: DVec3, n: DVec3, src: &Poly) -> f64 {
 
 /// Largest `radius / distance` (the source's corners about their mean, over that
 /// mean's distance from `x`) at which [`point_to_polygon`] integrates by the 3 × 3
-/// Gauss rule ([`far_factor`]).
+/// Gauss rule (`far_factor`).
 pub const FAR_RATIO: f64 = 0.1;
 
 /// The form factor from `x` (normal `n`) to the triangle or planar quad `c`
@@ -115,7 +115,7 @@ pub const FAR_RATIO: f64 = 0.1;
 /// `J/|ns|` with `J = (e₁ + t e₃) × (e₂ + s e₃) · ns`, linear in `s` and `t` for a
 /// planar quad; the kernel's cosine at the source is `h / (|ns| r)`, so
 /// `F = h / (π |ns|²) · Σ w J (n · d) / r⁴` with `d = y − x`, `r = |d|`.
-pub fn far_factor(x: DVec3, n: DVec3, c: &[DVec3], ns: DVec3, h: f64) -> Option<f64> {
+fn far_factor(x: DVec3, n: DVec3, c: &[DVec3], ns: DVec3, h: f64) -> Option<f64> {
     let (p0, p1, p2) = (c[0], c[1], c[2]);
     let p3 = if c.len() == 4 { c[3] } else { p2 };
     let m = c.iter().sum::<DVec3>() / c.len() as f64;
