@@ -235,18 +235,22 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
+    /// Uniform numbers in [0, 1) from a xorshift generator seeded with `h`.
+    fn xorshift(mut h: u64) -> impl FnMut() -> f64 {
+        move || {
+            h ^= h << 13;
+            h ^= h >> 7;
+            h ^= h << 17;
+            (h >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     #[test]
     fn edge_angle_is_atan2_to_an_ulp() {
         // Inputs over twelve decades on both sides of the three branches
         // (t = y/|x| below 0.66, up to tan 3π/8, above), both signs of x, and the
         // ends: x = 0, y = 0, infinite ratios.
-        let mut h = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rnd = || {
-            h ^= h << 13;
-            h ^= h >> 7;
-            h ^= h << 17;
-            (h >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = xorshift(0x9e37_79b9_7f4a_7c15);
         let mut worst = 0.0f64;
         for _ in 0..200_000 {
             let y = rnd() * 10f64.powf(12.0 * rnd() - 6.0);
@@ -317,13 +321,7 @@ mod tests {
     /// docs give; and a source across the horizon or nearer is the exact value.
     #[test]
     fn far_sources_take_the_quadrature_within_its_bound() {
-        let mut h = 0x2545_f491_4f6c_dd1du64;
-        let mut rnd = || {
-            h ^= h << 13;
-            h ^= h >> 7;
-            h ^= h << 17;
-            (h >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = xorshift(0x2545_f491_4f6c_dd1d);
         let unit = |rnd: &mut dyn FnMut() -> f64| loop {
             let v = DVec3::new(2.0 * rnd() - 1.0, 2.0 * rnd() - 1.0, 2.0 * rnd() - 1.0);
             let l = v.length();
