@@ -18,7 +18,8 @@
 //! the facet's centroid), the vector-area estimate of Sillion (1995, §4) split by
 //! orientation so that back faces count nothing. What hides a facet, other
 //! patches of its own cluster included, is left to rays aimed at the facet's own
-//! patches ([`ClusterFacets::point_on`]), a visible fraction per facet: one
+//! patches ([`ClusterFacets::point_on`]), a visible fraction per facet, in the
+//! leaf rows and the final gather alike (`Solver::part_visibility`): one
 //! fraction for the cluster, its rays drawn by power, took a side hidden behind
 //! the next box as visible as the lit tops the rays mostly went to. The facets
 //! hold where the patches stand at the start: a scene with motion does not use them.

@@ -298,7 +298,7 @@ impl Solver<'_> {
     /// cluster whose box, with `x`, meets a swept box is opened (its rays could be
     /// crossed), so a fixed cluster term holds over the window.
     #[allow(clippy::too_many_arguments)]
-    fn point_terms(
+    pub(super) fn point_terms(
         &self,
         x: DVec3,
         n: DVec3,
@@ -388,34 +388,62 @@ impl Solver<'_> {
             let key = oracle::hash3(self.opts.seed ^ 0xc105, s as u64, receiver_patch as u64);
             // Visibility by power, emission by axes: the model of the links.
             // `clear`: the caller supplies the visibility.
-            let (vis, _) = if clear {
-                (1.0, 0)
-            } else {
-                oracle::point_cluster_visibility(
-                    &self.elems,
-                    &self.bvh,
-                    x,
-                    n,
-                    receiver_patch,
-                    ElementId(s as u32),
-                    self.opts.cluster_rays,
-                    key,
-                    SOURCES_BY_POWER,
-                )
+            let shared = || {
+                if clear {
+                    1.0
+                } else {
+                    oracle::point_cluster_visibility(
+                        &self.elems,
+                        &self.bvh,
+                        x,
+                        n,
+                        receiver_patch,
+                        ElementId(s as u32),
+                        self.opts.cluster_rays,
+                        key,
+                        SOURCES_BY_POWER,
+                    )
+                    .0
+                }
             };
-            if vis <= 0.0 {
-                return;
-            }
-            // What the leaf rows take: the cluster estimate, or the parts of a
-            // cluster too near for it, sharing the cluster's visible fraction.
             let at = oracle::Samples {
                 points: [x; 4],
                 weights: [1.0, 0.0, 0.0, 0.0],
                 count: 1,
             };
+            if self.facets.count() == 0 {
+                let vis = shared();
+                if vis <= 0.0 {
+                    return;
+                }
+                // What the leaf rows take: the cluster estimate, or the parts of a
+                // cluster too near for it, sharing the cluster's visible fraction.
+                self.cluster_parts(&at, n, s as u32, &mut |e, k| {
+                    if k[0] > 0.0 {
+                        out.fixed.push((e, k[0] * vis));
+                    }
+                });
+                return;
+            }
+            // With facets, as the leaf rows: each facet by rays to its own patches
+            // ([`Solver::part_visibility`]), the other parts by the cluster's
+            // fraction (cast once, if a part needs it).
+            let mut vis = None;
             self.cluster_parts(&at, n, s as u32, &mut |e, k| {
-                if k[0] > 0.0 {
-                    out.fixed.push((e, k[0] * vis));
+                if k[0] <= 0.0 {
+                    return;
+                }
+                let own = if e & FACET_BIT != 0 && !clear {
+                    let m = self.opts.cluster_rays;
+                    Some(self.part_visibility(x, n, receiver_patch, e, m, 0))
+                        .filter(|&(_, rays)| rays > 0)
+                        .map(|(v, _)| v)
+                } else {
+                    None
+                };
+                let v = own.unwrap_or_else(|| *vis.get_or_insert_with(shared));
+                if v > 0.0 {
+                    out.fixed.push((e, k[0] * v));
                 }
             });
             return;

@@ -220,11 +220,23 @@ impl Solver<'_> {
                 return 0;
             }
             // A normal within the cone, at a point in the sphere: its cosine to
-            // the point is at least `cos(θ + α) d − r` (θ the axis's angle to w).
+            // the point is at least `cos(θ + α) d − r` (θ the axis's angle to w)
+            // while `θ + α ≤ π` (the sine of the sum not negative), else `−d − r`:
+            // the sum's cosine wraps round past π, and a cone wider than a right
+            // angle seen from behind its axis was taken as facing the point whole,
+            // its vector area then giving it nothing (a box's cluster of five
+            // faces seen by a final-gather point).
             let cos_t = axis.dot(w) / d;
             let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-            let front = (cos_t * cos_a - sin_t * sin_a) * d;
-            let back = (-cos_t * cos_a - sin_t * sin_a) * d;
+            let least = |cos_t: f64| {
+                if sin_t * cos_a + cos_t * sin_a >= 0.0 {
+                    (cos_t * cos_a - sin_t * sin_a) * d
+                } else {
+                    -d
+                }
+            };
+            let front = least(cos_t);
+            let back = least(-cos_t);
             if back > r {
                 -1
             } else if front > r && r < ratio * d {
@@ -268,6 +280,47 @@ impl Solver<'_> {
             *ki = projected * cos / (std::f64::consts::PI * d2);
         }
         part(s, k);
+    }
+
+    /// The visible fraction of cluster part `e` from the point `x` (normal `n`, on
+    /// patch `patch`), the `i`-th point of a leaf row or a final-gather point (`i` =
+    /// 0), by `m` rays: a facet ([`FACET_BIT`]) by rays to its own patches, drawn by
+    /// area ([`super::facets::ClusterFacets::point_on`]), a cluster by rays to
+    /// points drawn by power ([`oracle::point_cluster_visibility`]). The jitter
+    /// depends on the part, the patch and `i` only, so the points of one patch aim
+    /// at the same surface points. Returns `(visibility, rays cast)`; no ray cast
+    /// (every one below the point's horizon or on faces turned away) says nothing.
+    pub(super) fn part_visibility(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        patch: u32,
+        e: u32,
+        m: u32,
+        i: u64,
+    ) -> (f64, u32) {
+        let key = oracle::hash3(self.opts.seed ^ 0xc105, e as u64, patch as u64);
+        let h = oracle::hash3(key, i, 3);
+        if e & FACET_BIT != 0 {
+            oracle::kernel_weighted_visibility(&self.bvh, m, |j| {
+                let y = self
+                    .facets
+                    .point_on(&self.elems, e & !FACET_BIT, oracle::hash3(h, j, 2));
+                ((x, n, patch), y)
+            })
+        } else {
+            oracle::point_cluster_visibility(
+                &self.elems,
+                &self.bvh,
+                x,
+                n,
+                patch,
+                ElementId(e),
+                m,
+                h,
+                SOURCES_BY_POWER,
+            )
+        }
     }
 
     /// The factors from the points `q` (normal `n`) to each facet of cluster `s`
@@ -386,38 +439,13 @@ impl Solver<'_> {
                 self.push_opened(q, n, e, coef, v, row, None);
                 return;
             }
-            // A facet is seen by rays to its own patches (drawn by area), a
-            // cluster by its rays (drawn by power).
             let m = (self.opts.cluster_rays / q.count as u32).max(1);
-            let key = oracle::hash3(self.opts.seed ^ 0xc105, e as u64, patch as u64);
             // A point whose rays all fall below its horizon or on faces
             // turned away counts none: it takes the link's fraction, not 0
             // (the estimate still gives it the part of the sphere above).
             let v: f64 = (0..q.count)
                 .map(|i| {
-                    let (x, h) = (q.points[i], oracle::hash3(key, i as u64, 3));
-                    let (v, rays) = if facet {
-                        oracle::kernel_weighted_visibility(&self.bvh, m, |j| {
-                            let y = self.facets.point_on(
-                                &self.elems,
-                                e & !FACET_BIT,
-                                oracle::hash3(h, j, 2),
-                            );
-                            ((x, n, patch), y)
-                        })
-                    } else {
-                        oracle::point_cluster_visibility(
-                            &self.elems,
-                            &self.bvh,
-                            x,
-                            n,
-                            patch,
-                            ElementId(e),
-                            m,
-                            h,
-                            SOURCES_BY_POWER,
-                        )
-                    };
+                    let (v, rays) = self.part_visibility(q.points[i], n, patch, e, m, i as u64);
                     q.weights[i] * if rays > 0 { v } else { vis }
                 })
                 .sum();
