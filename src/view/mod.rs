@@ -131,6 +131,8 @@ pub struct Viewer {
     spans: Mutex<Vec<Arc<SpanMesh>>>,
     /// Span boundaries of the chunk ranges seen last: `(range, boundaries)`.
     plans: Mutex<Vec<(u32, Arc<Vec<f32>>)>>,
+    /// Held while a span is built.
+    building: Mutex<()>,
     /// The next colour id (0 is no colours).
     next_id: AtomicU32,
 }
@@ -156,6 +158,7 @@ impl Viewer {
             colors: Mutex::new(None),
             spans: Mutex::new(Vec::new()),
             plans: Mutex::new(Vec::new()),
+            building: Mutex::new(()),
             next_id: AtomicU32::new(1),
         };
         // The page's first requests, the mesh and colours at the start, find them
@@ -230,8 +233,20 @@ impl Viewer {
     /// asked for. Its leaves are those of the chunks [`Reader::chunks_for`] looks at
     /// in `t`'s chunk range, shared with the reader's copy when it holds them.
     pub fn span_at(&self, t: f64) -> Result<Arc<SpanMesh>> {
-        if let Some(s) = lock(&self.spans).iter().find(|s| s.span.contains(t)) {
-            return Ok(s.clone());
+        let kept = || {
+            lock(&self.spans)
+                .iter()
+                .find(|s| s.span.contains(t))
+                .cloned()
+        };
+        if let Some(s) = kept() {
+            return Ok(s);
+        }
+        // One build at a time: the frames asked for ahead into a new span wait for
+        // its one build instead of each making it.
+        let _building = lock(&self.building);
+        if let Some(s) = kept() {
+            return Ok(s);
         }
         let chunks = self.reader.chunks();
         let tf = t as f32;
@@ -246,12 +261,12 @@ impl Viewer {
                 .collect::<Result<Vec<_>>>()?,
             None => Vec::new(),
         };
-        let all: Vec<crate::solution::Leaf> = held.iter().flat_map(|c| c.iter().copied()).collect();
-        let kept = lock(&self.plans)
+        let all: Vec<&[crate::solution::Leaf]> = held.iter().map(|c| &c[..]).collect();
+        let plan = lock(&self.plans)
             .iter()
             .find(|p| p.0 == n as u32)
             .map(|p| p.1.clone());
-        let cuts = match kept {
+        let cuts = match plan {
             Some(c) => c,
             None => {
                 let c = Arc::new(span::boundaries(&all, lo, hi));
@@ -265,7 +280,7 @@ impl Viewer {
         };
         let j = cuts.partition_point(|&b| b <= tf).saturating_sub(1);
         let (a, b) = (cuts[j], cuts.get(j + 1).copied().unwrap_or(hi));
-        let span = span::Span::new((n as u32, j as u32), (a, b), all, self.reader.patches());
+        let span = span::Span::new((n as u32, j as u32), (a, b), &all, self.reader.patches());
         let bytes = wire::mesh_bytes(&span, self.reader.patches());
         let out = Arc::new(SpanMesh { span, bytes });
         let mut spans = lock(&self.spans);

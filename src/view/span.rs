@@ -44,11 +44,11 @@ pub fn mesh_order(a: &Leaf, b: &Leaf) -> Ordering {
         })
 }
 
-/// The span boundaries of a chunk range `[lo, hi)` (`f32` times) holding `leaves`
-/// (the leaves of its chunks): `lo`, the cuts in increasing order, then `hi`.
-pub fn boundaries(leaves: &[Leaf], lo: f32, hi: f32) -> Vec<f32> {
-    let mut starts: Vec<f32> = leaves
-        .iter()
+/// The span boundaries of a chunk range `[lo, hi)` (`f32` times) holding the leaves
+/// of `chunks` (its chunks'): `lo`, the cuts in increasing order, then `hi`.
+pub fn boundaries(chunks: &[&[Leaf]], lo: f32, hi: f32) -> Vec<f32> {
+    let leaves = || chunks.iter().flat_map(|c| c.iter());
+    let mut starts: Vec<f32> = leaves()
         .map(|l| l.time[0])
         .filter(|&s| s > lo && s < hi)
         .collect();
@@ -67,8 +67,7 @@ pub fn boundaries(leaves: &[Leaf], lo: f32, hi: f32) -> Vec<f32> {
         // The span from `a` to the next start holds the leaves begun by then and not
         // ended before `a`.
         let next = at.get(k).map_or(hi, |x| x.0);
-        let base = leaves
-            .iter()
+        let base = leaves()
             .filter(|l| l.time[0] < next && l.time[1] >= a)
             .count();
         let budget = (GROWTH * base).max(MIN_LEAVES);
@@ -104,19 +103,20 @@ pub struct Span {
 }
 
 impl Span {
-    /// The span `[lo, hi)` of chunk range `part`, index `index`, of the range's
-    /// `leaves` on `patches`.
+    /// The span `[lo, hi)` of chunk range `part`, index `index`, of the leaves of
+    /// the range's `chunks` on `patches`.
     pub fn new(
         (part, index): (u32, u32),
         (lo, hi): (f32, f32),
-        leaves: impl IntoIterator<Item = Leaf>,
+        chunks: &[&[Leaf]],
         patches: &[PatchGeometry],
     ) -> Span {
         let object = |l: &Leaf| patches.get(l.patch as usize).map_or(0, |p| p.object);
-        let mut held: Vec<(u32, Leaf)> = leaves
-            .into_iter()
+        let mut held: Vec<(u32, Leaf)> = chunks
+            .iter()
+            .flat_map(|c| c.iter())
             .filter(|l| l.time[0] < hi && l.time[1] >= lo)
-            .map(|l| (object(&l), l))
+            .map(|l| (object(l), *l))
             .collect();
         held.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| mesh_order(&a.1, &b.1)));
         Span {
@@ -170,7 +170,7 @@ mod tests {
     #[test]
     fn leaves_starting_together_are_one_span() {
         let leaves: Vec<Leaf> = (0..10_000).map(|p| leaf(p, 0.0, 2.0)).collect();
-        assert_eq!(boundaries(&leaves, 0.0, 2.5), vec![0.0, 2.5]);
+        assert_eq!(boundaries(&[&leaves], 0.0, 2.5), vec![0.0, 2.5]);
     }
 
     #[test]
@@ -183,7 +183,7 @@ mod tests {
             let t0 = k as f32 * 0.02;
             leaves.extend((0..1000).map(|p| leaf(p, t0, t0 + 0.1)));
         }
-        let b = boundaries(&leaves, 0.0, 2.0);
+        let b = boundaries(&[&leaves[..500], &leaves[500..]], 0.0, 2.0);
         assert!(b.len() > 3 && b[0] == 0.0 && b[b.len() - 1] == 2.0, "{b:?}");
         for w in b.windows(2) {
             let held = leaves
@@ -211,7 +211,7 @@ mod tests {
             leaves.push(leaf(k % 7, k as f32 * 0.1, k as f32 * 0.1 + 0.3));
         }
         let patches: Vec<PatchGeometry> = Vec::new();
-        let span = Span::new((1, 2), (0.0, 10.0), leaves.clone(), &patches);
+        let span = Span::new((1, 2), (0.0, 10.0), &[&leaves], &patches);
         assert_eq!(span.key, (1 << 32) | 2);
         for l in &leaves {
             let i = span.index_of(0, l).unwrap();

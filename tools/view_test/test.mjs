@@ -419,7 +419,7 @@ async function bench(b, file, seconds) {
     const s = await page.evaluate(() => window.rhierView.stats);
     console.log(`first frame: ${(s.firstFrameMs / 1000).toFixed(2)} s after navigation start (${(loadMs / 1000).toFixed(2)} s from goto to drawn)`);
     const each = (times) => Object.entries(times).map(([k, t]) => `${k} ${(t.ms / t.n).toFixed(1)} ms × ${t.n}`).join(', ');
-    console.log(`to the first frame (page): ${each(s.times)}; steps done at ${Object.entries(s.start).map(([k, t]) => `${k} ${t.toFixed(0)}`).join(', ')} ms`);
+    console.log(`to the first frame (page): ${each(s.times)}; steps done at ${Object.entries(s.start || {}).map(([k, t]) => `${k} ${t.toFixed(0)}`).join(', ')} ms`);
     const draw = await page.evaluate(() => window.rhierView.timeDraw(10));
     console.log(`drawing the frame shown: ${draw.toFixed(0)} ms (mean of 10)`);
     const moving = await page.evaluate(() => !document.getElementById('timeRow').hidden);
