@@ -103,6 +103,9 @@ struct Colors {
     bytes: Arc<Vec<u8>>,
 }
 
+/// A chunk range: its index, its `f32` bounds `[lo, hi)` and its chunks' leaves.
+type ChunkRange = (u32, (f32, f32), Vec<Arc<Vec<crate::solution::Leaf>>>);
+
 /// A span ([`span::Span`]) and its mesh message.
 pub struct SpanMesh {
     /// The span.
@@ -164,9 +167,7 @@ impl Viewer {
         // The page's first requests, the mesh and colours at the start, find them
         // ready: from the mesh just built, not a second one.
         let span = viewer.span_at(t)?;
-        let patches = viewer.reader.patches();
-        let (scale, bytes) =
-            wire::color_section(viewer.reader.path(), (&frame, &mesh), &span.span, patches)?;
+        let (scale, bytes) = wire::color_section(&frame, &mesh, viewer.reader.patches());
         *lock(&viewer.colors) = Some(Colors {
             id: viewer.next_id.fetch_add(1, Ordering::Relaxed),
             key: span.span.key,
@@ -229,25 +230,10 @@ impl Viewer {
         Ok(f)
     }
 
-    /// The span holding `t` and its mesh, built once while it is among the last few
-    /// asked for. Its leaves are those of the chunks [`Reader::chunks_for`] looks at
-    /// in `t`'s chunk range, shared with the reader's copy when it holds them.
-    pub fn span_at(&self, t: f64) -> Result<Arc<SpanMesh>> {
-        let kept = || {
-            lock(&self.spans)
-                .iter()
-                .find(|s| s.span.contains(t))
-                .cloned()
-        };
-        if let Some(s) = kept() {
-            return Ok(s);
-        }
-        // One build at a time: the frames asked for ahead into a new span wait for
-        // its one build instead of each making it.
-        let _building = lock(&self.building);
-        if let Some(s) = kept() {
-            return Ok(s);
-        }
+    /// `t`'s chunk range `n`, its `f32` bounds, and the leaves of the chunks
+    /// [`Reader::chunks_for`] looks at in it, shared with the reader's copy when it
+    /// holds them.
+    fn chunk_range(&self, t: f64) -> Result<ChunkRange> {
         let chunks = self.reader.chunks();
         let tf = t as f32;
         let n = chunks.partition_point(|c| c.t0 as f32 <= tf);
@@ -261,26 +247,60 @@ impl Viewer {
                 .collect::<Result<Vec<_>>>()?,
             None => Vec::new(),
         };
-        let all: Vec<&[crate::solution::Leaf]> = held.iter().map(|c| &c[..]).collect();
+        Ok((n as u32, (lo, hi), held))
+    }
+
+    /// The span holding `t`: its key (chunk range and index in it) and its `f32`
+    /// bounds, from the range's span boundaries ([`span::boundaries`], found once per
+    /// range while it is among the last few), without building the span.
+    pub fn span_key(&self, t: f64) -> Result<(u64, (f32, f32))> {
+        let tf = t as f32;
+        let chunks = self.reader.chunks();
+        let n = chunks.partition_point(|c| c.t0 as f32 <= tf) as u32;
         let plan = lock(&self.plans)
             .iter()
-            .find(|p| p.0 == n as u32)
+            .find(|p| p.0 == n)
             .map(|p| p.1.clone());
         let cuts = match plan {
             Some(c) => c,
             None => {
+                let (_, (lo, hi), held) = self.chunk_range(t)?;
+                let all: Vec<&[crate::solution::Leaf]> = held.iter().map(|c| &c[..]).collect();
                 let c = Arc::new(span::boundaries(&all, lo, hi));
                 let mut plans = lock(&self.plans);
                 if plans.len() >= KEPT_PLANS {
                     plans.remove(0);
                 }
-                plans.push((n as u32, c.clone()));
+                plans.push((n, c.clone()));
                 c
             }
         };
         let j = cuts.partition_point(|&b| b <= tf).saturating_sub(1);
-        let (a, b) = (cuts[j], cuts.get(j + 1).copied().unwrap_or(hi));
-        let span = span::Span::new((n as u32, j as u32), (a, b), &all, self.reader.patches());
+        let bounds = (cuts[j], cuts.get(j + 1).copied().unwrap_or(f32::INFINITY));
+        Ok((((n as u64) << 32) | j as u64, bounds))
+    }
+
+    /// The span holding `t` and its mesh, built once while it is among the last few
+    /// asked for.
+    pub fn span_at(&self, t: f64) -> Result<Arc<SpanMesh>> {
+        let kept = || {
+            lock(&self.spans)
+                .iter()
+                .find(|s| s.span.contains(t))
+                .cloned()
+        };
+        if let Some(s) = kept() {
+            return Ok(s);
+        }
+        // One build at a time: several requests into a new span make it once.
+        let _building = lock(&self.building);
+        if let Some(s) = kept() {
+            return Ok(s);
+        }
+        let (key, bounds) = self.span_key(t)?;
+        let (n, _, held) = self.chunk_range(t)?;
+        let all: Vec<&[crate::solution::Leaf]> = held.iter().map(|c| &c[..]).collect();
+        let span = span::Span::new((n, key as u32), bounds, &all, self.reader.patches());
         let bytes = wire::mesh_bytes(&span, self.reader.patches());
         let out = Arc::new(SpanMesh { span, bytes });
         let mut spans = lock(&self.spans);
@@ -385,8 +405,8 @@ impl Viewer {
         let objects = self.reader.objects();
         // The set's stretch names it: found among the reader's kept sets, no leaf read.
         let live = self.reader.live_at(t)?.stretch.id();
-        let span = self.span_at(t)?;
-        let key = span.span.key;
+        // The mesh's key, from the span boundaries: the span need not be built here.
+        let key = self.span_key(t)?.0;
         let relative = self.relative(t);
         let hit = |c: &Option<Colors>| {
             c.as_ref()
@@ -405,8 +425,7 @@ impl Viewer {
                 let frame = self.frame(t)?;
                 let patches = self.reader.patches();
                 let mesh = FrameMesh::build(&frame, shading);
-                let (scale, bytes) =
-                    wire::color_section(self.reader.path(), (&frame, &mesh), &span.span, patches)?;
+                let (scale, bytes) = wire::color_section(&frame, &mesh, patches);
                 let bytes = Arc::new(bytes);
                 let id = self.next_id.fetch_add(1, Ordering::Relaxed);
                 *self.colors.lock().unwrap_or_else(|p| p.into_inner()) = Some(Colors {

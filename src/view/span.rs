@@ -14,11 +14,9 @@
 //! (formats/view.md), and the page draws the leaves live at the shown time, by the
 //! same test as [`Leaf::is_live`].
 //!
-//! A span's leaves are in mesh order: by object, then [`mesh_order`] (the frame's
-//! canonical order made total), so that [`Span::index_of`] finds a live leaf by binary
-//! search, and the frame's colours go out in that order.
-
-use std::cmp::Ordering;
+//! A span's leaves are in mesh order: by object, then the frame's order
+//! ([`canonical_order`], total); the leaves live at a time, in the frame's order
+//! grouped by object, are in the same order ([`crate::view::wire::color_section`]).
 
 use crate::solution::{Leaf, PatchGeometry};
 use crate::store::live::canonical_order;
@@ -28,21 +26,6 @@ use crate::store::live::canonical_order;
 pub const GROWTH: usize = 4;
 /// ... and at least this many leaves.
 pub const MIN_LEAVES: usize = 4096;
-
-/// [`canonical_order`] made total: then end time, then every corner parameter.
-pub fn mesh_order(a: &Leaf, b: &Leaf) -> Ordering {
-    canonical_order(a, b)
-        .then(a.time[1].total_cmp(&b.time[1]))
-        .then(a.corners.cmp(&b.corners))
-        .then_with(|| {
-            a.uv.iter()
-                .flatten()
-                .zip(b.uv.iter().flatten())
-                .map(|(x, y)| x.total_cmp(y))
-                .find(|o| o.is_ne())
-                .unwrap_or(Ordering::Equal)
-        })
-}
 
 /// The span boundaries of a chunk range `[lo, hi)` (`f32` times) holding the leaves
 /// of `chunks` (its chunks'): `lo`, the cuts in increasing order, then `hi`.
@@ -96,7 +79,7 @@ pub struct Span {
     pub lo: f32,
     /// First `f32` time after it.
     pub hi: f32,
-    /// The leaves, by object then [`mesh_order`].
+    /// The leaves, by object then [`canonical_order`].
     pub leaves: Vec<Leaf>,
     /// Each leaf's object (the order's first key).
     pub objects: Vec<u32>,
@@ -118,7 +101,7 @@ impl Span {
             .filter(|l| l.time[0] < hi && l.time[1] >= lo)
             .map(|l| (object(l), *l))
             .collect();
-        held.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| mesh_order(&a.1, &b.1)));
+        held.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| canonical_order(&a.1, &b.1)));
         Span {
             key: ((part as u64) << 32) | index as u64,
             lo,
@@ -132,24 +115,6 @@ impl Span {
     pub fn contains(&self, t: f64) -> bool {
         let tf = t as f32;
         self.lo <= tf && tf < self.hi
-    }
-
-    /// Where `leaf` of object `object` is in the span, if it is there.
-    pub fn index_of(&self, object: u32, leaf: &Leaf) -> Option<usize> {
-        let mut lo = 0;
-        let mut hi = self.leaves.len();
-        while lo < hi {
-            let mid = (lo + hi) / 2;
-            match self.objects[mid]
-                .cmp(&object)
-                .then_with(|| mesh_order(&self.leaves[mid], leaf))
-            {
-                Ordering::Less => lo = mid + 1,
-                Ordering::Greater => hi = mid,
-                Ordering::Equal => return Some(mid),
-            }
-        }
-        None
     }
 }
 
@@ -205,19 +170,21 @@ mod tests {
     }
 
     #[test]
-    fn index_of_finds_every_leaf_and_no_other() {
+    fn a_span_holds_the_leaves_live_in_it_by_object_then_frame_order() {
         let mut leaves = Vec::new();
         for k in 0..50 {
             leaves.push(leaf(k % 7, k as f32 * 0.1, k as f32 * 0.1 + 0.3));
         }
         let patches: Vec<PatchGeometry> = Vec::new();
-        let span = Span::new((1, 2), (0.0, 10.0), &[&leaves], &patches);
+        let span = Span::new((1, 2), (1.0, 2.0), &[&leaves], &patches);
         assert_eq!(span.key, (1 << 32) | 2);
-        for l in &leaves {
-            let i = span.index_of(0, l).unwrap();
-            assert_eq!(span.leaves[i], *l);
-        }
-        assert_eq!(span.index_of(0, &leaf(3, 7.0, 8.0)), None);
-        assert_eq!(span.index_of(1, &leaves[0]), None);
+        let mut held: Vec<Leaf> = leaves
+            .iter()
+            .filter(|l| l.time[0] < 2.0 && l.time[1] >= 1.0)
+            .copied()
+            .collect();
+        held.sort_by(canonical_order);
+        assert_eq!(span.leaves, held);
+        assert!(held.len() > 10 && held.len() < 50);
     }
 }

@@ -17,7 +17,6 @@
 //! is not sent them again.
 
 use super::span::Span;
-use crate::error::{Error, Result};
 use crate::playback::Frame;
 use crate::playback::raster::FrameMesh;
 use crate::solution::PatchGeometry;
@@ -145,56 +144,39 @@ pub fn corner_colors(frame: &Frame, mesh: &FrameMesh) -> Vec<[[f64; 3]; 4]> {
 }
 
 /// The colour section of a frame message: the corners of `frame`'s live leaves, in
-/// `span`'s order, as 3 half floats each, padded to 4 bytes; and its `scale`; `mesh`
-/// is `frame`'s [`FrameMesh`] in the shading sent. An error if a live leaf is not in
-/// the span (`path`: the file, for the message).
-pub fn color_section(
-    path: &std::path::Path,
-    (frame, mesh): (&Frame, &FrameMesh),
-    span: &Span,
-    patches: &[PatchGeometry],
-) -> Result<(f32, Vec<u8>)> {
-    {
-        let mut order = Vec::with_capacity(frame.leaves.len());
-        for (k, l) in frame.leaves.iter().enumerate() {
-            let object = patches.get(l.patch as usize).map_or(0, |p| p.object);
-            let at = span.index_of(object, l).ok_or_else(|| {
-                Error::invalid(
-                    path,
-                    format!("the leaf live at t = {} on patch {}", frame.t, l.patch),
-                    format!(
-                        "a leaf of the span [{}, {}) that holds it",
-                        span.lo, span.hi
-                    ),
-                    format!("none of its {} leaves", span.leaves.len()),
-                )
-            })?;
-            order.push((at, k));
-        }
-        order.sort_unstable();
-        let colors = corner_colors(frame, mesh);
-        let scale = colors
-            .iter()
-            .flatten()
-            .flatten()
-            .fold(0.0f64, |a, &b| a.max(b.abs()))
-            .max(f64::MIN_POSITIVE) as f32;
-        let corners: usize = frame.leaves.iter().map(|l| l.corners as usize).sum();
-        let mut out = Vec::with_capacity(6 * corners + 2);
-        for &(_, k) in &order {
-            let l = &frame.leaves[k];
-            for c in &colors[k][..l.corners as usize] {
-                for x in c {
-                    let h = half::f16::from_f32((*x / scale as f64) as f32);
-                    out.extend_from_slice(&h.to_bits().to_le_bytes());
-                }
+/// the frame's order grouped by object (the order of its span's mesh, restricted to
+/// them: [`super::span`]), as 3 half floats each, padded to 4 bytes; and its `scale`.
+/// `mesh` is `frame`'s [`FrameMesh`] in the shading sent.
+pub fn color_section(frame: &Frame, mesh: &FrameMesh, patches: &[PatchGeometry]) -> (f32, Vec<u8>) {
+    let mut order: Vec<usize> = (0..frame.leaves.len()).collect();
+    let object = |k: &usize| {
+        patches
+            .get(frame.leaves[*k].patch as usize)
+            .map_or(0, |p| p.object)
+    };
+    order.sort_by_key(object);
+    let colors = corner_colors(frame, mesh);
+    let scale = colors
+        .iter()
+        .flatten()
+        .flatten()
+        .fold(0.0f64, |a, &b| a.max(b.abs()))
+        .max(f64::MIN_POSITIVE) as f32;
+    let corners: usize = frame.leaves.iter().map(|l| l.corners as usize).sum();
+    let mut out = Vec::with_capacity(6 * corners + 2);
+    for k in order {
+        let l = &frame.leaves[k];
+        for c in &colors[k][..l.corners as usize] {
+            for x in c {
+                let h = half::f16::from_f32((*x / scale as f64) as f32);
+                out.extend_from_slice(&h.to_bits().to_le_bytes());
             }
         }
-        if out.len() % 4 != 0 {
-            out.extend_from_slice(&[0, 0]);
-        }
-        Ok((scale, out))
     }
+    if out.len() % 4 != 0 {
+        out.extend_from_slice(&[0, 0]);
+    }
+    (scale, out)
 }
 
 /// The frame message at `t`: the objects' transforms then the colour section
