@@ -75,7 +75,7 @@ fn play(viewer: &Viewer) {
     for k in 0..n {
         let t = (td.start + k as f64 / 25.0).min(td.end);
         let (a, f) = ms(|| viewer.handle("GET", &format!("/api/frame?t={t}")));
-        let id = u32::from_le_bytes(f.body[36..40].try_into().unwrap());
+        let id = u32::from_le_bytes(f.body[44..48].try_into().unwrap());
         let (b, h) = ms(|| viewer.handle("GET", &format!("/api/frame?t={t}&have={id}")));
         let (c, m) = ms(|| viewer.handle("GET", &format!("/api/mesh?t={t}")));
         assert!(f.status == 200 && h.status == 200 && m.status == 200);

@@ -11,10 +11,10 @@ import { parseFrame, parseMesh } from '/wire.js';
 
 const $ = (id) => document.getElementById(id);
 const api = {
-  stats: { ready: false, firstFrameMs: null, framesShown: 0, playStarted: null, lastProbe: null, meshes: 0, times: {} },
+  stats: { ready: false, start: {}, firstFrameMs: null, framesShown: 0, playStarted: null, lastProbe: null, meshes: 0, times: {} },
   // stats.times: milliseconds spent, and answers received, by kind: `frame` and `mesh` from asking
   // to parsed (the server's time, the transfer and the parse), `install` (a new
-  // mesh to the GPU), `upload` (colours and transforms), `draw` (handing the draw
+  // span mesh to the GPU), `upload` (the live leaves' triangles, colours and transforms), `draw` (handing the draw
   // to WebGL) (benchmarks).
 };
 window.rhierView = api;
@@ -61,7 +61,7 @@ const camera = new THREE.PerspectiveCamera(45, 1, 0.1, 1000);
 const controls = new OrbitControls(camera, canvas);
 let info = null;
 let bounds = new THREE.Sphere(); // the scene at the first frame: fly speed, clip planes
-let mesh = { key: null, objects: new Map() }; // object index -> THREE.Mesh
+let mesh = { key: null, live: null, objects: new Map() }; // object index -> THREE.Mesh
 let shownFrame = null;
 const AHEAD = 8; // frames asked for ahead while playing
 const frames = new Map(); // `${shading}|${k}` -> Promise<frame>
@@ -150,7 +150,8 @@ function frameAt(k) {
     const have = colorsById.has(latestColors) ? `&have=${latestColors}` : '';
     // A frame whose live leaves differ from the mesh's has its mesh asked for too.
     const frame = timedFetch('frame', `/api/frame?t=${t}&shading=${shading()}${have}`, parseFrame).then(keep);
-    frame.then((f) => mesh.key !== f.key && meshFor(f.key, f.t)).catch(() => {});
+    // (The first frame's mesh is asked for with it, by `start`.)
+    frame.then((f) => api.stats.ready && mesh.key !== f.key && meshFor(f.key, f.t)).catch(() => {});
     frames.set(key, frame);
     if (frames.size > 64) frames.delete(frames.keys().next().value);
   }
@@ -167,11 +168,10 @@ function meshFor(key, t) {
   return meshes.get(k);
 }
 
-// Each object's mesh is kept across meshes (`pool`): a new mesh of the object is copied
-// into its buffers and only the part in use is uploaded (`addUpdateRange`) and drawn
-// (`setDrawRange`); the buffers are allocated anew, half again as large, only when
-// a mesh outgrows them. A moving scene whose live leaves change every frame thus
-// reuses its GPU buffers instead of allocating new ones each frame.
+// Each object's mesh is kept across span meshes (`pool`): a new mesh of the object is
+// copied into its buffers and only the part in use is uploaded (`addUpdateRange`) and
+// drawn (`setDrawRange`); the buffers are allocated anew, half again as large, only
+// when a mesh outgrows them.
 const pool = new Map(); // object index -> THREE.Mesh, in the scene or not
 
 function pooled(object, vertices, indices) {
@@ -205,27 +205,104 @@ function fill(attr, data) {
   attr.needsUpdate = true;
 }
 
+// A new span mesh: its corner positions to the GPU, once for all the frames of the
+// span; which leaves are drawn is chosen per live set (`select`).
 function install(parsed) {
   for (const m of mesh.objects.values()) scene.remove(m);
   uploadedColors = 0;
-  mesh = { key: parsed.key, objects: new Map(), groups: parsed.groups };
+  mesh = { key: parsed.key, live: null, objects: new Map() };
   for (const g of parsed.groups) {
     const vertices = g.positions.length / 3;
-    const m = pooled(g.object, vertices, g.indices.length);
+    const leaves = g.corners.length;
+    // Each leaf's first corner, and room for all its triangles.
+    const first = new Uint32Array(leaves);
+    let triangles = 0;
+    for (let k = 0, v = 0; k < leaves; k++) {
+      first[k] = v;
+      v += g.corners[k];
+      triangles += g.corners[k] - 2;
+    }
+    const m = pooled(g.object, vertices, 3 * triangles);
     const geometry = m.geometry;
     fill(geometry.getAttribute('position'), g.positions);
-    fill(geometry.index, g.indices);
-    geometry.setDrawRange(0, g.indices.length);
+    geometry.setDrawRange(0, 0);
     // Bounds of the part in use (what computeBoundingBox would give the mesh alone).
     geometry.boundingBox = new THREE.Box3().setFromArray(g.positions);
     geometry.boundingSphere = geometry.boundingBox.getBoundingSphere(new THREE.Sphere());
-    m.userData.object = g.object;
-    m.userData.firstVertex = g.firstVertex;
-    m.userData.vertices = vertices;
+    m.userData = { object: g.object, times: g.times, corners: g.corners, first, live: new Uint32Array(leaves), lives: 0 };
     scene.add(m);
     mesh.objects.set(g.object, m);
   }
   api.stats.meshes += 1;
+}
+
+// The leaves of the mesh live at the frame's time, by the test of
+// rhier::solution::Leaf::is_live (in f32: t0 <= t < t1, or t <= t1 when t1 is the
+// domain's end): their triangles become the index buffer (so only they are drawn and
+// hit by a click), and they are where the frame's colours go.
+function select(frame) {
+  if (mesh.live === frame.live) return;
+  const t = Math.fround(frame.t);
+  const end = Math.fround(info.time[1]);
+  for (const m of mesh.objects.values()) {
+    const { times, corners, first, live } = m.userData;
+    const index = m.geometry.index;
+    const out = index.array;
+    let n = 0;
+    let lives = 0;
+    for (let k = 0; k < corners.length; k++) {
+      const t0 = times[2 * k];
+      const t1 = times[2 * k + 1];
+      if (!(t0 <= t && (t < t1 || (t <= t1 && t1 >= end)))) continue;
+      live[lives++] = k;
+      const c = first[k];
+      out[n++] = c;
+      out[n++] = c + 1;
+      out[n++] = c + 2;
+      if (corners[k] === 4) {
+        out[n++] = c;
+        out[n++] = c + 2;
+        out[n++] = c + 3;
+      }
+    }
+    index.clearUpdateRanges();
+    index.addUpdateRange(0, n);
+    index.needsUpdate = true;
+    m.geometry.setDrawRange(0, n);
+    m.userData.lives = lives;
+  }
+  mesh.live = frame.live;
+  uploadedColors = 0;
+}
+
+// The frame's colours (the live leaves' corners, in the mesh's order) to the corners
+// of the live leaves.
+function scatter(colors) {
+  let at = 0;
+  for (const m of mesh.objects.values()) {
+    const { corners, first, live, lives } = m.userData;
+    const attr = m.geometry.getAttribute('color');
+    const out = attr.array;
+    let size = 0;
+    if (lives === corners.length) {
+      // Every leaf live: the colours are the group's, in order.
+      size = first.length ? 3 * (first[lives - 1] + corners[lives - 1]) : 0;
+      out.set(colors.subarray(at, at + size));
+      at += size;
+    } else {
+      for (let j = 0; j < lives; j++) {
+        const k = live[j];
+        const n = 3 * corners[k];
+        out.set(colors.subarray(at, at + n), 3 * first[k]);
+        at += n;
+        size = Math.max(size, 3 * first[k] + n);
+      }
+    }
+    attr.clearUpdateRanges();
+    attr.addUpdateRange(0, size);
+    attr.needsUpdate = true;
+  }
+  if (at !== colors.length) throw new Error(`frame: colours for ${colors.length / 3} corners, the live leaves have ${at / 3}`);
 }
 
 async function show(frame) {
@@ -235,19 +312,17 @@ async function show(frame) {
     install(parsed);
     spent('install', t0);
   }
-  const colors = uploadedColors === frame.colorsId ? null : await colorsOf(frame);
+  const colors = uploadedColors === frame.colorsId && mesh.live === frame.live ? null : await colorsOf(frame);
   const t0 = performance.now();
+  select(frame);
   material.uniforms.scale.value = frame.scale;
   for (const m of mesh.objects.values()) {
     const o = m.userData.object;
     const a = frame.transforms.subarray(12 * o, 12 * o + 12);
     m.matrix.set(a[0], a[3], a[6], a[9], a[1], a[4], a[7], a[10], a[2], a[5], a[8], a[11], 0, 0, 0, 1);
     m.matrixWorldNeedsUpdate = true;
-    if (colors) {
-      const first = 3 * m.userData.firstVertex;
-      fill(m.geometry.getAttribute('color'), colors.subarray(first, first + 3 * m.userData.vertices));
-    }
   }
+  if (colors) scatter(colors);
   uploadedColors = frame.colorsId;
   shownFrame = frame;
   $('clock').textContent = `t = ${frame.t.toFixed(3)} s`;
@@ -494,8 +569,15 @@ function clip() {
   }
 }
 
+// Milliseconds from navigation start to each step of the first frame (benchmarks).
+function mark(step) {
+  api.stats.start[step] = performance.now();
+}
+
 async function start() {
+  mark('script');
   info = await (await fetch('/api/info')).json();
+  mark('info');
   $('file').textContent = info.file;
   $('timeRow').hidden = !info.moving;
   setupTime();
@@ -508,11 +590,19 @@ async function start() {
   $('shading').addEventListener('change', () => goTo(Number($('time').value)));
   $('stops').addEventListener('input', setExposure);
   setExposure();
+  // The first frame and its mesh asked for together.
+  const early = timedFetch('mesh', `/api/mesh?t=${frameTime(0)}`, parseMesh);
   const first = await frameAt(0);
+  mark('frame');
+  const m0 = await early;
+  if (m0.key === first.key) meshes.set(m0.key.toString(), early);
   install(await meshFor(first.key, first.t));
+  mark('mesh');
   placeCamera();
   await show(first);
+  mark('show');
   finish();
+  mark('drawn');
   api.stats.firstFrameMs = performance.now();
   api.stats.ready = true;
   controls.addEventListener('change', render);

@@ -100,7 +100,10 @@ fn next_up(x: f32) -> f32 {
 }
 
 /// The order of leaves in a frame: patch, start time, then corner parameters, so that
-/// a solution and its file pick the same leaf where two domains touch.
+/// a solution and its file pick the same leaf where two domains touch; then end time,
+/// corner count and every other parameter, so that no two leaves tie (`rhier view`
+/// sends a frame's colours in this order, grouped by object, for a mesh of more
+/// leaves in the same order).
 pub fn canonical_order(a: &Leaf, b: &Leaf) -> Ordering {
     a.patch
         .cmp(&b.patch)
@@ -109,6 +112,16 @@ pub fn canonical_order(a: &Leaf, b: &Leaf) -> Ordering {
         .then(a.uv[0][0].total_cmp(&b.uv[0][0]))
         .then(a.uv[1][0].total_cmp(&b.uv[1][0]))
         .then(a.uv[2][1].total_cmp(&b.uv[2][1]))
+        .then(a.time[1].total_cmp(&b.time[1]))
+        .then(a.corners.cmp(&b.corners))
+        .then_with(|| {
+            a.uv.iter()
+                .flatten()
+                .zip(b.uv.iter().flatten())
+                .map(|(x, y)| x.total_cmp(y))
+                .find(|o| o.is_ne())
+                .unwrap_or(Ordering::Equal)
+        })
 }
 
 /// The leaves live at some time, in [`canonical_order`], and the stretch over which

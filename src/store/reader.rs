@@ -591,6 +591,23 @@ impl Reader {
         Ok(leaves)
     }
 
+    /// The leaves of chunk `k` as [`Reader::chunk_leaves`] gives them, shared with the
+    /// reader's own copy when the last live set read decoded that chunk (so that a
+    /// caller going over the chunks of the time it just played decodes nothing).
+    pub fn chunk_leaves_shared(&self, k: usize) -> Result<std::sync::Arc<Vec<Leaf>>> {
+        let kept = self
+            .recent
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .iter()
+            .find(|(j, _)| *j == k)
+            .map(|(_, l)| l.clone());
+        match kept {
+            Some(l) => Ok(l),
+            None => Ok(std::sync::Arc::new(self.chunk_leaves(k)?)),
+        }
+    }
+
     /// Indices of the chunks that may hold leaves live at `t` (see
     /// [`super::records::ChunkRecord`]): a binary search plus the carried chunks. Times
     /// are compared in `f32`, as [`Leaf::is_live`] compares them: a time just under a

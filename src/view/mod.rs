@@ -9,8 +9,10 @@
 //! [`crate::playback::raster::FrameMesh`] `rhier play` draws ([`wire`]), clicks
 //! [`probe_frame_hits`] (the answer of `rhier probe`), the start camera and exposure
 //! those of `play` ([`default_camera`], [`auto_exposure`] on a
-//! [`DEFAULT_SIZE`] picture). The last few frames built are kept, so the mesh and the
-//! colours of one time, or several clients at one time, build it once; the last
+//! [`DEFAULT_SIZE`] picture). Meshes are per span of time ([`span`], [`Viewer::span_at`]):
+//! a space-time file's live leaves change every frame, its mesh once per span, and
+//! a frame carries only the live leaves' colours. The last few frames and spans built
+//! are kept, so several requests or clients at one time build them once; the last
 //! colours are kept while what they depend on holds ([`Viewer::frame_message`]).
 //!
 //! What it serves (an exact match on the path, nothing decoded, nothing from the
@@ -21,6 +23,7 @@
 
 pub mod assets;
 mod server;
+pub mod span;
 pub mod wire;
 
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -42,6 +45,10 @@ pub use server::serve;
 
 /// Frames kept for requests at the same time (the mesh and colours of one time).
 const KEPT_FRAMES: usize = 12;
+/// Span meshes kept: the one playing, the next one asked for ahead, one more.
+const KEPT_SPANS: usize = 3;
+/// Chunk ranges whose span boundaries are kept.
+const KEPT_PLANS: usize = 4;
 
 /// An answer: HTTP status, media type and body.
 #[derive(Clone, Debug, PartialEq)]
@@ -86,12 +93,29 @@ impl Reply {
 struct Colors {
     /// Colour id: the same id, the same colours.
     id: u32,
+    /// The span's key and the live set's id.
     key: u64,
+    live: u64,
     shading: Shading,
     /// Each object's object → world map relative to the first object's, by columns.
     relative: Vec<[f64; 12]>,
     scale: f32,
     bytes: Arc<Vec<u8>>,
+}
+
+/// A chunk range: its index, its `f32` bounds `[lo, hi)` and its chunks' leaves.
+type ChunkRange = (u32, (f32, f32), Vec<Arc<Vec<crate::solution::Leaf>>>);
+
+/// A span ([`span::Span`]) and its mesh message.
+pub struct SpanMesh {
+    /// The span.
+    pub span: span::Span,
+    /// Its mesh message ([`wire::mesh_bytes`]).
+    pub bytes: Vec<u8>,
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
 /// The server's state: the opened file, what the page starts from, recent frames.
@@ -106,6 +130,12 @@ pub struct Viewer {
     recent: Mutex<Vec<Arc<Frame>>>,
     /// Colours of the last frame message.
     colors: Mutex<Option<Colors>>,
+    /// Span meshes built last, newest last.
+    spans: Mutex<Vec<Arc<SpanMesh>>>,
+    /// Span boundaries of the chunk ranges seen last: `(range, boundaries)`.
+    plans: Mutex<Vec<(u32, Arc<Vec<f32>>)>>,
+    /// Held while a span is built.
+    building: Mutex<()>,
     /// The next colour id (0 is no colours).
     next_id: AtomicU32,
 }
@@ -121,16 +151,48 @@ impl Viewer {
         let camera = default_camera(reader.camera(), &frame, &mesh);
         let exposure = auto_exposure(&render(&mesh, &camera, DEFAULT_SIZE[0], DEFAULT_SIZE[1]));
         let extent = frame.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length());
-        Ok(Viewer {
+        let viewer = Viewer {
             reader,
             camera,
             exposure,
             extent,
             inspect,
-            recent: Mutex::new(vec![Arc::new(frame)]),
+            recent: Mutex::new(Vec::new()),
             colors: Mutex::new(None),
+            spans: Mutex::new(Vec::new()),
+            plans: Mutex::new(Vec::new()),
+            building: Mutex::new(()),
             next_id: AtomicU32::new(1),
-        })
+        };
+        // The page's first requests, the mesh and colours at the start, find them
+        // ready: from the mesh just built, not a second one.
+        let span = viewer.span_at(t)?;
+        let (scale, bytes) = wire::color_section(&frame, &mesh, viewer.reader.patches());
+        *lock(&viewer.colors) = Some(Colors {
+            id: viewer.next_id.fetch_add(1, Ordering::Relaxed),
+            key: span.span.key,
+            live: frame.stretch.id(),
+            shading: Shading::Smooth,
+            relative: viewer.relative(t),
+            scale,
+            bytes: Arc::new(bytes),
+        });
+        lock(&viewer.recent).push(Arc::new(frame));
+        Ok(viewer)
+    }
+
+    /// Each object's object → world map at `t` relative to the first object's, by
+    /// columns (what smooth shading's colours depend on, with the live leaves).
+    fn relative(&self, t: f64) -> Vec<[f64; 12]> {
+        let objects = self.reader.objects();
+        let first = objects
+            .first()
+            .map_or(DAffine3::IDENTITY, |o| o.to_world(t));
+        let inverse = first.inverse();
+        objects
+            .iter()
+            .map(|o| (inverse * o.to_world(t)).to_cols_array())
+            .collect()
     }
 
     /// The opened file.
@@ -166,6 +228,87 @@ impl Viewer {
         }
         recent.push(f.clone());
         Ok(f)
+    }
+
+    /// `t`'s chunk range `n`, its `f32` bounds, and the leaves of the chunks
+    /// [`Reader::chunks_for`] looks at in it, shared with the reader's copy when it
+    /// holds them.
+    fn chunk_range(&self, t: f64) -> Result<ChunkRange> {
+        let chunks = self.reader.chunks();
+        let tf = t as f32;
+        let n = chunks.partition_point(|c| c.t0 as f32 <= tf);
+        let lo = n
+            .checked_sub(1)
+            .map_or(f32::NEG_INFINITY, |i| chunks[i].t0 as f32);
+        let hi = chunks.get(n).map_or(f32::INFINITY, |c| c.t0 as f32);
+        let held = match n.checked_sub(1) {
+            Some(i) => (chunks[i].carry_from as usize..=i)
+                .map(|k| self.reader.chunk_leaves_shared(k))
+                .collect::<Result<Vec<_>>>()?,
+            None => Vec::new(),
+        };
+        Ok((n as u32, (lo, hi), held))
+    }
+
+    /// The span holding `t`: its key (chunk range and index in it) and its `f32`
+    /// bounds, from the range's span boundaries ([`span::boundaries`], found once per
+    /// range while it is among the last few), without building the span.
+    pub fn span_key(&self, t: f64) -> Result<(u64, (f32, f32))> {
+        let tf = t as f32;
+        let chunks = self.reader.chunks();
+        let n = chunks.partition_point(|c| c.t0 as f32 <= tf) as u32;
+        let plan = lock(&self.plans)
+            .iter()
+            .find(|p| p.0 == n)
+            .map(|p| p.1.clone());
+        let cuts = match plan {
+            Some(c) => c,
+            None => {
+                let (_, (lo, hi), held) = self.chunk_range(t)?;
+                let all: Vec<&[crate::solution::Leaf]> = held.iter().map(|c| &c[..]).collect();
+                let c = Arc::new(span::boundaries(&all, lo, hi));
+                let mut plans = lock(&self.plans);
+                if plans.len() >= KEPT_PLANS {
+                    plans.remove(0);
+                }
+                plans.push((n, c.clone()));
+                c
+            }
+        };
+        let j = cuts.partition_point(|&b| b <= tf).saturating_sub(1);
+        let bounds = (cuts[j], cuts.get(j + 1).copied().unwrap_or(f32::INFINITY));
+        Ok((((n as u64) << 32) | j as u64, bounds))
+    }
+
+    /// The span holding `t` and its mesh, built once while it is among the last few
+    /// asked for.
+    pub fn span_at(&self, t: f64) -> Result<Arc<SpanMesh>> {
+        let kept = || {
+            lock(&self.spans)
+                .iter()
+                .find(|s| s.span.contains(t))
+                .cloned()
+        };
+        if let Some(s) = kept() {
+            return Ok(s);
+        }
+        // One build at a time: several requests into a new span make it once.
+        let _building = lock(&self.building);
+        if let Some(s) = kept() {
+            return Ok(s);
+        }
+        let (key, bounds) = self.span_key(t)?;
+        let (n, _, held) = self.chunk_range(t)?;
+        let all: Vec<&[crate::solution::Leaf]> = held.iter().map(|c| &c[..]).collect();
+        let span = span::Span::new((n, key as u32), bounds, &all, self.reader.patches());
+        let bytes = wire::mesh_bytes(&span, self.reader.patches());
+        let out = Arc::new(SpanMesh { span, bytes });
+        let mut spans = lock(&self.spans);
+        if spans.len() >= KEPT_SPANS {
+            spans.remove(0);
+        }
+        spans.push(out.clone());
+        Ok(out)
     }
 
     /// Answers a request: `method` and the request target `url` (path and query).
@@ -216,13 +359,11 @@ impl Viewer {
             "/api/info" => Ok(Reply::json(&self.info())),
             "/api/inspect" => Ok(Reply::json(&self.inspect)),
             "/api/mesh" => {
-                let frame = self.frame_at(&params)?;
-                let layout = wire::Layout::of(&frame, self.reader.patches());
-                Ok(Reply::binary(wire::mesh_bytes(
-                    &frame,
-                    self.reader.patches(),
-                    &layout,
-                )))
+                let t = params.time(&self.reader)?;
+                let span = self.span_at(t).map_err(|e| {
+                    Reply::text(500, format!("evaluating the mesh at t = {t}: {e}"))
+                })?;
+                Ok(Reply::binary(span.bytes.clone()))
             }
             "/api/frame" => {
                 let shading = match params.get("shading") {
@@ -251,9 +392,10 @@ impl Viewer {
         }
     }
 
-    /// The frame message at `t`. Its colours are those of the last frame answered
-    /// when nothing they depend on changed: the live leaves (the id of their stretch
-    /// of time, [`crate::store::Stretch::id`]), the shading, and the objects'
+    /// The frame message at `t`, for the mesh of its span ([`Viewer::span_at`]). Its
+    /// colours are those of the last frame answered when nothing they depend on
+    /// changed: the span, the live leaves (the id of their stretch of time,
+    /// [`crate::store::Stretch::id`]), the shading, and the objects'
     /// placements relative to the first object's, to rounding (1e-12, and 1e-12 of
     /// the scene's size for translations: smooth shading averages corners that meet
     /// in world space; a rigid motion of everything together keeps which corners
@@ -262,19 +404,15 @@ impl Viewer {
     pub fn frame_message(&self, t: f64, shading: Shading, have: u32) -> Result<Vec<u8>> {
         let objects = self.reader.objects();
         // The set's stretch names it: found among the reader's kept sets, no leaf read.
-        let key = self.reader.live_at(t)?.stretch.id();
-        let first = objects
-            .first()
-            .map_or(DAffine3::IDENTITY, |o| o.to_world(t));
-        let inverse = first.inverse();
-        let relative: Vec<[f64; 12]> = objects
-            .iter()
-            .map(|o| (inverse * o.to_world(t)).to_cols_array())
-            .collect();
+        let live = self.reader.live_at(t)?.stretch.id();
+        // The mesh's key, from the span boundaries: the span need not be built here.
+        let key = self.span_key(t)?.0;
+        let relative = self.relative(t);
         let hit = |c: &Option<Colors>| {
             c.as_ref()
                 .filter(|c| {
                     c.key == key
+                        && c.live == live
                         && c.shading == shading
                         && same_placements(&c.relative, &relative, self.extent)
                 })
@@ -285,13 +423,15 @@ impl Viewer {
             Some(k) => k,
             None => {
                 let frame = self.frame(t)?;
-                let layout = wire::Layout::of(&frame, self.reader.patches());
-                let (scale, bytes) = wire::color_section(&frame, &layout, shading);
+                let patches = self.reader.patches();
+                let mesh = FrameMesh::build(&frame, shading);
+                let (scale, bytes) = wire::color_section(&frame, &mesh, patches);
                 let bytes = Arc::new(bytes);
                 let id = self.next_id.fetch_add(1, Ordering::Relaxed);
                 *self.colors.lock().unwrap_or_else(|p| p.into_inner()) = Some(Colors {
                     id,
-                    key: layout.key,
+                    key,
+                    live,
                     shading,
                     relative,
                     scale,
@@ -301,7 +441,13 @@ impl Viewer {
             }
         };
         let colors: &[u8] = if have == id { &[] } else { &bytes };
-        Ok(wire::frame_bytes(objects, t, key, (id, scale), colors))
+        Ok(wire::frame_bytes(
+            objects,
+            t,
+            (key, live),
+            (id, scale),
+            colors,
+        ))
     }
 
     fn frame_at(&self, params: &Params) -> std::result::Result<Arc<Frame>, Reply> {

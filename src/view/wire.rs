@@ -1,22 +1,24 @@
-//! The binary messages of `rhier view` (formats/view.md): a frame's mesh, sent once
-//! per set of live leaves, and its colours, sent per frame. Little-endian throughout.
+//! The binary messages of `rhier view` (formats/view.md): a span's mesh, sent once
+//! per span of time ([`super::span`]), and a frame's colours, sent per frame.
+//! Little-endian throughout.
 //!
-//! How it works: [`Layout::of`] orders the corners of a frame's live leaves object by
-//! object (one group per object, each leaf's corners in order, a quad's two
-//! triangles `c0 c1 c2`, `c0 c2 c3` as in [`crate::playback::raster::FrameMesh`]).
-//! [`mesh_bytes`] writes the corners in object space, so that a moving object's
-//! positions are sent once and placed at each time by its transform; the layout's
-//! `key`, the id of the stretch of time over which the live leaves hold
-//! ([`crate::store::Stretch::id`]), tells the page when they, and so the mesh,
-//! changed. [`frame_bytes`] writes each
-//! object's transform at `t` and every corner's linear radiosity, taken from the
-//! `FrameMesh` that `rhier play` draws (smooth: averaged over the leaf corners that
-//! share a world position, normal and material; flat: the leaf's mean), as IEEE
-//! half floats of the radiosity over the frame's largest component (`scale`), under a
-//! colour id: a client that has that id's colours is not sent them again.
+//! How it works: [`mesh_bytes`] writes a span's leaves in its order (by object, one
+//! group per object): each corner's position in object space (so that a moving
+//! object's positions are sent once and placed at each time by its transform), each
+//! leaf's `f32` time range and its corner count; the triangles are implied (a quad's
+//! `c0 c1 c2`, `c0 c2 c3` as in [`crate::playback::raster::FrameMesh`]) and the page
+//! draws those of the leaves live at the shown time. The span's key tells the page
+//! when the mesh changed. [`frame_bytes`] writes each object's transform at `t` and
+//! the corner colours of the leaves live at `t`, in the span's order
+//! ([`color_section`]), taken from the `FrameMesh` that `rhier play` draws (smooth:
+//! averaged over the leaf corners that share a world position, normal and material;
+//! flat: the leaf's mean), as IEEE half floats of the radiosity over the frame's
+//! largest component (`scale`), under a colour id: a client that has that id's colours
+//! is not sent them again.
 
+use super::span::Span;
 use crate::playback::Frame;
-use crate::playback::raster::{FrameMesh, Shading};
+use crate::playback::raster::FrameMesh;
 use crate::solution::PatchGeometry;
 use crate::store::reader::StoredObject;
 
@@ -25,15 +27,15 @@ pub const MESH_MAGIC: [u8; 4] = *b"RHVM";
 /// First bytes of a frame message.
 pub const FRAME_MAGIC: [u8; 4] = *b"RHVF";
 /// Version of both messages.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// Bytes of a mesh message's header.
 pub const MESH_HEADER: usize = 32;
 /// Bytes of a mesh message's group record.
 pub const GROUP_BYTES: usize = 20;
 /// Bytes of a frame message's header.
-pub const FRAME_HEADER: usize = 40;
+pub const FRAME_HEADER: usize = 48;
 
-/// One object's run of corners and triangles in a mesh message. 20 bytes.
+/// One object's run of leaves and corners in a mesh message. 20 bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Group {
     /// Object index.
@@ -42,100 +44,60 @@ pub struct Group {
     pub first_vertex: u32,
     /// Corners of the group.
     pub vertices: u32,
-    /// First triangle index of the group (3 per triangle).
-    pub first_index: u32,
-    /// Triangle indices of the group, relative to `first_vertex`.
-    pub indices: u32,
+    /// First leaf of the group.
+    pub first_leaf: u32,
+    /// Leaves of the group.
+    pub leaves: u32,
 }
 
-/// The order in which a frame's leaf corners are sent.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Layout {
-    /// The id of the frame's live-leaf set ([`crate::store::Stretch::id`]).
-    pub key: u64,
-    /// Groups, by increasing object.
-    pub groups: Vec<Group>,
-    /// Frame leaf indices in sending order (group by group).
-    pub leaves: Vec<u32>,
-}
-
-impl Layout {
-    /// The layout of `frame`'s live leaves on `patches` (the view's).
-    pub fn of(frame: &Frame, patches: &[PatchGeometry]) -> Layout {
-        let objects = patches.iter().map(|p| p.object + 1).max().unwrap_or(0) as usize;
-        let mut by_object: Vec<Vec<u32>> = vec![Vec::new(); objects];
-        for (k, l) in frame.leaves.iter().enumerate() {
-            let o = patches.get(l.patch as usize).map_or(0, |p| p.object);
-            by_object[o as usize].push(k as u32);
-        }
-        let (mut groups, mut order) = (Vec::new(), Vec::with_capacity(frame.leaves.len()));
-        let (mut v, mut i) = (0u32, 0u32);
-        for (object, ls) in by_object.into_iter().enumerate() {
-            if ls.is_empty() {
-                continue;
+/// The groups of a span's leaves: one per object that has leaves, by increasing object.
+pub fn groups(span: &Span) -> Vec<Group> {
+    let mut out: Vec<Group> = Vec::new();
+    let mut vertex = 0u32;
+    for (k, (l, &object)) in span.leaves.iter().zip(&span.objects).enumerate() {
+        match out.last_mut() {
+            Some(g) if g.object == object => {
+                g.vertices += l.corners;
+                g.leaves += 1;
             }
-            let corners: u32 = ls.iter().map(|&k| frame.leaves[k as usize].corners).sum();
-            let tris: u32 = ls
-                .iter()
-                .map(|&k| frame.leaves[k as usize].corners - 2)
-                .sum();
-            groups.push(Group {
-                object: object as u32,
-                first_vertex: v,
-                vertices: corners,
-                first_index: i,
-                indices: 3 * tris,
-            });
-            v += corners;
-            i += 3 * tris;
-            order.extend(ls);
+            _ => out.push(Group {
+                object,
+                first_vertex: vertex,
+                vertices: l.corners,
+                first_leaf: k as u32,
+                leaves: 1,
+            }),
         }
-        Layout {
-            key: frame.stretch.id(),
-            groups,
-            leaves: order,
-        }
+        vertex += l.corners;
     }
-
-    /// Corners in all.
-    pub fn vertices(&self) -> u32 {
-        self.groups.iter().map(|g| g.vertices).sum()
-    }
+    out
 }
 
 fn put_u32(out: &mut Vec<u8>, x: u32) {
     out.extend_from_slice(&x.to_le_bytes());
 }
 
-/// The mesh message of a frame: object-space corner positions and triangles.
-pub fn mesh_bytes(frame: &Frame, patches: &[PatchGeometry], layout: &Layout) -> Vec<u8> {
-    let vertices = layout.vertices();
-    let indices: u32 = layout.groups.iter().map(|g| g.indices).sum();
+/// The mesh message of a span: object-space corner positions, leaf time ranges and
+/// corner counts.
+pub fn mesh_bytes(span: &Span, patches: &[PatchGeometry]) -> Vec<u8> {
+    let groups = groups(span);
+    let vertices: u32 = groups.iter().map(|g| g.vertices).sum();
+    let leaves = span.leaves.len();
     let mut out = Vec::with_capacity(
-        MESH_HEADER
-            + GROUP_BYTES * layout.groups.len()
-            + 12 * vertices as usize
-            + 4 * indices as usize,
+        MESH_HEADER + GROUP_BYTES * groups.len() + 12 * vertices as usize + 9 * leaves + 3,
     );
     out.extend_from_slice(&MESH_MAGIC);
     put_u32(&mut out, VERSION);
-    out.extend_from_slice(&layout.key.to_le_bytes());
-    for x in [layout.groups.len() as u32, vertices, indices, 0] {
+    out.extend_from_slice(&span.key.to_le_bytes());
+    for x in [groups.len() as u32, vertices, leaves as u32, 0] {
         put_u32(&mut out, x);
     }
-    for g in &layout.groups {
-        for x in [
-            g.object,
-            g.first_vertex,
-            g.vertices,
-            g.first_index,
-            g.indices,
-        ] {
+    for g in &groups {
+        for x in [g.object, g.first_vertex, g.vertices, g.first_leaf, g.leaves] {
             put_u32(&mut out, x);
         }
     }
-    for &k in &layout.leaves {
-        let l = &frame.leaves[k as usize];
+    for l in &span.leaves {
         let p = &patches[l.patch as usize];
         for uv in &l.uv[..l.corners as usize] {
             let x = p.point(uv[0] as f64, uv[1] as f64);
@@ -144,28 +106,22 @@ pub fn mesh_bytes(frame: &Frame, patches: &[PatchGeometry], layout: &Layout) -> 
             }
         }
     }
-    let mut leaves = layout.leaves.iter();
-    for g in &layout.groups {
-        // Indices relative to the group's first corner.
-        let mut base = 0u32;
-        while base < g.vertices {
-            let Some(&k) = leaves.next() else { break };
-            let n = frame.leaves[k as usize].corners;
-            for t in [[0, 1, 2], [0, 2, 3]].iter().take(n as usize - 2) {
-                for c in t {
-                    put_u32(&mut out, base + c);
-                }
-            }
-            base += n;
+    for l in &span.leaves {
+        for t in l.time {
+            out.extend_from_slice(&t.to_le_bytes());
         }
+    }
+    out.extend(span.leaves.iter().map(|l| l.corners as u8));
+    while out.len() % 4 != 0 {
+        out.push(0);
     }
     out
 }
 
-/// Each live leaf's corner colours as `rhier play` draws them, in frame leaf order:
-/// corner `c` of leaf `k` is `[k][c]`.
-pub fn corner_colors(frame: &Frame, shading: Shading) -> Vec<[[f64; 3]; 4]> {
-    let mesh = FrameMesh::build(frame, shading);
+/// Each live leaf's corner colours as `rhier play` draws them (`mesh`, `frame`'s
+/// [`FrameMesh`] in some shading), in frame leaf order: corner `c` of leaf `k` is
+/// `[k][c]`.
+pub fn corner_colors(frame: &Frame, mesh: &FrameMesh) -> Vec<[[f64; 3]; 4]> {
     // FrameMesh emits, leaf after leaf in frame order, `c0 c1 c2` then for a quad
     // `c0 c2 c3`: corner 3 is the second triangle's last vertex.
     let mut tri = 0usize;
@@ -187,20 +143,30 @@ pub fn corner_colors(frame: &Frame, shading: Shading) -> Vec<[[f64; 3]; 4]> {
         .collect()
 }
 
-/// The colour section of a frame message (`V` × 3 half floats in layout order,
-/// padded to 4 bytes) and its `scale`.
-pub fn color_section(frame: &Frame, layout: &Layout, shading: Shading) -> (f32, Vec<u8>) {
-    let colors = corner_colors(frame, shading);
+/// The colour section of a frame message: the corners of `frame`'s live leaves, in
+/// the frame's order grouped by object (the order of its span's mesh, restricted to
+/// them: [`super::span`]), as 3 half floats each, padded to 4 bytes; and its `scale`.
+/// `mesh` is `frame`'s [`FrameMesh`] in the shading sent.
+pub fn color_section(frame: &Frame, mesh: &FrameMesh, patches: &[PatchGeometry]) -> (f32, Vec<u8>) {
+    let mut order: Vec<usize> = (0..frame.leaves.len()).collect();
+    let object = |k: &usize| {
+        patches
+            .get(frame.leaves[*k].patch as usize)
+            .map_or(0, |p| p.object)
+    };
+    order.sort_by_key(object);
+    let colors = corner_colors(frame, mesh);
     let scale = colors
         .iter()
         .flatten()
         .flatten()
         .fold(0.0f64, |a, &b| a.max(b.abs()))
         .max(f64::MIN_POSITIVE) as f32;
-    let mut out = Vec::with_capacity(6 * layout.vertices() as usize + 2);
-    for &k in &layout.leaves {
-        let l = &frame.leaves[k as usize];
-        for c in &colors[k as usize][..l.corners as usize] {
+    let corners: usize = frame.leaves.iter().map(|l| l.corners as usize).sum();
+    let mut out = Vec::with_capacity(6 * corners + 2);
+    for k in order {
+        let l = &frame.leaves[k];
+        for c in &colors[k][..l.corners as usize] {
             for x in c {
                 let h = half::f16::from_f32((*x / scale as f64) as f32);
                 out.extend_from_slice(&h.to_bits().to_le_bytes());
@@ -214,12 +180,13 @@ pub fn color_section(frame: &Frame, layout: &Layout, shading: Shading) -> (f32, 
 }
 
 /// The frame message at `t`: the objects' transforms then the colour section
-/// ([`color_section`], `colors`, empty to leave it out) of the leaves whose key is
+/// ([`color_section`], `colors`, empty to leave it out) of the leaves live at `t`,
+/// whose set is named `live` ([`crate::store::Stretch::id`]), for the mesh of span
 /// `key`, with its colour id and scale `(id, scale)`.
 pub fn frame_bytes(
     objects: &[StoredObject],
     t: f64,
-    key: u64,
+    (key, live): (u64, u64),
     (id, scale): (u32, f32),
     colors: &[u8],
 ) -> Vec<u8> {
@@ -227,6 +194,7 @@ pub fn frame_bytes(
     out.extend_from_slice(&FRAME_MAGIC);
     put_u32(&mut out, VERSION);
     out.extend_from_slice(&key.to_le_bytes());
+    out.extend_from_slice(&live.to_le_bytes());
     out.extend_from_slice(&t.to_le_bytes());
     put_u32(&mut out, objects.len() as u32);
     // Corners: 3 half floats each, the section padded to 4 bytes.

@@ -11,7 +11,9 @@
 //       grows as the moved camera says, and R gives back the start picture; a
 //       right-button drag turns the view where the camera stands; moving
 //       the time slider changes the moving scene's picture; the page logs no console
-//       error; 12 requests at once are all answered; playing shows 20 frames.
+//       error; two frames of one span (one mesh) with different live leaves are each
+//       rhier play's picture at their time; 12 requests at once are all answered;
+//       playing shows 20 frames.
 //   node tools/view_test/test.mjs --bench FILE.rhier [--seconds S]
 //       Time to the first rendered frame, and frames per second while playing
 //       (BENCHMARKS.md, "Viewer").
@@ -154,17 +156,7 @@ async function cornell(b) {
     const out = join(work, 'play');
     rhier('play', file, '--time', '0', '-o', out, '--width', String(WIDTH), '--height', String(HEIGHT));
     const ref = PNG.sync.read(readFileSync(join(out, 'frame_00000.png')));
-    let diff = 0;
-    let far = 0;
-    for (let i = 0; i < ref.data.length; i += 4) {
-      for (let k = 0; k < 3; k++) {
-        const d = Math.abs(ref.data[i + k] - img.data[i + k]);
-        diff += d;
-        if (d > 16) far++;
-      }
-    }
-    const mean = diff / (3 * WIDTH * HEIGHT);
-    const farFraction = far / (3 * WIDTH * HEIGHT);
+    const { mean, far: farFraction } = compare(img, ref);
     check(mean < 2 && farFraction < 0.01,
       `cornell: the page's picture is rhier play's (mean |difference| ${mean.toFixed(3)} of 255, ${(100 * farFraction).toFixed(3)}% of channels off by more than 16)`);
     // The red wall (x = 556) and the green wall (x = 0) where the camera projects them.
@@ -309,6 +301,62 @@ async function look(page, cam0) {
   check(off < 1e-6 * Math.hypot(...start.eye), `look: R gives back the start camera (eye and target ${off.toExponential(1)} off)`);
 }
 
+// Mean |difference| per channel (of 255) between two pictures, and the fraction of
+// channels off by more than 16.
+function compare(a, b) {
+  let diff = 0;
+  let far = 0;
+  for (let i = 0; i < a.data.length; i += 4) {
+    for (let k = 0; k < 3; k++) {
+      const d = Math.abs(a.data[i + k] - b.data[i + k]);
+      diff += d;
+      if (d > 16) far++;
+    }
+  }
+  return { mean: diff / (3 * a.width * a.height), far: far / (3 * a.width * a.height) };
+}
+
+// A space-time file draws each frame from its span's mesh (formats/view.md): two
+// slider frames of one span (the same mesh key) with different live leaves each show
+// `rhier play`'s picture at their time, and no other mesh is fetched between them.
+async function sameSpan(page, url, file) {
+  const info = await (await fetch(url + 'api/info')).json();
+  const last = await page.evaluate(() => Number(document.getElementById('time').max));
+  const fps = await page.evaluate(() => Number(document.getElementById('fps').value));
+  const time = (k) => Math.min(info.time[0] + k / fps, info.time[1]);
+  const ids = [];
+  for (let k = 0; k <= last; k++) {
+    const v = new DataView(await (await fetch(`${url}api/frame?t=${time(k)}`)).arrayBuffer());
+    ids.push({ key: v.getBigUint64(8, true), live: v.getBigUint64(16, true) });
+  }
+  const meshes = new Set(ids.map((x) => x.key)).size;
+  const lives = new Set(ids.map((x) => x.live)).size;
+  // Two frames 3 apart in one span, their live leaves different.
+  const k = ids.findIndex((x, j) => j + 3 <= last && ids[j + 3].key === x.key && ids[j + 3].live !== x.live);
+  check(k >= 0 && meshes < lives,
+    `span: ${meshes} meshes for ${lives} live sets over ${last + 1} frames; frames ${k} and ${k + 3} share a mesh, not their live leaves`);
+  if (k < 0) return;
+  const before = await page.evaluate(() => window.rhierView.stats.meshes);
+  for (const j of [k, k + 3]) {
+    const shown = await page.evaluate(() => window.rhierView.stats.framesShown);
+    await page.locator('#time').fill(String(j));
+    await page.waitForFunction((n) => window.rhierView.stats.framesShown > n, shown, { timeout: 30000 });
+    const img = await picture(page);
+    writeFileSync(join(work, `span_${j}.png`), PNG.sync.write(img));
+    const out = join(work, `play_${j}`);
+    rhier('play', file, '--time', String(time(j)), '--exposure', String(info.exposure), '-o', out,
+      '--width', String(WIDTH), '--height', String(HEIGHT));
+    const ref = PNG.sync.read(readFileSync(join(out, 'frame_00000.png')));
+    const d = compare(img, ref);
+    check(d.mean < 2 && d.far < 0.01,
+      `span: frame ${j} (t = ${time(j)}) is rhier play's picture (mean |difference| ${d.mean.toFixed(3)} of 255, ${(100 * d.far).toFixed(3)}% of channels off by more than 16)`);
+  }
+  if (k >= 0) {
+    const first = await page.evaluate(() => window.rhierView.stats.meshes);
+    check(first - before <= 1, `span: the two frames were drawn from one mesh (${first - before} fetched for them)`);
+  }
+}
+
 async function moving(b) {
   const file = join(work, 'moving.rhier');
   rhier('solve', join(repo, 'formats/examples/cornell_moving.json'), '--fps', '5', '--eps', '2', '-q', '-o', file);
@@ -330,6 +378,7 @@ async function moving(b) {
     }
     const fraction = changed / (first.width * first.height);
     check(fraction > 0.01, `moving: the slider at its end (${clock}) changes ${(100 * fraction).toFixed(2)}% of the pixels`);
+    await sameSpan(page, url, file);
     // Many requests at once, as the playing loop asks ahead: Chromium opens its 6
     // connections per host together, and every request is answered (tiny_http left
     // the last connections unread in 2 runs of 3 before its fix, vendor/README.md).
@@ -369,6 +418,8 @@ async function bench(b, file, seconds) {
     const { page, loadMs } = await open(b, url, errors);
     const s = await page.evaluate(() => window.rhierView.stats);
     console.log(`first frame: ${(s.firstFrameMs / 1000).toFixed(2)} s after navigation start (${(loadMs / 1000).toFixed(2)} s from goto to drawn)`);
+    const each = (times) => Object.entries(times).map(([k, t]) => `${k} ${(t.ms / t.n).toFixed(1)} ms × ${t.n}`).join(', ');
+    console.log(`to the first frame (page): ${each(s.times)}; steps done at ${Object.entries(s.start || {}).map(([k, t]) => `${k} ${t.toFixed(0)}`).join(', ')} ms`);
     const draw = await page.evaluate(() => window.rhierView.timeDraw(10));
     console.log(`drawing the frame shown: ${draw.toFixed(0)} ms (mean of 10)`);
     const moving = await page.evaluate(() => !document.getElementById('timeRow').hidden);
@@ -381,8 +432,7 @@ async function bench(b, file, seconds) {
       });
       await page.locator('#play').click();
       console.log(`playing at 25 fps asked: ${(r[0] / (r[1] / 1000)).toFixed(1)} frames per second shown over ${(r[1] / 1000).toFixed(1)} s; per frame ${(r[2] / r[0]).toFixed(0)} ms waiting for data, ${(r[3] / r[0]).toFixed(0)} ms uploading and handing the draw over`);
-      const each = Object.entries(r[4]).map(([k, t]) => `${k} ${(t.ms / t.n).toFixed(1)} ms × ${t.n}`);
-      console.log(`mean per answer or step (page): ${each.join(', ')}`);
+      console.log(`mean per answer or step (page): ${each(r[4])}`);
     }
   } finally {
     proc.kill();

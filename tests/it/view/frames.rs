@@ -8,6 +8,7 @@ use glam::{DAffine3, DMat3, DVec3};
 use rhier::playback::frame::Frame;
 use rhier::playback::probe::{ProbePoint, probe};
 use rhier::playback::raster::{FrameMesh, Shading};
+use rhier::solution::Leaf;
 use rhier::store::samples::turning_tiled_box;
 use rhier::store::{Reader, WriteOptions, write_solution};
 use rhier::view::Viewer;
@@ -23,23 +24,27 @@ fn f32_at(b: &[u8], at: usize) -> f32 {
 /// A triangle in world space with its corners' radiosity.
 type Tri = [(DVec3, [f64; 3]); 3];
 
-/// Decodes a mesh and a frame message into world triangles with colours.
-fn decode(mesh: &[u8], frame: &[u8]) -> Vec<Tri> {
+/// Decodes a mesh and a frame message into world triangles with colours: those of
+/// the mesh's leaves live at the frame's time (`Leaf::is_live`, in a domain ending
+/// at `t_end`), with the frame's colours in the mesh's order.
+fn decode(mesh: &[u8], frame: &[u8], t_end: f64) -> Vec<Tri> {
     assert_eq!(&mesh[..4], b"RHVM");
     assert_eq!(&frame[..4], b"RHVF");
     assert_eq!(mesh[8..16], frame[8..16], "mesh and frame keys");
     let groups = u32_at(mesh, 16) as usize;
     let vertices = u32_at(mesh, 20) as usize;
+    let leaves = u32_at(mesh, 24) as usize;
     let pos = 32 + 20 * groups;
-    let idx = pos + 12 * vertices;
-    assert_eq!(mesh.len(), idx + 4 * u32_at(mesh, 24) as usize);
-    let objects = u32_at(frame, 24) as usize;
-    assert_eq!(u32_at(frame, 28) as usize, vertices);
-    let scale = f32_at(frame, 32) as f64;
-    let col = 40 + 48 * objects;
+    let times = pos + 12 * vertices;
+    let counts = times + 8 * leaves;
+    assert_eq!(mesh.len(), (counts + leaves).next_multiple_of(4));
+    let t = f64::from_le_bytes(frame[24..32].try_into().unwrap());
+    let objects = u32_at(frame, 32) as usize;
+    let scale = f32_at(frame, 40) as f64;
+    let col = 48 + 48 * objects;
     let transform = |o: usize| {
         let a: Vec<f64> = (0..12)
-            .map(|k| f32_at(frame, 40 + 48 * o + 4 * k) as f64)
+            .map(|k| f32_at(frame, 48 + 48 * o + 4 * k) as f64)
             .collect();
         DAffine3::from_mat3_translation(
             DMat3::from_cols_slice(&a[..9]),
@@ -47,26 +52,51 @@ fn decode(mesh: &[u8], frame: &[u8]) -> Vec<Tri> {
         )
     };
     let mut out = Vec::new();
+    // The next colour (corner) of the frame.
+    let mut next = 0usize;
     for g in 0..groups {
         let r = |k: usize| u32_at(mesh, 32 + 20 * g + 4 * k) as usize;
-        let (object, first, count, first_index, indices) = (r(0), r(1), r(2), r(3), r(4));
+        let (object, first, count, first_leaf, n) = (r(0), r(1), r(2), r(3), r(4));
         let m = transform(object);
-        let corner = |i: usize| {
-            assert!(i < count);
-            let v = first + i;
-            let p = DVec3::from_array([0, 1, 2].map(|k| f32_at(mesh, pos + 12 * v + 4 * k) as f64));
-            let c = [0, 1, 2].map(|k| {
-                let at = col + 6 * v + 2 * k;
-                half::f16::from_bits(u16::from_le_bytes([frame[at], frame[at + 1]])).to_f64()
-                    * scale
-            });
-            (m.transform_point3(p), c)
-        };
-        for t in 0..indices / 3 {
-            let i = |k: usize| u32_at(mesh, idx + 4 * (first_index + 3 * t + k)) as usize;
-            out.push([corner(i(0)), corner(i(1)), corner(i(2))]);
+        let mut v = first;
+        for k in first_leaf..first_leaf + n {
+            let corners = mesh[counts + k] as u32;
+            let leaf = Leaf {
+                patch: 0,
+                corners,
+                time: [f32_at(mesh, times + 8 * k), f32_at(mesh, times + 8 * k + 4)],
+                uv: [[0.0; 2]; 4],
+                b: [[0.0; 3]; 4],
+            };
+            if leaf.is_live(t, t_end) {
+                let corner = |i: u32| {
+                    let c = next + i as usize;
+                    let v = v + i as usize;
+                    assert!(v < first + count);
+                    let p = DVec3::from_array(
+                        [0, 1, 2].map(|k| f32_at(mesh, pos + 12 * v + 4 * k) as f64),
+                    );
+                    let c = [0, 1, 2].map(|k| {
+                        let at = col + 6 * c + 2 * k;
+                        half::f16::from_bits(u16::from_le_bytes([frame[at], frame[at + 1]]))
+                            .to_f64()
+                            * scale
+                    });
+                    (m.transform_point3(p), c)
+                };
+                for tri in [[0, 1, 2], [0, 2, 3]].iter().take(corners as usize - 2) {
+                    out.push(tri.map(corner));
+                }
+                next += corners as usize;
+            }
+            v += corners as usize;
         }
     }
+    assert_eq!(
+        next,
+        u32_at(frame, 36) as usize,
+        "colours for the live corners"
+    );
     out
 }
 
@@ -129,7 +159,7 @@ fn frames_are_what_play_draws_at_the_same_time() {
         for (shading, name) in [(Shading::Smooth, "smooth"), (Shading::Flat, "flat")] {
             let sent = viewer.handle("GET", &format!("/api/frame?t={t}&shading={name}"));
             assert_eq!(sent.status, 200);
-            let tris = decode(&mesh.body, &sent.body);
+            let tris = decode(&mesh.body, &sent.body, reader.time_domain().end);
             assert_same_triangles(
                 &tris,
                 &FrameMesh::build(&frame, shading),
@@ -140,34 +170,78 @@ fn frames_are_what_play_draws_at_the_same_time() {
         let start = viewer.handle("GET", "/api/frame?t=0").body;
         let now = viewer.handle("GET", &format!("/api/frame?t={t}")).body;
         moved += usize::from(
-            start[40..40 + 48 * reader.objects().len()]
-                != now[40..40 + 48 * reader.objects().len()],
+            start[48..48 + 48 * reader.objects().len()]
+                != now[48..48 + 48 * reader.objects().len()],
         );
     }
     assert_eq!(moved, 3, "the transforms of t > 0 differ from t = 0's");
     // Asked again with its colour id, a frame comes without its colours; the block
     // moving against the room, another time has other colours, under another id.
-    let id = |m: &[u8]| u32_at(m, 36);
+    let id = |m: &[u8]| u32_at(m, 44);
     let full = viewer.handle("GET", "/api/frame?t=1.3").body;
     let short = viewer
         .handle("GET", &format!("/api/frame?t=1.3&have={}", id(&full)))
         .body;
     let objects = reader.objects().len();
-    assert_eq!((id(&short), u32_at(&short, 28)), (id(&full), 0));
+    assert_eq!((id(&short), u32_at(&short, 36)), (id(&full), 0));
     assert_eq!(
         short[..],
-        full[..40 + 48 * objects]
+        full[..48 + 48 * objects]
             .iter()
             .enumerate()
-            .map(|(i, &b)| if (28..32).contains(&i) { 0 } else { b })
+            .map(|(i, &b)| if (36..40).contains(&i) { 0 } else { b })
             .collect::<Vec<u8>>()[..]
     );
     let other = viewer
         .handle("GET", &format!("/api/frame?t=1.5&have={}", id(&full)))
         .body;
-    let corners = u32_at(&other, 28) as usize;
+    let corners = u32_at(&other, 36) as usize;
     assert!(id(&other) != id(&full) && corners > 0);
-    assert!(other.len() >= 40 + 48 * objects + 6 * corners);
+    assert!(other.len() >= 48 + 48 * objects + 6 * corners);
+}
+
+#[test]
+fn frames_of_one_span_draw_their_own_live_leaves_from_one_mesh() {
+    // A space-time solve: its live leaves change from frame to frame, its mesh only
+    // from span to span. Two times of one span with different live leaves each
+    // draw play's triangles and colours at their own time.
+    let dir = tempfile::tempdir().unwrap();
+    let file = super::moving(dir.path());
+    let reader = Reader::open(&file).unwrap();
+    let t_end = reader.time_domain().end;
+    let viewer = Viewer::new(Reader::open(&file).unwrap(), serde_json::Value::Null).unwrap();
+    let frames: Vec<(f64, Vec<u8>)> = (0..=50)
+        .map(|k| k as f64 / 25.0)
+        .map(|t| (t, viewer.handle("GET", &format!("/api/frame?t={t}")).body))
+        .collect();
+    let keys: std::collections::BTreeSet<&[u8]> = frames.iter().map(|f| &f.1[8..16]).collect();
+    let lives: std::collections::BTreeSet<&[u8]> = frames.iter().map(|f| &f.1[16..24]).collect();
+    assert!(
+        keys.len() < lives.len() / 2,
+        "{} meshes for {} live sets",
+        keys.len(),
+        lives.len()
+    );
+    let (a, b) = frames
+        .iter()
+        .zip(&frames[1..])
+        .find(|(a, b)| a.1[8..16] == b.1[8..16] && a.1[16..24] != b.1[16..24])
+        .expect("two frames of one span with different live leaves");
+    let mesh = viewer.handle("GET", &format!("/api/mesh?t={}", a.0)).body;
+    assert_eq!(
+        mesh,
+        viewer.handle("GET", &format!("/api/mesh?t={}", b.0)).body
+    );
+    for (t, sent) in [a, b] {
+        let frame = Frame::build(&reader, *t).unwrap();
+        assert!((u32_at(&mesh, 24) as usize) > frame.leaves.len(), "t = {t}");
+        let tris = decode(&mesh, sent, t_end);
+        assert_same_triangles(
+            &tris,
+            &FrameMesh::build(&frame, Shading::Smooth),
+            &format!("t = {t}"),
+        );
+    }
 }
 
 #[test]
@@ -235,9 +309,9 @@ fn a_scene_turning_as_one_keeps_its_mesh_and_colours() {
     write_solution(&file, &turning_tiled_box(6), WriteOptions::default()).unwrap();
     let viewer = Viewer::new(Reader::open(&file).unwrap(), serde_json::Value::Null).unwrap();
     let first = viewer.handle("GET", "/api/frame?t=0").body;
-    let (key, id) = (&first[8..16], u32_at(&first, 36));
-    let colors = &first[40 + 48..];
-    assert!(u32_at(&first, 28) as usize >= 4 * 6 * 36 && colors.iter().any(|&b| b != 0));
+    let (key, id) = (&first[8..16], u32_at(&first, 44));
+    let colors = &first[48 + 48..];
+    assert!(u32_at(&first, 36) as usize >= 4 * 6 * 36 && colors.iter().any(|&b| b != 0));
     for k in 1..=50 {
         let t = k as f64 / 25.0;
         // Kept: the same live leaves (key), the same colour id, no colours sent.
@@ -245,13 +319,15 @@ fn a_scene_turning_as_one_keeps_its_mesh_and_colours() {
             .handle("GET", &format!("/api/frame?t={t}&have={id}"))
             .body;
         assert_eq!(
-            (&kept[8..16], u32_at(&kept, 36), u32_at(&kept, 28)),
+            (&kept[8..16], u32_at(&kept, 44), u32_at(&kept, 36)),
             (key, id, 0),
             "t = {t}"
         );
         // And they are the colours computed afresh at that time.
+        // (A fresh viewer holds the smooth colours of t = 0: flat ones come in between.)
         let fresh = Viewer::new(Reader::open(&file).unwrap(), serde_json::Value::Null).unwrap();
+        fresh.handle("GET", &format!("/api/frame?t={t}&shading=flat"));
         let own = fresh.handle("GET", &format!("/api/frame?t={t}")).body;
-        assert_eq!(&own[40 + 48..], colors, "t = {t}");
+        assert_eq!(&own[48 + 48..], colors, "t = {t}");
     }
 }

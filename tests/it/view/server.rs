@@ -240,7 +240,7 @@ fn many_clients_share_one_mapping_of_the_file() {
         );
         let mut out = raw_bytes(v.port, request.as_bytes());
         let at = out.windows(4).position(|w| w == b"RHVF").unwrap();
-        out[at + 36..at + 40].fill(0);
+        out[at + 44..at + 48].fill(0);
         let status_end = out.windows(2).position(|w| w == b"\r\n").unwrap();
         out.drain(status_end..at);
         out
