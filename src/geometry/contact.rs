@@ -24,13 +24,13 @@
 //! and ceiling: the room read 0.1–4% of the path tracer (74–101% now).
 //!
 //! **Covered regions.** A polygon hanging parallel just in front of a patch with its
-//! back to it (a lamp hung 1 cm under a ceiling) covers a region that sees almost
-//! nothing: within [`NEAR_GAP`] of the scene's diameter and [`NEAR_GAP_OF_SIZE`] of
-//! the polygon's size. The patch is cut along that polygon's outline too, and the
-//! covered piece is kept (a probe there finds the ceiling, dark, as a path tracer
-//! does), not dropped. Why: whole, the patch hands on its *average* radiosity, dark
-//! covered part included, to receivers that see only its lit part; in the closed room
-//! of `tests/data/hung_lamp_room.json` that lost 2.3% of the emitted power.
+//! back to it (a lamp hung 1 cm under a ceiling) covers a region that sees little:
+//! within [`NEAR_GAP_OF_SIZE`] of the polygon's size. The patch is cut along that
+//! outline too, and the covered piece is kept (a probe there finds the ceiling, dark,
+//! as a path tracer does), not dropped. Why: whole, the patch hands on its *average*
+//! radiosity, dark covered part included, to receivers that see only its lit part
+//! (2.3% of the power of `tests/data/hung_lamp_room.json` lost; a one-quad ceiling
+//! 1 cm over a 1 m lamp in a 6 m room, uncut, was 2–4% dark everywhere).
 //!
 //! What it does not do: contacts of moving objects (they change over time) are left
 //! to the refinement; shadow boundaries away from contacts are meshed by the
@@ -57,7 +57,8 @@ pub struct ContactStats {
 pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, ContactStats) {
     let bvh = SceneBvh::build(scene, patches, t);
     let tol = patches.diameter * 1e-6;
-    let near_gap = patches.diameter * NEAR_GAP;
+    // The widest gap any polygon of the scene covers (see `NEAR_GAP_OF_SIZE`).
+    let near_gap = NEAR_GAP_OF_SIZE * patches.areas.iter().fold(0.0f64, |m, &a| m.max(a)).sqrt();
     let moving = |i: usize| {
         scene
             .objects
@@ -102,7 +103,11 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
             let on = |&j: &usize| patches.polys[j].contains(patches.normals[j], x, tol);
             // The ray first: a floor under a field of boxes faces every box bottom,
             // and nothing lies behind the floor.
-            (pieces.len() > 1 && !covering.iter().any(on) && behind_is_back_face(n))
+            // A covered piece is kept (module docs) unless a solid rests on it: a
+            // flat box's top covers the floor under it, and its bottom rests there.
+            (pieces.len() > 1
+                && (!covering.iter().any(on) || facing.iter().any(on))
+                && behind_is_back_face(n))
                 || (behind_is_back_face(-n) && facing.iter().any(on))
         };
         if pieces.len() == 1 {
@@ -170,7 +175,7 @@ struct Contacts {
 
 /// The [`Contacts`] of patch `i` with the static patches near it (`moving` tells
 /// the others), within `tol` of its plane or, parallel and facing away, within
-/// `near_gap` in front of it.
+/// `near_gap` (the widest gap a polygon of the scene covers) in front of it.
 fn contacts(
     patches: &Patches,
     bvh: &SceneBvh,
@@ -193,13 +198,18 @@ fn contacts(
         lo = lo.min(c);
         hi = hi.max(c);
     }
-    let pad = DVec3::splat(tol * 2.0 + near_gap);
+    // The patch swept `near_gap` along its normal: what rests on it or covers it.
+    let pad = DVec3::splat(tol * 2.0);
+    let (lo, hi) = (
+        lo.min(lo + n * near_gap) - pad,
+        hi.max(hi + n * near_gap) + pad,
+    );
     // In patch order, each once. Not in the order the BVH meets them: that order
     // follows the f32 tree, which another unit's rounding builds otherwise, and
     // the order of the cuts decides the pieces' order and corners (issue 45,
     // part 3).
     let mut seen = Vec::new();
-    bvh.for_each_triangle_in_box(lo - pad, hi + pad, |j, _| {
+    bvh.for_each_triangle_in_box(lo, hi, |j, _| {
         let j = j as usize;
         if j != i && !moving(j) {
             seen.push(j);
@@ -227,7 +237,7 @@ fn contacts(
             continue; // not standing on the front side
         }
         let gap = dist.iter().copied().fold(0.0, f64::max);
-        if n.dot(nj) > 0.99 && gap <= near_gap && gap <= NEAR_GAP_OF_SIZE * other.area().sqrt() {
+        if n.dot(nj) > 0.99 && gap <= NEAR_GAP_OF_SIZE * other.area().sqrt() {
             covering.push(j);
             for e in 0..k {
                 let (a, b) = (other.v[e], other.v[(e + 1) % k]);
@@ -325,14 +335,14 @@ fn line_key(m: DVec3, off: f64, tol: f64) -> [i64; 4] {
     [q(m.x), q(m.y), q(m.z), (off / tol).round() as i64]
 }
 
-/// Largest gap, as a fraction of the scene's diameter, between a patch and a
-/// parallel polygon hanging in front of it with its back to it for the patch to be
-/// cut along that polygon's outline (module docs, "Covered regions").
-pub const NEAR_GAP: f64 = 1e-3;
-
-/// The same gap as a fraction of the hanging polygon's size (square root of its
-/// area): under a gap this thin, the covered region sees almost nothing.
-pub const NEAR_GAP_OF_SIZE: f64 = 0.01;
+/// Largest gap between a patch and a parallel polygon hanging in front of it with
+/// its back to it, as a fraction of that polygon's size (square root of its area),
+/// for the patch to be cut along the polygon's outline (module docs, "Covered
+/// regions"). The covered region of a square of side `L` hung `h` away sees out
+/// through about `2h/L` of its hemisphere on average: a fifth at this gap, a dark
+/// region whose edge runs along the outline. Relative to the polygon alone, so
+/// that a scaled scene is cut alike (issue 45, part 3).
+pub const NEAR_GAP_OF_SIZE: f64 = 0.1;
 
 /// A point well inside convex polygon `p` but off its centroid, for the hidden
 /// test's ray: a box's top is two triangles whose shared diagonal runs straight

@@ -188,3 +188,84 @@ fn a_lamp_hung_just_under_the_ceiling_cuts_it_along_its_outline() {
     let (after, _) = split_at_contacts(&scene, &before, 0.0);
     assert_eq!(ceiling(&after).len(), 1);
 }
+
+/// Whether a polygon covers a patch is decided by its gap against its own size,
+/// not the scene's: the 2 m lamp of the hung-lamp room 10 cm under its ceiling (5%
+/// of its size, past 1e-3 of the room's 14.7 m diameter, the scene rule that left
+/// a one-quad ceiling whole over a 1 m lamp hung 1 cm in a 6 m room and made that
+/// room 2–5% dark; `solver::tiled_lamp`) cuts the ceiling in a 3 × 3 grid, and so
+/// does the same room scaled by 1000 or by 1/1000; 30 cm under (15%) it does not.
+#[test]
+fn the_covering_gap_is_measured_against_the_lamp_alone() {
+    let ceiling_pieces = |scene: &Scene, y: f64| {
+        let before = Patches::at_time(scene, 0.0);
+        let (after, stats) = split_at_contacts(scene, &before, 0.0);
+        assert_eq!(stats.pieces_hidden, 0, "{stats:?}");
+        (0..after.len())
+            .filter(|&i| after.normals[i].y < -0.99 && (after.polys[i].v[0].y - y).abs() < 1e-9 * y)
+            .count()
+    };
+    let scaled = |gap: f64, s: f64| {
+        let mut scene = hung_lamp_room(gap);
+        for o in &mut scene.objects {
+            for p in &mut o.polygons {
+                for v in &mut p.vertices {
+                    *v *= s;
+                }
+            }
+        }
+        scene
+    };
+    for s in [1.0, 1e3, 1e-3] {
+        assert_eq!(ceiling_pieces(&scaled(0.1, s), 4.0 * s), 9, "scale {s}");
+        assert_eq!(ceiling_pieces(&scaled(0.3, s), 4.0 * s), 1, "scale {s}");
+    }
+}
+
+/// A flat box (2 cm high, 1 m wide) resting on a floor: its top covers the floor
+/// (gap 2% of its size) and its bottom rests there; the floor under it lies inside
+/// a solid and is dropped, as under any box, not kept as a covered region.
+#[test]
+fn the_footprint_of_a_flat_box_is_dropped_though_its_top_covers_it() {
+    use crate::common::shapes::{self, Tiling};
+    use rhier::scene::MaterialId;
+    let m = MaterialId(0);
+    let mut polygons = shapes::tiled_rect(
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::Z * 4.0,
+        DVec3::X * 4.0,
+        Tiling::Quads(1),
+        m,
+    );
+    assert!(polygons[0].vertices.len() == 4);
+    polygons.extend(shapes::tiled_box(
+        DVec3::new(1.5, 0.0, 1.5),
+        DVec3::new(2.5, 0.02, 2.5),
+        Tiling::Quads(1),
+        false,
+        m,
+    ));
+    let scene = Scene {
+        materials: vec![Material {
+            name: "white".into(),
+            rho: [0.5; 3],
+            emission: [1.0; 3],
+        }],
+        objects: vec![Object {
+            name: "floor and slab".into(),
+            polygons,
+            motion: None,
+        }],
+        ..Default::default()
+    };
+    let before = Patches::at_time(&scene, 0.0);
+    assert!(before.normals[0].y > 0.99, "the floor faces up");
+    let (after, stats) = split_at_contacts(&scene, &before, 0.0);
+    let floor: Vec<usize> = (0..after.len())
+        .filter(|&i| after.normals[i].y > 0.99 && after.polys[i].v[0].y.abs() < 1e-12)
+        .collect();
+    let area: f64 = floor.iter().map(|&i| after.areas[i]).sum();
+    eprintln!("{stats:?}, {} floor pieces, area {area}", floor.len());
+    assert_eq!(floor.len(), 8, "the floor around the slab");
+    assert!((area - 15.0).abs() < 1e-9, "floor area {area}");
+}
