@@ -122,7 +122,8 @@ fn far_factor(x: DVec3, n: DVec3, c: &[DVec3], ns: DVec3, h: f64) -> Option<f64>
     let rad2 = c.iter().fold(0.0f64, |r, v| r.max(v.distance_squared(m)));
     let d2 = x.distance_squared(m);
     let ratio2 = rad2 / d2;
-    if !(ratio2 <= FAR_RATIO * FAR_RATIO) {
+    // NaN (the point on the source's centroid) is near too.
+    if ratio2.is_nan() || ratio2 > FAR_RATIO * FAR_RATIO {
         return None;
     }
     let (e1, e2, e3) = (p1 - p0, p3 - p0, p2 - p1 - p3 + p0);
