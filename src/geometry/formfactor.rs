@@ -62,20 +62,32 @@ pub fn cosine_direction(n: DVec3, u1: f64, u2: f64) -> DVec3 {
     t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()
 }
 
+/// Height over a source's plane, relative to the source's size (square root of
+/// its area), under which a source facing a point back to back is its twin and
+/// not in front of it ([`point_to_polygon`]): the planarity a quad is held to
+/// (`scene::validate::PLANARITY_TOLERANCE`), since a surface is only known to
+/// that. On Blender's Suzanne (`tests/data/blender/cornell-box.glb`), two-sided,
+/// a quarter of the head's leaves summed their rows above 1 (up to 2.06) from
+/// their own twin's factor of 1; at `ρ = 0.999` that made `ρK` expand.
+pub const TWIN_GAP: f64 = 1e-4;
+
 /// Unoccluded form factor from the differential area at `x` with unit normal `n` to
 /// the one-sided polygon `src` (counter-clockwise seen from its front): exact (the
 /// contour integral, [`point_to_polygon_exact`]) unless the source is far and wholly
 /// above the horizon, where a Gauss quadrature (`far_factor`) is within 3e-5 of it.
+///
+/// A source facing the point from within [`TWIN_GAP`] of the point's plane is not
+/// in front of it: it is the point's own surface seen from the other side (a
+/// two-sided polygon's back-to-back twin), which round-off or a merged quad's
+/// slight non-planarity puts a hair in front of some of its points, where it
+/// would cover their whole hemisphere (factor 1).
 pub fn point_to_polygon(x: DVec3, n: DVec3, src: &Poly) -> f64 {
     if src.n < 3 {
         return 0.0;
     }
-    // One-sided source: x must be strictly in front of its plane.
-    let ns = src.area_vector();
-    let h = ns.dot(x - src.v[0]);
-    if h <= 0.0 {
+    let Some((ns, h)) = in_front(x, n, src) else {
         return 0.0;
-    }
+    };
     let c = src.corners();
     let above = c.iter().all(|&v| n.dot(v - x) > 0.0);
     if above && c.len() <= 4 {
@@ -94,10 +106,28 @@ pub fn point_to_polygon(x: DVec3, n: DVec3, src: &Poly) -> f64 {
 
 /// [`point_to_polygon`] by the contour integral always: exact to rounding.
 pub fn point_to_polygon_exact(x: DVec3, n: DVec3, src: &Poly) -> f64 {
-    if src.n < 3 || src.area_vector().dot(x - src.v[0]) <= 0.0 {
+    if src.n < 3 || in_front(x, n, src).is_none() {
         return 0.0;
     }
     contour_integral(x, n, src.clip_front(x, n).corners())
+}
+
+/// The source's Newell vector `ns` and `h = ns · (x − v₀)` when `x` (normal `n`) is
+/// strictly in front of the one-sided `src` and `src` is not its twin
+/// ([`TWIN_GAP`]); `None` otherwise.
+fn in_front(x: DVec3, n: DVec3, src: &Poly) -> Option<(DVec3, f64)> {
+    let ns = src.area_vector();
+    let h = ns.dot(x - src.v[0]);
+    if h <= 0.0 {
+        return None;
+    }
+    // A twin: facing the point's own plane (normals within 25°) from a height
+    // under `TWIN_GAP` × its size (`|ns|` is twice its area).
+    let l2 = ns.length_squared();
+    if n.dot(ns) < -0.9 * l2.sqrt() && h * h <= TWIN_GAP * TWIN_GAP * l2 * l2.sqrt() {
+        return None;
+    }
+    Some((ns, h))
 }
 
 /// Largest `radius / distance` (the source's corners about their mean, over that
