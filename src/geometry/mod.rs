@@ -23,8 +23,8 @@ mod visibility;
 
 pub use contact::{ContactStats, split_at_contacts};
 pub use formfactor::{
-    FAR_RATIO, contour_integral as formfactor_contour, cosine_direction, point_to_point_kernel,
-    point_to_polygon, point_to_polygon_exact,
+    FAR_RATIO, TWIN_GAP, contour_integral as formfactor_contour, cosine_direction,
+    point_to_point_kernel, point_to_polygon, point_to_polygon_exact,
 };
 pub use nearest::{closest_point_on_polygon, nearest_facing, on_emitters};
 pub use patches::{PatchGeometry, PatchId, Patches, param_point};
