@@ -264,17 +264,8 @@ fn atan_nonneg(t: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::oracle::xorshift;
     use std::f64::consts::PI;
-
-    /// Uniform numbers in [0, 1) from a xorshift generator seeded with `h`.
-    fn xorshift(mut h: u64) -> impl FnMut() -> f64 {
-        move || {
-            h ^= h << 13;
-            h ^= h >> 7;
-            h ^= h << 17;
-            crate::oracle::unit(h)
-        }
-    }
 
     #[test]
     fn edge_angle_is_atan2_to_an_ulp() {

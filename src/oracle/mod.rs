@@ -950,6 +950,18 @@ pub fn unit(h: u64) -> f64 {
     (h >> 11) as f64 / (1u64 << 53) as f64
 }
 
+/// Numbers uniform in `[0, 1)` from a xorshift generator seeded with `h` (nonzero):
+/// the random inputs of the crate's unit tests.
+#[cfg(test)]
+pub(crate) fn xorshift(mut h: u64) -> impl FnMut() -> f64 {
+    move || {
+        h ^= h << 13;
+        h ^= h >> 7;
+        h ^= h << 17;
+        unit(h)
+    }
+}
+
 /// What to do with a link whose error exceeds the threshold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Split {

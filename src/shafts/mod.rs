@@ -495,15 +495,7 @@ mod tests {
         assert!(missed > 10000 && met > 1500, "{missed} missed, {met} met");
     }
 
-    /// Numbers uniform in `[0, 1)` from a xorshift generator seeded with `state`.
-    fn uniform(mut state: u64) -> impl FnMut() -> f64 {
-        move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            crate::oracle::unit(state)
-        }
-    }
+    use crate::oracle::xorshift as uniform;
 
     #[test]
     fn blocker_between_is_not_culled_and_side_walls_are() {

@@ -8,16 +8,17 @@ use glam::DVec3;
 use rhier::geometry::formfactor_contour as contour;
 use rhier::geometry::{Poly, point_to_polygon};
 
+/// The midpoint of cell `(i, j)` of a `k` × `k` grid over the bilinear quad `q`.
+fn grid_point(q: &[DVec3; 4], i: usize, j: usize, k: usize) -> DVec3 {
+    let (u, v) = ((i as f64 + 0.5) / k as f64, (j as f64 + 0.5) / k as f64);
+    (1.0 - u) * (1.0 - v) * q[0] + u * (1.0 - v) * q[1] + u * v * q[2] + (1.0 - u) * v * q[3]
+}
+
 fn area_factor(recv: [DVec3; 4], n: DVec3, src: &Poly, k: usize) -> f64 {
     let mut s = 0.0;
     for i in 0..k {
         for j in 0..k {
-            let (u, v) = ((i as f64 + 0.5) / k as f64, (j as f64 + 0.5) / k as f64);
-            let x = (1.0 - u) * (1.0 - v) * recv[0]
-                + u * (1.0 - v) * recv[1]
-                + u * v * recv[2]
-                + (1.0 - u) * v * recv[3];
-            s += point_to_polygon(x, n, src);
+            s += point_to_polygon(grid_point(&recv, i, j, k), n, src);
         }
     }
     s / (k * k) as f64
@@ -133,11 +134,7 @@ fn a_twin_is_not_in_front_of_its_own_surface() {
     let k = 16;
     for i in 0..k {
         for j in 0..k {
-            let (u, v) = ((i as f64 + 0.5) / k as f64, (j as f64 + 0.5) / k as f64);
-            let x = (1.0 - u) * (1.0 - v) * bent[0]
-                + u * (1.0 - v) * bent[1]
-                + u * v * bent[2]
-                + (1.0 - u) * v * bent[3];
+            let x = grid_point(&bent, i, j, k);
             // The bent quad's points, and the same 1e-5 in front of its twin.
             let t = twin(&bent);
             let m = t.area_vector().normalize();
