@@ -317,26 +317,40 @@ pub fn uniform_scene(polygons: Vec<Polygon>, rho: f64, e: f64) -> Scene {
     }
 }
 
+/// The walls of a 4 × 2.5 × 4 m room (faces inward, tiled as `tiling`) and its
+/// 1 × 1 m ceiling lamp hung 1 cm under the ceiling over `[1.5, 2.5] × [1.5, 2.5]`.
+pub fn lit_room(tiling: Tiling, white: MaterialId, lamp: MaterialId) -> Vec<Polygon> {
+    let mut room = tiled_box(DVec3::ZERO, DVec3::new(4.0, 2.5, 4.0), tiling, true, white);
+    room.extend(tiled_rect(
+        DVec3::new(1.5, 2.49, 1.5),
+        DVec3::X,
+        DVec3::Z,
+        Tiling::Quads(1),
+        lamp,
+    ));
+    room
+}
+
+/// The materials of [`lit_room`]'s scenes, by index: 0 white walls (`ρ` 0.7), 1 the
+/// lamp (`E` 10, black), 2 a coloured object of reflectance `coloured`.
+pub fn lit_room_materials(coloured: [f64; 3]) -> Vec<Material> {
+    vec![
+        Material::diffuse("white", [0.7; 3]),
+        Material {
+            emission: [10.0; 3],
+            ..Material::diffuse("lamp", [0.0; 3])
+        },
+        Material::diffuse("red", coloured),
+    ]
+}
+
 /// A 4 × 2.5 × 4 m room lit by a ceiling lamp, with three boxes on the floor: two
 /// touching face to face and a third standing on the first. Tessellated as real
 /// scenes are: the room's faces in triangles of unequal sizes, the first box's in
 /// quads meeting in T-junctions.
 pub fn touching_boxes() -> Scene {
     let (white, lamp, red) = (MaterialId(0), MaterialId(1), MaterialId(2));
-    let mut room = tiled_box(
-        DVec3::ZERO,
-        DVec3::new(4.0, 2.5, 4.0),
-        Tiling::UnequalTriangles(3),
-        true,
-        white,
-    );
-    room.extend(tiled_rect(
-        DVec3::new(1.5, 2.49, 1.5),
-        DVec3::new(1.0, 0.0, 0.0),
-        DVec3::new(0.0, 0.0, 1.0),
-        Tiling::Quads(1),
-        lamp,
-    ));
+    let room = lit_room(Tiling::UnequalTriangles(3), white, lamp);
     let mut boxes = tiled_box(
         DVec3::new(1.0, 0.0, 1.0),
         DVec3::new(1.8, 0.6, 1.8),
@@ -358,17 +372,8 @@ pub fn touching_boxes() -> Scene {
         false,
         white,
     ));
-    let material = |name: &str, rho: [f64; 3], emission: [f64; 3]| Material {
-        name: name.into(),
-        rho,
-        emission,
-    };
     Scene {
-        materials: vec![
-            material("white", [0.7; 3], [0.0; 3]),
-            material("lamp", [0.0; 3], [10.0; 3]),
-            material("red", [0.6, 0.1, 0.1], [0.0; 3]),
-        ],
+        materials: lit_room_materials([0.6, 0.1, 0.1]),
         objects: vec![Object::still("room", room), Object::still("boxes", boxes)],
         ..Default::default()
     }

@@ -13,23 +13,16 @@ use rhier::interactive::predict::Method;
 use rhier::interactive::store::Policy;
 use rhier::interactive::{ObjectMove, Pose, Session, Settings, Stage, Traversal, Update};
 use rhier::playback::probe::{ProbePoint, probe};
-use rhier::scene::{Material, MaterialId, Object, Scene};
+use rhier::scene::{MaterialId, Object, Scene};
 use rhier::solver::SolveOptions;
 
-use crate::common::shapes::{Tiling, tiled_box, tiled_rect};
+use crate::common::shapes::{Tiling, lit_room, lit_room_materials, tiled_box};
 
 /// A 4 × 2.5 × 4 room (tiled as `tiling`) lit by a ceiling lamp, with a
 /// 0.6 × 0.5 × 0.6 box "crate" at `[1.0, y, 1.4]` (`y = 0`: on the floor).
 pub fn room(tiling: Tiling, y: f64) -> Scene {
     let (white, lamp, red) = (MaterialId(0), MaterialId(1), MaterialId(2));
-    let mut walls = tiled_box(DVec3::ZERO, DVec3::new(4.0, 2.5, 4.0), tiling, true, white);
-    walls.extend(tiled_rect(
-        DVec3::new(1.5, 2.49, 1.5),
-        DVec3::X,
-        DVec3::Z,
-        Tiling::Quads(1),
-        lamp,
-    ));
+    let walls = lit_room(tiling, white, lamp);
     let crate_ = tiled_box(
         DVec3::new(1.0, y, 1.4),
         DVec3::new(1.6, y + 0.5, 2.0),
@@ -37,17 +30,8 @@ pub fn room(tiling: Tiling, y: f64) -> Scene {
         false,
         red,
     );
-    let material = |name: &str, rho: [f64; 3], emission: [f64; 3]| Material {
-        name: name.into(),
-        rho,
-        emission,
-    };
     Scene {
-        materials: vec![
-            material("white", [0.7; 3], [0.0; 3]),
-            material("lamp", [0.0; 3], [10.0; 3]),
-            material("red", [0.6, 0.2, 0.2], [0.0; 3]),
-        ],
+        materials: lit_room_materials([0.6, 0.2, 0.2]),
         objects: vec![Object::still("room", walls), Object::still("crate", crate_)],
         ..Default::default()
     }
