@@ -183,7 +183,10 @@ function pooled(object, vertices, indices) {
   const geometry = new THREE.BufferGeometry();
   const attribute = (a, size) => new THREE.BufferAttribute(a, size).setUsage(THREE.DynamicDrawUsage);
   geometry.setAttribute('position', attribute(new Float32Array(3 * room(vertices)), 3));
-  const colors = new THREE.Float16BufferAttribute(new Uint16Array(3 * room(vertices)), 3);
+  // Colours as 4 half floats a corner (the 4th unused): a 3-half vertex format is
+  // not one Vulkan must have, and ANGLE on SwiftShader converted the whole buffer on
+  // the CPU after each change (26 ms a frame, ACTOR, BENCHMARKS.md "Viewer").
+  const colors = new THREE.Float16BufferAttribute(new Uint16Array(4 * room(vertices)), 4);
   geometry.setAttribute('color', colors.setUsage(THREE.DynamicDrawUsage));
   geometry.setIndex(attribute(new Uint32Array(room(indices)), 1));
   if (!m) {
@@ -275,31 +278,31 @@ function select(frame) {
   uploadedColors = 0;
 }
 
-// The frame's colours (the live leaves' corners, in the mesh's order) to the corners
-// of the live leaves.
+// The frame's colours (the live leaves' corners, in the mesh's order, 3 half floats
+// each) to the corners of the live leaves (4 half floats each, the 4th unused).
 function scatter(colors) {
   let at = 0;
   for (const m of mesh.objects.values()) {
     const { corners, first, live, lives } = m.userData;
     const attr = m.geometry.getAttribute('color');
     const out = attr.array;
-    let size = 0;
-    if (lives === corners.length) {
-      // Every leaf live: the colours are the group's, in order.
-      size = first.length ? 3 * (first[lives - 1] + corners[lives - 1]) : 0;
-      out.set(colors.subarray(at, at + size));
-      at += size;
-    } else {
-      for (let j = 0; j < lives; j++) {
-        const k = live[j];
-        const n = 3 * corners[k];
-        out.set(colors.subarray(at, at + n), 3 * first[k]);
-        at += n;
-        size = Math.max(size, 3 * first[k] + n);
+    let lo = Infinity;
+    let hi = 0;
+    for (let j = 0; j < lives; j++) {
+      const k = live[j];
+      let d = 4 * first[k];
+      const end = at + 3 * corners[k];
+      lo = Math.min(lo, d);
+      for (; at < end; at += 3, d += 4) {
+        out[d] = colors[at];
+        out[d + 1] = colors[at + 1];
+        out[d + 2] = colors[at + 2];
       }
+      hi = Math.max(hi, d);
     }
+    if (lives === 0) continue;
     attr.clearUpdateRanges();
-    attr.addUpdateRange(0, size);
+    attr.addUpdateRange(lo, hi - lo);
     attr.needsUpdate = true;
   }
   if (at !== colors.length) throw new Error(`frame: colours for ${colors.length / 3} corners, the live leaves have ${at / 3}`);
