@@ -485,7 +485,7 @@ async function bench(b, file, seconds) {
       await page.waitForTimeout(1000 * seconds);
       const r = await page.evaluate(() => {
         const s = window.rhierView.stats;
-        return [s.playFrames, performance.now() - s.playStarted, s.waitMs, s.drawMs, s.times];
+        return [s.playFrames, performance.now() - s.playStarted, s.waitMs, s.drawMs, s.times, s.firstPassMs, Number(document.getElementById('time').max) + 1];
       });
       const cpu1 = cpuByKind(proc.pid);
       await page.locator('#play').click();
@@ -493,6 +493,7 @@ async function bench(b, file, seconds) {
       console.log(`processor time per frame shown (load average ${load}): ${Object.keys(cpu1).map((k) => `${k} ${((cpu1[k] - cpu0[k]) / r[0]).toFixed(1)} ms`).join(', ')}`);
       console.log(`playing at 25 fps asked: ${(r[0] / (r[1] / 1000)).toFixed(1)} frames per second shown over ${(r[1] / 1000).toFixed(1)} s; per frame ${(r[2] / r[0]).toFixed(0)} ms waiting for data, ${(r[3] / r[0]).toFixed(0)} ms uploading and handing the draw over`);
       console.log(`mean per answer or step (page): ${each(r[4])}`);
+      if (r[5]) console.log(`the first pass over the ${r[6]} frames (none kept yet): ${(r[6] / (r[5] / 1000)).toFixed(1)} frames per second`);
     }
   } finally {
     proc.kill();
