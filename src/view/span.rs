@@ -219,7 +219,7 @@ impl Span {
     /// ([`Live::scan`] over the span): what [`crate::store::Reader::live_at`] finds
     /// from every leaf of the chunks.
     pub fn live(&self, t: f64, t_end: f64) -> Live {
-        let (tf, end) = (t as f32, t_end as f32);
+        let tf = t as f32;
         let mut stretch = Stretch {
             part: (self.key >> 32) as u32,
             lo: f32::NEG_INFINITY,
@@ -227,17 +227,8 @@ impl Span {
         };
         stretch.cut_start(tf, self.lo);
         stretch.cut_start(tf, self.hi);
-        let leaves = self
-            .canonical
-            .iter()
-            .map(|&k| &self.leaves[k as usize])
-            .filter(|l| {
-                stretch.cut(tf, l.time, end);
-                l.is_live(t, t_end)
-            })
-            .copied()
-            .collect();
-        Live::new(stretch, leaves)
+        let leaves = self.canonical.iter().map(|&k| &self.leaves[k as usize]);
+        Live::scan_from(stretch, leaves, t, t_end)
     }
 }
 
