@@ -304,17 +304,18 @@ mod tests {
 
     #[test]
     fn a_plan_builds_each_span_and_a_span_finds_the_live_leaves_of_all() {
-        // Leaves of 9 patches starting and ending at scattered times, over two
+        // 30 000 leaves of 9 patches starting at scattered times and lasting
+        // 0.01-0.05 s (about 450 live at a time: spans of MIN_LEAVES), over two
         // chunks: a plan's spans are those built from every leaf, and the leaves
         // live at a time in a span, with their stretch, are those every leaf gives,
         // the stretch cut to the span.
         let mut leaves = Vec::new();
-        for k in 0..6000u32 {
-            let t0 = (k.wrapping_mul(2_654_435_761) % 1000) as f32 * 0.002;
-            let t1 = t0 + 0.01 + (k % 17) as f32 * 0.01;
+        for k in 0..30_000u32 {
+            let t0 = (k.wrapping_mul(2_654_435_761) % 2000) as f32 * 0.001;
+            let t1 = t0 + 0.01 + (k % 5) as f32 * 0.01;
             leaves.push(leaf(k % 9, t0, t1.min(2.0)));
         }
-        let (a, b) = leaves.split_at(2500);
+        let (a, b) = leaves.split_at(12_000);
         let chunks = vec![Arc::new(a.to_vec()), Arc::new(b.to_vec())];
         let patches: Vec<PatchGeometry> = Vec::new();
         let plan = Plan::new(3, (0.0, 2.5), chunks);
