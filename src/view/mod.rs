@@ -12,9 +12,10 @@
 //! [`DEFAULT_SIZE`] picture). Meshes are per span of time ([`span`], [`Viewer::span_at`]):
 //! a space-time file's live leaves change every frame, its mesh once per span, and
 //! a frame carries only the live leaves' colours. A frame's live leaves are found
-//! among its span's ([`span::Span::live`]), not among every leaf of its chunks. The last few frames and spans built
-//! are kept, so several requests or clients at one time build them once; the last
-//! colours are kept while what they depend on holds ([`Viewer::frame_message`]).
+//! among its span's ([`span::Span::live`]), not among every leaf of its chunks. The
+//! last few frames and spans built are kept, so several requests or clients at one
+//! time build them once; the last colours are kept while what they depend on holds
+//! ([`Viewer::frame_message`]).
 //!
 //! What it serves (an exact match on the path, nothing decoded, nothing from the
 //! disk): the embedded page ([`assets`]) and `/api/info`, `/api/inspect`,
@@ -48,8 +49,9 @@ pub use server::serve;
 const KEPT_FRAMES: usize = 12;
 /// Span meshes kept: the one playing, the next one asked for ahead, one more.
 const KEPT_SPANS: usize = 3;
-/// Chunk ranges whose span boundaries are kept.
-const KEPT_PLANS: usize = 4;
+/// Chunk ranges whose span plans are kept (each holds its chunks' leaves): the one
+/// playing and the next.
+const KEPT_PLANS: usize = 2;
 
 /// An answer: HTTP status, media type and body.
 #[derive(Clone, Debug, PartialEq)]
