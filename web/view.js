@@ -64,7 +64,12 @@ let bounds = new THREE.Sphere(); // the scene at the first frame: fly speed, cli
 let mesh = { key: null, live: null, objects: new Map() }; // object index -> THREE.Mesh
 let shownFrame = null;
 const AHEAD = 8; // frames asked for ahead while playing
-const frames = new Map(); // `${shading}|${k}` -> Promise<frame>
+const frames = new Map(); // `${shading}|${fps}|${k}` -> Promise<frame>, oldest first
+// Frames are kept up to KEPT_BYTES of messages, so that an animation played again or
+// scrubbed back is drawn from memory (ACTOR's 76 frames: 7 MB; 100k's: 2.4 MB each).
+const KEPT_BYTES = 64 * 1024 * 1024;
+const frameBytes = new Map(); // key -> bytes of its message, once received
+let keptBytes = 0;
 const meshes = new Map(); // key -> Promise<parsed mesh>
 const colorsById = new Map(); // colour id -> Uint16Array, the last few received
 let latestColors = 0; // id of the colours received last
@@ -153,7 +158,17 @@ function frameAt(k) {
     // (The first frame's mesh is asked for with it, by `start`.)
     frame.then((f) => api.stats.ready && mesh.key !== f.key && meshFor(f.key, f.t)).catch(() => {});
     frames.set(key, frame);
-    if (frames.size > 64) frames.delete(frames.keys().next().value);
+    frame.then((f) => {
+      if (frames.get(key) !== frame) return;
+      frameBytes.set(key, f.transforms.buffer.byteLength);
+      keptBytes += f.transforms.buffer.byteLength;
+      while ((keptBytes > KEPT_BYTES || frames.size > 4096) && frames.size > 1) {
+        const old = frames.keys().next().value;
+        keptBytes -= frameBytes.get(old) || 0;
+        frameBytes.delete(old);
+        frames.delete(old);
+      }
+    }).catch(() => frames.get(key) === frame && frames.delete(key));
   }
   return frames.get(key);
 }
@@ -183,7 +198,10 @@ function pooled(object, vertices, indices) {
   const geometry = new THREE.BufferGeometry();
   const attribute = (a, size) => new THREE.BufferAttribute(a, size).setUsage(THREE.DynamicDrawUsage);
   geometry.setAttribute('position', attribute(new Float32Array(3 * room(vertices)), 3));
-  const colors = new THREE.Float16BufferAttribute(new Uint16Array(3 * room(vertices)), 3);
+  // Colours as 4 half floats a corner (the 4th unused): a 3-half vertex format is
+  // not one Vulkan must have, and ANGLE on SwiftShader converted the whole buffer on
+  // the CPU after each change (26 ms a frame, ACTOR, BENCHMARKS.md "Viewer").
+  const colors = new THREE.Float16BufferAttribute(new Uint16Array(4 * room(vertices)), 4);
   geometry.setAttribute('color', colors.setUsage(THREE.DynamicDrawUsage));
   geometry.setIndex(attribute(new Uint32Array(room(indices)), 1));
   if (!m) {
@@ -275,31 +293,31 @@ function select(frame) {
   uploadedColors = 0;
 }
 
-// The frame's colours (the live leaves' corners, in the mesh's order) to the corners
-// of the live leaves.
+// The frame's colours (the live leaves' corners, in the mesh's order, 3 half floats
+// each) to the corners of the live leaves (4 half floats each, the 4th unused).
 function scatter(colors) {
   let at = 0;
   for (const m of mesh.objects.values()) {
     const { corners, first, live, lives } = m.userData;
     const attr = m.geometry.getAttribute('color');
     const out = attr.array;
-    let size = 0;
-    if (lives === corners.length) {
-      // Every leaf live: the colours are the group's, in order.
-      size = first.length ? 3 * (first[lives - 1] + corners[lives - 1]) : 0;
-      out.set(colors.subarray(at, at + size));
-      at += size;
-    } else {
-      for (let j = 0; j < lives; j++) {
-        const k = live[j];
-        const n = 3 * corners[k];
-        out.set(colors.subarray(at, at + n), 3 * first[k]);
-        at += n;
-        size = Math.max(size, 3 * first[k] + n);
+    let lo = Infinity;
+    let hi = 0;
+    for (let j = 0; j < lives; j++) {
+      const k = live[j];
+      let d = 4 * first[k];
+      const end = at + 3 * corners[k];
+      lo = Math.min(lo, d);
+      for (; at < end; at += 3, d += 4) {
+        out[d] = colors[at];
+        out[d + 1] = colors[at + 1];
+        out[d + 2] = colors[at + 2];
       }
+      hi = Math.max(hi, d);
     }
+    if (lives === 0) continue;
     attr.clearUpdateRanges();
-    attr.addUpdateRange(0, size);
+    attr.addUpdateRange(lo, hi - lo);
     attr.needsUpdate = true;
   }
   if (at !== colors.length) throw new Error(`frame: colours for ${colors.length / 3} corners, the live leaves have ${at / 3}`);
@@ -354,6 +372,7 @@ async function play() {
   let due = performance.now();
   api.stats.playStarted = due;
   api.stats.playFrames = 0;
+  api.stats.firstPassMs = null;
   api.stats.waitMs = 0; // waiting for frame data
   api.stats.drawMs = 0; // uploading and handing the draw to WebGL
   while (playing) {
@@ -370,6 +389,8 @@ async function play() {
     await show(frame);
     api.stats.drawMs += performance.now() - drawn;
     api.stats.playFrames += 1;
+    // The first pass over the frames, none of them kept yet (benchmarks).
+    if (api.stats.playFrames === n) api.stats.firstPassMs = performance.now() - api.stats.playStarted;
     due = Math.max(due + 1000 / fps(), performance.now() - 1000 / fps());
     k = (k + 1) % n;
   }

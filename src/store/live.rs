@@ -148,10 +148,20 @@ impl Live {
     /// stretch: every leaf of `all` cuts it (`all` is every leaf there is, as in a
     /// solution in memory).
     pub fn scan(all: &[Leaf], t: f64, t_end: f64) -> Live {
-        let mut stretch = Stretch::whole(0);
+        Live::scan_from(Stretch::whole(0), all, t, t_end)
+    }
+
+    /// [`Live::scan`] of the leaves `all` yields, the stretch starting as `stretch`
+    /// (already cut by what else bounds it, as `rhier view`'s spans are).
+    pub fn scan_from<'a>(
+        mut stretch: Stretch,
+        all: impl IntoIterator<Item = &'a Leaf>,
+        t: f64,
+        t_end: f64,
+    ) -> Live {
         let (tf, end) = (t as f32, t_end as f32);
         let leaves = all
-            .iter()
+            .into_iter()
             .filter(|l| {
                 stretch.cut(tf, l.time, end);
                 l.is_live(t, t_end)

@@ -11,9 +11,11 @@
 //! those of `play` ([`default_camera`], [`auto_exposure`] on a
 //! [`DEFAULT_SIZE`] picture). Meshes are per span of time ([`span`], [`Viewer::span_at`]):
 //! a space-time file's live leaves change every frame, its mesh once per span, and
-//! a frame carries only the live leaves' colours. The last few frames and spans built
-//! are kept, so several requests or clients at one time build them once; the last
-//! colours are kept while what they depend on holds ([`Viewer::frame_message`]).
+//! a frame carries only the live leaves' colours. A frame's live leaves are found
+//! among its span's ([`span::Span::live`]), not among every leaf of its chunks. The
+//! last few frames and spans built are kept, so several requests or clients at one
+//! time build them once; the last colours are kept while what they depend on holds
+//! ([`Viewer::frame_message`]).
 //!
 //! What it serves (an exact match on the path, nothing decoded, nothing from the
 //! disk): the embedded page ([`assets`]) and `/api/info`, `/api/inspect`,
@@ -47,8 +49,9 @@ pub use server::serve;
 const KEPT_FRAMES: usize = 12;
 /// Span meshes kept: the one playing, the next one asked for ahead, one more.
 const KEPT_SPANS: usize = 3;
-/// Chunk ranges whose span boundaries are kept.
-const KEPT_PLANS: usize = 4;
+/// Chunk ranges whose span plans are kept (each holds its chunks' leaves): the one
+/// playing and the next.
+const KEPT_PLANS: usize = 2;
 
 /// An answer: HTTP status, media type and body.
 #[derive(Clone, Debug, PartialEq)]
@@ -106,6 +109,45 @@ struct Colors {
 /// A chunk range: its index, its `f32` bounds `[lo, hi)` and its chunks' leaves.
 type ChunkRange = (u32, (f32, f32), Vec<Arc<Vec<crate::solution::Leaf>>>);
 
+/// The file seen through one span: the reader's patches and objects, and the
+/// leaves live at a time found among the span's leaves alone ([`span::Span::live`]),
+/// so that [`Frame::build`] (playback's one evaluation path) reads no chunk.
+struct SpanView<'a> {
+    reader: &'a Reader,
+    span: &'a span::Span,
+}
+
+impl crate::playback::SolutionView for SpanView<'_> {
+    fn name(&self) -> &std::path::Path {
+        self.reader.path()
+    }
+
+    fn time_domain(&self) -> crate::scene::TimeDomain {
+        self.reader.time_domain()
+    }
+
+    fn camera(&self) -> Option<Camera> {
+        self.reader.camera()
+    }
+
+    fn patches(&self) -> &[crate::solution::PatchGeometry] {
+        self.reader.patches()
+    }
+
+    fn object_to_world(&self, object: u32, t: f64) -> DAffine3 {
+        crate::playback::SolutionView::object_to_world(self.reader, object, t)
+    }
+
+    fn live_at(&self, t: f64) -> Result<crate::store::Live> {
+        let td = self.reader.time_domain();
+        crate::store::reader::check_time(self.reader.path(), td, t)?;
+        if !self.span.contains(t) {
+            return self.reader.live_at(t);
+        }
+        Ok(self.span.live(t, td.end))
+    }
+}
+
 /// A span ([`span::Span`]) and its mesh message.
 pub struct SpanMesh {
     /// The span.
@@ -132,8 +174,8 @@ pub struct Viewer {
     colors: Mutex<Option<Colors>>,
     /// Span meshes built last, newest last.
     spans: Mutex<Vec<Arc<SpanMesh>>>,
-    /// Span boundaries of the chunk ranges seen last: `(range, boundaries)`.
-    plans: Mutex<Vec<(u32, Arc<Vec<f32>>)>>,
+    /// Span plans of the chunk ranges seen last.
+    plans: Mutex<Vec<Arc<span::Plan>>>,
     /// Held while a span is built.
     building: Mutex<()>,
     /// The next colour id (0 is no colours).
@@ -167,11 +209,12 @@ impl Viewer {
         // The page's first requests, the mesh and colours at the start, find them
         // ready: from the mesh just built, not a second one.
         let span = viewer.span_at(t)?;
+        let live = span.span.live(t, viewer.reader.time_domain().end);
         let (scale, bytes) = wire::color_section(&frame, &mesh, viewer.reader.patches());
         *lock(&viewer.colors) = Some(Colors {
             id: viewer.next_id.fetch_add(1, Ordering::Relaxed),
             key: span.span.key,
-            live: frame.stretch.id(),
+            live: live.stretch.id(),
             shading: Shading::Smooth,
             relative: viewer.relative(t),
             scale,
@@ -210,7 +253,8 @@ impl Viewer {
         self.exposure
     }
 
-    /// The frame at `t`, built once while it is among the last few asked for.
+    /// The frame at `t`, built once while it is among the last few asked for, from
+    /// the leaves of its span (no other leaf of the chunks is read).
     pub fn frame(&self, t: f64) -> Result<Arc<Frame>> {
         let kept = |recent: &Vec<Arc<Frame>>| {
             recent
@@ -221,7 +265,12 @@ impl Viewer {
         if let Some(f) = kept(&self.recent.lock().unwrap_or_else(|p| p.into_inner())) {
             return Ok(f);
         }
-        let f = Arc::new(Frame::build(&self.reader, t)?);
+        let span = self.span_at(t)?;
+        let view = SpanView {
+            reader: &self.reader,
+            span: &span.span,
+        };
+        let f = Arc::new(Frame::build(&view, t)?);
         let mut recent = self.recent.lock().unwrap_or_else(|p| p.into_inner());
         if recent.len() >= KEPT_FRAMES {
             recent.remove(0);
@@ -250,34 +299,24 @@ impl Viewer {
         Ok((n as u32, (lo, hi), held))
     }
 
-    /// The span holding `t`: its key (chunk range and index in it) and its `f32`
-    /// bounds, from the range's span boundaries ([`span::boundaries`], found once per
-    /// range while it is among the last few), without building the span.
-    pub fn span_key(&self, t: f64) -> Result<(u64, (f32, f32))> {
+    /// The span plan of `t`'s chunk range ([`span::Plan`]), made once per range
+    /// while it is among the last few.
+    fn plan(&self, t: f64) -> Result<Arc<span::Plan>> {
         let tf = t as f32;
         let chunks = self.reader.chunks();
         let n = chunks.partition_point(|c| c.t0 as f32 <= tf) as u32;
-        let plan = lock(&self.plans)
-            .iter()
-            .find(|p| p.0 == n)
-            .map(|p| p.1.clone());
-        let cuts = match plan {
-            Some(c) => c,
-            None => {
-                let (_, (lo, hi), held) = self.chunk_range(t)?;
-                let all: Vec<&[crate::solution::Leaf]> = held.iter().map(|c| &c[..]).collect();
-                let c = Arc::new(span::boundaries(&all, lo, hi));
-                let mut plans = lock(&self.plans);
-                if plans.len() >= KEPT_PLANS {
-                    plans.remove(0);
-                }
-                plans.push((n, c.clone()));
-                c
-            }
-        };
-        let j = cuts.partition_point(|&b| b <= tf).saturating_sub(1);
-        let bounds = (cuts[j], cuts.get(j + 1).copied().unwrap_or(f32::INFINITY));
-        Ok((((n as u64) << 32) | j as u64, bounds))
+        let kept = lock(&self.plans).iter().find(|p| p.part == n).cloned();
+        if let Some(p) = kept {
+            return Ok(p);
+        }
+        let (_, bounds, held) = self.chunk_range(t)?;
+        let plan = Arc::new(span::Plan::new(n, bounds, held));
+        let mut plans = lock(&self.plans);
+        if plans.len() >= KEPT_PLANS {
+            plans.remove(0);
+        }
+        plans.push(plan.clone());
+        Ok(plan)
     }
 
     /// The span holding `t` and its mesh, built once while it is among the last few
@@ -297,10 +336,9 @@ impl Viewer {
         if let Some(s) = kept() {
             return Ok(s);
         }
-        let (key, bounds) = self.span_key(t)?;
-        let (n, _, held) = self.chunk_range(t)?;
-        let all: Vec<&[crate::solution::Leaf]> = held.iter().map(|c| &c[..]).collect();
-        let span = span::Span::new((n, key as u32), bounds, &all, self.reader.patches());
+        let plan = self.plan(t)?;
+        let (j, _) = plan.span_of(t as f32);
+        let span = plan.span(j, self.reader.patches());
         let bytes = wire::mesh_bytes(&span, self.reader.patches());
         let out = Arc::new(SpanMesh { span, bytes });
         let mut spans = lock(&self.spans);
@@ -403,10 +441,14 @@ impl Viewer {
     /// already and they are left out of the message.
     pub fn frame_message(&self, t: f64, shading: Shading, have: u32) -> Result<Vec<u8>> {
         let objects = self.reader.objects();
-        // The set's stretch names it: found among the reader's kept sets, no leaf read.
-        let live = self.reader.live_at(t)?.stretch.id();
-        // The mesh's key, from the span boundaries: the span need not be built here.
-        let key = self.span_key(t)?.0;
+        // The live set's stretch names it: found among the span's leaves alone.
+        let span = self.span_at(t)?;
+        let key = span.span.key;
+        let live = span
+            .span
+            .live(t, self.reader.time_domain().end)
+            .stretch
+            .id();
         let relative = self.relative(t);
         let hit = |c: &Option<Colors>| {
             c.as_ref()

@@ -1,6 +1,7 @@
 //! Spans: stretches of time that the page draws from one mesh, so that a space-time
 //! file, whose live leaves change at every frame, sends its corner positions once per
-//! span and only its colours per frame.
+//! span and only its colours per frame; and the live leaves at a time found from the
+//! span alone, without reading the rest of the chunks.
 //!
 //! How it works: a span lies inside one chunk range of the file (the times at which
 //! [`crate::store::Reader::chunks_for`] looks at the same chunks, the `part` of a
@@ -10,16 +11,24 @@
 //! greedily at leaf starts: a span begins with the leaves live at its start and takes
 //! in leaves as they start until it holds [`GROWTH`] times that many (at least
 //! [`MIN_LEAVES`]); a range whose leaves all start together (a static or rigidly
-//! moving scene) is one span. Each leaf keeps its `f32` time range in the mesh
+//! moving scene) is one span. A [`Plan`] is a chunk range's boundaries with its
+//! leaves sorted once in [`canonical_order`], so that building a span filters that
+//! order by time (no sort). Each leaf keeps its `f32` time range in the mesh
 //! (formats/view.md), and the page draws the leaves live at the shown time, by the
 //! same test as [`Leaf::is_live`].
 //!
 //! A span's leaves are in mesh order: by object, then the frame's order
 //! ([`canonical_order`], total); the leaves live at a time, in the frame's order
 //! grouped by object, are in the same order ([`crate::view::wire::color_section`]).
+//! [`Span::live`] gives the leaves live at a time in the span with their stretch:
+//! no leaf outside the span is live in it, so the span's bounds and its own leaves'
+//! times cut the stretch ([`Stretch::cut`]) as all the chunks' leaves would.
+
+use std::sync::Arc;
 
 use crate::solution::{Leaf, PatchGeometry};
 use crate::store::live::canonical_order;
+use crate::store::{Live, Stretch};
 
 /// A span takes in starting leaves until it holds this many times the leaves live
 /// at its start.
@@ -70,6 +79,70 @@ pub fn boundaries(chunks: &[&[Leaf]], lo: f32, hi: f32) -> Vec<f32> {
     out
 }
 
+/// A chunk range indexed for span builds: its span boundaries and its leaves in
+/// [`canonical_order`].
+pub struct Plan {
+    /// The chunk range's index (a [`Stretch`]'s `part`).
+    pub part: u32,
+    /// The span boundaries ([`boundaries`]): `lo`, the cuts, `hi`.
+    pub cuts: Vec<f32>,
+    /// The range's chunks' leaves, held while the plan is.
+    chunks: Vec<Arc<Vec<Leaf>>>,
+    /// Every leaf of the range in canonical order: (chunk, index in it).
+    order: Vec<(u32, u32)>,
+    /// Their time ranges, in that order.
+    times: Vec<[f32; 2]>,
+}
+
+impl Plan {
+    /// The plan of chunk range `part`, `[lo, hi)` in `f32` times, of the leaves of
+    /// `chunks` (the chunks [`crate::store::Reader::chunks_for`] looks at in it).
+    pub fn new(part: u32, (lo, hi): (f32, f32), chunks: Vec<Arc<Vec<Leaf>>>) -> Plan {
+        let all: Vec<&[Leaf]> = chunks.iter().map(|c| &c[..]).collect();
+        let cuts = boundaries(&all, lo, hi);
+        let mut order: Vec<(u32, u32)> = chunks
+            .iter()
+            .enumerate()
+            .flat_map(|(c, l)| (0..l.len() as u32).map(move |k| (c as u32, k)))
+            .collect();
+        let leaf = |&(c, k): &(u32, u32)| &chunks[c as usize][k as usize];
+        order.sort_unstable_by(|a, b| canonical_order(leaf(a), leaf(b)));
+        let times = order.iter().map(|x| leaf(x).time).collect();
+        Plan {
+            part,
+            cuts,
+            chunks,
+            order,
+            times,
+        }
+    }
+
+    /// The index of the span holding `f32` time `tf`, and its bounds.
+    pub fn span_of(&self, tf: f32) -> (u32, (f32, f32)) {
+        let j = self.cuts.partition_point(|&b| b <= tf).saturating_sub(1);
+        let hi = self.cuts.get(j + 1).copied().unwrap_or(f32::INFINITY);
+        (j as u32, (self.cuts[j], hi))
+    }
+
+    /// Span `j` of the range ([`Plan::span_of`]), its leaves on `patches`.
+    pub fn span(&self, j: u32, patches: &[PatchGeometry]) -> Span {
+        let lo = self.cuts.get(j as usize).copied().unwrap_or(f32::INFINITY);
+        let hi = self
+            .cuts
+            .get(j as usize + 1)
+            .copied()
+            .unwrap_or(f32::INFINITY);
+        let held: Vec<Leaf> = self
+            .order
+            .iter()
+            .zip(&self.times)
+            .filter(|(_, t)| t[0] < hi && t[1] >= lo)
+            .map(|(&(c, k), _)| self.chunks[c as usize][k as usize])
+            .collect();
+        Span::from_canonical((self.part, j), (lo, hi), held, patches)
+    }
+}
+
 /// One span's leaves, in mesh order, grouped by object.
 #[derive(Clone, Debug)]
 pub struct Span {
@@ -83,6 +156,8 @@ pub struct Span {
     pub leaves: Vec<Leaf>,
     /// Each leaf's object (the order's first key).
     pub objects: Vec<u32>,
+    /// The leaves in [`canonical_order`]: indices into `leaves`.
+    pub canonical: Vec<u32>,
 }
 
 impl Span {
@@ -94,20 +169,42 @@ impl Span {
         chunks: &[&[Leaf]],
         patches: &[PatchGeometry],
     ) -> Span {
-        let object = |l: &Leaf| patches.get(l.patch as usize).map_or(0, |p| p.object);
-        let mut held: Vec<(u32, Leaf)> = chunks
+        let mut held: Vec<Leaf> = chunks
             .iter()
             .flat_map(|c| c.iter())
             .filter(|l| l.time[0] < hi && l.time[1] >= lo)
-            .map(|l| (object(l), *l))
+            .copied()
             .collect();
-        held.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| canonical_order(&a.1, &b.1)));
+        held.sort_by(canonical_order);
+        Span::from_canonical((part, index), (lo, hi), held, patches)
+    }
+
+    /// The span `[lo, hi)` of chunk range `part`, index `index`, holding `held`
+    /// (in [`canonical_order`]) on `patches`.
+    fn from_canonical(
+        (part, index): (u32, u32),
+        (lo, hi): (f32, f32),
+        held: Vec<Leaf>,
+        patches: &[PatchGeometry],
+    ) -> Span {
+        let object = |l: &Leaf| patches.get(l.patch as usize).map_or(0, |p| p.object);
+        // Mesh order: canonical order stably sorted by object.
+        let mut by_object: Vec<u32> = (0..held.len() as u32).collect();
+        by_object.sort_by_key(|&k| object(&held[k as usize]));
+        let mut canonical = vec![0u32; held.len()];
+        for (m, &k) in by_object.iter().enumerate() {
+            canonical[k as usize] = m as u32;
+        }
         Span {
             key: ((part as u64) << 32) | index as u64,
             lo,
             hi,
-            objects: held.iter().map(|x| x.0).collect(),
-            leaves: held.into_iter().map(|x| x.1).collect(),
+            objects: by_object
+                .iter()
+                .map(|&k| object(&held[k as usize]))
+                .collect(),
+            leaves: by_object.iter().map(|&k| held[k as usize]).collect(),
+            canonical,
         }
     }
 
@@ -115,6 +212,23 @@ impl Span {
     pub fn contains(&self, t: f64) -> bool {
         let tf = t as f32;
         self.lo <= tf && tf < self.hi
+    }
+
+    /// The leaves live at `t` (in the span) in a domain ending at `t_end`, in
+    /// canonical order, and their stretch, cut by the span's bounds and its leaves
+    /// ([`Live::scan`] over the span): what [`crate::store::Reader::live_at`] finds
+    /// from every leaf of the chunks.
+    pub fn live(&self, t: f64, t_end: f64) -> Live {
+        let tf = t as f32;
+        let mut stretch = Stretch {
+            part: (self.key >> 32) as u32,
+            lo: f32::NEG_INFINITY,
+            hi: f32::INFINITY,
+        };
+        stretch.cut_start(tf, self.lo);
+        stretch.cut_start(tf, self.hi);
+        let leaves = self.canonical.iter().map(|&k| &self.leaves[k as usize]);
+        Live::scan_from(stretch, leaves, t, t_end)
     }
 }
 
@@ -186,5 +300,41 @@ mod tests {
         held.sort_by(canonical_order);
         assert_eq!(span.leaves, held);
         assert!(held.len() > 10 && held.len() < 50);
+    }
+
+    #[test]
+    fn a_plan_builds_each_span_and_a_span_finds_the_live_leaves_of_all() {
+        // 30 000 leaves of 9 patches starting at scattered times and lasting
+        // 0.01-0.05 s (about 450 live at a time: spans of MIN_LEAVES), over two
+        // chunks: a plan's spans are those built from every leaf, and the leaves
+        // live at a time in a span, with their stretch, are those every leaf gives,
+        // the stretch cut to the span.
+        let mut leaves = Vec::new();
+        for k in 0..30_000u32 {
+            let t0 = (k.wrapping_mul(2_654_435_761) % 2000) as f32 * 0.001;
+            let t1 = t0 + 0.01 + (k % 5) as f32 * 0.01;
+            leaves.push(leaf(k % 9, t0, t1.min(2.0)));
+        }
+        let (a, b) = leaves.split_at(12_000);
+        let chunks = vec![Arc::new(a.to_vec()), Arc::new(b.to_vec())];
+        let patches: Vec<PatchGeometry> = Vec::new();
+        let plan = Plan::new(3, (0.0, 2.5), chunks);
+        assert!(plan.cuts.len() > 3, "{:?}", plan.cuts);
+        for j in 0..plan.cuts.len() as u32 - 1 {
+            let span = plan.span(j, &patches);
+            let direct = Span::new((3, j), (span.lo, span.hi), &[a, b], &patches);
+            assert_eq!(span.leaves, direct.leaves, "span {j}");
+            assert_eq!(span.key, (3 << 32) | j as u64);
+            for s in 0..40 {
+                let t = span.lo as f64 + (span.hi - span.lo) as f64 * s as f64 / 40.0;
+                assert_eq!(plan.span_of(t as f32).0, j);
+                let got = span.live(t, 2.0);
+                let all = Live::scan(&leaves, t, 2.0);
+                assert_eq!(got.leaves, all.leaves, "t = {t}");
+                assert_eq!(got.stretch.lo, all.stretch.lo.max(span.lo), "t = {t}");
+                assert_eq!(got.stretch.hi, all.stretch.hi.min(span.hi), "t = {t}");
+                assert_eq!(got.stretch.part, 3);
+            }
+        }
     }
 }

@@ -16,11 +16,15 @@
 //       playing shows 20 frames.
 //   node tools/view_test/test.mjs --bench FILE.rhier [--seconds S]
 //       Time to the first rendered frame, and frames per second while playing
-//       (BENCHMARKS.md, "Viewer").
+//       (BENCHMARKS.md, "Viewer"), with the processor time per frame of the server
+//       and of Chromium's renderer, GPU process (SwiftShader) and the rest, apart.
+//
+// RHIER_WEB=web/ serves the page's own scripts from that directory instead of those
+// built into the binary (a change of the page tried without a build).
 //
 // Chromium is Debian's (/usr/bin/chromium, or $CHROMIUM); WebGL2 runs on SwiftShader.
 import { spawn, execFileSync } from 'node:child_process';
-import { mkdtempSync, writeFileSync, readFileSync, rmSync } from 'node:fs';
+import { mkdtempSync, writeFileSync, readFileSync, readdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, resolve, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -86,6 +90,15 @@ async function open(b, url, errors) {
   });
   page.on('pageerror', (e) => errors.push(`page: ${e.message}`));
   page.on('requestfailed', (r) => errors.push(`request failed: ${r.url()}`));
+  // RHIER_WEB=DIR: the page's own scripts from DIR (web/ of a working tree) instead
+  // of those built into the binary, to try a change of the page without a build.
+  if (process.env.RHIER_WEB) {
+    await page.route(/\/(view|wire)\.(js|css)$/, (route) => {
+      const name = new URL(route.request().url()).pathname.slice(1);
+      const type = name.endsWith('.css') ? 'text/css' : 'text/javascript';
+      route.fulfill({ contentType: type, body: readFileSync(join(process.env.RHIER_WEB, name)) });
+    });
+  }
   const t0 = Date.now();
   await page.goto(url);
   await page.waitForFunction(() => window.rhierView && window.rhierView.stats.ready, null, { timeout: 60000 });
@@ -411,6 +424,44 @@ async function moving(b) {
   check(errors.length === 0, `moving: no console error${errors.length ? ': ' + errors.join('; ') : ''}`);
 }
 
+// Processor time (ms) of this script's descendant processes, by kind: the server
+// (`rhier view`), Chromium's renderer, its GPU process (SwiftShader draws there) and
+// the rest of Chromium (Linux /proc; {} elsewhere).
+function cpuByKind(serverPid) {
+  const tick = 1000 / 100; // USER_HZ
+  const procs = [];
+  let entries = [];
+  try {
+    entries = readdirSync('/proc').filter((d) => /^\d+$/.test(d));
+  } catch {
+    return {};
+  }
+  for (const d of entries) {
+    try {
+      const stat = readFileSync(`/proc/${d}/stat`, 'utf8');
+      const f = stat.slice(stat.lastIndexOf(')') + 2).split(' ');
+      const cmd = readFileSync(`/proc/${d}/cmdline`, 'utf8');
+      procs.push({ pid: Number(d), ppid: Number(f[1]), ms: (Number(f[11]) + Number(f[12])) * tick, cmd });
+    } catch {
+      // gone meanwhile
+    }
+  }
+  const mine = new Set([process.pid]);
+  for (let grew = true; grew;) {
+    grew = false;
+    for (const p of procs) if (!mine.has(p.pid) && mine.has(p.ppid)) mine.add(p.pid), (grew = true);
+  }
+  const out = { server: 0, renderer: 0, gpu: 0, other: 0 };
+  for (const p of procs) {
+    if (!mine.has(p.pid) || p.pid === process.pid) continue;
+    const kind = p.pid === serverPid ? 'server'
+      : p.cmd.includes('--type=renderer') ? 'renderer'
+        : p.cmd.includes('--type=gpu-process') ? 'gpu' : 'other';
+    out[kind] += p.ms;
+  }
+  return out;
+}
+
 async function bench(b, file, seconds) {
   const { url, proc } = await serve(resolve(file));
   const errors = [];
@@ -420,19 +471,29 @@ async function bench(b, file, seconds) {
     console.log(`first frame: ${(s.firstFrameMs / 1000).toFixed(2)} s after navigation start (${(loadMs / 1000).toFixed(2)} s from goto to drawn)`);
     const each = (times) => Object.entries(times).map(([k, t]) => `${k} ${(t.ms / t.n).toFixed(1)} ms × ${t.n}`).join(', ');
     console.log(`to the first frame (page): ${each(s.times)}; steps done at ${Object.entries(s.start || {}).map(([k, t]) => `${k} ${t.toFixed(0)}`).join(', ')} ms`);
-    const draw = await page.evaluate(() => window.rhierView.timeDraw(10));
-    console.log(`drawing the frame shown: ${draw.toFixed(0)} ms (mean of 10)`);
+    const perFrame = (a, c, n) => Object.keys(c).map((k) => `${k} ${((c[k] - a[k]) / n).toFixed(1)} ms`).join(', ');
+    const idle0 = cpuByKind(proc.pid);
+    await page.waitForTimeout(2000);
+    console.log(`processor time per second idle: ${perFrame(idle0, cpuByKind(proc.pid), 2)}`);
+    const draw0 = cpuByKind(proc.pid);
+    const draw = await page.evaluate(() => window.rhierView.timeDraw(20));
+    console.log(`drawing the frame shown: ${draw.toFixed(0)} ms (mean of 20); processor time per draw: ${perFrame(draw0, cpuByKind(proc.pid), 20)}`);
     const moving = await page.evaluate(() => !document.getElementById('timeRow').hidden);
     if (moving) {
+      const cpu0 = cpuByKind(proc.pid);
       await page.locator('#play').click();
       await page.waitForTimeout(1000 * seconds);
       const r = await page.evaluate(() => {
         const s = window.rhierView.stats;
-        return [s.playFrames, performance.now() - s.playStarted, s.waitMs, s.drawMs, s.times];
+        return [s.playFrames, performance.now() - s.playStarted, s.waitMs, s.drawMs, s.times, s.firstPassMs, Number(document.getElementById('time').max) + 1];
       });
+      const cpu1 = cpuByKind(proc.pid);
       await page.locator('#play').click();
+      const load = readFileSync('/proc/loadavg', 'utf8').split(' ')[0];
+      console.log(`processor time per frame shown (load average ${load}): ${Object.keys(cpu1).map((k) => `${k} ${((cpu1[k] - cpu0[k]) / r[0]).toFixed(1)} ms`).join(', ')}`);
       console.log(`playing at 25 fps asked: ${(r[0] / (r[1] / 1000)).toFixed(1)} frames per second shown over ${(r[1] / 1000).toFixed(1)} s; per frame ${(r[2] / r[0]).toFixed(0)} ms waiting for data, ${(r[3] / r[0]).toFixed(0)} ms uploading and handing the draw over`);
       console.log(`mean per answer or step (page): ${each(r[4])}`);
+      if (r[5]) console.log(`the first pass over the ${r[6]} frames (none kept yet): ${(r[6] / (r[5] / 1000)).toFixed(1)} frames per second`);
     }
   } finally {
     proc.kill();
