@@ -237,7 +237,9 @@ impl<'a> Session<'a> {
                 let near: Vec<Aabb> = old.iter().chain(&new).map(|&b| grown(b)).collect();
                 let mut changed: Vec<LinkId> = self.changed.iter().map(|&l| LinkId(l)).collect();
                 changed.extend(&added);
-                self.solver.settle_local(changed, wave, &near)?
+                let boxes: Vec<Aabb> = old.iter().chain(&new).copied().collect();
+                self.solver
+                    .settle_local(changed, wave, &near, &moved, &boxes)?
             }
             Update::Full => {
                 let mut wave = active.clone();

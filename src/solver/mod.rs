@@ -47,6 +47,7 @@ pub(crate) mod moves;
 pub mod per_frame;
 mod reconstruct;
 pub mod report;
+mod row_patch;
 mod rows;
 pub mod spacetime;
 
@@ -568,9 +569,10 @@ struct LeafSystem {
     row_spread_limit: f64,
     /// How many leaves there were when `row_spread` was taken.
     row_spread_leaves: usize,
-    /// Interactive moves: each leaf's cluster-source entries by chain link
-    /// (sorted by link), reused by the next move for links it did not touch
-    /// ([`Solver::settle_local`]).
+    /// Interactive moves: each leaf's entries by chain link (sorted by link), as
+    /// the session's start-up or the last move computed them, reused by the next
+    /// move for links it did not touch and updated in place for those it did
+    /// ([`Solver::settle_local`], `row_patch`).
     move_cluster_cache: FastMap<u32, Vec<(u32, RowEntries)>>,
 }
 

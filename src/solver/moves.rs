@@ -22,6 +22,7 @@
 
 use glam::DAffine3;
 
+use super::row_patch::{Dirty, RowPatch};
 use super::{FastMap, Solver};
 use crate::Result;
 use crate::oracle::{self, Split};
@@ -57,18 +58,6 @@ pub struct Settled {
     pub rows_s: f64,
     /// Seconds in the linear solves ([`Solver::settle_local`] only).
     pub solve_s: f64,
-}
-
-/// How far a move dirtied the rows of the leaves under an element
-/// ([`Solver::settle_local`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-enum Dirty {
-    /// Rows kept.
-    Clean,
-    /// Rows of the leaves that meet a box near the moved objects computed again.
-    Near,
-    /// Every row under it computed again.
-    All,
 }
 
 impl<'a> Solver<'a> {
@@ -229,10 +218,11 @@ impl<'a> Solver<'a> {
     /// system of the last move is kept, and only what the move changed is done
     /// again (paper 000 section 2: the update touches the links the move affects).
     ///
-    /// `dirty_links`: the links the move evaluated again or added, each with its factor
-    /// before (0 for an added link); `changed`: those whose transport changed, and
-    /// the added ones. Each pass refines the links of `changed` (later
-    /// passes: the active links whose source's radiosity the last solve raised by
+    /// `dirty_links`: the links the move evaluated again or added, each with its
+    /// factor before (0 for an added link); `changed`: those whose transport
+    /// changed, and the added ones; `moved`: per object, whether the move placed
+    /// it; `boxes`: the moved objects' boxes before and after. Each pass refines
+    /// the links of `changed` (later passes: the active links whose source's radiosity the last solve raised by
     /// more than [`SOURCE_RISE`], the only ones the new radiosity can push over the
     /// threshold), then recomputes the rows of the *dirty* leaves only
     /// ([`Solver::rows_of`]): new leaves; leaves under the receiver of a link that
@@ -241,11 +231,16 @@ impl<'a> Solver<'a> {
     /// the threshold; and, under the other wave links with a cluster end, the
     /// leaves that meet a box of `near` (the moved objects' boxes before and after,
     /// grown: where a cluster source is opened down to the moved surfaces, or their
-    /// shadow falls close). Every other row is copied from the last move: its chain
-    /// links and their shafts are untouched, so are its coefficients. The leaf
-    /// system is then solved by GMRES warm-started from the radiosity the last move
-    /// left. A balanced system keeps its row scales and gains; a recomputed row
-    /// takes the scale that makes it sum to 1 where balancing scaled it before.
+    /// shadow falls close). In a recomputed row the entries of the links the move
+    /// left are kept, and those of the links it evaluated again are updated in
+    /// place ([`RowPatch`], `super::row_patch`: only the parts that hold the moved
+    /// objects, or whose rays their boxes before or after meet, are computed
+    /// again). Every other row is copied from the last move: its chain links and
+    /// their shafts are untouched, so are its coefficients. The leaf system is then
+    /// solved by GMRES warm-started from the radiosity the last move left. A
+    /// balanced system keeps its row scales and gains; a recomputed row that
+    /// balancing scaled keeps its scale times its old sum over its new one (the
+    /// column passes' share of the scale stays; `1 / sum` undid it).
     ///
     /// What is not done again: cluster-source links the move did not affect keep
     /// the estimate of the radiosity they were evaluated with (a fresh solve
@@ -256,6 +251,8 @@ impl<'a> Solver<'a> {
         changed: Vec<LinkId>,
         dirty_links: Vec<(LinkId, f32)>,
         near: &[(glam::DVec3, glam::DVec3)],
+        moved: &[bool],
+        boxes: &[(glam::DVec3, glam::DVec3)],
     ) -> Result<Settled> {
         let passive0 = self.links.counts().1;
         let mut residual = f64::NAN;
@@ -315,8 +312,13 @@ impl<'a> Solver<'a> {
             }
             let before: Vec<[f32; 3]> = self.elems.radiosities.as_slice().to_vec();
             let t = std::time::Instant::now();
-            rows_done += self.update_rows(&dirty, near, &stale);
-            stale.clear();
+            let patch = RowPatch {
+                holding: self.elements_holding(moved),
+                boxes: boxes.to_vec(),
+                near: near.to_vec(),
+                stale: std::mem::take(&mut stale),
+            };
+            rows_done += self.update_rows(&dirty, &patch);
             rows_s += t.elapsed().as_secs_f64();
             let t = std::time::Instant::now();
             residual = self.solve_leaves()?;
@@ -367,12 +369,8 @@ impl<'a> Solver<'a> {
     /// Re-indexes the active links and rebuilds the leaf system's rows, keeping
     /// the rows of the leaves that are neither new nor under an element flagged in
     /// `dirty` (module docs, [`Solver::settle_local`]). Returns the rows computed.
-    fn update_rows(
-        &mut self,
-        dirty: &[Dirty],
-        near: &[(glam::DVec3, glam::DVec3)],
-        stale: &FastMap<u32, Dirty>,
-    ) -> u64 {
+    fn update_rows(&mut self, dirty: &[Dirty], patch: &RowPatch) -> u64 {
+        let near = &patch.near;
         let old_leaves = std::mem::take(&mut self.sys.leaves);
         let old_index = std::mem::take(&mut self.sys.leaf_index);
         let old_start = std::mem::take(&mut self.sys.row_start);
@@ -419,23 +417,9 @@ impl<'a> Solver<'a> {
         };
         let leaves = self.sys.leaves.clone();
         let redo: Vec<ElementId> = leaves.iter().copied().filter(|&l| is_dirty(l)).collect();
-        // The kept entries of the links evaluated again are stale.
-        for l in &redo {
-            let (lo, hi) = super::geom_box(&geoms[l.ix()]);
-            let near = crate::shafts::meets_any(lo, hi, near);
-            let keep = |link: u32| match stale.get(&link) {
-                Some(Dirty::All) => false,
-                Some(Dirty::Near) => !near,
-                _ => true,
-            };
-            if let Some(kept) = self.sys.row_cache.get_mut(&l.0) {
-                kept.retain(|k| keep(k.link));
-            }
-            if let Some(kept) = self.sys.move_cluster_cache.get_mut(&l.0) {
-                kept.retain(|k| keep(k.0));
-            }
-        }
-        let fresh = self.rows_of(&redo);
+        // The kept entries of the links evaluated again are stale: updated in
+        // place (`super::row_patch`).
+        let fresh = self.rows_of(&redo, patch);
         let balanced = !old_scale.is_empty();
         let mut fresh = redo.iter().zip(fresh);
         let mut next = fresh.next();
@@ -459,10 +443,15 @@ impl<'a> Solver<'a> {
                     self.sys.row_sources.extend(row.iter().map(|e| e.0));
                     self.sys.row_coefs.extend(row.iter().map(|e| e.1));
                     if balanced {
-                        let was = heir.map_or(1.0, |i| old_scale[i]);
+                        // The balanced scale follows the row's sum: it keeps what
+                        // the column passes gave it (`1 / sum` undid them).
+                        let (was, old_sum) = heir.map_or((1.0, 0.0), |i| {
+                            let (r0, r1) = (old_start[i] as usize, old_start[i + 1] as usize);
+                            (old_scale[i], old_coefs[r0..r1].iter().sum::<f64>())
+                        });
                         let sum: f64 = row.iter().map(|e| e.1).sum();
-                        let scaled = was != 1.0 && sum > 0.0;
-                        scale.push(if scaled { 1.0 / sum } else { 1.0 });
+                        let scaled = was != 1.0 && sum > 0.0 && old_sum > 0.0;
+                        scale.push(if scaled { was * old_sum / sum } else { 1.0 });
                     }
                     next = fresh.next();
                 }

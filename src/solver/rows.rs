@@ -13,6 +13,7 @@
 //! entries with a moving end are taken on the line between two solved frames where
 //! their light holds ([`super::TimeRange`]).
 
+use super::row_patch::RowPatch;
 use super::*;
 
 /// Row entries `(source element, coefficient)`, as a leaf's row holds them.
@@ -97,6 +98,8 @@ struct RowInputs<'r> {
     keep_rows: bool,
     /// Keep each cluster source's entries by chain link too (`Solver::rows_of`).
     keep_clusters: bool,
+    /// An interactive move's stale entries, updated in place (`Solver::rows_of`).
+    patch: Option<&'r RowPatch>,
     timed: bool,
     passed: Option<&'r KeyedCoefs>,
     radiosities: &'r [[f32; 3]],
@@ -195,6 +198,20 @@ impl Solver<'_> {
         s: u32,
         part: &mut impl FnMut(u32, [f64; 4]),
     ) {
+        self.cluster_parts_reusing(q, n, s, part, &mut |_| false);
+    }
+
+    /// [`Solver::cluster_parts`], handing each child it would open first to
+    /// `reuse`, which takes it (true: what it gives is known already, an
+    /// interactive move's kept entries, `super::row_patch`) or leaves it.
+    pub(super) fn cluster_parts_reusing(
+        &self,
+        q: &oracle::Samples,
+        n: DVec3,
+        s: u32,
+        part: &mut impl FnMut(u32, [f64; 4]),
+        reuse: &mut impl FnMut(u32) -> bool,
+    ) {
         let elems = &self.elems;
         let gs = &elems.geoms.as_slice()[s as usize];
         let mut k = [0.0; 4];
@@ -261,7 +278,9 @@ impl Solver<'_> {
                 return;
             }
             for ch in node.first_child..node.first_child + node.child_count {
-                self.cluster_parts(q, n, ch, part);
+                if !reuse(ch) {
+                    self.cluster_parts_reusing(q, n, ch, part, reuse);
+                }
             }
             return;
         }
@@ -390,8 +409,10 @@ impl Solver<'_> {
     /// one face sees it at 0.4. A link too close for the cluster estimate
     /// ([`oracle::close_cluster_factor`]) is opened the same way. With `kept` (a
     /// static solve) the parts are recorded for the next round ([`ClusterPart`]).
+    /// `reuse` takes the parts whose entries are known already
+    /// ([`Solver::cluster_parts_reusing`]).
     #[allow(clippy::too_many_arguments)]
-    fn push_cluster(
+    pub(super) fn push_cluster(
         &self,
         leaf: ElementId,
         l: u32,
@@ -400,6 +421,7 @@ impl Solver<'_> {
         s: u32,
         row: &mut Vec<(u32, f64)>,
         mut kept: Option<&mut Vec<ClusterPart>>,
+        reuse: &mut impl FnMut(u32) -> bool,
     ) {
         let t = &self.links.transports.as_slice()[l as usize];
         let mut vis = t.visibility as f64;
@@ -414,7 +436,7 @@ impl Solver<'_> {
         }
         let geoms = self.elems.geoms.as_slice();
         let patch = geoms[leaf.ix()].patch;
-        self.cluster_parts(q, n, s, &mut |e, k| {
+        let mut part = |e: u32, k: [f64; 4]| {
             let coef: f64 = (0..q.count).map(|i| q.weights[i] * k[i]).sum::<f64>();
             if coef <= 0.0 {
                 return;
@@ -465,7 +487,8 @@ impl Solver<'_> {
                 };
                 row.push((e, entry));
             }
-        });
+        };
+        self.cluster_parts_reusing(q, n, s, &mut part, reuse);
     }
 
     /// The row entries of cluster link `l` from the parts an earlier round kept
@@ -860,6 +883,12 @@ impl Solver<'_> {
             .map(|w| (&w.factors, w.frame.elems_len));
         // A static scene keeps each leaf's coefficients from round to round.
         let keep_rows = !self.has_motion();
+        // An interactive session's start-up (links kept, objects that move, no
+        // window) records each row's entries by chain link for its first moves to
+        // keep (`super::moves`; reused by no round of its own: the cluster parts'
+        // rays follow the radiosity).
+        let record = self.opts.keep_passive && self.has_motion() && self.st.window.is_none();
+        self.sys.move_cluster_cache.clear();
         // A window's frame records its entries with a moving end, and takes them
         // between the solved frames around it where they hold.
         let timed = self.st.window.as_ref().is_some_and(|w| w.in_frame);
@@ -876,7 +905,8 @@ impl Solver<'_> {
             rays_per_point,
             factors,
             keep_rows,
-            keep_clusters: false,
+            keep_clusters: record,
+            patch: None,
             timed,
             passed,
             radiosities,
@@ -894,9 +924,11 @@ impl Solver<'_> {
     /// computes them outside a space-time window, reusing the surface entries
     /// kept in the row cache as a static solve does: an interactive move
     /// recomputes only the rows whose chain links it changed, and in them only the
-    /// entries of those links (`super::moves`). Each row comes with the entries
-    /// to keep for it.
-    pub(super) fn rows_of(&self, leaves: &[ElementId]) -> Vec<LeafRow> {
+    /// entries of those links (`super::moves`), and of those only the entries the
+    /// move can have changed (`patch`, `super::row_patch`). Each row comes with the
+    /// entries to keep for it.
+    pub(super) fn rows_of(&self, leaves: &[ElementId], patch: &RowPatch) -> Vec<LeafRow> {
+        let patch = Some(patch);
         let inputs = RowInputs {
             geoms: self.elems.geoms.as_slice(),
             ends: self.links.ends.as_slice(),
@@ -909,6 +941,7 @@ impl Solver<'_> {
             factors: None,
             keep_rows: true,
             keep_clusters: true,
+            patch,
             timed: false,
             passed: None,
             radiosities: self.elems.radiosities.as_slice(),
@@ -932,6 +965,7 @@ impl Solver<'_> {
             keep_rows,
             keep_clusters,
             timed,
+            patch,
             ..
         } = *inputs;
         let settled = |entries: &[(u32, f64)]| self.opened_settled(entries);
@@ -939,6 +973,10 @@ impl Solver<'_> {
         let q = oracle::samples(g);
         let n = DVec3::from_array(g.normal);
         let leaf_moving = self.elem_moving(leaf);
+        let leaf_near = patch.is_some_and(|p| {
+            let (lo, hi) = geom_box(g);
+            crate::shafts::meets_any(lo, hi, &p.near)
+        });
         let mut out = LeafRow::default();
         let leaf_ray = self.ray_id(leaf.0);
         let rho_leaf = self.rho_of(leaf);
@@ -973,14 +1011,31 @@ impl Solver<'_> {
             // only for the links the move touched.
             let kept = moved_before
                 .and_then(|c| c.binary_search_by_key(&l, |x| x.0).ok().map(|i| &c[i].1));
+            // Those it evaluated again are updated in place where they can be
+            // (`super::row_patch`).
+            let stale = patch.is_some_and(|p| p.is_stale(l, leaf_near));
+            let kept_coef = || {
+                before
+                    .filter(|_| gs.patch != u32::MAX)
+                    .and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]))
+            };
             if let Some(entries) = kept {
-                out.row.extend_from_slice(entries);
-                out.move_clusters.push((l, entries.clone()));
-                let coef =
-                    before.and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]));
-                out.kept.extend(coef);
-                continue;
+                let at = out.row.len();
+                let kept_all = !stale;
+                if kept_all {
+                    out.row.extend_from_slice(entries);
+                }
+                let patched = kept_all
+                    || patch.is_some_and(|p| {
+                        self.patch_entries(p, leaf, l, &q, n, entries, &mut out.row)
+                    });
+                if patched {
+                    out.move_clusters.push((l, out.row[at..].into()));
+                    out.kept.extend(kept_coef());
+                    continue;
+                }
             }
+            let before = before.filter(|_| !stale);
             let at = out.row.len();
             if gs.patch == u32::MAX {
                 let reused = clusters_before.is_some_and(|parts| {
@@ -988,7 +1043,7 @@ impl Solver<'_> {
                 });
                 if !reused {
                     let kept = Some(&mut out.clusters).filter(|_| keep_rows && !keep_clusters);
-                    self.push_cluster(leaf, l, &q, n, s, &mut out.row, kept);
+                    self.push_cluster(leaf, l, &q, n, s, &mut out.row, kept, &mut |_| false);
                 }
                 if keep_clusters {
                     out.move_clusters.push((l, out.row[at..].into()));
@@ -1202,8 +1257,12 @@ impl Solver<'_> {
                 timed,
                 between,
                 passed,
+                move_clusters,
                 ..
             } = out;
+            if !move_clusters.is_empty() {
+                self.sys.move_cluster_cache.insert(leaf.0, move_clusters);
+            }
             self.st.frame_rows.0.extend(timed);
             self.st.rows_between += between;
             self.st.pass_rows.extend(passed);

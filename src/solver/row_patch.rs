@@ -1,0 +1,167 @@
+//! An interactive move's leaf rows updated in place: of a chain link the move
+//! evaluated again, only the row entries the move can have changed are computed
+//! again, the others kept from the move before (issue 49; paper 000 section 2: an
+//! update touches what the move affects, here down to the row entries).
+//!
+//! How it works: a leaf row holds, per chain link, the entries its source opened
+//! into ([`super::Solver`]'s `cluster_parts` for a cluster source: parts taken
+//! whole, or surfaces opened further), kept by link from the session's start-up
+//! on. An entry depends on the leaf's and the part's geometry and on the
+//! visibility rays between them, which all lie in the hull of the leaf's box and
+//! the part's. So for a stale link's entries:
+//! - a surface source that holds no moved patch, seen from a leaf that holds none,
+//!   keeps its entries when no moved object's box (before or after) meets the
+//!   shaft between the leaf's box and the source's ([`crate::shafts::box_shaft_misses`]);
+//! - a cluster source is opened again as `cluster_parts` opens it, but each part
+//!   it comes to that holds no moved patch ([`RowPatch::holding`]) stands where it
+//!   stood and opens as it did: where the shaft between the leaf and the part
+//!   misses the moved boxes, its old entries (those under it; none if its parent
+//!   was opened and it gave nothing) are kept instead of opened. Only the parts
+//!   that hold a moved patch (their boxes moved) and those the moved boxes shade
+//!   are computed again, down to the parts the shafts clear.
+//!
+//! What this does not redo: the fallback visibility of a cluster part from which
+//! no ray is cast (the link's fraction, which the move evaluated again) in entries
+//! that are kept. Where the geometry and the rays are the same, the kept entries
+//! are the ones a recomputation gives, bit for bit (the rays' jitter is keyed by
+//! the leaf, the part and the point).
+
+use super::*;
+
+/// How far a move dirtied the rows of the leaves under an element or the entries of
+/// a link ([`Solver::settle_local`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub(super) enum Dirty {
+    /// Kept.
+    Clean,
+    /// In the rows of the leaves that meet a box near the moved objects.
+    Near,
+    /// In every row under it.
+    All,
+}
+
+/// What the rows of one pass of [`Solver::settle_local`] update in place
+/// (module docs).
+pub(super) struct RowPatch {
+    /// Per element: a patch of a moved object lies under it (itself for a surface).
+    pub(super) holding: Vec<bool>,
+    /// The moved objects' boxes before and after the move.
+    pub(super) boxes: Vec<(DVec3, DVec3)>,
+    /// The boxes near the moved objects, where a [`Dirty::Near`] link's entries
+    /// are stale.
+    pub(super) near: Vec<(DVec3, DVec3)>,
+    /// The links the move evaluated again or added, by how far their kept entries
+    /// are stale.
+    pub(super) stale: FastMap<u32, Dirty>,
+}
+
+impl RowPatch {
+    /// True if the entries of link `l` in the row of a leaf are stale; `near`: the
+    /// leaf meets a box of [`RowPatch::near`].
+    pub(super) fn is_stale(&self, l: u32, near: bool) -> bool {
+        match self.stale.get(&l) {
+            Some(Dirty::All) => true,
+            Some(Dirty::Near) => near,
+            _ => false,
+        }
+    }
+
+    /// True if every segment between boxes `a` and `b` misses every moved box.
+    fn clear(&self, a: (DVec3, DVec3), b: (DVec3, DVec3)) -> bool {
+        self.boxes
+            .iter()
+            .all(|&x| crate::shafts::box_shaft_misses(a, b, x))
+    }
+
+    /// The old entries of a link to source `s` under each element that holds no
+    /// moved patch, on the way up from the entry to `s` or to the first element
+    /// that holds one (indices into `old`; entries that hold a moved patch
+    /// themselves are under none: they are computed again), and the elements
+    /// that were opened (an entry lies strictly under them).
+    fn groups(&self, nodes: &[Node], s: u32, old: &[(u32, f64)]) -> Groups {
+        let mut out = Groups::default();
+        for (i, &(x, _)) in old.iter().enumerate() {
+            let (mut a, mut kept) = (x, true);
+            loop {
+                kept = kept && self.holding.get(a as usize) == Some(&false);
+                if kept {
+                    out.under.entry(a).or_default().push(i as u32);
+                }
+                if a == s {
+                    break;
+                }
+                a = nodes[a as usize].parent;
+                if a == u32::MAX || !out.opened.insert(a) && !kept {
+                    break;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// A stale link's old entries by the elements they lie under ([`RowPatch::groups`]).
+#[derive(Default)]
+struct Groups {
+    /// Per element that holds no moved patch: the entries under it.
+    under: FastMap<u32, Vec<u32>>,
+    /// The elements an entry lies strictly under.
+    opened: ahash::AHashSet<u32>,
+}
+
+impl Solver<'_> {
+    /// Keeps the old entries `old` of stale link `l` (source `s`) in the row of
+    /// `leaf` where the move cannot have changed them, computing the rest again
+    /// into `row` (module docs). Returns false, having pushed nothing, where
+    /// nothing can be kept: the caller computes the link's entries in full.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn patch_entries(
+        &self,
+        patch: &RowPatch,
+        leaf: ElementId,
+        l: u32,
+        q: &oracle::Samples,
+        n: DVec3,
+        old: &[(u32, f64)],
+        row: &mut Vec<(u32, f64)>,
+    ) -> bool {
+        let geoms = self.elems.geoms.as_slice();
+        let s = self.links.ends.as_slice()[l as usize].source;
+        if patch.holding[leaf.ix()] {
+            return false;
+        }
+        let leaf_box = super::geom_box(&geoms[leaf.ix()]);
+        let gs = &geoms[s as usize];
+        if gs.patch != u32::MAX {
+            let keep = !patch.holding[s as usize] && patch.clear(leaf_box, super::geom_box(gs));
+            if keep {
+                row.extend_from_slice(old);
+            }
+            return keep;
+        }
+        let nodes = self.elems.nodes.as_slice();
+        let groups = patch.groups(nodes, s, old);
+        let mut kept = Vec::new();
+        let mut reuse = |c: u32| -> bool {
+            // A part that gave nothing before: its parent was opened.
+            let group = groups.under.get(&c).map(Vec::as_slice);
+            let was_empty = || {
+                !patch.holding[c as usize]
+                    && (c == s || groups.opened.contains(&nodes[c as usize].parent))
+            };
+            if group.is_none() && !was_empty() {
+                return false;
+            }
+            if !patch.clear(leaf_box, super::geom_box(&geoms[c as usize])) {
+                return false;
+            }
+            kept.extend(group.unwrap_or(&[]).iter().map(|&i| old[i as usize]));
+            true
+        };
+        if !reuse(s) {
+            self.push_cluster(leaf, l, q, n, s, row, None, &mut reuse);
+        }
+        row.extend_from_slice(&kept);
+        true
+    }
+}
