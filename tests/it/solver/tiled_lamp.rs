@@ -116,16 +116,19 @@ fn worst_apart(base: Tiling, others: &[Tiling]) -> f64 {
     worst
 }
 
-/// The room tiled three ways gives the same light at every point. Short of the 1%
-/// asked (2026-11-29): unequal triangles 1.95% and T-junctions 2.19% from equal
-/// quads at their worst point; the bar is 2.5%.
+/// The room tiled three ways gives the same light at every point, within 1%
+/// (measured 2026-11-29: unequal triangles 0.74% and T-junctions 0.76% from equal
+/// quads at their worst point; 0.95% and 2.09% before the reconstruction welded
+/// the points gathered from either side of a seam, `Solver::weld`: the T-junction
+/// tiling gathered the point of a wall by the floor at x = 1 m once, from the leaf
+/// on its left, and the quads gathered it on each side, 2.8% apart).
 #[test]
 fn the_tiling_of_the_walls_changes_little() {
     let worst = worst_apart(
         Tiling::Quads(6),
         &[Tiling::UnequalTriangles(4), Tiling::TJunctions(3)],
     );
-    assert!(worst < 0.025, "{worst}");
+    assert!(worst < 0.01, "{worst}");
 }
 
 /// One quad per wall against the tiled room, within 1% at every point (measured
