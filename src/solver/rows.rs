@@ -495,7 +495,7 @@ impl Solver<'_> {
     /// again with the radiosity known: drops the kept cluster parts
     /// ([`ClusterPart`]) of every link that holds a part hanging on the link's
     /// estimate or on the radiosity ([`PART_ON_ESTIMATE`]), or whose new estimate
-    /// [`Solver::push_cluster`] would now take nothing from (a surface leaf and a
+    /// [`Solver::push_cluster`] would now take nothing from (a surface receiver and a
     /// link that sees nothing). What is left, surface parts and facets seen by
     /// their own rays, is what the rows would cast again to the same answer:
     /// dropping everything made the second round cast every leaf's rows once more,
