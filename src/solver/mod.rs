@@ -815,8 +815,8 @@ impl<'a> Solver<'a> {
                 let active = self.active_links(false);
                 if !clusters_reevaluated {
                     self.reevaluate_cluster_sources(&active);
-                    // The parts kept were cast at the old estimates.
-                    self.sys.cluster_cache.clear();
+                    // Some parts kept were cast at the old estimates.
+                    self.drop_estimate_parts();
                     clusters_reevaluated = true;
                 }
                 self.refine(active, thr)?
@@ -2756,6 +2756,45 @@ mod tests {
             assert!(terms.fixed.iter().all(|t| t.0 & FACET_BIT != 0));
             terms.fixed.iter().map(|t| t.1).sum()
         });
+    }
+
+    /// After the first solve the cluster links are evaluated again by power
+    /// ([`Solver::reevaluate_cluster_sources`]); the leaf rows then reuse the cluster
+    /// parts that do not hang on those estimates ([`Solver::drop_estimate_parts`])
+    /// and cast the others again. The rows so made equal the rows cast afresh, entry
+    /// by entry, with the parts opened to surfaces and with the facets; and the parts
+    /// reused are not none (else the test would show nothing).
+    #[test]
+    fn rows_reusing_the_parts_the_estimates_leave_equal_rows_cast_afresh() {
+        let scene = cube_grid();
+        for opts in [SolveOptions::default(), facet_opts()] {
+            let facets = opts.cluster_facets;
+            let mut s = Solver::new(&scene, opts).unwrap();
+            s.run(|_, _| {}).unwrap();
+            let active = s.active_links(false);
+            s.reevaluate_cluster_sources(&active);
+            let before: usize = s.sys.cluster_cache.values().map(Vec::len).sum();
+            s.drop_estimate_parts();
+            let kept: usize = s.sys.cluster_cache.values().map(Vec::len).sum();
+            assert!(kept > 0 && kept <= before, "kept {kept} of {before}");
+            s.compute_leaf_rows();
+            let reused = (s.sys.row_sources.clone(), s.sys.row_coefs.clone());
+            s.sys.cluster_cache.clear();
+            s.compute_leaf_rows();
+            let (sources, coefs) = (&s.sys.row_sources, &s.sys.row_coefs);
+            assert_eq!(reused.0.len(), sources.len(), "facets {facets}");
+            let (mut worst, mut clusters) = (0.0f64, 0);
+            for i in 0..sources.len() {
+                assert_eq!(reused.0[i], sources[i], "facets {facets}, entry {i}");
+                worst = worst.max((reused.1[i] - coefs[i]).abs());
+                let e = sources[i];
+                clusters += usize::from(
+                    e & FACET_BIT != 0 || s.elems.geoms.as_slice()[e as usize].patch == u32::MAX,
+                );
+            }
+            assert!(worst <= 1e-12, "facets {facets}: worst {worst}");
+            assert!(clusters > 0 || !facets, "facets {facets}: no cluster entry");
+        }
     }
 
     /// The light a leaf's row hands its quadrature points

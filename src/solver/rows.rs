@@ -160,7 +160,11 @@ const _: () = assert!(std::mem::size_of::<KeptCoef>() == 12);
 /// One part of a cluster source as a static leaf's row took it ([`Solver::push_cluster`]),
 /// kept for the next round: `vis >= 0`, a surface part to open at `(coef, vis)`
 /// ([`Solver::push_opened`], whose opening follows the source's children as they
-/// are then); `vis < 0`, a cluster part whose entry is `coef`. 16 bytes.
+/// are then); `vis < 0`, a cluster part (a facet or a sub-cluster) whose entry is
+/// `coef`: [`PART_OWN_RAYS`] if its visibility came from its own rays to its own
+/// patches, [`PART_ON_ESTIMATE`] if it hangs on the link's estimate or on the
+/// radiosity (a sub-cluster seen by power, a point with no ray that took the link's
+/// fraction), which [`Solver::drop_estimate_parts`] then drops. 16 bytes.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct ClusterPart {
     pub(super) link: u32,
@@ -170,6 +174,14 @@ pub(super) struct ClusterPart {
 }
 
 const _: () = assert!(std::mem::size_of::<ClusterPart>() == 16);
+
+/// [`ClusterPart::vis`] of a cluster part whose visibility is its own rays' to its
+/// own patches (a facet's, drawn by area): it does not depend on the radiosity.
+const PART_OWN_RAYS: f32 = -1.0;
+/// [`ClusterPart::vis`] of a cluster part that depends on the link's estimate or on
+/// the radiosity: a sub-cluster (rays to points drawn by power), or a facet one of
+/// whose points cast no ray and took the link's fraction.
+const PART_ON_ESTIMATE: f32 = -2.0;
 
 impl Solver<'_> {
     /// Visits what a leaf gathers of cluster `s` from its quadrature points `q`
@@ -465,30 +477,75 @@ impl Solver<'_> {
             // A point whose rays all fall below its horizon or on faces
             // turned away counts none: it takes the link's fraction, not 0
             // (the estimate still gives it the part of the sphere above).
+            let mut on_estimate = !facet;
             let v: f64 = (0..q.count)
                 .map(|i| {
                     let (v, rays) = self.part_visibility(q.points[i], n, patch, e, m, i as u64);
+                    on_estimate |= rays == 0;
                     q.weights[i] * if rays > 0 { v } else { vis }
                 })
                 .sum();
+            // A part that gave nothing is kept too where the estimate may change
+            // that, so that the link's other parts are not reused without it.
+            if v <= 0.0 && !on_estimate {
+                return;
+            }
+            let entry = match kept.as_deref_mut() {
+                Some(k) => {
+                    let c = (coef * v.max(0.0)) as f32;
+                    k.push(ClusterPart {
+                        link: l,
+                        elem: e,
+                        coef: c,
+                        vis: if on_estimate {
+                            PART_ON_ESTIMATE
+                        } else {
+                            PART_OWN_RAYS
+                        },
+                    });
+                    c as f64
+                }
+                None => coef * v,
+            };
             if v > 0.0 {
-                let entry = match kept.as_deref_mut() {
-                    Some(k) => {
-                        let c = (coef * v) as f32;
-                        k.push(ClusterPart {
-                            link: l,
-                            elem: e,
-                            coef: c,
-                            vis: -1.0,
-                        });
-                        c as f64
-                    }
-                    None => coef * v,
-                };
                 row.push((e, entry));
             }
         };
         self.cluster_parts_reusing(q, n, s, &mut part, reuse);
+    }
+
+    /// After [`Solver::reevaluate_cluster_sources`] has evaluated the cluster links
+    /// again with the radiosity known: drops the kept cluster parts
+    /// ([`ClusterPart`]) of every link that holds a part hanging on the link's
+    /// estimate or on the radiosity ([`PART_ON_ESTIMATE`]), or whose new estimate
+    /// [`Solver::push_cluster`] would now take nothing from (a surface receiver and a
+    /// link that sees nothing). What is left, surface parts and facets seen by
+    /// their own rays, is what the rows would cast again to the same answer:
+    /// dropping everything made the second round cast every leaf's rows once more,
+    /// as long as the first round (`gen_cubes 20`, BENCHMARKS.md "Scale").
+    pub(super) fn drop_estimate_parts(&mut self) {
+        let tr = self.links.transports.as_slice();
+        let ends = self.links.ends.as_slice();
+        let geoms = self.elems.geoms.as_slice();
+        for parts in self.sys.cluster_cache.values_mut() {
+            let mut from = 0;
+            let mut out = 0;
+            while from < parts.len() {
+                let l = parts[from].link;
+                let to = from + parts[from..].partition_point(|p| p.link == l);
+                let t = &tr[l as usize];
+                let surface_receiver = geoms[ends[l as usize].receiver as usize].patch != u32::MAX;
+                let empty = surface_receiver && (t.f <= 0.0 || t.visibility <= 0.0);
+                let on_estimate = parts[from..to].iter().any(|p| p.vis == PART_ON_ESTIMATE);
+                if !empty && !on_estimate {
+                    parts.copy_within(from..to, out);
+                    out += to - from;
+                }
+                from = to;
+            }
+            parts.truncate(out);
+        }
+        self.sys.cluster_cache.retain(|_, parts| !parts.is_empty());
     }
 
     /// The row entries of cluster link `l` from the parts an earlier round kept
@@ -508,7 +565,9 @@ impl Solver<'_> {
         let to = from + parts[from..].partition_point(|p| p.link == l);
         for p in &parts[from..to] {
             if p.vis < 0.0 {
-                row.push((p.elem, p.coef as f64));
+                if p.coef > 0.0 {
+                    row.push((p.elem, p.coef as f64));
+                }
             } else {
                 self.push_opened(q, n, p.elem, p.coef as f64, p.vis as f64, row, None);
             }
