@@ -226,16 +226,6 @@ fn object_floors(patches: &Patches, min_size: f64) -> Vec<f64> {
         })
         .collect()
 }
-
-/// Default [`SolveOptions::min_size`]: elements no smaller in edge than 1/64 of
-/// the scene's (or their object's) diameter. The final gather gives the point
-/// values; finer elements only refine the light the leaves hand on: on the Cornell
-/// box 1/256 refined the room's corners to 4 mm and took 1.5–1.9× the time for the
-/// same error against the path tracer (0.478% against 0.477% at eps 0.1;
-/// BENCHMARKS.md, "Static solver: error against run time"). Relative to the
-/// diameter, so a scene scaled ×1000 meshes the same.
-pub const MIN_SIZE: f64 = 1.0 / 64.0;
-
 /// Default [`SolveOptions::cluster_open_ratio`].
 pub const CLUSTER_OPEN_RATIO: f64 = 0.2;
 
@@ -372,7 +362,7 @@ impl Default for SolveOptions {
             // `RHIER_STORAGE` (a bad value is refused by `validate`).
             storage: Storage::from_env().unwrap_or_default(),
             eps: 0.5,
-            min_size: MIN_SIZE,
+            min_size: 1.0 / 256.0,
             rays_per_point: 4,
             cluster_rays: 8,
             corner_rays: 8,
