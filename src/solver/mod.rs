@@ -1596,14 +1596,12 @@ impl<'a> Solver<'a> {
                 },
             ));
             let g = &mut self.elems.geoms.as_mut_slice()[e];
-            g.corners[0] = lo.to_array();
-            g.corners[1] = hi.to_array();
             let centroid = if area > 0.0 {
                 moment / area
             } else {
                 (lo + hi) * 0.5
             };
-            g.corners[2] = centroid.to_array();
+            g.set_cluster_box(lo, hi, centroid);
             g.set_cluster_cone(&cone);
         }
     }
