@@ -411,6 +411,10 @@ impl Solver<'_> {
                 weights: [1.0, 0.0, 0.0, 0.0],
                 count: 1,
             };
+            // Wholly behind the point's plane: no rays for it either.
+            if super::rows::box_behind(gs, &at, n) {
+                return;
+            }
             if self.facets.count() == 0 {
                 let vis = shared();
                 if vis <= 0.0 {
