@@ -184,16 +184,14 @@ pub fn poly(g: &Geom) -> Poly {
 }
 
 /// Centre and bounding radius of an element.
+#[inline]
 pub fn sphere(g: &Geom) -> (DVec3, f64) {
     if g.patch == u32::MAX {
         // About the area centroid, which a cluster estimate takes for the cluster's
         // place: the box's centre may lie far from every surface (two walls of a
         // corner), which errs to first order in `r/d`; the centroid to second.
-        let lo = DVec3::from_array(g.corners[0]);
-        let hi = DVec3::from_array(g.corners[1]);
-        let c = DVec3::from_array(g.corners[2]);
-        let far = (c - lo).abs().max((hi - c).abs());
-        (c, far.length())
+        // The radius is kept with the box (`Geom::set_cluster_box`).
+        (DVec3::from_array(g.corners[2]), g.corners[3][0])
     } else {
         // No `Poly` built: link evaluation and the error samples call this per term.
         let n = (g.n as usize).min(4);

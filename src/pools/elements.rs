@@ -51,9 +51,10 @@ const _: () = assert!(std::mem::size_of::<Node>() == 16);
 /// Surface: world corners (3 or 4) counter-clockwise seen from the front, their
 /// parameter-space positions, the unit normal, the area. Cluster: `corners[0]` and
 /// `corners[1]` are the box's min and max, `corners[2]` the area centroid of its
-/// patches (where a cluster estimate places the cluster), `area` the summed area of
-/// its patches, `normal` zero, and `uv` the cone that holds its patches' normals
-/// ([`Geom::cluster_cone`]).
+/// patches (where a cluster estimate places the cluster), `corners[3][0]` the radius
+/// of the sphere about that centroid that holds the box ([`Geom::set_cluster_box`]),
+/// `area` the summed area of its patches, `normal` zero, and `uv` the cone that holds
+/// its patches' normals ([`Geom::cluster_cone`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Geom {
@@ -74,6 +75,21 @@ pub struct Geom {
 const _: () = assert!(std::mem::size_of::<Geom>() == 168);
 
 impl Geom {
+    /// Sets a cluster's box `lo`–`hi` and area centroid `centroid`, and the radius of
+    /// the sphere about the centroid that holds the box, kept in `corners[3][0]`
+    /// (read by [`crate::oracle::sphere`], which every walk into a cluster calls
+    /// at every node it visits: 4.5% of a cluttered scene's run when recomputed
+    /// per visit, BENCHMARKS.md "Scale").
+    pub fn set_cluster_box(&mut self, lo: DVec3, hi: DVec3, centroid: DVec3) {
+        let far = (centroid - lo).abs().max((hi - centroid).abs());
+        self.corners = [
+            lo.to_array(),
+            hi.to_array(),
+            centroid.to_array(),
+            [far.length(), 0.0, 0.0],
+        ];
+    }
+
     /// A cluster's normal cone ([`Cone`]), kept in `uv` (`[ax, ay], [az, cos],
     /// [coherence, 0]`), which a cluster has no use for otherwise.
     pub fn cluster_cone(&self) -> Cone {

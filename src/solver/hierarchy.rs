@@ -132,13 +132,14 @@ fn push_cluster(
         (lo + hi) * 0.5
     };
     let mut geom = Geom {
-        corners: [lo.to_array(), hi.to_array(), centroid.to_array(), [0.0; 3]],
+        corners: [[0.0; 3]; 4],
         normal: [0.0; 3],
         area,
         uv: [[0.0; 2]; 4],
         patch: u32::MAX,
         n: 2,
     };
+    geom.set_cluster_box(lo, hi, centroid);
     geom.set_cluster_cone(&Cone::merge(members.iter().map(|&m| {
         (
             Cone::of_normal(patches.normals[m as usize]),

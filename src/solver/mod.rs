@@ -1622,14 +1622,12 @@ impl<'a> Solver<'a> {
                 },
             ));
             let g = &mut self.elems.geoms.as_mut_slice()[e];
-            g.corners[0] = lo.to_array();
-            g.corners[1] = hi.to_array();
             let centroid = if area > 0.0 {
                 moment / area
             } else {
                 (lo + hi) * 0.5
             };
-            g.corners[2] = centroid.to_array();
+            g.set_cluster_box(lo, hi, centroid);
             g.set_cluster_cone(&cone);
         }
     }
@@ -2951,6 +2949,81 @@ mod tests {
         let lit = shaped_factor(x, -DVec3::Z, &g, &[1.9, 0.7, 0.7, 0.7]);
         assert!(dark < 0.5 * whole, "{dark} vs {whole}");
         assert!(lit > 1.5 * whole, "{lit} vs {whole}");
+    }
+
+    /// Each quad of `scene` cut into 2 × 2 (the tessellated twin of a scene of quads).
+    fn quads_cut_in_four(mut scene: Scene) -> Scene {
+        for o in &mut scene.objects {
+            o.polygons = o
+                .polygons
+                .iter()
+                .flat_map(|p| {
+                    let v = &p.vertices;
+                    let mid = |a: DVec3, b: DVec3| (a + b) * 0.5;
+                    let c = (v[0] + v[1] + v[2] + v[3]) * 0.25;
+                    let e: [DVec3; 4] = std::array::from_fn(|i| mid(v[i], v[(i + 1) % 4]));
+                    (0..4).map(move |i| crate::scene::Polygon {
+                        vertices: vec![v[i], e[i], c, e[(i + 3) % 4]],
+                        material: p.material,
+                    })
+                })
+                .collect();
+        }
+        scene
+    }
+
+    /// A cluster whose box lies behind every point's plane (`rows::box_behind`) is
+    /// skipped by the walk into clusters; the known answer: each of its patches'
+    /// exact factors from those points is 0. Points: every patch root's quadrature
+    /// points of `cube_grid` (and its tessellated twin) against every cluster. And
+    /// every cluster's kept bounding radius ([`Geom::set_cluster_box`]) is the one
+    /// its box and centroid give.
+    #[test]
+    fn a_cluster_behind_a_points_plane_gives_it_nothing() {
+        for scene in [cube_grid(), quads_cut_in_four(cube_grid())] {
+            let s = Solver::new(&scene, SolveOptions::default()).unwrap();
+            let geoms = s.elems.geoms.as_slice();
+            let clusters: Vec<u32> = (0..geoms.len() as u32)
+                .filter(|&e| geoms[e as usize].patch == u32::MAX)
+                .collect();
+            for &e in &clusters {
+                let g = &geoms[e as usize];
+                let (lo, hi, c) = (g.corners[0], g.corners[1], g.corners[2]);
+                let (lo, hi, c) = (
+                    DVec3::from_array(lo),
+                    DVec3::from_array(hi),
+                    DVec3::from_array(c),
+                );
+                let r = (c - lo).abs().max((hi - c).abs()).length();
+                assert_eq!(oracle::sphere(g), (c, r), "cluster {e}");
+            }
+            let under: Vec<Vec<u32>> = clusters.iter().map(|&e| patches_under(&s, e)).collect();
+            let (mut behind, mut pairs) = (0, 0);
+            for p in (0..geoms.len()).filter(|&p| geoms[p].patch != u32::MAX) {
+                // Patch roots only (no parent, or a cluster's child).
+                let parent = s.elems.nodes.as_slice()[p].parent;
+                if parent != u32::MAX && geoms[parent as usize].patch != u32::MAX {
+                    continue;
+                }
+                let q = oracle::samples(&geoms[p]);
+                let n = DVec3::from_array(geoms[p].normal);
+                for (k, &e) in clusters.iter().enumerate() {
+                    pairs += 1;
+                    if !rows::box_behind(&geoms[e as usize], &q, n) {
+                        continue;
+                    }
+                    behind += 1;
+                    for &u in &under[k] {
+                        let pu = oracle::poly(&geoms[u as usize]);
+                        for &x in &q.points[..q.count] {
+                            assert_eq!(point_to_polygon(x, n, &pu), 0.0, "patch {u} from {p}");
+                        }
+                    }
+                }
+            }
+            // The test must see the skip at work: a cube face has cubes behind it.
+            assert!(behind * 10 > pairs, "{behind} of {pairs} behind");
+        }
     }
 
     #[test]
