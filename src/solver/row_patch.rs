@@ -164,4 +164,76 @@ impl Solver<'_> {
         row.extend_from_slice(&kept);
         true
     }
+
+    /// The entries of chain link `l`, which the leaf's kept row `kept` does not
+    /// hold (a child of a link the move split), taken from the kept entries of
+    /// its parent: the link of `kept` whose ends lie over `l`'s, now passive.
+    /// A row entry depends on the leaf, the part and the rays between them, not
+    /// on the link that reached the part, so the parent's entries under `l`'s
+    /// source are the child's, updated in place as a stale link's are
+    /// ([`Solver::patch_entries`]). Taken only where the parent's row reached
+    /// `l`'s source as a part (the source itself, or a child of an opened
+    /// cluster), not where a surface was opened into it at the surface's own
+    /// visibility. Returns false, having pushed nothing, where there is nothing
+    /// to take (or, at a surface receiver, where `l` sees nothing: its row takes
+    /// nothing from it). Where the parent was split at its receiver the rays of its
+    /// surface parts were keyed by the parent's receiver
+    /// ([`Solver::row_ray_ids`]): the entries are as a fresh row gives them up to
+    /// the rays' jitter.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn inherit_entries(
+        &self,
+        patch: &RowPatch,
+        leaf: ElementId,
+        l: u32,
+        q: &oracle::Samples,
+        n: DVec3,
+        kept: &[(u32, RowEntries)],
+        row: &mut Vec<(u32, f64)>,
+    ) -> bool {
+        let ends = self.links.ends.as_slice();
+        let tr = self.links.transports.as_slice();
+        let nodes = self.elems.nodes.as_slice();
+        let geoms = self.elems.geoms.as_slice();
+        let under = |mut a: u32, top: u32| loop {
+            if a == top {
+                return true;
+            }
+            a = match nodes.get(a as usize) {
+                Some(x) => x.parent,
+                None => return false,
+            };
+            if a == u32::MAX {
+                return false;
+            }
+        };
+        let e = ends[l as usize];
+        let Some((p, old)) = kept.iter().find(|(p, _)| {
+            let pe = ends[*p as usize];
+            *p != l
+                && tr[*p as usize].state() != LinkState::Active
+                && under(e.receiver, pe.receiver)
+                && under(e.source, pe.source)
+        }) else {
+            return false;
+        };
+        let s = e.source;
+        // A surface receiver takes nothing from a link that sees nothing
+        // ([`Solver::push_cluster`]): computed in full, to nothing.
+        let t = &tr[l as usize];
+        let gated =
+            geoms[e.receiver as usize].patch != u32::MAX && (t.f <= 0.0 || t.visibility <= 0.0);
+        if old.is_empty() || gated {
+            return false;
+        }
+        if ends[*p as usize].source == s {
+            return self.patch_entries(patch, leaf, l, q, n, old, row);
+        }
+        let up = nodes[s as usize].parent;
+        if up == u32::MAX || geoms[up as usize].patch != u32::MAX {
+            return false;
+        }
+        let sub: Vec<(u32, f64)> = old.iter().copied().filter(|&(x, _)| under(x, s)).collect();
+        !sub.is_empty() && self.patch_entries(patch, leaf, l, q, n, &sub, row)
+    }
 }

@@ -1115,6 +1115,13 @@ impl Solver<'_> {
                     out.kept.extend(kept_coef());
                     continue;
                 }
+            } else if let Some((p, c)) = patch.zip(moved_before) {
+                // A child of a link the move split: its parent's entries.
+                let at = out.row.len();
+                if self.inherit_entries(p, leaf, l, &q, n, c, &mut out.row) {
+                    out.move_clusters.push((l, out.row[at..].into()));
+                    continue;
+                }
             }
             let before = before.filter(|_| !stale);
             let at = out.row.len();
