@@ -35,6 +35,19 @@ use crate::scene::Scene;
 /// Relative trim of both ends of a visibility segment.
 pub const SEGMENT_TRIM: f64 = 1e-4;
 
+/// Relative trim of both ends of a segment between two surface points whose
+/// patches, and those patches' back-to-back twins, are skipped
+/// ([`SceneBvh::occluded_between`]): what [`SEGMENT_TRIM`] guards against, the
+/// round-off hits on the surfaces the segment starts and ends on, is then left to
+/// the skip, and the trim only has to absorb the round-off of a hit on a coplanar
+/// neighbour at the very start (`1e-16 / sin θ` of the length for a ray leaving at
+/// `θ`). Why: a leaf of Blender's Suzanne (`tests/data/blender/cornell-box.glb`,
+/// two-sided) lies 0.14 mm from the lip folded over it; rays from its corners and
+/// finer points passed through that lip inside the `1e-4` trim of a 1 m segment and
+/// saw the room through the closed head, and its row summed to 1.38 (issue 45,
+/// part 4).
+pub const SURFACE_TRIM: f64 = 1e-9;
+
 /// The ray parameter before which obvhs' CWBVH traversal drops a node whatever the
 /// ray's `tmin` (`EPSILON` in obvhs 0.4 `cwbvh/node.rs`: a node's entry is clamped
 /// to it, so a node the ray leaves sooner is never entered).
@@ -277,6 +290,48 @@ impl Part {
 /// Visibility structure of a scene at one time.
 pub struct SceneBvh {
     parts: Vec<Part>,
+    /// Each patch's back-to-back twin (the same corners in reverse order: a
+    /// two-sided polygon's other side), `u32::MAX` for none ([`twin_patches`]).
+    twins: Vec<u32>,
+}
+
+/// Each patch's back-to-back twin among `patches`: the patch with the same corners
+/// (bit for bit) in reverse order, as `scene::two_sided` and glTF's `doubleSided`
+/// make them; `u32::MAX` for none.
+pub fn twin_patches(patches: &Patches) -> Vec<u32> {
+    use std::collections::HashMap;
+    let key = |p: usize| {
+        let mut k: Vec<[u64; 3]> = patches.polys[p]
+            .corners()
+            .iter()
+            .map(|v| v.to_array().map(f64::to_bits))
+            .collect();
+        k.sort_unstable();
+        k
+    };
+    let mut first: HashMap<Vec<[u64; 3]>, u32> = HashMap::new();
+    let mut twins = vec![u32::MAX; patches.len()];
+    for p in 0..patches.len() {
+        match first.entry(key(p)) {
+            std::collections::hash_map::Entry::Vacant(e) => {
+                e.insert(p as u32);
+            }
+            std::collections::hash_map::Entry::Occupied(e) => {
+                let q = *e.get() as usize;
+                let (cp, cq) = (patches.polys[p].corners(), patches.polys[q].corners());
+                let n = cp.len();
+                // Reversed: corner i of one is corner (j - i) of the other for
+                // some shift j.
+                let reversed =
+                    n == cq.len() && (0..n).any(|j| (0..n).all(|i| cp[i] == cq[(j + n - i) % n]));
+                if reversed && twins[q] == u32::MAX {
+                    twins[p] = q as u32;
+                    twins[q] = p as u32;
+                }
+            }
+        }
+    }
+    twins
 }
 
 impl SceneBvh {
@@ -312,7 +367,10 @@ impl SceneBvh {
             ));
         }
         parts.extend(Part::build(st, from_unit(unit), u32::MAX, unit));
-        SceneBvh { parts }
+        SceneBvh {
+            parts,
+            twins: twin_patches(patches),
+        }
     }
 
     /// Builds one world-space BVH of `patches` as they stand, moving or not: a
@@ -328,6 +386,7 @@ impl SceneBvh {
             parts: Part::build(st, from_unit(unit), u32::MAX, unit)
                 .into_iter()
                 .collect(),
+            twins: twin_patches(patches),
         }
     }
 
@@ -401,8 +460,41 @@ impl SceneBvh {
         which: Parts,
         last: &mut LastHit,
     ) -> bool {
+        let skip = [skip[0], skip[1], u32::MAX, u32::MAX];
+        self.occluded_trimmed(a, b, skip, SEGMENT_TRIM, which, last)
+    }
+
+    /// [`SceneBvh::occluded_cached`] for a segment between two surface points on
+    /// the patches `skip`: those patches' twins are skipped too, and the ends are
+    /// trimmed by [`SURFACE_TRIM`] only, so that a surface nearer to an end than
+    /// [`SEGMENT_TRIM`] of the length (a fold of a mesh lying over the point)
+    /// still blocks.
+    pub fn occluded_between(
+        &self,
+        a: DVec3,
+        b: DVec3,
+        skip: [u32; 2],
+        which: Parts,
+        last: &mut LastHit,
+    ) -> bool {
+        let twin = |p: u32| self.twins.get(p as usize).copied().unwrap_or(u32::MAX);
+        let skip = [skip[0], skip[1], twin(skip[0]), twin(skip[1])];
+        self.occluded_trimmed(a, b, skip, SURFACE_TRIM, which, last)
+    }
+
+    /// Whether a triangle not of the patches `skip` blocks the segment `a b` with
+    /// both ends trimmed by `trim` of its length.
+    fn occluded_trimmed(
+        &self,
+        a: DVec3,
+        b: DVec3,
+        skip: [u32; 4],
+        trim: f64,
+        which: Parts,
+        last: &mut LastHit,
+    ) -> bool {
         let d = b - a;
-        let (s0, s1) = (SEGMENT_TRIM, 1.0 - SEGMENT_TRIM);
+        let (s0, s1) = (trim, 1.0 - trim);
         // Cast from `2 NODE_EPSILON` behind `a` ([`SceneBvh::closest_hit`]), so
         // that no node is dropped near the trim: the f64 test decides there.
         let back = 2.0 * NODE_EPSILON;
@@ -413,7 +505,7 @@ impl SceneBvh {
             && let Some(tri) = part.tris.get(last.tri as usize)
         {
             let p = part.tri_patch[last.tri as usize];
-            if p != skip[0] && p != skip[1] {
+            if !skip.contains(&p) {
                 // Blocked only where the f32 test also hits: the f32 node boxes
                 // can hide from the traversal a grazing hit only the f64 test
                 // makes, and then the traversal, not the cache, must decide.
@@ -439,7 +531,7 @@ impl SceneBvh {
             let mut blocker = u32::MAX;
             let hit = !part.bvh.ray_traverse_miss(ray, |_, id| {
                 let p = part.tri_patch[id];
-                if p == skip[0] || p == skip[1] {
+                if skip.contains(&p) {
                     return f32::INFINITY;
                 }
                 if part.hit64(id, lo, ld, t0, t1).is_finite() {

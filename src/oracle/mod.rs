@@ -583,7 +583,7 @@ pub(crate) fn kernel_weighted_visibility(
         }
         rays += 1;
         wsum += k;
-        if !bvh.occluded_cached(x, y, [px, py], Parts::All, &mut last) {
+        if !bvh.occluded_between(x, y, [px, py], Parts::All, &mut last) {
             vsum += k;
         }
     }
@@ -634,7 +634,7 @@ pub fn close_cluster_factor(
         }
         rays += 1;
         ksum += k;
-        if !bvh.occluded_cached(x, y, [px, py], Parts::All, &mut last) {
+        if !bvh.occluded_between(x, y, [px, py], Parts::All, &mut last) {
             kvis += k;
         }
     }
@@ -790,7 +790,7 @@ impl PointRays<'_> {
 /// Kernel-weighted fraction of the source of `r` visible from its point.
 pub fn visible_fraction(bvh: &SceneBvh, r: &PointRays) -> f64 {
     let mut last = LastHit::default();
-    r.weighted(|_, y| !bvh.occluded_cached(r.x, y, r.skip, Parts::All, &mut last))
+    r.weighted(|_, y| !bvh.occluded_between(r.x, y, r.skip, Parts::All, &mut last))
 }
 
 /// The rays of [`visible_fraction`] that nothing static blocks, as a bit mask (ray
@@ -801,7 +801,7 @@ pub fn static_clear_mask(bvh: &SceneBvh, r: &PointRays) -> u64 {
     let mut mask = 0u64;
     let mut last = LastHit::default();
     for (j, y) in r.capped().targets() {
-        if !bvh.occluded_cached(r.x, y, r.skip, Parts::Static, &mut last) {
+        if !bvh.occluded_between(r.x, y, r.skip, Parts::Static, &mut last) {
             mask |= 1 << j;
         }
     }
@@ -816,7 +816,7 @@ pub fn visible_fraction_masked(bvh: Option<&SceneBvh>, r: &PointRays, mask: u64)
     let mut last = LastHit::default();
     r.capped().weighted(|j, y| {
         mask & (1 << j) != 0
-            && !bvh.is_some_and(|b| b.occluded_cached(r.x, y, r.skip, Parts::Moving, &mut last))
+            && !bvh.is_some_and(|b| b.occluded_between(r.x, y, r.skip, Parts::Moving, &mut last))
     })
 }
 
@@ -835,7 +835,7 @@ pub fn masked_rays(bvh: &SceneBvh, r: &PointRays, mask: Option<u64>, moving: boo
         let bit = 1u64 << j;
         let open = match mask {
             Some(mask) => mask & bit != 0,
-            None => !bvh.occluded_cached(r.x, y, r.skip, Parts::Static, &mut last_static),
+            None => !bvh.occluded_between(r.x, y, r.skip, Parts::Static, &mut last_static),
         };
         let k = point_to_point_kernel(r.x, r.n, y, r.ns);
         wsum += k;
@@ -846,7 +846,7 @@ pub fn masked_rays(bvh: &SceneBvh, r: &PointRays, mask: Option<u64>, moving: boo
         // The same sums, in the same order, as `PointRays::weighted`'s.
         vs += k;
         ps += 1.0;
-        if moving && bvh.occluded_cached(r.x, y, r.skip, Parts::Moving, &mut last_moving) {
+        if moving && bvh.occluded_between(r.x, y, r.skip, Parts::Moving, &mut last_moving) {
             blocked |= bit;
         } else {
             vn += k;
@@ -886,7 +886,7 @@ pub fn visible_fraction_moving(bvh: &SceneBvh, r: &PointRays, mask: u64, vis_sta
     let mut blocked = 0u64;
     let mut last = LastHit::default();
     for (j, y) in r.targets() {
-        if mask & (1 << j) != 0 && bvh.occluded_cached(r.x, y, r.skip, Parts::Moving, &mut last) {
+        if mask & (1 << j) != 0 && bvh.occluded_between(r.x, y, r.skip, Parts::Moving, &mut last) {
             blocked |= 1 << j;
         }
     }

@@ -152,8 +152,27 @@ fn blender_error(opts: SolveOptions, paths: u32) -> PointError {
 /// of some of its points took a factor of 1): 13.6% off the lamp, worst point 29%
 /// (the red wall low at the back), every wall now reading *under* the reference,
 /// and the solve's estimate 93% (this test, 520 s at load 2–4).
+///
+/// Why the head's rows sum above 1 (2026-11-30, h45export; Suzanne alone,
+/// two-sided, in a closed one-quad-per-wall room, uniform `E = 1`, `ρ = 0.9`, one
+/// round): each entry of a leaf's row was compared with 2,000 cosine rays from each
+/// of the leaf's quadrature points. The worst row (1.38, an inner twin at the
+/// lips) counts 0.3 of the room that no ray from its quadrature points reaches:
+/// those points see nothing of the room, but two of the leaf's corners do (a lip
+/// lies 0.14 mm over it), so `hidden_row_coef` integrates those entries on the
+/// finer rule, at 0.43–0.51 visible, while the entry of the lip folded over it
+/// keeps the three-point rule (0.78). Entries of one row integrated on different
+/// rules no longer share the points at which their factors sum to at most 1:
+/// that, not a twin counted twice, is what lifts the rows. Next: integrate a
+/// leaf's whole row on the finer rule once one entry needs it. Rays between
+/// surface points now skip both ends' twins and trim `1e-9` of the length
+/// (`SURFACE_TRIM`), no longer `1e-4`, so that a fold 0.14 mm away blocks a 1 m
+/// ray: that row 1.38 → 1.31; this test 12.4% off the lamp, worst point 26% (the
+/// red wall low at the back), every wall still under the reference, 94 s of CPU
+/// (8 min wall at load 15–20), and the estimate now 2.5% (most likely the leaf system no
+/// longer stalls; not checked), and nothing else in the estimate sees the bias.
 #[test]
-#[ignore = "13.6% off the lamp at eps 0.5, short of 5%, and minutes long (issue 45)"]
+#[ignore = "12.4% off the lamp at eps 0.5, short of 5%, and minutes long (issue 45)"]
 fn blender_cornell_box_agrees_with_the_path_tracer() {
     let err = blender_error(
         SolveOptions {
@@ -278,6 +297,74 @@ fn two_sided_slab_room_gives_e_over_one_minus_rho() {
             b.iter().map(|x| x[1]).collect::<Vec<_>>()
         );
         assert!(worst < 0.01, "rho {rho}: worst point {worst} from {exact}");
+    }
+}
+
+/// A closed room `[0, 2]³` (walls tiled `n × n`, facing in) holding a two-sided
+/// closed box `0.8 × t × 0.8` (faces tiled `n × n`) whose top and bottom lie `t`
+/// apart: every polygon emits 1 with reflectance `rho`, so `B = 1/(1 − ρ)` on
+/// both sides of every surface.
+fn room_with_thin_two_sided_box(rho: f64, t: f64, n: usize) -> Scene {
+    let mut polygons = shapes::tiled_box(
+        DVec3::ZERO,
+        DVec3::splat(2.0),
+        shapes::Tiling::Quads(n),
+        true,
+        rhier::scene::MaterialId(0),
+    );
+    let mut thin = shapes::uniform_scene(
+        shapes::tiled_box(
+            DVec3::new(0.6, 0.8, 0.6),
+            DVec3::new(1.4, 0.8 + t, 1.4),
+            shapes::Tiling::Quads(n),
+            false,
+            rhier::scene::MaterialId(0),
+        ),
+        rho,
+        1.0,
+    );
+    rhier::scene::two_sided(&mut thin);
+    polygons.extend(thin.objects.remove(0).polygons);
+    shapes::uniform_scene(polygons, rho, 1.0)
+}
+
+/// A fold of a two-sided mesh nearer to a point than the `1e-4` trim of a
+/// segment's length (`SEGMENT_TRIM`) let the point's rays through: a closed
+/// room around a two-sided box 0.04 mm thick (thinner than that trim of the
+/// room's 1–3 m segments), uniformly emitting, is to give `E/(1 − ρ)` at every
+/// stored corner within 1% at `ρ = 0.9`, and no leaf row is to sum above 1.01,
+/// with the box and room in one quad a face and tiled 3 × 3. The rays between
+/// surface points now skip their patches' twins and keep a `1e-9` trim
+/// (`SURFACE_TRIM`), so that the ceiling no longer sees the inside of the box's
+/// bottom through its top. Still short (2026-11-30, one quad a face): the
+/// largest row sums to 1.027, and corners along the box's edges and on its
+/// bottom read about 1.0–1.26 for the exact 10 (they gather next to nothing;
+/// contact meshing's handling of the box's inner faces, 0.04 mm apart, is the
+/// first suspect, not traced).
+#[test]
+#[ignore = "short: a row sums to 1.027 and box corners read about E (issue 45, part 4)"]
+fn a_thin_two_sided_box_in_a_uniform_room_gives_e_over_one_minus_rho() {
+    let rho = 0.9;
+    let exact = 1.0 / (1.0 - rho);
+    for n in [1, 3] {
+        let scene = room_with_thin_two_sided_box(rho, 4e-5, n);
+        let mut s = rhier::solver::Solver::new(&scene, SolveOptions::default()).expect("solver");
+        s.run(|_, _| {}).expect("run");
+        let rows = s.row_sums();
+        let top = rows.iter().map(|r| r.1).fold(0.0, f64::max);
+        let sol = s.solution();
+        let mut worst: f64 = 0.0;
+        for leaf in &sol.leaves {
+            for c in 0..leaf.corners as usize {
+                worst = worst.max((leaf.b[c][0] as f64 - exact).abs() / exact);
+            }
+        }
+        eprintln!(
+            "tiled {n}: {} leaves, largest row sum {top:.4}, worst corner {worst:.2e}",
+            rows.len()
+        );
+        assert!(top <= 1.01, "tiled {n}: a row sums to {top}");
+        assert!(worst < 0.01, "tiled {n}: a corner is {worst} off {exact}");
     }
 }
 
