@@ -116,20 +116,24 @@ fn worst_apart(base: Tiling, others: &[Tiling]) -> f64 {
     worst
 }
 
-/// The room tiled three ways gives the same light at every point. Short of the 1%
-/// asked (2026-11-29): unequal triangles 1.95% and T-junctions 2.19% from equal
-/// quads at their worst point; the bar is 2.5%.
+/// The room tiled three ways gives the same light at every point, within 1%
+/// (measured 2026-11-29: unequal triangles 0.74% and T-junctions 0.76% from equal
+/// quads at their worst point; 0.95% and 2.09% before the reconstruction welded
+/// the points gathered from either side of a seam, `Solver::weld`: the T-junction
+/// tiling gathered the point of a wall by the floor at x = 1 m once, from the leaf
+/// on its left, and the quads gathered it on each side, 2.8% apart).
 #[test]
 fn the_tiling_of_the_walls_changes_little() {
     let worst = worst_apart(
         Tiling::Quads(6),
         &[Tiling::UnequalTriangles(4), Tiling::TJunctions(3)],
     );
-    assert!(worst < 0.025, "{worst}");
+    assert!(worst < 0.01, "{worst}");
 }
 
 /// One quad per wall against the tiled room, within 1% at every point (measured
-/// 2026-11-29: 0.65% at worst, ceiling point (3.1, 3, 1.2); 4.3% before). What
+/// 2026-11-29: 0.65% at worst, ceiling point (3.1, 3, 1.2), 0.71% with the seams
+/// welded; 4.3% before). What
 /// made the one-quad room 2–5% dark: its ceiling leaves straddled the outline of
 /// the lamp hung 1 cm under it (edges at 2.5 and 3.5 m, never a split of the one
 /// 6 m quad; the tiled room's half-tile splits fall on them), handed their mean
@@ -143,9 +147,16 @@ fn the_tiling_of_the_walls_changes_little() {
 ///
 /// Still short: a lamp hung lower than that (2–5% of its size under the ceiling
 /// are cut; 10–20% are not) leaves the one-quad room 1–3% under the tiled room at
-/// most points (measured at gaps 0.1 and 0.2 m: 2.9% and 4.8% at worst), and with
-/// the cut, the wall band just under the lamp's plane (y = 2.7 at a 5–10 cm gap)
-/// reads 1–3% over the tiled room.
+/// most points (measured with the seams welded, 2026-11-29: 1.1%, 2.6% and 4.3% at
+/// worst at gaps 0.05, 0.1 and 0.2 m). Why, at 0.2 m: the ceiling over the lamp
+/// sees the lamp's black back and is dark (path tracer 0.054 at (2.75, 3, 3.05);
+/// tiled 0.112, one quad 0.396: no leaf or cell edge of the one-quad ceiling
+/// follows the lamp's outline), so the one-quad leaf system sends too much into
+/// the lamp's back (absorbs 0.978 of the power against the tiled 0.989) and the
+/// room reads 1–2% dark; the wall band just under the lamp's plane (y = 2.7)
+/// reads 2.4–3.7% over the path tracer, a cell straddling the kink of the direct
+/// light at that plane (no direct light above it). Both want meshing: the
+/// ceiling along the lamp's outline at any gap, the walls along the lamp's plane.
 #[test]
 fn one_quad_per_wall_agrees_with_the_tiled_room() {
     let worst = worst_apart(Tiling::Quads(6), &[Tiling::Quads(1)]);
