@@ -23,8 +23,8 @@ use rayon::prelude::*;
 
 use super::spacetime::interpolate::point_coord;
 use super::{
-    CORNER_INSET, ElementId, FastMap, FrameBetween, FrameValues, Leaf, Patches, PointKey, Solution,
-    SolveStats, Solver, hierarchy,
+    ANY_LEAF, CORNER_INSET, ElementId, FastMap, FrameBetween, FrameValues, KeptKey, Leaf, Patches,
+    PointKey, Solution, SolveStats, Solver, hierarchy,
 };
 
 /// Points gathered in parallel at a time by the reconstruction: enough to keep the
@@ -56,8 +56,9 @@ pub struct Reconstruction {
 }
 
 /// A point to gather: the leaf whose links gather, the patch, the parameter point,
-/// the parameter point it is inset towards, and its key.
-type GatherPoint = (ElementId, u32, [f32; 2], [f32; 2], PointKey);
+/// the parameter point it is inset towards, and its key (place and, gathered per
+/// leaf, that leaf).
+type GatherPoint = (ElementId, u32, [f32; 2], [f32; 2], KeptKey);
 
 /// RMS over the unit square of the bubble `16 u(1−u) v(1−v)` (peak 1): `16/30`.
 const BUBBLE_RMS: f64 = 16.0 / 30.0;
@@ -144,11 +145,16 @@ impl Cell {
 /// with [`VertexCache::per_leaf`]).
 #[derive(Default)]
 struct VertexCache {
-    index: FastMap<(u32, u32, u32), usize>,
-    /// A static solve gathers a point once per leaf whose cells have it, from
-    /// inside that leaf ([`Solver::weld`] then averages them): `(key, leaf)`.
-    sided: FastMap<((u32, u32, u32), u32), usize>,
-    /// Gather per leaf (a static solve outside a window).
+    /// The gather point of each place and leaf (the leaf [`ANY_LEAF`] unless
+    /// [`VertexCache::per_leaf`]).
+    index: FastMap<KeptKey, usize>,
+    /// The first gather point of each place: the frame's value there, for the
+    /// frames between to interpolate (after [`Solver::weld`], the same as the
+    /// place's other points).
+    first: FastMap<PointKey, usize>,
+    /// Gather a point once per leaf whose cells have it, from inside that leaf
+    /// ([`Solver::weld`] then averages them): a static solve, and a space-time
+    /// window of one instant (solved as the static solve is).
     per_leaf: bool,
     /// (leaf whose links gather, patch, parameter point, point inset towards this
     /// uv, the point's key).
@@ -165,17 +171,15 @@ type Evaluated<T> = ([f64; 3], bool, Option<T>, Option<[f64; 3]>);
 
 impl VertexCache {
     fn register(&mut self, c: &Cell, uv: [f32; 2], toward: [f32; 2]) -> usize {
-        let key = (c.patch, point_coord(uv[0]), point_coord(uv[1]));
+        let pk = (c.patch, point_coord(uv[0]), point_coord(uv[1]));
+        let key = (pk, if self.per_leaf { c.leaf.0 } else { ANY_LEAF });
         let points = &mut self.points;
-        let add = || {
+        let i = *self.index.entry(key).or_insert_with(|| {
             points.push((c.leaf, c.patch, uv, toward, key));
             points.len() - 1
-        };
-        if self.per_leaf {
-            *self.sided.entry((key, c.leaf.0)).or_insert_with(add)
-        } else {
-            *self.index.entry(key).or_insert_with(add)
-        }
+        });
+        self.first.entry(pk).or_insert(i);
+        i
     }
 
     /// Gathers up to `batch` of the points registered and not gathered yet; returns
@@ -183,20 +187,20 @@ impl VertexCache {
     fn evaluate<T: Send>(
         &mut self,
         batch: usize,
-        gather: impl Fn(ElementId, DVec3, PointKey) -> Evaluated<T> + Sync,
+        gather: impl Fn(ElementId, DVec3, KeptKey) -> Evaluated<T> + Sync,
         patches: &Patches,
     ) -> Vec<T> {
         let from = self.values.len();
         let to = self.points.len().min(from + batch);
         let new: Vec<_> = self.points[from..to]
             .par_iter()
-            .map(|&(leaf, patch, uv, toward, pk)| {
+            .map(|&(leaf, patch, uv, toward, key)| {
                 let x = patches.point(patch as usize, uv[0] as f64, uv[1] as f64);
                 let c = patches.point(patch as usize, toward[0] as f64, toward[1] as f64);
                 // Evaluate a hair inside the cell: on an edge shared with a
                 // perpendicular wall the factor jumps (the wall is seen edge-on), and
                 // the interpolant wants the limit from inside.
-                (pk, gather(leaf, x + CORNER_INSET * (c - x), pk))
+                (key.0, gather(leaf, x + CORNER_INSET * (c - x), key))
             })
             .collect();
         let mut keep = Vec::new();
@@ -335,7 +339,10 @@ impl Solver<'_> {
         limits.shapes = shapes;
         let min_len = self.opts.recon_min_size * self.patches.diameter;
         let mut cache = VertexCache {
-            per_leaf: self.st.window.is_none(),
+            // A window of one instant welds as the static solve does, its kept
+            // terms apart per leaf (`KeptKey`); a window spanning time gathers
+            // each point once, for its frames between to interpolate.
+            per_leaf: !self.window_spans_time(),
             ..Default::default()
         };
         // In a space-time window the points on moving surfaces keep their direct
@@ -383,7 +390,8 @@ impl Solver<'_> {
                 let gathered = std::sync::atomic::AtomicBool::new(false);
                 let fresh = cache.evaluate(
                     GATHER_BATCH,
-                    |leaf, x, pk| {
+                    |leaf, x, key| {
+                        let pk = key.0;
                         let n = DVec3::from_array(geoms[leaf.ix()].normal);
                         let outside = || self.outside_solids(x, n);
                         let direct = emitters
@@ -398,11 +406,11 @@ impl Solver<'_> {
                         }
                         gathered.store(true, std::sync::atomic::Ordering::Relaxed);
                         let (b, valid, fresh) =
-                            self.gather_point(leaf, x, view, pk, admit, &limits);
+                            self.gather_point(leaf, x, view, key, admit, &limits);
                         // The records to keep are laid out here, in parallel.
                         let keep = view
                             .filter(|_| !fresh.is_empty())
-                            .and_then(|v| v.prepare(pk, fresh));
+                            .and_then(|v| v.prepare(key, fresh));
                         (b, valid, keep, direct.filter(|_| valid))
                     },
                     &self.patches,
@@ -511,7 +519,7 @@ impl Solver<'_> {
         // Later frames of a window interpolate this one's values; a solve
         // outside a window has no use for them.
         let values = if self.st.window.is_some() {
-            FrameValues::from_points(cache.index.iter().map(|(&pk, &i)| {
+            FrameValues::from_points(cache.first.iter().map(|(&pk, &i)| {
                 let (b, ok) = cache.values[i];
                 (pk, b, ok)
             }))
