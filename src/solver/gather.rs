@@ -558,7 +558,8 @@ impl Solver<'_> {
         let leaf = self.leaf_at(ElementId(near.elem), near.foot);
         // Its own rays: another key than any reconstruction point's.
         let pk_y = (pk.0 ^ 0x6761_7000, pk.1.rotate_left(7), pk.2);
-        let (sy, _, _) = self.gather_sum(leaf, near.foot, None, (pk_y, ANY_LEAF), false, true, limits);
+        let (sy, _, _) =
+            self.gather_sum(leaf, near.foot, None, (pk_y, ANY_LEAF), false, true, limits);
         let py = self.elems.geoms.as_slice()[leaf.ix()].patch as usize;
         let (rho_y, em_y) = (self.patches.rhos[py], self.patches.emissions[py]);
         let mut hy = sy.h;

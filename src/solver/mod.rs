@@ -1050,7 +1050,8 @@ impl<'a> Solver<'a> {
                     uv_inside(&g.uv, g.n, smp.uv)
                 })?;
                 let pk = (u32::MAX, i as u32, smp.patch);
-                let (b, valid, _) = self.gather_point(leaf, smp.x, None, (pk, ANY_LEAF), false, &limits);
+                let (b, valid, _) =
+                    self.gather_point(leaf, smp.x, None, (pk, ANY_LEAF), false, &limits);
                 let e = self.patches.emissions[smp.patch as usize];
                 valid.then(|| std::array::from_fn(|k| b[k] - e[k]))
             })
