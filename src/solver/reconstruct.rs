@@ -267,7 +267,7 @@ impl Solver<'_> {
     /// leaf. This meshes the stored answer to where `B(x)` bends (room edges, contact
     /// lines, shadow boundaries) without refining the link hierarchy there. Cells
     /// straddling the plane of a static emitter near them split across it too
-    /// ([`Solver::straddled_planes`]).
+    /// (`Solver::straddled_planes`).
     ///
     /// Its estimated error combines the last round's (the hierarchy's) with the
     /// reconstruction's interpolation error, `sqrt(e_h² + e_i²)` (`NaN` if the
