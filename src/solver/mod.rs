@@ -227,6 +227,17 @@ fn object_floors(patches: &Patches, min_size: f64) -> Vec<f64> {
         })
         .collect()
 }
+
+/// Default [`SolveOptions::min_size`]: elements no smaller in edge than 1/64 of
+/// the scene's (or their object's) diameter. The final gather gives the point
+/// values; finer elements only refine the light the leaves hand on: on the Cornell
+/// box 1/256 refined the room's corners to 4 mm and took 1.5–1.9× the time for the
+/// same error against the path tracer (0.478% against 0.477% at eps 0.1;
+/// BENCHMARKS.md, "Static solver: error against run time"). Relative to the
+/// diameter, so a scene scaled ×1000 meshes the same. A solve that refines below
+/// `--eps` for its promise lowers it with `eps` (`Solver::link_floor`).
+pub const MIN_SIZE: f64 = 1.0 / 64.0;
+
 /// Default [`SolveOptions::cluster_open_ratio`].
 pub const CLUSTER_OPEN_RATIO: f64 = 0.2;
 
@@ -363,7 +374,7 @@ impl Default for SolveOptions {
             // `RHIER_STORAGE` (a bad value is refused by `validate`).
             storage: Storage::from_env().unwrap_or_default(),
             eps: 0.5,
-            min_size: 1.0 / 256.0,
+            min_size: MIN_SIZE,
             rays_per_point: 4,
             cluster_rays: 8,
             corner_rays: 8,
@@ -506,6 +517,9 @@ pub struct Solver<'a> {
     min_area: f64,
     /// The `--min-size` floor of each object's elements ([`object_floors`]).
     object_min_area: Vec<f64>,
+    /// What [`Solver::link_floor`] multiplies its floor by: `(eps / --eps)²` while
+    /// [`Solver::run`] refines below `eps` for its promise, 1 otherwise.
+    floor_scale: f64,
     /// `A_p` of [`SolveOptions::power_size`] (0: off).
     power_area: f64,
     rho_max: f64,
@@ -669,6 +683,7 @@ impl<'a> Solver<'a> {
             plane_tol: diam * 1e-9,
             min_area: (opts.min_size * diam).powi(2),
             object_min_area: object_floors(&patches, opts.min_size),
+            floor_scale: 1.0,
             power_area: (opts.power_size * diam).powi(2),
             opts,
             patches,
@@ -798,6 +813,8 @@ impl<'a> Solver<'a> {
             }
             let (rays0, clear0) = (self.rays, self.shaft_clear);
             let thr = eps * b_ref;
+            // Below `eps` the floor's edge follows it: see [`Solver::link_floor`].
+            self.floor_scale = (eps / self.opts.eps).min(1.0).powi(2);
             let changed = if round == 0 {
                 let ev = oracle::evaluate(
                     &self.elems,
@@ -903,6 +920,7 @@ impl<'a> Solver<'a> {
                 break;
             }
         }
+        self.floor_scale = 1.0;
         // Leaves split on their spread, then the leaf system solved again (static
         // scenes; `split_on_spread`). Each pass is reported as a round.
         let time_budget = self.opts.time_budget;
@@ -1098,6 +1116,13 @@ impl<'a> Solver<'a> {
     /// The `--min-size` floor of a link: the finer of its ends' objects' floors (a
     /// cluster end counts as the scene's), so that a small object is meshed to its
     /// own scale, and so are the shadows it casts on a large one.
+    ///
+    /// While [`Solver::run`] refines below `--eps` because its estimate is above
+    /// what `eps` promises, the floor's edge falls with `eps` (area times
+    /// [`Solver::floor_scale`]): the floor bounds what `--eps` asks for, and a
+    /// level that halves `eps` asks for links twice as fine. Without it a coarse
+    /// floor stops such a solve before its estimate meets the promise (the one-quad
+    /// lamp room of `tests/it/solver/tiled_lamp.rs` at 1/64: 18 links at the floor).
     fn link_floor(&self, r: ElementId, s: ElementId) -> f64 {
         let geoms = self.elems.geoms.as_slice();
         [r, s]
@@ -1112,6 +1137,7 @@ impl<'a> Solver<'a> {
                     .unwrap_or(self.min_area)
             })
             .fold(self.min_area, f64::min)
+            * self.floor_scale
     }
 
     /// Why the last [`Solver::run`] stopped refining ([`StopReason::NotRun`] before).

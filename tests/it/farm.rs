@@ -13,7 +13,7 @@ use rhier::geometry::Patches;
 use rhier::playback::{ProbePoint, probe};
 use rhier::store::Reader;
 
-use crate::common::{example, probe::grid_points, rhier};
+use crate::common::{example, probe::grid_points, rhier, succeed, succeeded};
 
 /// LIGHT at 4 fps in windows of half a second (13 frames, 7 windows), coarse.
 const LIGHT: &[&str] = &[
@@ -31,11 +31,6 @@ const LIGHT: &[&str] = &[
 /// The moving Cornell box at 4 fps in windows of half a second (9 frames, 5
 /// windows), as `cli::spacetime` solves it.
 const CORNELL: &[&str] = &["--fps", "4", "--window", "0.5", "-q"];
-
-fn ok(o: Output) -> Output {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    o
-}
 
 /// Solves `scene` with `settings` into `out`, as shard `shard` (`K/N`) if given.
 fn solve(scene: &Path, settings: &[&str], shard: Option<&str>, out: &Path) -> Output {
@@ -56,7 +51,7 @@ fn solve_shards(scene: &Path, settings: &[&str], n: usize, dir: &Path) -> Vec<Pa
     (0..n)
         .map(|k| {
             let p = dir.join(format!("part-{k}.rhier"));
-            ok(solve(scene, settings, Some(&format!("{k}/{n}")), &p));
+            succeeded(solve(scene, settings, Some(&format!("{k}/{n}")), &p));
             p
         })
         .collect()
@@ -182,10 +177,10 @@ fn merged_shards_match_the_solve_on_one_machine_at_every_frame() {
         let sub = dir.path().join(name);
         std::fs::create_dir_all(&sub).unwrap();
         let single = sub.join("single.rhier");
-        ok(solve(&scene_path, LIGHT, None, &single));
+        succeeded(solve(&scene_path, LIGHT, None, &single));
         let parts = solve_shards(&scene_path, LIGHT, 3, &sub);
         let merged = sub.join("merged.rhier");
-        ok(merge(&parts, &merged));
+        succeeded(merge(&parts, &merged));
         let (a, b) = (
             Reader::open(&merged).unwrap(),
             Reader::open(&single).unwrap(),
@@ -217,13 +212,13 @@ fn the_merged_file_is_the_same_whatever_n_for_the_same_boundaries() {
     let dir = tempfile::tempdir().unwrap();
     let scene = example("cornell_moving.json");
     let plan = |n: &str| {
-        let o = ok(rhier()
-            .arg("plan")
-            .arg(&scene)
-            .args(&CORNELL[..4])
-            .args(["--shards", n, "--json"])
-            .output()
-            .unwrap());
+        let o = succeed(
+            rhier()
+                .arg("plan")
+                .arg(&scene)
+                .args(&CORNELL[..4])
+                .args(["--shards", n, "--json"]),
+        );
         serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()
     };
     let bounds = |p: &serde_json::Value| -> Vec<(u64, u64)> {
@@ -252,7 +247,7 @@ fn the_merged_file_is_the_same_whatever_n_for_the_same_boundaries() {
     let parts6: Vec<PathBuf> = (0..6)
         .map(|k| {
             let p = d6.join(format!("part-{k}.rhier"));
-            ok(solve_from_env(&scene, &k.to_string(), &p));
+            succeeded(solve_from_env(&scene, &k.to_string(), &p));
             p
         })
         .collect();
@@ -261,8 +256,8 @@ fn the_merged_file_is_the_same_whatever_n_for_the_same_boundaries() {
         "the sixth shard holds no window"
     );
     let (m5, m6) = (dir.path().join("m5.rhier"), dir.path().join("m6.rhier"));
-    ok(merge(&parts5, &m5));
-    ok(merge(&parts6, &m6));
+    succeeded(merge(&parts5, &m5));
+    succeeded(merge(&parts6, &m6));
     let (a, b) = (Reader::open(&m5).unwrap(), Reader::open(&m6).unwrap());
     assert_eq!(a.chunks().len(), 5);
     assert!(same_chunks(&a, &b));
@@ -291,7 +286,7 @@ fn merge_refuses_gaps_overlaps_other_settings_and_corrupt_parts() {
     refused(&all, &out, &["again.rhier", "shard 1 of 3 again"]);
     // A shard of another split.
     let other_n = dir.path().join("other-n.rhier");
-    ok(solve(&scene, CORNELL, Some("1/2"), &other_n));
+    succeeded(solve(&scene, CORNELL, Some("1/2"), &other_n));
     refused(
         &[parts[0].clone(), other_n.clone(), parts[2].clone()],
         &out,
@@ -299,7 +294,7 @@ fn merge_refuses_gaps_overlaps_other_settings_and_corrupt_parts() {
     );
     // Other settings: the setting named.
     let other = dir.path().join("other-eps.rhier");
-    ok(solve(
+    succeeded(solve(
         &scene,
         &[CORNELL, &["--eps", "0.75"]].concat(),
         Some("1/3"),
@@ -312,11 +307,7 @@ fn merge_refuses_gaps_overlaps_other_settings_and_corrupt_parts() {
     );
     // A file that is no part: a static solve.
     let stat = dir.path().join("static.rhier");
-    ok(rhier()
-        .args(["solve", "-q", "--eps", "1", "-o"])
-        .arg(&stat)
-        .output()
-        .unwrap());
+    succeed(rhier().args(["solve", "-q", "--eps", "1", "-o"]).arg(&stat));
     refused(
         std::slice::from_ref(&stat),
         &out,
@@ -347,8 +338,8 @@ fn merge_refuses_gaps_overlaps_other_settings_and_corrupt_parts() {
     assert_eq!(std::fs::read(&parts[0]).unwrap(), before);
     // Re-running the missing index alone completes the set.
     std::fs::remove_file(&parts[1]).unwrap();
-    ok(solve(&scene, CORNELL, Some("1/3"), &parts[1]));
-    ok(merge(&parts, &out));
+    succeeded(solve(&scene, CORNELL, Some("1/3"), &parts[1]));
+    succeeded(merge(&parts, &out));
     let m = Reader::open(&out).unwrap();
     m.verify().unwrap();
     assert_eq!(m.chunks().len(), 5);
@@ -363,7 +354,7 @@ fn resume_works_inside_a_shard_and_the_journal_knows_its_shard() {
     let scene = example("cornell_moving.json");
     let (full, cut) = (dir.path().join("full.rhier"), dir.path().join("cut.rhier"));
     // Shard 1 of 2 holds the last windows, at least two of them.
-    ok(solve(&scene, CORNELL, Some("1/2"), &full));
+    succeeded(solve(&scene, CORNELL, Some("1/2"), &full));
     let p = Reader::open(&full).unwrap().provenance().unwrap().clone();
     assert!(p.end - p.first >= 2, "{p:?}");
     let stop = rhier()
@@ -398,14 +389,14 @@ fn resume_works_inside_a_shard_and_the_journal_knows_its_shard() {
         err.contains("different solve") && err.contains("shard"),
         "{err}"
     );
-    ok(rhier()
-        .arg("solve")
-        .arg(&scene)
-        .args(CORNELL)
-        .args(["--shard", "1/2", "--resume", "-o"])
-        .arg(&cut)
-        .output()
-        .unwrap());
+    succeed(
+        rhier()
+            .arg("solve")
+            .arg(&scene)
+            .args(CORNELL)
+            .args(["--shard", "1/2", "--resume", "-o"])
+            .arg(&cut),
+    );
     assert!(!journal.exists());
     let (a, b) = (Reader::open(&full).unwrap(), Reader::open(&cut).unwrap());
     assert!(same_chunks(&a, &b));

@@ -281,7 +281,11 @@ pub struct AccuracyArgs {
     /// taken relative to its object's diameter (bounding-box diagonal) as well as to
     /// the scene's, the finer of the two, but no finer than 1/16 of the scene's: a
     /// car in a long tunnel is meshed to the car's scale, and so is its shadow on the
-    /// tunnel.
+    /// tunnel. The default, 1/64, leaves the point values to the final gather: a
+    /// finer floor refined the Cornell box's corners for the same error against the
+    /// path tracer at 1.5–1.9× the time (BENCHMARKS.md). A solve that refines below
+    /// `--eps` because its estimate is above what `--eps` promises lowers the floor's
+    /// edge with `eps` (half the edge at `eps/2`).
     #[arg(long, default_value_t = SolveOptions::default().min_size)]
     pub min_size: f64,
     /// Reconstruction tolerance, relative to the RMS reflected radiosity.

@@ -1,20 +1,7 @@
 //! The real `rhier` binary: the default job, solve's probe against `rhier probe` on
 //! the file it wrote, `--keep-links`, `--report`, exit codes.
 
-use std::process::Command;
-
-use crate::common::rhier;
-
-/// Runs `cmd` and fails the test with its standard error unless it succeeds.
-fn succeed(cmd: &mut Command) -> std::process::Output {
-    let out = cmd.output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
+use crate::common::{rhier, succeed, succeeded};
 
 #[test]
 fn default_job_writes_the_cornell_box() {
@@ -177,11 +164,10 @@ fn the_storage_variable_names_the_default_backend() {
         "{err}"
     );
     assert!(!out.exists());
-    let o = solve(
+    succeeded(solve(
         &format!("mmap:{}", missing.display()),
         &["--storage", "ram"],
-    );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    ));
     assert!(out.exists());
 }
 

@@ -5,7 +5,7 @@
 use std::path::Path;
 use std::process::Output;
 
-use crate::common::{self, rhier};
+use crate::common::{self, rhier, succeeded};
 
 const SCENE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -23,8 +23,7 @@ fn solve(out: &Path, extra: &[&str]) -> Output {
 
 /// [`solve`], which must succeed.
 fn solve_ok(out: &Path, extra: &[&str]) {
-    let o = solve(out, extra);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    succeeded(solve(out, extra));
 }
 
 /// `a` and `b` hold as many chunks, with the same leaves.
@@ -223,12 +222,7 @@ fn a_fifo_output_gets_the_file_and_no_journal() {
     let dir = tempfile::tempdir().unwrap();
     let (fifo, file) = (dir.path().join("pipe"), dir.path().join("file.rhier"));
     let reader = common::fifo::fifo_with_reader(&fifo);
-    let out = solve(&fifo, &[]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(solve(&fifo, &[]));
     assert!(!rhier::store::journal::journal_dir(&fifo).exists());
     // Checked before joining: a replaced FIFO would leave the reader blocked forever.
     assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());

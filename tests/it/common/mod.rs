@@ -3,7 +3,7 @@
 //! built in code (boxes, enclosures, random flatland scenes) and a seeded generator.
 
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 
 use glam::DVec3;
 use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
@@ -11,6 +11,24 @@ use rhier::scene::{Material, MaterialId, Object, Polygon, Scene};
 /// A command that runs the `rhier` binary cargo built for these tests.
 pub fn rhier() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rhier"))
+}
+
+/// `out`, after failing the test with the process's standard error unless it exited 0.
+#[track_caller]
+pub fn succeeded(out: Output) -> Output {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Runs `cmd` (a [`rhier`] command) and fails the test with its standard error unless
+/// it exits 0.
+#[track_caller]
+pub fn succeed(cmd: &mut Command) -> Output {
+    succeeded(cmd.output().expect("rhier starts"))
 }
 
 /// A running `rhier` process, killed and reaped when dropped, so that a failing test

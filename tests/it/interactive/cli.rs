@@ -8,7 +8,7 @@ use std::io::{BufRead, BufReader, Write};
 
 use rhier::store::Reader;
 
-use crate::common::{example, rhier, spawn_piped};
+use crate::common::{example, rhier, spawn_piped, succeed, succeeded};
 
 /// The flags every run here shares: the Cornell box with its blocks, coarse.
 fn base(cmd: &mut std::process::Command) -> &mut std::process::Command {
@@ -157,14 +157,13 @@ fn a_move_is_answered_before_the_next_line_is_read() {
 fn from_a_file_without_links_is_refused_with_the_way_out() {
     let dir = tempfile::tempdir().unwrap();
     let solved = dir.path().join("c.rhier");
-    let s = rhier()
-        .arg("solve")
-        .arg(example("cornell_blocks.json"))
-        .args(["--eps", "1", "--max-rounds", "2", "-q", "-o"])
-        .arg(&solved)
-        .output()
-        .unwrap();
-    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    succeed(
+        rhier()
+            .arg("solve")
+            .arg(example("cornell_blocks.json"))
+            .args(["--eps", "1", "--max-rounds", "2", "-q", "-o"])
+            .arg(&solved),
+    );
     let moves = dir.path().join("m.jsonl");
     std::fs::write(&moves, "{\"object\": \"short_block\"}\n").unwrap();
     let run = rhier()
@@ -206,10 +205,8 @@ fn the_pools_follow_rhier_storage_and_give_the_same_answer() {
             .unwrap()
     };
     let (ram, mapped) = (dir.path().join("ram.jsonl"), dir.path().join("mmap.jsonl"));
-    let r = run("ram", &ram);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let m = run(&format!("mmap:{}", scratch.display()), &mapped);
-    assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
+    succeeded(run("ram", &ram));
+    succeeded(run(&format!("mmap:{}", scratch.display()), &mapped));
     // The backend holds the same records: the same answer, bit for bit.
     let (a, b) = (
         std::fs::read_to_string(&ram).unwrap(),

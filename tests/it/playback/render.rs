@@ -14,7 +14,7 @@ use rhier::solution::{PatchGeometry, Solution, SolveStats};
 use rhier::store::samples::{box_solution, uniform_leaves};
 use rhier::store::{WriteOptions, write_solution};
 
-use crate::common::rhier;
+use crate::common::{rhier, succeed};
 
 /// A 2 × 2 white wall in the plane z = 0 facing +z, radiosity `b` everywhere, seen
 /// head-on from (0, 0, 3).
@@ -182,18 +182,7 @@ fn cli_probe_play_and_inspect_read_back_the_written_box() {
     )
     .unwrap();
 
-    let out = rhier()
-        .arg("probe")
-        .arg(&file)
-        .arg("--points")
-        .arg(&pts)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = succeed(rhier().arg("probe").arg(&file).arg("--points").arg(&pts));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let b0: Vec<f64> = v[0]["B"]
         .as_array()
@@ -217,49 +206,29 @@ fn cli_probe_play_and_inspect_read_back_the_written_box() {
     }
 
     let frames = dir.path().join("frames");
-    let out = rhier()
-        .arg("play")
-        .arg(&file)
-        .args(["--time", "0", "--width", "80", "--height", "60", "-o"])
-        .arg(&frames)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeed(
+        rhier()
+            .arg("play")
+            .arg(&file)
+            .args(["--time", "0", "--width", "80", "--height", "60", "-o"])
+            .arg(&frames),
     );
     let img = image::open(frames.join("frame_00000.png")).unwrap();
     assert_eq!((img.width(), img.height()), (80, 60));
 
-    let out = rhier()
-        .arg("play")
-        .arg(&file)
-        .args(["--time", "0", "--export", "gltf", "-o"])
-        .arg(&frames)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeed(
+        rhier()
+            .arg("play")
+            .arg(&file)
+            .args(["--time", "0", "--export", "gltf", "-o"])
+            .arg(&frames),
     );
     let exported = frames.join("frame_00000.gltf");
     if let Err(e) = gltf::Gltf::open(&exported) {
         panic!("{} does not parse: {e}", exported.display());
     }
 
-    let out = rhier()
-        .arg("inspect")
-        .arg(&file)
-        .arg("--json")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = succeed(rhier().arg("inspect").arg(&file).arg("--json"));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     // Format version 2 (issue 50); without a provenance section a version-1
     // reader reads the file.
@@ -367,22 +336,17 @@ fn smooth_shading_averages_only_within_a_material() {
 fn cli_play_frame_range_writes_one_picture_per_frame() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
     let dir = tempfile::tempdir().unwrap();
-    let out = rhier()
-        .arg("play")
-        .arg(data.join("v1_animated.rhier"))
-        .args([
-            "--frames", "0..1", "--fps", "4", "--width", "32", "--height", "24", "-o",
-        ])
-        .arg(dir.path())
-        // Seen from beyond +z (the front wall culled): the plate faces +z. The
-        // automatic camera of this interior looks at its brightest wall instead.
-        .args(["--eye", "0.5,0.5,3", "--target", "0.5,0.5,0.5"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeed(
+        rhier()
+            .arg("play")
+            .arg(data.join("v1_animated.rhier"))
+            .args([
+                "--frames", "0..1", "--fps", "4", "--width", "32", "--height", "24", "-o",
+            ])
+            .arg(dir.path())
+            // Seen from beyond +z (the front wall culled): the plate faces +z. The
+            // automatic camera of this interior looks at its brightest wall instead.
+            .args(["--eye", "0.5,0.5,3", "--target", "0.5,0.5,0.5"]),
     );
     // Frames at 0, 0.25, 0.5, 0.75, 1.
     let mut names: Vec<String> = std::fs::read_dir(dir.path())

@@ -14,7 +14,7 @@ use rhier::solver::per_frame::{FrameReport, frame_times, solve_per_frame};
 use rhier::solver::{SolveOptions, Solver};
 use rhier::store::{FrameWriter, Reader, WriteOptions};
 
-use crate::common::rhier;
+use crate::common::{rhier, succeeded};
 
 /// Coarse settings: the tests check bookkeeping, not accuracy.
 fn coarse() -> SolveOptions {
@@ -252,7 +252,7 @@ fn cli_per_frame_writes_the_file_and_one_report_row_per_frame() {
             .output()
             .unwrap()
     };
-    let o = run(&[
+    let o = succeeded(run(&[
         scene_file.to_str().unwrap(),
         "--fps",
         "2",
@@ -260,8 +260,7 @@ fn cli_per_frame_writes_the_file_and_one_report_row_per_frame() {
         out.to_str().unwrap(),
         "--report",
         csv.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    ]));
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(
         stderr.lines().filter(|l| l.starts_with("frame ")).count(),
@@ -286,8 +285,13 @@ fn cli_per_frame_writes_the_file_and_one_report_row_per_frame() {
     }
     // --builtin with a static scene: one frame, quiet.
     let one = dir.path().join("c.rhier");
-    let o = run(&["--builtin", "cornell", "-q", "-o", one.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = succeeded(run(&[
+        "--builtin",
+        "cornell",
+        "-q",
+        "-o",
+        one.to_str().unwrap(),
+    ]));
     assert!(o.stderr.is_empty());
     assert_eq!(Reader::open(&one).unwrap().chunks().len(), 1);
     // Bad fps and unsupported flags are refused (exit 1), unknown builtins by clap (2).

@@ -8,7 +8,7 @@ use rhier::scene::cornell_box;
 use rhier::solver::{SolveOptions, solve};
 use rhier::store::{Reader, WriteOptions, write_solution};
 
-use crate::common::rhier;
+use crate::common::{rhier, succeed};
 
 #[test]
 fn solve_file_probe_equals_the_solves_probe() {
@@ -75,18 +75,7 @@ fn solve_file_probe_equals_the_solves_probe() {
         .map(|p| serde_json::json!({"p": p.p.to_array(), "n": p.n.to_array()}))
         .collect();
     std::fs::write(&pts, serde_json::to_string(&json).unwrap()).unwrap();
-    let out = rhier()
-        .arg("probe")
-        .arg(&path)
-        .arg("--points")
-        .arg(&pts)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = succeed(rhier().arg("probe").arg(&path).arg("--points").arg(&pts));
     let v: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
     for (got, want) in v.iter().zip(&from_solve) {
         let got: Vec<f64> = got["B"]
