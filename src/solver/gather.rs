@@ -520,7 +520,9 @@ impl Solver<'_> {
         }
     }
 
-    /// Final gather at point `x` of leaf `leaf`: `(B(x), valid, fresh)`.
+    /// Final gather at point `x` of leaf `leaf`: `(B(x), valid, fresh)`. `key`: the
+    /// point's place (its rays' jitter) and the leaf its terms are kept for in a
+    /// window ([`KeptKey`]).
     ///
     /// A point with a near source (module docs, "Two surfaces across a narrow gap")
     /// gathers at its foot on that source too, and the two values are solved
@@ -530,13 +532,13 @@ impl Solver<'_> {
         leaf: ElementId,
         x: DVec3,
         known: Option<&PointCache>,
-        pk: PointKey,
+        key: KeptKey,
         admit: bool,
         limits: &GatherLimits,
     ) -> ([f64; 3], bool, FreshTerms) {
-        let (sum, valid, fresh) = self.gather_sum(leaf, x, known, pk, admit, false, limits);
+        let (sum, valid, fresh) = self.gather_sum(leaf, x, known, key, admit, false, limits);
         let p = self.elems.geoms.as_slice()[leaf.ix()].patch;
-        (self.across_gap(p, &sum, pk, limits), valid, fresh)
+        (self.across_gap(p, &sum, key.0, limits), valid, fresh)
     }
 
     /// `B(x) = E + ρ H` at a point of patch `p` whose gather is `sum`. With a near
@@ -560,7 +562,8 @@ impl Solver<'_> {
         let leaf = self.leaf_at(ElementId(near.elem), near.foot);
         // Its own rays: another key than any reconstruction point's.
         let pk_y = (pk.0 ^ 0x6761_7000, pk.1.rotate_left(7), pk.2);
-        let (sy, _, _) = self.gather_sum(leaf, near.foot, None, pk_y, false, true, limits);
+        let (sy, _, _) =
+            self.gather_sum(leaf, near.foot, None, (pk_y, ANY_LEAF), false, true, limits);
         let py = self.elems.geoms.as_slice()[leaf.ix()].patch as usize;
         let (rho_y, em_y) = (self.patches.rhos[py], self.patches.emissions[py]);
         let mut hy = sy.h;
@@ -635,12 +638,13 @@ impl Solver<'_> {
         leaf: ElementId,
         x: DVec3,
         known: Option<&PointCache>,
-        pk: PointKey,
+        key: KeptKey,
         admit: bool,
         once: bool,
         limits: &GatherLimits,
     ) -> (PointGather<'_>, bool, FreshTerms) {
         let faint = limits.faint;
+        let pk = key.0;
         // Ray jitter from the point's place, so that a point gathered again (another
         // frame, another cell) casts the same rays.
         let point_key = oracle::hash3(
@@ -661,7 +665,7 @@ impl Solver<'_> {
             .window
             .as_ref()
             .filter(|_| !once && !self.elem_moving(leaf));
-        let cached = known.and_then(|m| m.get(&pk));
+        let cached = known.and_then(|m| m.get(&key));
         let mut sum = PointGather::new(&self.patches, x, n, limits.near_gap);
         let mut fresh = Vec::new();
         let mut terms = Terms::default();

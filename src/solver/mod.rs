@@ -59,7 +59,7 @@ use spacetime::interpolate::TimedEntry;
 pub use spacetime::interpolate::{
     FrameBetween, FrameRows, FrameValues, Keyframe, SharedRadiosity, TimeRange,
 };
-use spacetime::kept_terms::{MaskedTerm, PointCache};
+use spacetime::kept_terms::{ANY_LEAF, KeptKey, MaskedTerm, PointCache};
 pub use spacetime::window::FrameCost;
 use spacetime::window::Window;
 
@@ -1068,7 +1068,8 @@ impl<'a> Solver<'a> {
                     uv_inside(&g.uv, g.n, smp.uv)
                 })?;
                 let pk = (u32::MAX, i as u32, smp.patch);
-                let (b, valid, _) = self.gather_point(leaf, smp.x, None, pk, false, &limits);
+                let (b, valid, _) =
+                    self.gather_point(leaf, smp.x, None, (pk, ANY_LEAF), false, &limits);
                 let e = self.patches.emissions[smp.patch as usize];
                 valid.then(|| std::array::from_fn(|k| b[k] - e[k]))
             })

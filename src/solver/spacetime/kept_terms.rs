@@ -43,6 +43,16 @@ use crate::pools::{Column, Storage};
 use crate::solver::gather::Terms;
 use crate::solver::{FastMap, PointKey};
 
+/// A point whose terms are kept: its place, and the leaf it is gathered from
+/// inside where a reconstruction gathers a point once per leaf that has it (the
+/// static solve's, and a window of one instant's: each leaf's gather is made at
+/// another point, a hair inside that leaf, and takes that leaf's links); [`ANY_LEAF`]
+/// where it is gathered once, whichever leaf registered it first.
+pub type KeptKey = (PointKey, u32);
+
+/// The leaf of a [`KeptKey`] gathered once, whichever leaf has it.
+pub const ANY_LEAF: u32 = u32::MAX;
+
 /// Reconstructions (frames) after which a point no reconstruction registered is
 /// dropped. A reconstruction registers every point it meshes, gathered or
 /// interpolated, so what goes is the points of cells no frame has meshed for that
@@ -153,7 +163,7 @@ impl<'a> PointView<'a> {
 /// One point's records as the arenas will hold them, made off the cache by
 /// [`PointCache::prepare`] and written by [`PointCache::commit`].
 pub struct PreparedPoint {
-    pk: PointKey,
+    pk: KeptKey,
     /// The point's slot when prepared (`None`: a new point).
     slot: Option<u32>,
     /// Where that slot's records lay then (index, fixed and masked starts).
@@ -165,7 +175,7 @@ pub struct PreparedPoint {
 
 /// The kept final-gather terms of a window (module docs).
 pub struct PointCache {
-    slots: FastMap<PointKey, u32>,
+    slots: FastMap<KeptKey, u32>,
     spans: Vec<PointSpan>,
     index: Column<TermIndex>,
     fixed: Column<FixedTerm>,
@@ -203,7 +213,7 @@ impl PointCache {
 
     /// Bytes one point costs besides its records (the slot map's key, value and
     /// control byte, and its span).
-    const POINT: usize = std::mem::size_of::<PointKey>() + 4 + 1 + std::mem::size_of::<PointSpan>();
+    const POINT: usize = std::mem::size_of::<KeptKey>() + 4 + 1 + std::mem::size_of::<PointSpan>();
 
     /// Bytes held: the arenas (live and dead records) and the per-point overhead.
     pub fn bytes(&self) -> usize {
@@ -219,7 +229,7 @@ impl PointCache {
     }
 
     /// The kept terms of point `pk`.
-    pub fn get(&self, pk: &PointKey) -> Option<PointView<'_>> {
+    pub fn get(&self, pk: &KeptKey) -> Option<PointView<'_>> {
         let s = self.spans[*self.slots.get(pk)? as usize];
         let at = |start: u32, n: u32| start as usize..(start + n) as usize;
         Some(PointView {
@@ -234,7 +244,7 @@ impl PointCache {
     /// not kept. [`PointCache::prepare`] then [`PointCache::commit`] (which the
     /// reconstruction calls apart).
     #[cfg(test)]
-    pub fn add(&mut self, pk: PointKey, links: Vec<(u32, Terms)>) {
+    pub fn add(&mut self, pk: KeptKey, links: Vec<(u32, Terms)>) {
         if let Some(p) = self.prepare(pk, links) {
             self.commit(p);
         }
@@ -247,7 +257,7 @@ impl PointCache {
     /// their points' records themselves and the thread between batches only
     /// copies them in ([`PointCache::commit`]; on ACTOR this was a quarter of
     /// the serial time between batches).
-    pub fn prepare(&self, pk: PointKey, links: Vec<(u32, Terms)>) -> Option<PreparedPoint> {
+    pub fn prepare(&self, pk: KeptKey, links: Vec<(u32, Terms)>) -> Option<PreparedPoint> {
         let slot = self.slots.get(&pk).copied();
         if !self.healthy || (slot.is_none() && !self.admits()) {
             return None;
@@ -322,7 +332,7 @@ impl PointCache {
     /// is not kept.
     fn append(
         &mut self,
-        pk: PointKey,
+        pk: KeptKey,
         slot: Option<u32>,
         index: &[TermIndex],
         fixed: &[FixedTerm],
@@ -392,7 +402,7 @@ impl PointCache {
     /// budget, every point not in `used`), and compacts the arenas when dead records
     /// (of rewritten or dropped points) make up a quarter of one, or, over the
     /// budget, when there are any.
-    pub fn collect(&mut self, used: &FastMap<PointKey, usize>) {
+    pub fn collect(&mut self, used: &FastMap<KeptKey, usize>) {
         self.seq += 1;
         let seq = self.seq;
         for pk in used.keys() {
@@ -528,7 +538,7 @@ mod tests {
         }
     }
 
-    fn check(cache: &PointCache, pk: PointKey, key: u32, fixed: &[u32], masked: &[u32]) {
+    fn check(cache: &PointCache, pk: KeptKey, key: u32, fixed: &[u32], masked: &[u32]) {
         let view = cache.get(&pk).expect("point kept");
         let (f, m) = view.get(key).expect("source kept");
         assert_eq!(f.iter().map(|t| t.elem).collect::<Vec<_>>(), fixed);
@@ -550,7 +560,7 @@ mod tests {
     #[test]
     fn a_point_keeps_each_source_once_in_key_order_across_adds() {
         for (mut c, _dir) in caches() {
-            let pk = (3, 10, 20);
+            let pk = ((3, 10, 20), 0);
             c.add(
                 pk,
                 vec![
@@ -577,7 +587,7 @@ mod tests {
     #[test]
     fn a_key_twice_in_one_gather_keeps_its_first_terms() {
         for (mut c, _dir) in caches() {
-            let pk = (0, 1, 2);
+            let pk = ((0, 1, 2), 0);
             c.add(
                 pk,
                 vec![
@@ -595,7 +605,7 @@ mod tests {
     #[test]
     fn records_prepared_for_a_slot_since_rewritten_are_not_written() {
         for (mut c, _dir) in caches() {
-            let pk = (2, 0, 0);
+            let pk = ((2, 0, 0), 0);
             c.add(pk, vec![(2, terms(&[(1, 0.5)], &[]))]);
             // PreparedPoint from the point as it was, then the point is rewritten.
             let stale = c.prepare(pk, vec![(4, terms(&[(5, 0.5)], &[]))]);
@@ -617,14 +627,14 @@ mod tests {
     #[test]
     fn stale_points_are_dropped_and_the_rest_survive_compaction() {
         for (mut c, _dir) in caches() {
-            let a = (1, 0, 0);
-            let b = (1, 0, 1);
+            let a = ((1, 0, 0), 0);
+            let b = ((1, 0, 0), 1);
             c.add(a, vec![(2, terms(&[(1, 0.5)], &[3]))]);
             c.add(b, vec![(2, terms(&[(4, 0.5), (5, 0.125)], &[6]))]);
             // `a` gains a source (its first span dies), both registered.
             c.add(a, vec![(8, terms(&[(9, 1.0)], &[]))]);
-            let both: FastMap<PointKey, usize> = [(a, 0), (b, 1)].into_iter().collect();
-            let only_b: FastMap<PointKey, usize> = [(b, 1)].into_iter().collect();
+            let both: FastMap<KeptKey, usize> = [(a, 0), (b, 1)].into_iter().collect();
+            let only_b: FastMap<KeptKey, usize> = [(b, 1)].into_iter().collect();
             c.collect(&both);
             for round in 0..STALE_AFTER {
                 assert!(c.get(&a).is_some(), "round {round}");
@@ -642,14 +652,14 @@ mod tests {
     #[test]
     fn over_budget_only_the_points_just_registered_are_kept_and_none_admitted() {
         let mut c = PointCache::new(&Storage::Ram, Some(200)).expect("ram");
-        let (a, b) = ((0, 0, 0), (0, 0, 1));
+        let (a, b) = (((0, 0, 0), 0), ((0, 0, 1), 0));
         c.add(a, vec![(2, terms(&[(1, 0.5); 8], &[3, 4]))]);
         assert!(c.bytes() > 100);
         c.add(b, vec![(2, terms(&[(1, 0.5); 8], &[3, 4]))]);
         assert!(c.bytes() > 200);
         assert!(!c.admits());
-        c.add((0, 0, 2), vec![(2, terms(&[(1, 0.5)], &[]))]);
-        assert!(c.get(&(0, 0, 2)).is_none());
+        c.add(((0, 0, 2), 0), vec![(2, terms(&[(1, 0.5)], &[]))]);
+        assert!(c.get(&((0, 0, 2), 0)).is_none());
         c.collect(&[(b, 0)].into_iter().collect());
         assert!(c.get(&a).is_none());
         check(&c, b, 2, &[1; 8], &[3, 4]);

@@ -16,13 +16,21 @@ fn lamp_room(tiling: Tiling) -> Scene {
 
 /// The room with its walls tiled by `tiling`, the lamp hung `gap` under its ceiling.
 fn lamp_room_at(tiling: Tiling, gap: f64) -> Scene {
+    lamp_room_tilted(tiling, gap, 0.0)
+}
+
+/// [`lamp_room_at`] with the lamp turned `degrees` about its x axis (its centre
+/// `gap` under the ceiling).
+fn lamp_room_tilted(tiling: Tiling, gap: f64, degrees: f64) -> Scene {
     let (white, lamp) = (MaterialId(0), MaterialId(1));
     let mut polygons =
         shapes::tiled_box(DVec3::ZERO, DVec3::new(6.0, 3.0, 6.0), tiling, true, white);
+    let (s, c) = degrees.to_radians().sin_cos();
+    let v = DVec3::new(0.0, s, c);
     polygons.extend(shapes::tiled_rect(
-        DVec3::new(2.5, 3.0 - gap, 2.5),
+        DVec3::new(3.0, 3.0 - gap, 3.0) - 0.5 * DVec3::X - 0.5 * v,
         DVec3::X,
-        DVec3::Z,
+        v,
         Tiling::Quads(1),
         lamp,
     ));
@@ -101,35 +109,54 @@ fn the_one_quad_room_loses_no_light_into_the_lamps_back() {
 /// The worst relative difference between the room tiled by `base` and by each of
 /// `others`, at eps 0.5, printed.
 fn worst_apart(base: Tiling, others: &[Tiling]) -> f64 {
-    let a = radiosity(&lamp_room(base), 0.5);
+    worst_apart_at(0.01, base, others)
+}
+
+/// [`worst_apart`] with the lamp hung `gap` under the ceiling.
+fn worst_apart_at(gap: f64, base: Tiling, others: &[Tiling]) -> f64 {
+    let a = radiosity(&lamp_room_at(base, gap), 0.5);
     let mut worst = 0.0f64;
     for &tiling in others {
-        let b = radiosity(&lamp_room(tiling), 0.5);
-        let w = a
+        let b = radiosity(&lamp_room_at(tiling, gap), 0.5);
+        let (i, w) = a
             .iter()
             .zip(&b)
             .map(|(a, b)| (a - b).abs() / a)
-            .fold(0.0, f64::max);
-        eprintln!("{tiling:?}: worst point {:.2}% from {base:?}", 100.0 * w);
+            .enumerate()
+            .fold(
+                (0, 0.0),
+                |(i, w), (j, x)| if x > w { (j, x) } else { (i, w) },
+            );
+        eprintln!(
+            "gap {gap}: {tiling:?}: worst point {:.2}% from {base:?}, at {:?}: {:.4} against {:.4}",
+            100.0 * w,
+            points()[i].p,
+            b[i],
+            a[i]
+        );
         worst = worst.max(w);
     }
     worst
 }
 
-/// The room tiled three ways gives the same light at every point. Short of the 1%
-/// asked (2026-11-29): unequal triangles 1.95% and T-junctions 2.19% from equal
-/// quads at their worst point; the bar is 2.5%.
+/// The room tiled three ways gives the same light at every point, within 1%
+/// (measured 2026-11-29: unequal triangles 0.74% and T-junctions 0.76% from equal
+/// quads at their worst point; 0.95% and 2.09% before the reconstruction welded
+/// the points gathered from either side of a seam, `Solver::weld`: the T-junction
+/// tiling gathered the point of a wall by the floor at x = 1 m once, from the leaf
+/// on its left, and the quads gathered it on each side, 2.8% apart).
 #[test]
 fn the_tiling_of_the_walls_changes_little() {
     let worst = worst_apart(
         Tiling::Quads(6),
         &[Tiling::UnequalTriangles(4), Tiling::TJunctions(3)],
     );
-    assert!(worst < 0.025, "{worst}");
+    assert!(worst < 0.01, "{worst}");
 }
 
 /// One quad per wall against the tiled room, within 1% at every point (measured
-/// 2026-11-29: 0.65% at worst, ceiling point (3.1, 3, 1.2); 4.3% before). What
+/// 2026-11-29: 0.65% at worst, ceiling point (3.1, 3, 1.2), 0.71% with the seams
+/// welded; 4.3% before). What
 /// made the one-quad room 2–5% dark: its ceiling leaves straddled the outline of
 /// the lamp hung 1 cm under it (edges at 2.5 and 3.5 m, never a split of the one
 /// 6 m quad; the tiled room's half-tile splits fall on them), handed their mean
@@ -139,17 +166,32 @@ fn the_tiling_of_the_walls_changes_little() {
 /// a lamp hung this close, but its gap rule also asked for 1e-3 of the scene's
 /// diameter (9 mm here), and 1 cm is exactly 1% of the lamp's size, where the gap
 /// rule stopped: the one-quad ceiling stayed whole. The rule is now the gap against
-/// the lamp's size alone, up to 10% (`geometry::contact::NEAR_GAP_OF_SIZE`).
-///
-/// Still short: a lamp hung lower than that (2–5% of its size under the ceiling
-/// are cut; 10–20% are not) leaves the one-quad room 1–3% under the tiled room at
-/// most points (measured at gaps 0.1 and 0.2 m: 2.9% and 4.8% at worst), and with
-/// the cut, the wall band just under the lamp's plane (y = 2.7 at a 5–10 cm gap)
-/// reads 1–3% over the tiled room.
+/// the lamp's size alone, up to 25% (`geometry::contact::NEAR_GAP_OF_SIZE`); a lamp
+/// hung lower is `a_lamp_hung_lower_lights_one_quad_and_tiled_rooms_alike`.
 #[test]
 fn one_quad_per_wall_agrees_with_the_tiled_room() {
     let worst = worst_apart(Tiling::Quads(6), &[Tiling::Quads(1)]);
     assert!(worst < 0.01, "{worst}");
+}
+
+/// The lamp hung 5, 10 and 20 cm under the ceiling: one quad per wall against the
+/// tiled room, within 1% at every point (measured 2026-11-30: 0.61%, 0.67% and
+/// 0.89% at worst; 1.1%, 2.6% and 4.3% before, with the seams welded). Two
+/// causes, both meshing. The ceiling over a lamp hung 20 cm down sees the lamp's
+/// black back and is dark (path tracer 0.054 at (2.75, 3, 3.05); tiled 0.112, one
+/// quad 0.396): contact meshing cut a ceiling along a lamp's outline up to a gap
+/// of 10% of the lamp's size, now 25%. And the walls have a kink of the direct
+/// light along the lamp's plane (no direct light above it), which a cell
+/// straddling it interpolated across (the wall band at y = 2.7 under the lamp
+/// hung 20 cm down read 2.4–3.7% over the path tracer; one quad against tiled,
+/// 2.15% at worst at gap 0.1 m with the ceiling cut): the reconstruction splits
+/// the cells an emitter's plane crosses (`Solver::straddled_planes`).
+#[test]
+fn a_lamp_hung_lower_lights_one_quad_and_tiled_rooms_alike() {
+    for gap in [0.05, 0.1, 0.2] {
+        let worst = worst_apart_at(gap, Tiling::Quads(6), &[Tiling::Quads(1)]);
+        assert!(worst < 0.01, "gap {gap}: {worst}");
+    }
 }
 
 /// Against the path tracer, the tiled room's error off the lamp falls as eps falls
@@ -187,19 +229,21 @@ fn the_tiled_room_approaches_the_path_tracer_as_eps_falls() {
 }
 
 /// The default stopping follows the round's error estimate: with the lamp hung
-/// 20 cm under the ceiling (too low for contact meshing to cut the ceiling along
-/// it, see `one_quad_per_wall_agrees_with_the_tiled_room`), the one-quad room's
-/// links are all under eps 0.5 after one level while its estimate reads about
-/// 3.9%, above the `eps/20` = 2.5% that eps promises, so it refines on below eps
-/// until the estimate is under the promise; the tiled room's estimate (under 0.1%)
-/// is already under it, and it stops at eps.
+/// 20 cm under the ceiling and turned 10° (contact meshing cuts a ceiling along
+/// parallel polygons only, see `a_lamp_hung_lower_lights_one_quad_and_tiled_rooms_alike`),
+/// the one-quad room's links are all under eps 0.5 after one level while its
+/// estimate reads 3.7%, above the `eps/20` = 2.5% that eps promises, so it refines
+/// on below eps until the estimate is under the promise; the tiled room's estimate
+/// (0.34%) is already under it, and it stops at eps (measured 2026-11-30). Level,
+/// the lamp hung 20 cm down read 3.9% before its ceiling was cut along it, 0.66%
+/// since: no longer a room this test can use.
 #[test]
 fn the_default_solve_refines_below_eps_while_its_estimate_is_above_the_promise() {
     let opts = SolveOptions::default();
     let promised = opts.promised_error();
     assert!((promised - opts.eps / 20.0).abs() < 1e-12, "{promised}");
     let run = |tiling| {
-        let scene = lamp_room_at(tiling, 0.2);
+        let scene = lamp_room_tilted(tiling, 0.2, 10.0);
         let mut s = Solver::new(&scene, SolveOptions::default()).expect("solver");
         let records = s.run(|_, _| {}).expect("run");
         let estimates: Vec<f64> = records.iter().map(|r| r.estimated_error).collect();
