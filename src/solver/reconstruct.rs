@@ -93,6 +93,12 @@ impl Cell {
         })
     }
 
+    /// Corner `i` of the cell in world space.
+    fn corner(&self, i: usize, patches: &Patches) -> DVec3 {
+        let [u, v] = self.uv[i];
+        patches.point(self.patch as usize, u as f64, v as f64)
+    }
+
     /// Which parameter directions `(u, v)` the cell may split along: a direction
     /// whose world edge is at least twice `min_len` (so no child is thinner than
     /// the reconstruction's smallest size), both for a triangle above four times
@@ -104,13 +110,7 @@ impl Cell {
             let ok = self.area >= 4.0 * min_len * min_len;
             return (ok, ok);
         }
-        let p = |i: usize| {
-            patches.point(
-                self.patch as usize,
-                self.uv[i][0] as f64,
-                self.uv[i][1] as f64,
-            )
-        };
+        let p = |i: usize| self.corner(i, patches);
         let len_u = p(0).distance(p(1)).max(p(3).distance(p(2)));
         let len_v = p(0).distance(p(3)).max(p(1).distance(p(2)));
         (len_u >= 2.0 * min_len, len_v >= 2.0 * min_len)
@@ -585,12 +585,8 @@ impl Solver<'_> {
     /// with these splits).
     fn straddled_planes(&self, c: &Cell, planes: &[(DVec3, f64, f64, DVec3)]) -> (bool, bool) {
         let n = c.n as usize;
-        let pts: Vec<DVec3> = (0..n)
-            .map(|i| {
-                self.patches
-                    .point(c.patch as usize, c.uv[i][0] as f64, c.uv[i][1] as f64)
-            })
-            .collect();
+        let pts: [DVec3; 4] = std::array::from_fn(|i| c.corner(i.min(n - 1), &self.patches));
+        let pts = &pts[..n];
         let centre = pts.iter().copied().sum::<DVec3>() / n as f64;
         // A plane through the cell's edge (a lamp set in the ceiling, beside a
         // wall) crosses nothing.
@@ -600,9 +596,9 @@ impl Solver<'_> {
             if centre.distance(cj) > EMITTER_PLANE_REACH * size {
                 continue;
             }
-            let sd: Vec<f64> = pts.iter().map(|&x| nj.dot(x) - dj).collect();
-            let lo = sd.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = sd.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let sd: [f64; 4] = std::array::from_fn(|i| nj.dot(pts[i.min(n - 1)]) - dj);
+            let lo = sd[..n].iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = sd[..n].iter().copied().fold(f64::NEG_INFINITY, f64::max);
             if lo >= -tol || hi <= tol || hi - lo <= EMITTER_PLANE_CELL * size {
                 continue;
             }
