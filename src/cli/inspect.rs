@@ -117,7 +117,7 @@ pub(crate) fn report(file: &Path, r: &Reader, verify: bool) -> anyhow::Result<In
             time: [td.start, td.end],
             materials: r.materials().len(),
             objects: r.objects().len(),
-            moving_objects: r.objects().iter().filter(|o| o.motion.is_some()).count(),
+            moving_objects: r.objects().iter().filter(|o| o.is_moving()).count(),
             patches: r.patches().len(),
             camera: r.camera().is_some(),
         },

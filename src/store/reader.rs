@@ -58,12 +58,13 @@ impl Backing {
     }
 }
 
-/// An object as stored: name and motion (only for objects that move).
+/// An object as stored: name and motion (the keys of an object that moves, the one
+/// key that places a static object off the identity, else none).
 #[derive(Clone, Debug, PartialEq)]
 pub struct StoredObject {
     /// Name.
     pub name: String,
-    /// Motion track; `None` = static.
+    /// Motion track; `None` = static at the identity placement.
     pub motion: Option<MotionTrack>,
 }
 
@@ -71,6 +72,11 @@ impl StoredObject {
     /// Object → world map at `t`.
     pub fn to_world(&self, t: f64) -> DAffine3 {
         self.motion.as_ref().map_or(DAffine3::IDENTITY, |m| m.at(t))
+    }
+
+    /// True if the object's track moves it (a placement alone does not).
+    pub fn is_moving(&self) -> bool {
+        self.motion.as_ref().is_some_and(MotionTrack::is_moving)
     }
 }
 

@@ -10,7 +10,7 @@
 //! ([`crate::solution`], [`crate::scene`]); conversion functions live here and
 //! do not validate semantics (the reader does).
 
-use glam::{DQuat, DVec3};
+use glam::{DAffine3, DQuat, DVec3};
 use rkyv::{Archive, Deserialize, Serialize};
 
 use crate::scene::{Camera, Material, MotionKey, MotionTrack};
@@ -342,4 +342,16 @@ impl From<&ArchivedStatsRecord> for SolveStats {
 /// A motion track as stored: its keys.
 pub fn track_record(track: &MotionTrack) -> Vec<MotionKeyRecord> {
     track.keys.iter().map(MotionKeyRecord::from).collect()
+}
+
+/// What a playback needs of an object's track: every key of a track that moves
+/// the object; the one key of a track that only places it (patches are stored in
+/// object space, so a placement dropped would draw and probe the object where its
+/// file's coordinates put it, not where it was solved); nothing for the identity.
+pub fn stored_track(track: &MotionTrack) -> Option<Vec<MotionKeyRecord>> {
+    if track.is_moving() {
+        return Some(track_record(track));
+    }
+    let key = track.keys.first()?;
+    (key.to_affine() != DAffine3::IDENTITY).then(|| vec![MotionKeyRecord::from(key)])
 }

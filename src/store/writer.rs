@@ -32,7 +32,7 @@ use super::format::{
 };
 use super::records::{
     CameraRecord, ChunkIndexRecord, ChunkRecord, LinkRecord, MaterialRecord, ObjectRecord,
-    PatchRecord, ProvenanceRecord, SceneRecord, StatsRecord, track_record,
+    PatchRecord, ProvenanceRecord, SceneRecord, StatsRecord, stored_track,
 };
 use crate::error::{Error, Result};
 use crate::scene::Scene;
@@ -367,11 +367,7 @@ impl Writer {
                 .iter()
                 .map(|o| ObjectRecord {
                     name: o.name.clone(),
-                    motion: o
-                        .motion
-                        .as_ref()
-                        .filter(|m| m.is_moving())
-                        .map(track_record),
+                    motion: o.motion.as_ref().and_then(stored_track),
                 })
                 .collect(),
             camera: scene.camera.as_ref().map(CameraRecord::from),

@@ -504,7 +504,7 @@ impl Viewer {
         json!({
             "file": self.reader.path().display().to_string(),
             "time": [td.start, td.end],
-            "moving": self.reader.objects().iter().any(|o| o.motion.is_some()),
+            "moving": self.reader.objects().iter().any(|o| o.is_moving()),
             "objects": self.reader.objects().iter().map(|o| o.name.clone()).collect::<Vec<_>>(),
             "patches": self.reader.patches().len(),
             "camera": {

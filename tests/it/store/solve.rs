@@ -92,3 +92,100 @@ fn solve_file_probe_equals_the_solves_probe() {
         }
     }
 }
+
+/// A static object placed by a single motion key (its file coordinates in its own
+/// space, as a glTF node's or an exported scene's are) is stored with that key:
+/// probing the file gives the solve's answer at the placed surfaces bit for bit, and
+/// the answer is the one of the same scene with the block's coordinates written in
+/// world space. Before the fix the writer kept only tracks that move, so a file
+/// drew and probed the block at its file coordinates (a furnished room's people
+/// stood half outside the room, lit, while their footprints stayed on the floor).
+#[test]
+fn a_static_object_placed_by_one_key_is_stored_where_it_was_solved() {
+    use rhier::scene::{MotionKey, MotionTrack};
+    let world = cornell_box(true);
+    let mut placed = world.clone();
+    let shift = DVec3::new(-200.0, 0.0, -150.0);
+    let block = placed
+        .objects
+        .iter_mut()
+        .find(|o| o.name == "tall_block")
+        .unwrap();
+    for p in &mut block.polygons {
+        for v in &mut p.vertices {
+            *v += shift;
+        }
+    }
+    let mut key = MotionKey::identity(0.0);
+    key.translation = -shift;
+    block.motion = Some(MotionTrack { keys: vec![key] });
+    assert!(!placed.has_motion(), "a placement alone is not motion");
+
+    let opts = SolveOptions {
+        max_rounds: 2,
+        ..SolveOptions::default()
+    };
+    let (sol_world, _) = solve(&world, opts.clone()).unwrap();
+    let (sol, _) = solve(&placed, opts).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("placed.rhier");
+    write_solution(&path, &sol, WriteOptions::default()).unwrap();
+    let r = Reader::open(&path).unwrap();
+    let stored = r.objects().iter().find(|o| o.name == "tall_block").unwrap();
+    assert_eq!(stored.to_world(0.0).translation, -shift);
+    assert!(!stored.is_moving());
+    assert!(
+        r.objects()
+            .iter()
+            .filter(|o| o.name != "tall_block")
+            .all(|o| o.motion.is_none())
+    );
+
+    // A point off the middle of each of the tall block's faces (where it stands in
+    // the world), and points on the floor and two walls.
+    let mut points: Vec<ProbePoint> = world
+        .objects
+        .iter()
+        .find(|o| o.name == "tall_block")
+        .unwrap()
+        .polygons
+        .iter()
+        .map(|p| {
+            let n = p.area_vector().normalize();
+            let mid = p.vertices.iter().sum::<DVec3>() / p.vertices.len() as f64;
+            ProbePoint {
+                p: mid + n * 1e-3,
+                n,
+            }
+        })
+        .collect();
+    points.extend([
+        ProbePoint {
+            p: DVec3::new(150.0, 1e-3, 150.0),
+            n: DVec3::Y,
+        },
+        ProbePoint {
+            p: DVec3::new(400.0, 300.0, 559.2 - 1e-3),
+            n: DVec3::NEG_Z,
+        },
+        ProbePoint {
+            p: DVec3::new(1e-3, 300.0, 300.0),
+            n: DVec3::X,
+        },
+    ]);
+    let from_solve = probe(&sol, &points, 0.0).unwrap();
+    let from_file = probe(&r, &points, 0.0).unwrap();
+    assert_eq!(from_file, from_solve);
+    let from_world = probe(&sol_world, &points, 0.0).unwrap();
+    for (i, (a, b)) in from_file.iter().zip(&from_world).enumerate() {
+        for c in 0..3 {
+            // The same surfaces up to the rounding of (v - shift) + shift.
+            assert!(
+                (a[c] - b[c]).abs() <= 1e-3 * b[c].abs().max(1e-3),
+                "point {i} channel {c}: placed {} against world {}",
+                a[c],
+                b[c]
+            );
+        }
+    }
+}
