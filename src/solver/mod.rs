@@ -588,7 +588,22 @@ struct LeafSystem {
     /// move for links it did not touch and updated in place for those it did
     /// ([`Solver::settle_local`], `row_patch`).
     move_cluster_cache: FastMap<u32, Vec<(u32, RowEntries)>>,
+    /// Interactive moves: the static masks ([`rows::RowMasks`]) of the rays at the
+    /// quadrature points of row entries whose leaf and surface source both stand
+    /// still, keyed by `(leaf, receiver of the chain link, source)`, what the rays'
+    /// jitter is keyed by ([`Solver::row_ray_ids`]). Made the first time a move
+    /// computes the entry, then reused: the rays are cast at the moving objects
+    /// alone ([`Solver::move_row_masks`]).
+    move_masks: FastMap<MaskKey, u64>,
+    /// The masks the rows being computed made, taken into `move_masks` after.
+    move_masks_made: std::sync::Mutex<Vec<(MaskKey, u64)>>,
+    /// Rows are being computed for an interactive move ([`Solver::move_row_masks`]).
+    move_rows: bool,
 }
+
+/// What an interactive move's row masks are keyed by: `(leaf, receiver of the
+/// chain link, surface source)` ([`LeafSystem::move_masks`]).
+type MaskKey = (u32, u32, u32);
 
 /// What moves in the scene and where it stands now: per patch and per cluster
 /// whether it moves, and the moving objects' boxes at the time they are placed at.

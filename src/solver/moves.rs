@@ -418,8 +418,14 @@ impl<'a> Solver<'a> {
         let leaves = self.sys.leaves.clone();
         let redo: Vec<ElementId> = leaves.iter().copied().filter(|&l| is_dirty(l)).collect();
         // The kept entries of the links evaluated again are stale: updated in
-        // place (`super::row_patch`).
+        // place (`super::row_patch`), their rays at static geometry known from the
+        // moves before where both ends stand still (`Solver::move_row_masks`).
+        self.sys.move_rows = true;
         let fresh = self.rows_of(&redo, patch);
+        self.sys.move_rows = false;
+        if let Ok(made) = self.sys.move_masks_made.get_mut() {
+            self.sys.move_masks.extend(made.drain(..));
+        }
         let balanced = !old_scale.is_empty();
         let mut fresh = redo.iter().zip(fresh);
         let mut next = fresh.next();

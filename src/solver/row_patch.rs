@@ -25,7 +25,16 @@
 //! that are kept. Where the geometry and the rays are the same, the kept entries
 //! are the ones a recomputation gives, bit for bit (the rays' jitter is keyed by
 //! the leaf, the part and the point).
+//!
+//! The entries computed again cast fewer rays: a surface entry whose leaf and
+//! source both stand still casts the same rays at every move (same keys, same
+//! ends), and the static scene blocks the same of them, so the first move that
+//! computes it keeps which rays the static scene leaves clear (a mask, as a
+//! space-time window keeps them, [`RowMasks`]) and the later moves cast only those,
+//! at the moving objects alone ([`Solver::move_row_masks`]): the same answer, bit
+//! for bit, for a ray that misses the moved object's box at the cost of a box test.
 
+use super::rows::RowMasks;
 use super::*;
 
 /// How far a move dirtied the rows of the leaves under an element or the entries of
@@ -110,6 +119,47 @@ struct Groups {
 }
 
 impl Solver<'_> {
+    /// How the rays of the row entry of `leaf` (quadrature `q`) for surface `e`,
+    /// reached by chain link `l`, treat static geometry: in an interactive move's
+    /// rows, where neither end moves, by the masks an earlier move made
+    /// ([`RowMasks::Known`]: the rays the static scene leaves clear are cast at the
+    /// moving objects alone, to the same answer), or making them
+    /// ([`RowMasks::Make`]); elsewhere [`RowMasks::None`]. The rays' keys and ends
+    /// are those of any other move (the leaf, the link's receiver and `e` key
+    /// them, [`Solver::row_ray_ids`]), and the static scene stands: the masks hold.
+    pub(super) fn move_row_masks(
+        &self,
+        leaf: ElementId,
+        l: u32,
+        e: u32,
+        q: &oracle::Samples,
+    ) -> RowMasks {
+        if !self.sys.move_rows
+            || self.opts.rays_per_point * q.count as u32 > 64
+            || self.elem_moving(leaf)
+            || self.elem_moving(ElementId(e))
+        {
+            return RowMasks::None;
+        }
+        let r = self.links.ends.as_slice()[l as usize].receiver;
+        match self.sys.move_masks.get(&(leaf.0, r, e)) {
+            Some(&bits) => RowMasks::Known(bits),
+            None => RowMasks::Make,
+        }
+    }
+
+    /// Hands the masks `made` to the next moves where `how` made them
+    /// ([`Solver::move_row_masks`]).
+    pub(super) fn keep_move_mask(&self, leaf: ElementId, l: u32, e: u32, how: RowMasks, made: u64) {
+        if !matches!(how, RowMasks::Make) {
+            return;
+        }
+        let r = self.links.ends.as_slice()[l as usize].receiver;
+        if let Ok(mut v) = self.sys.move_masks_made.lock() {
+            v.push(((leaf.0, r, e), made));
+        }
+    }
+
     /// Keeps the old entries `old` of stale link `l` (source `s`) in the row of
     /// `leaf` where the move cannot have changed them, computing the rest again
     /// into `row` (module docs). Returns false, having pushed nothing, where

@@ -477,7 +477,9 @@ impl Solver<'_> {
             }
             let facet = e & FACET_BIT != 0;
             if !facet && geoms[e as usize].patch != u32::MAX {
-                let (coef, v) = self.hidden_row_coef(leaf, l, e, q, n, RowMasks::None).0;
+                let how = self.move_row_masks(leaf, l, e, q);
+                let ((coef, v), made) = self.hidden_row_coef(leaf, l, e, q, n, how);
+                self.keep_move_mask(leaf, l, e, how, made);
                 // Rounded once, so a reused part equals the first.
                 let (coef, v) = match kept.as_deref_mut() {
                     Some(k) => {
@@ -1307,10 +1309,21 @@ impl Solver<'_> {
                         None if maskable => RowMasks::Make,
                         None => RowMasks::None,
                     };
-                    let (cv, made) = self.hidden_row_coef(leaf, l, s, q, n, how);
+                    // An interactive move's rows: masks of their own.
+                    let moved = match how {
+                        RowMasks::None => self.move_row_masks(leaf, l, s, q),
+                        _ => RowMasks::None,
+                    };
+                    let cast = if matches!(moved, RowMasks::None) {
+                        how
+                    } else {
+                        moved
+                    };
+                    let (cv, made) = self.hidden_row_coef(leaf, l, s, q, n, cast);
                     if matches!(how, RowMasks::Make) {
                         out.masks.push((key, made));
                     }
+                    self.keep_move_mask(leaf, l, s, moved, made);
                     if steady {
                         out.hidden.push((key, cv));
                     }
