@@ -2801,9 +2801,10 @@ mod tests {
     /// After the first solve the cluster links are evaluated again by power
     /// ([`Solver::reevaluate_cluster_sources`]); the leaf rows then reuse the cluster
     /// parts that do not hang on those estimates ([`Solver::drop_estimate_parts`])
-    /// and cast the others again. The rows so made equal the rows cast afresh, entry
-    /// by entry, with the parts opened to surfaces and with the facets; and the parts
-    /// reused are not none (else the test would show nothing).
+    /// and cast the others again, walking again the links that hold both. The rows
+    /// so made equal the rows cast afresh, entry by entry, with the parts opened to
+    /// surfaces and with the facets; and the parts reused are not none, nor the
+    /// links walked again with some of them (else the test would show nothing).
     #[test]
     fn rows_reusing_the_parts_the_estimates_leave_equal_rows_cast_afresh() {
         let scene = cube_grid();
@@ -2817,6 +2818,8 @@ mod tests {
             s.drop_estimate_parts();
             let kept: usize = s.sys.cluster_cache.values().map(Vec::len).sum();
             assert!(kept > 0 && kept <= before, "kept {kept} of {before}");
+            let walked = s.links_to_walk_again();
+            assert!(walked > 0, "facets {facets}: no link walked again");
             s.compute_leaf_rows();
             let reused = (s.sys.row_sources.clone(), s.sys.row_coefs.clone());
             s.sys.cluster_cache.clear();

@@ -182,6 +182,24 @@ const PART_OWN_RAYS: f32 = -1.0;
 /// the radiosity: a sub-cluster (rays to points drawn by power), or a facet one of
 /// whose points cast no ray and took the link's fraction.
 const PART_ON_ESTIMATE: f32 = -2.0;
+/// [`ClusterPart::elem`] of the mark [`Solver::drop_estimate_parts`] puts first in a
+/// link's kept parts when some hung on the estimate: the link is walked again, its
+/// other parts taken as kept.
+const WALK_AGAIN: u32 = u32::MAX;
+/// Leaves whose rows [`Solver::compute_leaf_rows`] makes before it frees the
+/// cluster parts they read.
+const ROW_CHUNK: usize = 1024;
+
+/// What [`Solver::push_kept_cluster`] found kept of a link.
+enum KeptParts<'p> {
+    /// Nothing: the link is cast afresh.
+    None,
+    /// Every part, pushed.
+    Used,
+    /// The parts that do not hang on the estimate, in the walk's order: the
+    /// link is walked again and only the others cast.
+    Walk(&'p [ClusterPart]),
+}
 
 /// True if cluster `g`'s box lies wholly behind the tangent plane (normal `n`) of
 /// every point of `q`: nothing in it is above a point's horizon, so it gives the
@@ -454,8 +472,30 @@ impl Solver<'_> {
         n: DVec3,
         s: u32,
         row: &mut Vec<(u32, f64)>,
+        kept: Option<&mut Vec<ClusterPart>>,
+        reuse: &mut impl FnMut(u32) -> bool,
+    ) {
+        self.push_cluster_known(leaf, l, q, n, s, row, kept, reuse, &[]);
+    }
+
+    /// [`Solver::push_cluster`], taking the parts of `known` (the parts an earlier
+    /// round kept of link `l` that do not hang on its estimate, in the order the
+    /// walk met them: [`Solver::drop_estimate_parts`]) as they were kept instead
+    /// of casting their rays again; the others are cast. The walk into the
+    /// cluster depends on the geometry only, so it meets the known parts in the
+    /// same order, and the row equals the row cast afresh entry by entry.
+    #[allow(clippy::too_many_arguments)]
+    fn push_cluster_known(
+        &self,
+        leaf: ElementId,
+        l: u32,
+        q: &oracle::Samples,
+        n: DVec3,
+        s: u32,
+        row: &mut Vec<(u32, f64)>,
         mut kept: Option<&mut Vec<ClusterPart>>,
         reuse: &mut impl FnMut(u32) -> bool,
+        known: &[ClusterPart],
     ) {
         let t = &self.links.transports.as_slice()[l as usize];
         let mut vis = t.visibility as f64;
@@ -470,7 +510,16 @@ impl Solver<'_> {
         }
         let geoms = self.elems.geoms.as_slice();
         let patch = geoms[leaf.ix()].patch;
+        let mut next_known = 0;
         let mut part = |e: u32, k: [f64; 4]| {
+            if let Some(p) = known.get(next_known).filter(|p| p.elem == e) {
+                next_known += 1;
+                self.push_part(q, n, p, row);
+                if let Some(k) = kept.as_deref_mut() {
+                    k.push(*p);
+                }
+                return;
+            }
             let coef: f64 = (0..q.count).map(|i| q.weights[i] * k[i]).sum::<f64>();
             if coef <= 0.0 {
                 return;
@@ -540,64 +589,106 @@ impl Solver<'_> {
 
     /// After [`Solver::reevaluate_cluster_sources`] has evaluated the cluster links
     /// again with the radiosity known: drops the kept cluster parts
-    /// ([`ClusterPart`]) of every link that holds a part hanging on the link's
-    /// estimate or on the radiosity ([`PART_ON_ESTIMATE`]), or whose new estimate
-    /// [`Solver::push_cluster`] would now take nothing from (a surface receiver and a
-    /// link that sees nothing). What is left, surface parts and facets seen by
+    /// ([`ClusterPart`]) that hang on the link's estimate or on the radiosity
+    /// ([`PART_ON_ESTIMATE`]), marking their links to be walked again
+    /// ([`WALK_AGAIN`]), and every part of a link whose new estimate
+    /// [`Solver::push_cluster`] would now take nothing from (a surface receiver and
+    /// a link that sees nothing). What is left, surface parts and facets seen by
     /// their own rays, is what the rows would cast again to the same answer:
     /// dropping everything made the second round cast every leaf's rows once more,
-    /// as long as the first round (`gen_cubes 20`, BENCHMARKS.md "Scale").
+    /// as long as the first round (`gen_cubes 20`, BENCHMARKS.md "Scale"); dropping
+    /// every part of a link with one sub-cluster in it cast its surface parts
+    /// again (`the_clutter_keeps_its_light`: 121.5 CPU s, 93.4 with them kept;
+    /// BENCHMARKS.md "Scale").
     pub(super) fn drop_estimate_parts(&mut self) {
         let tr = self.links.transports.as_slice();
         let ends = self.links.ends.as_slice();
         let geoms = self.elems.geoms.as_slice();
         for parts in self.sys.cluster_cache.values_mut() {
+            let mut left = Vec::with_capacity(parts.len());
             let mut from = 0;
-            let mut out = 0;
             while from < parts.len() {
                 let l = parts[from].link;
                 let to = from + parts[from..].partition_point(|p| p.link == l);
                 let t = &tr[l as usize];
                 let surface_receiver = geoms[ends[l as usize].receiver as usize].patch != u32::MAX;
                 let empty = surface_receiver && (t.f <= 0.0 || t.visibility <= 0.0);
-                let on_estimate = parts[from..to].iter().any(|p| p.vis == PART_ON_ESTIMATE);
-                if !empty && !on_estimate {
-                    parts.copy_within(from..to, out);
-                    out += to - from;
+                let link = &parts[from..to];
+                if empty {
+                    // Cast again, to nothing.
+                } else if link.iter().any(|p| p.vis == PART_ON_ESTIMATE) {
+                    // Walked again: the parts that hang on the estimate are cast,
+                    // the others taken as kept.
+                    left.push(ClusterPart {
+                        link: l,
+                        elem: WALK_AGAIN,
+                        coef: 0.0,
+                        vis: PART_ON_ESTIMATE,
+                    });
+                    left.extend(link.iter().filter(|p| p.vis != PART_ON_ESTIMATE));
+                } else {
+                    left.extend_from_slice(link);
                 }
                 from = to;
             }
-            parts.truncate(out);
+            left.shrink_to_fit();
+            *parts = left;
         }
         self.sys.cluster_cache.retain(|_, parts| !parts.is_empty());
     }
 
+    /// How many links' kept parts [`Solver::drop_estimate_parts`] left to walk
+    /// again ([`WALK_AGAIN`]).
+    #[cfg(test)]
+    pub(super) fn links_to_walk_again(&self) -> usize {
+        self.sys
+            .cluster_cache
+            .values()
+            .flatten()
+            .filter(|p| p.elem == WALK_AGAIN)
+            .count()
+    }
+
+    /// The row entries of kept cluster part `p` ([`ClusterPart`]): a surface part
+    /// opened at its coefficient and visibility, a cluster part at its entry.
+    fn push_part(&self, q: &oracle::Samples, n: DVec3, p: &ClusterPart, row: &mut Vec<(u32, f64)>) {
+        if p.vis < 0.0 {
+            if p.coef > 0.0 {
+                row.push((p.elem, p.coef as f64));
+            }
+        } else {
+            self.push_opened(q, n, p.elem, p.coef as f64, p.vis as f64, row, None);
+        }
+    }
+
     /// The row entries of cluster link `l` from the parts an earlier round kept
-    /// (`parts`, sorted by link; [`ClusterPart`]); false if it kept none for `l`
-    /// (a link new since, or one whose parts all gave nothing: those are cast
-    /// again, which finds nothing again).
-    fn push_kept_cluster(
+    /// (`parts`, sorted by link; [`ClusterPart`]): [`KeptParts::None`] if it kept
+    /// none for `l` (a link new since, or one whose parts all gave nothing: those
+    /// are cast again, which finds nothing again), [`KeptParts::Walk`] with the
+    /// parts to take as kept where some hang on an estimate that changed
+    /// ([`Solver::drop_estimate_parts`]; nothing is pushed then).
+    fn push_kept_cluster<'p>(
         &self,
         q: &oracle::Samples,
         n: DVec3,
         l: u32,
-        parts: &[ClusterPart],
+        parts: &'p [ClusterPart],
         row: &mut Vec<(u32, f64)>,
         kept: &mut Vec<ClusterPart>,
-    ) -> bool {
+    ) -> KeptParts<'p> {
         let from = parts.partition_point(|p| p.link < l);
         let to = from + parts[from..].partition_point(|p| p.link == l);
+        if to == from {
+            return KeptParts::None;
+        }
+        if parts[from].elem == WALK_AGAIN {
+            return KeptParts::Walk(&parts[from + 1..to]);
+        }
         for p in &parts[from..to] {
-            if p.vis < 0.0 {
-                if p.coef > 0.0 {
-                    row.push((p.elem, p.coef as f64));
-                }
-            } else {
-                self.push_opened(q, n, p.elem, p.coef as f64, p.vis as f64, row, None);
-            }
+            self.push_part(q, n, p, row);
         }
         kept.extend_from_slice(&parts[from..to]);
-        to > from
+        KeptParts::Used
     }
 
     /// A leaf's row coefficient for the partly hidden chain link `l` to surface
@@ -972,6 +1063,7 @@ impl Solver<'_> {
         // rays follow the radiosity).
         let record = self.opts.keep_passive && self.has_motion() && self.st.window.is_none();
         self.sys.move_cluster_cache.clear();
+        let mut parts_before = std::mem::take(&mut self.sys.cluster_cache);
         // A window's frame records its entries with a moving end, and takes them
         // between the solved frames around it where they hold.
         let timed = self.st.window.as_ref().is_some_and(|w| w.in_frame);
@@ -994,12 +1086,21 @@ impl Solver<'_> {
             passed,
             radiosities,
         };
-        let rows: Vec<LeafRow> = self
-            .sys
-            .leaves
-            .par_iter()
-            .map(|&leaf| self.leaf_row(&inputs, leaf))
-            .collect();
+        // The rows are made a chunk of leaves at a time, each chunk's kept parts
+        // freed once read: the parts kept and the parts being kept are not held
+        // whole at once (with the parts of the links walked again kept, the
+        // 32 × 32 boxes of `the_clutter_keeps_its_light` peaked at 1.28 GB
+        // instead of 1.01).
+        let mut rows: Vec<LeafRow> = Vec::with_capacity(self.sys.leaves.len());
+        for chunk in self.sys.leaves.chunks(ROW_CHUNK) {
+            rows.par_extend(chunk.par_iter().map(|&leaf| {
+                let parts = parts_before.get(&leaf.0).map(Vec::as_slice);
+                self.leaf_row(&inputs, leaf, parts)
+            }));
+            for leaf in chunk {
+                parts_before.remove(&leaf.0);
+            }
+        }
         self.store_leaf_rows(rows, keep_rows);
     }
 
@@ -1031,13 +1132,19 @@ impl Solver<'_> {
         };
         leaves
             .par_iter()
-            .map(|&leaf| self.leaf_row(&inputs, leaf))
+            .map(|&leaf| self.leaf_row(&inputs, leaf, None))
             .collect()
     }
 
     /// One leaf's row ([`Solver::compute_leaf_rows`]): each chain link's source
-    /// opened at its coefficient over the leaf, from the caches where they hold.
-    fn leaf_row(&self, inputs: &RowInputs, leaf: ElementId) -> LeafRow {
+    /// opened at its coefficient over the leaf, from the caches where they hold
+    /// (`parts_before`: the cluster parts an earlier round kept for the leaf).
+    fn leaf_row(
+        &self,
+        inputs: &RowInputs,
+        leaf: ElementId,
+        parts_before: Option<&[ClusterPart]>,
+    ) -> LeafRow {
         let RowInputs {
             geoms,
             ends,
@@ -1066,11 +1173,7 @@ impl Solver<'_> {
         let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
         // A static solve reuses its cluster parts from round to round; an
         // interactive move (`keep_clusters`) the entries of the links it left.
-        let clusters_before = self
-            .sys
-            .cluster_cache
-            .get(&leaf.0)
-            .filter(|_| keep_rows && !keep_clusters);
+        let clusters_before = parts_before.filter(|_| keep_rows && !keep_clusters);
         let moved_before = self
             .sys
             .move_cluster_cache
@@ -1128,12 +1231,27 @@ impl Solver<'_> {
             let before = before.filter(|_| !stale);
             let at = out.row.len();
             if gs.patch == u32::MAX {
-                let reused = clusters_before.is_some_and(|parts| {
+                let reused = clusters_before.map_or(KeptParts::None, |parts| {
                     self.push_kept_cluster(&q, n, l, parts, &mut out.row, &mut out.clusters)
                 });
-                if !reused {
+                let known = match reused {
+                    KeptParts::Used => None,
+                    KeptParts::None => Some(&[][..]),
+                    KeptParts::Walk(known) => Some(known),
+                };
+                if let Some(known) = known {
                     let kept = Some(&mut out.clusters).filter(|_| keep_rows && !keep_clusters);
-                    self.push_cluster(leaf, l, &q, n, s, &mut out.row, kept, &mut |_| false);
+                    self.push_cluster_known(
+                        leaf,
+                        l,
+                        &q,
+                        n,
+                        s,
+                        &mut out.row,
+                        kept,
+                        &mut |_| false,
+                        known,
+                    );
                 }
                 if keep_clusters {
                     out.move_clusters.push((l, out.row[at..].into()));
