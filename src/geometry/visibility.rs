@@ -25,7 +25,7 @@ use std::time::Duration;
 
 use glam::{DAffine3, DVec3, UVec2, Vec3A};
 use obvhs::{
-    BvhBuildParams, aabb::Aabb, cwbvh::CwBvh, cwbvh::builder::build_cwbvh_from_tris, ray::Ray,
+    BvhBuildParams, aabb::Aabb, cwbvh::CwBvh, cwbvh::builder::build_cwbvh, ray::Ray,
     triangle::Triangle,
 };
 
@@ -158,8 +158,8 @@ impl Part {
         if tris.is_empty() {
             return None;
         }
-        let bvh = build_cwbvh_from_tris(
-            &tris,
+        let bvh = build_cwbvh(
+            &padded_boxes(&tris64),
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
@@ -732,6 +732,39 @@ fn from_unit(unit: f64) -> DAffine3 {
 /// Triangles of a part as they are gathered: f32 corners for the BVH, the patch of
 /// each, and the f64 corners (part space).
 type Tris = (Vec<Triangle>, Vec<u32>, Vec<[DVec3; 3]>);
+
+/// The BVH's boxes of the triangles `tris` (f64 corners, part space): each
+/// triangle's f64 box widened by [`BOX_PAD`] of the part's size plus its farthest
+/// coordinate, so that the f32 traversal (the ray and the node boxes rounded to
+/// f32) reaches every triangle the f64 test hits ([`SceneBvh::occluded_cached`]).
+///
+/// Why: boxes of the f32 triangles, exact to their corners, lost a hit that the
+/// f64 test makes within the f32 round-off of a triangle's edge (the f32 ray
+/// passes the edge on the other side). In `tests/it/solver/scale_free.rs`'s
+/// touching boxes, a final-gather point 10⁻⁴ m beside the small box's foot cast a
+/// ray to the ceiling that crosses the box's side 6·10⁻⁸ m from its vertical edge:
+/// the traversal missed that side in metres and millimetres and found it in
+/// kilometres, and the point read 0.34% apart between the scales.
+fn padded_boxes(tris: &[[DVec3; 3]]) -> Vec<Aabb> {
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for t in tris {
+        for &v in t {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    let reach = lo.abs().max(hi.abs()).max_element();
+    let pad = ((hi - lo).length() + reach) * BOX_PAD;
+    let f = |p: DVec3| Vec3A::new(p.x as f32, p.y as f32, p.z as f32);
+    tris.iter()
+        .map(|&[a, b, c]| Aabb::new(f(a.min(b).min(c) - pad), f(a.max(b).max(c) + pad)))
+        .collect()
+}
+
+/// Relative widening of the BVH's triangle boxes ([`padded_boxes`]): 16 f32 ulps
+/// of the part's size, as [`Part::update_box`] pads a part's world box. A ray's
+/// f32 round-off moves it by a few ulps of its coordinates and length.
+const BOX_PAD: f64 = 1e-6;
 
 fn push_triangles(v: &[DVec3], unit: f64, patch: u32, (tris, tp, t64): &mut Tris) {
     let f = |p: DVec3| {

@@ -423,22 +423,31 @@ impl Solver<'_> {
             let key = oracle::hash3(self.opts.seed ^ 0xc105, s as u64, receiver_patch as u64);
             // Visibility by power, emission by axes: the model of the links.
             // `clear`: the caller supplies the visibility.
+            // Partly hidden: cast again with more rays (`PARTIAL_CLUSTER_RAYS`).
             let shared = || {
                 if clear {
                     1.0
                 } else {
-                    oracle::point_cluster_visibility(
-                        &self.elems,
-                        &self.bvh,
-                        x,
-                        n,
-                        receiver_patch,
-                        ElementId(s as u32),
-                        self.opts.cluster_rays,
-                        key,
-                        SOURCES_BY_POWER,
-                    )
-                    .0
+                    let cast = |m| {
+                        oracle::point_cluster_visibility(
+                            &self.elems,
+                            &self.bvh,
+                            x,
+                            n,
+                            receiver_patch,
+                            ElementId(s as u32),
+                            m,
+                            key,
+                            SOURCES_BY_POWER,
+                        )
+                        .0
+                    };
+                    let v = cast(self.opts.cluster_rays);
+                    if v > 0.0 && v < 1.0 {
+                        cast(self.opts.cluster_rays * super::rows::PARTIAL_CLUSTER_RAYS)
+                    } else {
+                        v
+                    }
                 }
             };
             let at = oracle::Samples {
@@ -474,9 +483,21 @@ impl Solver<'_> {
                 }
                 let own = if e & FACET_BIT != 0 && !clear {
                     let m = self.opts.cluster_rays;
-                    Some(self.part_visibility(x, n, receiver_patch, e, m, 0))
-                        .filter(|&(_, rays)| rays > 0)
-                        .map(|(v, _)| v)
+                    let (v, rays) = self.part_visibility(x, n, receiver_patch, e, m, 0);
+                    Some(if rays > 0 && v > 0.0 && v < 1.0 {
+                        self.part_visibility(
+                            x,
+                            n,
+                            receiver_patch,
+                            e,
+                            m * super::rows::PARTIAL_CLUSTER_RAYS,
+                            0,
+                        )
+                    } else {
+                        (v, rays)
+                    })
+                    .filter(|&(_, rays)| rays > 0)
+                    .map(|(v, _)| v)
                 } else {
                     None
                 };

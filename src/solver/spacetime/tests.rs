@@ -788,8 +788,12 @@ fn a_frame_between_takes_the_moving_rows_that_hold_and_solves_as_without() {
     );
     assert_eq!(fresh_cost.rows_between, 0);
     assert!(cost.rows_moving > 1000, "{} moving rows", cost.rows_moving);
+    // Over 40%: 1369 of 2923 rows (was 1972 of 3516 before the floor and desk
+    // pieces inside the desk's open legs were dropped as hidden, 8 pieces whose
+    // ~600 rows saw nothing and were all taken; the rows that remain are taken
+    // as before).
     assert!(
-        2 * cost.rows_between > cost.rows_moving,
+        5 * cost.rows_between > 2 * cost.rows_moving,
         "{} of {} taken",
         cost.rows_between,
         cost.rows_moving

@@ -271,3 +271,34 @@ fn the_footprint_of_a_flat_box_is_dropped_though_its_top_covers_it() {
     assert_eq!(floor.len(), 8, "the floor around the slab");
     assert!((area - 15.0).abs() < 1e-9, "floor area {area}");
 }
+
+/// A pillar from floor to ceiling modelled by its four sides only (its ends would
+/// lie on the floor and ceiling): the floor and ceiling under it lie inside it and
+/// are dropped, though straight above the floor's footprint is the ceiling's
+/// footprint, a front face (every slanted ray meets the sides' backs). Kept, they
+/// lost their light on those backs and the room read open (`solver::enclosures`).
+#[test]
+fn the_footprints_of_a_pillar_without_ends_are_dropped_from_floor_and_ceiling() {
+    use crate::common::shapes::{self, Tiling};
+    use rhier::scene::MaterialId;
+    let m = MaterialId(0);
+    let polygons = shapes::room_with_pillar_and_box(Tiling::Quads(6), m);
+    let scene = shapes::uniform_scene(polygons, 0.5, 1.0);
+    let before = Patches::at_time(&scene, 0.0);
+    let (after, stats) = split_at_contacts(&scene, &before, 0.0);
+    // Floor (y = 0, facing up) and ceiling (y = 3, facing down) areas.
+    let area = |p: &Patches, y: f64, up: f64| -> f64 {
+        (0..p.len())
+            .filter(|&i| p.normals[i].y * up > 0.99 && (p.polys[i].v[0].y - y).abs() < 1e-9)
+            .map(|i| p.areas[i])
+            .sum()
+    };
+    eprintln!("{stats:?}");
+    let footprint = 0.8 * 0.8;
+    for (y, up) in [(0.0, 1.0), (3.0, -1.0)] {
+        let (was, is) = (area(&before, y, up), area(&after, y, up));
+        assert!((was - 36.0).abs() < 1e-9, "{was}");
+        assert!((is - (36.0 - footprint)).abs() < 1e-9, "y = {y}: {is}");
+    }
+    assert_eq!(stats.pieces_hidden, 2, "{stats:?}");
+}

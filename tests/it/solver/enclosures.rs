@@ -12,7 +12,7 @@ use glam::DVec3;
 use rhier::playback::probe::{ProbePoint, probe};
 use rhier::scene::{MaterialId, Polygon, Scene};
 use rhier::solution::Solution;
-use rhier::solver::{SolveOptions, solve};
+use rhier::solver::{SolveOptions, Solver, solve};
 
 const M: MaterialId = MaterialId(0);
 
@@ -108,22 +108,28 @@ fn closed_shapes_reach_e_over_one_minus_rho_up_to_rho_0_999() {
         "L-shaped room",
         &shapes::l_room(3.0, 2.5, Tiling::Quads(3), M),
         &rhos,
-        // Short of the 1% asked: 1.3% at rho 0.5, 2.3–2.6% from 0.9 on, at the
-        // re-entrant corner's foot (2026-11-29); 2.65% at 0.99 and 3.05% at 0.999
-        // since the stored corners carry the reconstruction's mean shift (they
-        // are set for the cells' means, not the gathered point: `MEAN_SHIFT` in
-        // src/solver/reconstruct.rs). Bar 3% -> 3.5%.
-        0.035,
+        // Short of the 1% asked at the re-entrant corner's foot, (3, 0, 3):
+        // 0.95% at rho 0.5, 1.83–1.89% from 0.9 on (2026-11-30; was 1.3% and
+        // 2.3–3.05% before partly hidden clusters got more rays,
+        // `PARTIAL_CLUSTER_RAYS`). The stored corners carry the reconstruction's
+        // mean shift (set for the cells' means, not the gathered point:
+        // `MEAN_SHIFT` in src/solver/reconstruct.rs). Bar 3.5% -> 2.5%.
+        0.025,
     );
 }
 
-/// A room with a pillar from floor to ceiling and a floating box: probed at points
-/// on every kind of surface, away from the pillar's foot. Short of the 1% asked
-/// (2026-11-29): the pillar's sides read 2.2% low at `ρ = 0.5` and 5.8% at 0.9,
-/// the rest within 0.6% and 2.8%; at 0.99 every point is 21–25% low. The floor
-/// and ceiling pieces under the pillar face its inside and lose their light on
-/// its sides' backs, so the closure test finds the room open and its rows, which
-/// sum 0.2–2.5% under 1 beside the pillar, are not balanced.
+/// A room with a pillar from floor to ceiling and a floating box, probed on every
+/// kind of surface: within 1% of `E/(1 − ρ)` up to `ρ = 0.999` (measured
+/// 2026-11-30: worst 0.87%, the box's side at 0.999; 0.46% at 0.5). The room must
+/// be closed and balanced from 0.99 on. Before, the floor and ceiling pieces under
+/// the pillar (it has no ends) were kept: they lost their light on the sides'
+/// backs, the closure test found the room open, and at 0.99 every point read
+/// 21–25% low (contact meshing now drops them, `SLANTED_RAYS` in
+/// src/geometry/contact.rs). With 8 rays to a partly hidden cluster the final
+/// gather read the ceiling 1.4% low and the box's side 1.45% high
+/// (`PARTIAL_CLUSTER_RAYS` in src/solver/rows.rs). Stored corners (not probed) are
+/// further off: 3.7% at the back wall level with the box's top, (4.25, 2.375, 6),
+/// from the same cluster rays (1.0% with 8 times `cluster_rays`).
 #[test]
 fn room_with_pillar_and_floating_box_reaches_e_over_one_minus_rho() {
     let polys = shapes::room_with_pillar_and_box(Tiling::Quads(6), M);
@@ -138,17 +144,36 @@ fn room_with_pillar_and_floating_box_reaches_e_over_one_minus_rho() {
         (DVec3::new(3.5, 1.5, 4.2), -DVec3::X),
     ]
     .map(|(p, n)| ProbePoint { p, n });
-    for (rho, tol) in [(0.5, 0.03), (0.9, 0.07)] {
+    let mut failed = Vec::new();
+    for rho in [0.5, 0.9, 0.99, 0.999] {
         let scene = shapes::uniform_scene(polys.clone(), rho, 1.0);
-        let (sol, _) = solve(&scene, SolveOptions::default()).unwrap();
+        let mut solver = Solver::new(&scene, SolveOptions::default()).unwrap();
+        solver.run(|_, _| {}).unwrap();
+        let sol = solver.solution();
+        eprintln!(
+            "pillar room rho {rho}: closed {:?}, balanced {}, balance {:.5}",
+            solver.is_closed(),
+            solver.rows_balanced(),
+            solver.power_balance()
+        );
+        assert_eq!(
+            solver.is_closed(),
+            Some(true),
+            "rho {rho}: the room reads open"
+        );
         let exact = 1.0 / (1.0 - rho);
+        let (worst, at) = worst_corner(&sol, exact);
+        eprintln!("pillar room rho {rho}: worst corner {worst:.2e} at {at:.3}");
         let b = probe(&sol, &points, 0.0).unwrap();
         for (p, v) in points.iter().zip(&b) {
             let err = (v[0] - exact).abs() / exact;
             eprintln!("pillar room rho {rho}: {:?} {:.4} ({err:.2e})", p.p, v[0]);
-            assert!(err < tol, "rho {rho}: {:?} reads {} for {exact}", p.p, v[0]);
+            if err >= 0.01 {
+                failed.push(format!("rho {rho}: {:?} reads {} for {exact}", p.p, v[0]));
+            }
         }
     }
+    assert!(failed.is_empty(), "{failed:#?}");
 }
 
 /// The answer does not depend on the order of the polygons in the file: the room

@@ -27,9 +27,12 @@
 //! point on the edge of two leaves, the middle of a patch, took one leaf or the
 //! other). Before, the Cornell box at ×1000 differed by up to 2.8% (420 of 950
 //! points over 1e-3) and the boxes at 790 and 812 of their points; now no point
-//! differs by more than 1e-3: the Cornell box's leaves by at most 1e-7 (the f32
-//! the leaves keep), the boxes' by 1e-7 at ×0.001 and by up to 8e-4 at ×1000 at
-//! a few corners (a decision not traced yet, under the bar).
+//! differs by more than 1e-4: the Cornell box by at most 1.3e-8, the boxes by
+//! 1.3e-5 at ×0.001 and 1.9e-5 at ×1000. The boxes had read up to 1e-3 apart at
+//! ×1000 at the small box's foot until the BVH's boxes were padded beyond f32
+//! round-off (`geometry::visibility`, `padded_boxes`): a gather point 10⁻⁴ m
+//! beside the box cast a ray that crosses the box's side 6·10⁻⁸ m from its edge,
+//! and the f32 traversal found that side at one scale only.
 
 use glam::DVec3;
 use rhier::geometry::Patches;
@@ -56,7 +59,7 @@ fn scaled(scene: &Scene, s: f64) -> Scene {
 /// Solves `scene` at scale 1 and at each of `scales` with `opts`, probes each at the
 /// same points (scaled alike) and returns, per scale, the worst difference from
 /// scale 1 (module docs), the point where it is, and how many points differ by more
-/// than 1e-3.
+/// than [`BAR`].
 fn scale_differences(
     name: &str,
     scene: &Scene,
@@ -90,13 +93,13 @@ fn scale_differences(
             let d = (0..3)
                 .map(|c| (a[c] - b[c]).abs() / a[c].abs().max(0.01 * rms))
                 .fold(0.0, f64::max);
-            count += usize::from(d > 1e-3);
+            count += usize::from(d > BAR);
             if d > worst {
                 (worst, at_point) = (d, i);
             }
         }
         eprintln!(
-            "{name} ×{s}: worst {worst:.2e} at {} ({count} of {} over 1e-3)",
+            "{name} ×{s}: worst {worst:.2e} at {} ({count} of {} over {BAR:.0e})",
             pts[at_point].0,
             pts.len()
         );
@@ -104,6 +107,9 @@ fn scale_differences(
     }
     out
 }
+
+/// Largest difference allowed between scales (module docs).
+const BAR: f64 = 1e-4;
 
 /// Power-of-two scales: mm ↔ m (2^±10) and far beyond.
 const EXACT_SCALES: [f64; 4] = [
@@ -152,7 +158,7 @@ fn same_answer_in_millimetres_and_kilometres() {
     for (name, scene, gaps) in cases {
         for (s, w, p, count) in scale_differences(name, &scene, &gaps, &[1000.0, 0.001], &opts) {
             assert!(
-                w <= 1e-3,
+                w <= BAR,
                 "{name} ×{s}: {count} points differ, worst {w:.2e} at {p}"
             );
         }
