@@ -18,6 +18,22 @@ def quad(a, b, c, d, m):
     return {"vertices": [a, b, c, d], "material": m}
 
 
+# The room's materials (tools/gen_curved.py shares them, its room and its lamp).
+MATERIALS = {
+    "white": {"reflectance": [0.7, 0.7, 0.7]},
+    "red": {"reflectance": [0.6, 0.1, 0.1]},
+    "green": {"reflectance": [0.1, 0.6, 0.1]},
+    "lamp": {"reflectance": [0.5, 0.5, 0.5], "emission": [20.0, 20.0, 20.0]},
+}
+# The lamp's extent in x and z: a 2 x 2 m square 1 cm under the ceiling.
+LAMP = (4.0, 6.0)
+
+
+def lamp_panel(h):
+    l0, l1 = LAMP
+    return [quad([l0, h - 0.01, l0], [l1, h - 0.01, l0], [l1, h - 0.01, l1], [l0, h - 0.01, l1], "lamp")]
+
+
 def room(size, h):
     s = size
     return [
@@ -78,8 +94,7 @@ def main():
     lo, hi = block(sys.argv[3:], n)
     size, h = 10.0, 4.0
     polys = room(size, h)
-    l0, l1 = 4.0, 6.0
-    lamp = [quad([l0, h - 0.01, l0], [l1, h - 0.01, l0], [l1, h - 0.01, l1], [l0, h - 0.01, l1], "lamp")]
+    lamp = lamp_panel(h)
     cubes = []
     pitch = (size - 1.0) / n
     for i in range(lo, hi):
@@ -91,12 +106,7 @@ def main():
             cubes += faces
     scene = {
         "rhier_scene": 1,
-        "materials": {
-            "white": {"reflectance": [0.7, 0.7, 0.7]},
-            "red": {"reflectance": [0.6, 0.1, 0.1]},
-            "green": {"reflectance": [0.1, 0.6, 0.1]},
-            "lamp": {"reflectance": [0.5, 0.5, 0.5], "emission": [20.0, 20.0, 20.0]},
-        },
+        "materials": MATERIALS,
         "objects": [
             {"name": "room", "polygons": polys},
             {"name": "lamp", "polygons": lamp},

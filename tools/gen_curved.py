@@ -23,20 +23,8 @@ import random
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from gen_furnished import poly, revolve, rnd, sphere  # noqa: E402
-
-
-def room(size, h):
-    s = size
-    q = lambda a, b, c, d, m: poly([a, b, c, d], m)  # noqa: E731
-    return [
-        q([0, 0, 0], [0, 0, s], [s, 0, s], [s, 0, 0], "white"),
-        q([0, h, 0], [s, h, 0], [s, h, s], [0, h, s], "white"),
-        q([0, 0, s], [0, h, s], [s, h, s], [s, 0, s], "white"),
-        q([0, 0, 0], [s, 0, 0], [s, h, 0], [0, h, 0], "white"),
-        q([0, 0, 0], [0, h, 0], [0, h, s], [0, 0, s], "red"),
-        q([s, 0, 0], [s, 0, s], [s, h, s], [s, h, 0], "green"),
-    ]
+from gen_cubes import LAMP, MATERIALS, lamp_panel, room  # noqa: E402
+from gen_furnished import revolve, rnd, sphere  # noqa: E402
 
 
 def torus(centre, big, small, m, res):
@@ -85,17 +73,12 @@ def main():
             else:
                 objects_polys += vase([cx, 0.0, cz], 2.2 * r, r, "white", args.res)
                 tops.append(None)
-    l0, l1 = 4.0, 6.0
-    lamp = [poly([[l0, h - 0.01, l0], [l1, h - 0.01, l0], [l1, h - 0.01, l1], [l0, h - 0.01, l1]], "lamp")]
+    l0, l1 = LAMP
+    lamp = lamp_panel(h)
     walls = room(size, h)
     scene = {
         "rhier_scene": 1,
-        "materials": {
-            "white": {"reflectance": [0.7, 0.7, 0.7]},
-            "red": {"reflectance": [0.6, 0.1, 0.1]},
-            "green": {"reflectance": [0.1, 0.6, 0.1]},
-            "lamp": {"reflectance": [0.5, 0.5, 0.5], "emission": [20.0, 20.0, 20.0]},
-        },
+        "materials": MATERIALS,
         "objects": [
             {"name": "room", "polygons": walls},
             {"name": "lamp", "polygons": lamp},
