@@ -1949,10 +1949,25 @@ impl Solver<'_> {
             return f64::NAN;
         }
         let geoms = self.elems.geoms.as_slice();
+        let nodes = self.elems.nodes.as_slice();
         let rad = self.elems.radiosities.as_slice();
-        let b: Vec<[f64; 3]> = rad.iter().map(|v| v.map(f64::from)).collect();
-        let mut fb = Vec::new();
+        let plain: Vec<[f64; 3]> = rad.iter().map(|v| v.map(f64::from)).collect();
+        // The sources as the leaf system pulls them, with the leaves' gains (a
+        // balanced system's rows sum to 1 with them: `Solver::balance_rows`), and
+        // the gains alone, pulled the same way, for the rows' sums.
+        let mut b = plain.clone();
+        let mut gain = vec![[1.0, 0.0, 0.0]; geoms.len()];
+        if !self.sys.leaf_gain.is_empty() {
+            for (&l, g) in self.sys.leaves.iter().zip(&self.sys.leaf_gain) {
+                b[l.ix()] = b[l.ix()].map(|v| v * g);
+                gain[l.ix()] = [*g, 0.0, 0.0];
+            }
+            pull(nodes, geoms, &mut b);
+            pull(nodes, geoms, &mut gain);
+        }
+        let (mut fb, mut fgain) = (Vec::new(), Vec::new());
         self.facets.pull(&b, &mut fb);
+        self.facets.pull(&gain, &mut fgain);
         let (mut num, mut den) = (0.0, 0.0);
         for (li, &leaf) in self.sys.leaves.iter().enumerate() {
             let (r0, r1) = (
@@ -1961,8 +1976,12 @@ impl Solver<'_> {
             );
             let g = &geoms[leaf.ix()];
             let r = self.sys.row_scale.get(li).copied().unwrap_or(1.0);
-            let sum: f64 = r * self.sys.row_coefs[r0..r1].iter().sum::<f64>();
-            let bl = b[leaf.ix()];
+            let sum: f64 = self.sys.row_sources[r0..r1]
+                .iter()
+                .zip(&self.sys.row_coefs[r0..r1])
+                .map(|(s, c)| r * c * source_value(&gain, &fgain, *s)[0])
+                .sum();
+            let bl = plain[leaf.ix()];
             den += g.area * bl.iter().map(|x| x * x).sum::<f64>();
             if sum <= 1.0 {
                 continue;
