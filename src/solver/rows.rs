@@ -1880,41 +1880,13 @@ impl Solver<'_> {
             return f64::NAN;
         }
         let geoms = self.elems.geoms.as_slice();
-        // The sources' radiosity as the leaf system pulls it: with the leaves' gains.
-        let mut b: Vec<[f64; 3]> = self
-            .elems
-            .radiosities
-            .as_slice()
-            .iter()
-            .map(|v| v.map(f64::from))
-            .collect();
-        if !self.sys.leaf_gain.is_empty() {
-            for (&l, g) in self.sys.leaves.iter().zip(&self.sys.leaf_gain) {
-                b[l.ix()] = b[l.ix()].map(|v| v * g);
-            }
-            pull(self.elems.nodes.as_slice(), geoms, &mut b);
-        }
-        let mut fb = Vec::new();
-        self.facets.pull(&b, &mut fb);
+        let rad = self.elems.radiosities.as_slice();
+        let (b, fb) = self.gained(rad.iter().map(|v| v.map(f64::from)).collect());
         let (mut absorbed, mut emitted) = (0.0, 0.0);
         for (li, &leaf) in self.sys.leaves.iter().enumerate() {
-            let (r0, r1) = (
-                self.sys.row_start[li] as usize,
-                self.sys.row_start[li + 1] as usize,
-            );
             let g = &geoms[leaf.ix()];
             let p = g.patch as usize;
-            let r = self.sys.row_scale.get(li).copied().unwrap_or(1.0);
-            let mut h = [0.0; 3];
-            for (s, c) in self.sys.row_sources[r0..r1]
-                .iter()
-                .zip(&self.sys.row_coefs[r0..r1])
-            {
-                let bs = source_value(&b, &fb, *s);
-                for k in 0..3 {
-                    h[k] += r * c * bs[k];
-                }
-            }
+            let h = self.row_gather(li, &b, &fb);
             for ((hk, rho), e) in h
                 .iter()
                 .zip(self.patches.rhos[p])
@@ -1929,6 +1901,46 @@ impl Solver<'_> {
         } else {
             f64::NAN
         }
+    }
+
+    /// A field over the elements (`b`, the leaves' values) as the leaf system
+    /// pulls it: each leaf's value times its gain ([`Solver::balance_rows`]),
+    /// pulled to the inner elements when there are gains, and the facets' values.
+    fn gained(&self, mut b: Vec<[f64; 3]>) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        if !self.sys.leaf_gain.is_empty() {
+            for (&l, g) in self.sys.leaves.iter().zip(&self.sys.leaf_gain) {
+                b[l.ix()] = b[l.ix()].map(|v| v * g);
+            }
+            pull(
+                self.elems.nodes.as_slice(),
+                self.elems.geoms.as_slice(),
+                &mut b,
+            );
+        }
+        let mut fb = Vec::new();
+        self.facets.pull(&b, &mut fb);
+        (b, fb)
+    }
+
+    /// What leaf `li`'s row (scaled as solved) gathers of the field `b` (with its
+    /// facets' values `fb`, [`Solver::gained`]): `Σ_j K_ij b_j`.
+    fn row_gather(&self, li: usize, b: &[[f64; 3]], fb: &[[f64; 3]]) -> [f64; 3] {
+        let (r0, r1) = (
+            self.sys.row_start[li] as usize,
+            self.sys.row_start[li + 1] as usize,
+        );
+        let r = self.sys.row_scale.get(li).copied().unwrap_or(1.0);
+        let mut h = [0.0; 3];
+        for (s, c) in self.sys.row_sources[r0..r1]
+            .iter()
+            .zip(&self.sys.row_coefs[r0..r1])
+        {
+            let bs = source_value(b, fb, *s);
+            for k in 0..3 {
+                h[k] += r * c * bs[k];
+            }
+        }
+        h
     }
 
     /// The relative RMS error that rows summing above 1 put into the leaves'
@@ -1949,53 +1961,22 @@ impl Solver<'_> {
             return f64::NAN;
         }
         let geoms = self.elems.geoms.as_slice();
-        let nodes = self.elems.nodes.as_slice();
         let rad = self.elems.radiosities.as_slice();
         let plain: Vec<[f64; 3]> = rad.iter().map(|v| v.map(f64::from)).collect();
-        // The sources as the leaf system pulls them, with the leaves' gains (a
-        // balanced system's rows sum to 1 with them: `Solver::balance_rows`), and
-        // the gains alone, pulled the same way, for the rows' sums.
-        let mut b = plain.clone();
-        let mut gain = vec![[1.0, 0.0, 0.0]; geoms.len()];
-        if !self.sys.leaf_gain.is_empty() {
-            for (&l, g) in self.sys.leaves.iter().zip(&self.sys.leaf_gain) {
-                b[l.ix()] = b[l.ix()].map(|v| v * g);
-                gain[l.ix()] = [*g, 0.0, 0.0];
-            }
-            pull(nodes, geoms, &mut b);
-            pull(nodes, geoms, &mut gain);
-        }
-        let (mut fb, mut fgain) = (Vec::new(), Vec::new());
-        self.facets.pull(&b, &mut fb);
-        self.facets.pull(&gain, &mut fgain);
+        // The sources as the leaf system pulls them, and the gains alone pulled the
+        // same way for the rows' sums (a balanced system's rows sum to 1 with them).
+        let (b, fb) = self.gained(plain.clone());
+        let (gain, fgain) = self.gained(vec![[1.0, 0.0, 0.0]; geoms.len()]);
         let (mut num, mut den) = (0.0, 0.0);
         for (li, &leaf) in self.sys.leaves.iter().enumerate() {
-            let (r0, r1) = (
-                self.sys.row_start[li] as usize,
-                self.sys.row_start[li + 1] as usize,
-            );
             let g = &geoms[leaf.ix()];
-            let r = self.sys.row_scale.get(li).copied().unwrap_or(1.0);
-            let sum: f64 = self.sys.row_sources[r0..r1]
-                .iter()
-                .zip(&self.sys.row_coefs[r0..r1])
-                .map(|(s, c)| r * c * source_value(&gain, &fgain, *s)[0])
-                .sum();
+            let sum = self.row_gather(li, &gain, &fgain)[0];
             let bl = plain[leaf.ix()];
             den += g.area * bl.iter().map(|x| x * x).sum::<f64>();
             if sum <= 1.0 {
                 continue;
             }
-            let mut h = [0.0; 3];
-            for (s, c) in self.sys.row_sources[r0..r1]
-                .iter()
-                .zip(&self.sys.row_coefs[r0..r1])
-            {
-                let bs = source_value(&b, &fb, *s);
-                for k in 0..3 {
-                    h[k] += r * c * bs[k];
-                }
-            }
+            let h = self.row_gather(li, &b, &fb);
             let rho = self.patches.rhos[g.patch as usize];
             let share = (sum - 1.0) / sum;
             num += g.area * (0..3).map(|k| (rho[k] * h[k] * share).powi(2)).sum::<f64>();
