@@ -981,14 +981,16 @@ impl<'a> Solver<'a> {
         }
         // Rows that sum above 1 make light the change between levels does not see:
         // the answer's estimate is at least what they add (`row_excess_error`).
-        // Only the last record's, so no refinement decision changes.
-        let excess = self.row_excess_error();
+        // Only the last record's, so no refinement decision changes; a run without
+        // an estimate (a space-time window's) skips the pass over the rows.
         if let Some(last) = records.last_mut()
             && last.estimated_error.is_finite()
-            && excess > last.estimated_error
         {
-            last.estimated_error = excess;
-            self.estimate = excess;
+            let excess = self.row_excess_error();
+            if excess > last.estimated_error {
+                last.estimated_error = excess;
+                self.estimate = excess;
+            }
         }
         if let Some(last) = records.last() {
             self.check_sound(last.residual)?;
