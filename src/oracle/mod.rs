@@ -534,6 +534,66 @@ pub fn point_cluster_visibility(
     })
 }
 
+/// [`point_cluster_visibility`] (by power) with what static geometry does to its
+/// rays known: `known`, `(mask, targets)` as an earlier call with the same
+/// arguments handed back, holds while the points the rays are aimed at are the
+/// same (the descent by power picks them from the radiosity, which moves: their
+/// hash `targets` is compared), and then only the rays the static part left clear
+/// (bit `j` of `mask`) are cast, at the moving objects; otherwise every ray is
+/// cast at the static part first and the new `(mask, targets)` is handed back.
+/// The answer equals [`point_cluster_visibility`]'s: the same rays, the same sums
+/// in the same order (a ray is blocked if a static or a moving triangle blocks
+/// it). At most 64 rays; returns `((visibility, rays cast), made)`.
+#[allow(clippy::too_many_arguments)]
+pub fn point_cluster_visibility_masked(
+    elems: &ElementPool,
+    bvh: &SceneBvh,
+    x: DVec3,
+    n: DVec3,
+    patch: u32,
+    s: ElementId,
+    m: u32,
+    key: u64,
+    known: Option<(u64, u64)>,
+) -> ((f64, u32), Option<(u64, u64)>) {
+    let m = m.clamp(1, 64) as usize;
+    let mut ends = [(DVec3::ZERO, DVec3::ZERO, 0u32); 64];
+    let mut targets = 0x7a3e_u64;
+    for (j, end) in ends.iter_mut().enumerate().take(m) {
+        *end = descend(elems, s, hash3(key, j as u64, 2), true);
+        let (y, _, py) = *end;
+        targets = hash3(
+            targets ^ y.x.to_bits(),
+            y.y.to_bits() ^ y.z.to_bits().rotate_left(29),
+            py as u64,
+        );
+    }
+    let mask = known.filter(|k| k.1 == targets).map(|k| k.0);
+    let (mut wsum, mut vsum, mut rays, mut clear) = (0.0, 0.0, 0, 0u64);
+    let (mut last_static, mut last_moving) = (LastHit::default(), LastHit::default());
+    for (j, &(y, ny, py)) in ends.iter().enumerate().take(m) {
+        let k = point_to_point_kernel(x, n, y, ny);
+        if k.is_nan() || k <= 0.0 {
+            continue;
+        }
+        rays += 1;
+        wsum += k;
+        let open = match mask {
+            Some(mask) => mask >> j & 1 == 1,
+            None => !bvh.occluded_between(x, y, [patch, py], Parts::Static, &mut last_static),
+        };
+        if !open {
+            continue;
+        }
+        clear |= 1 << j;
+        if !bvh.occluded_between(x, y, [patch, py], Parts::Moving, &mut last_moving) {
+            vsum += k;
+        }
+    }
+    let vis = if wsum > 0.0 { vsum / wsum } else { 0.0 };
+    ((vis, rays), mask.is_none().then_some((clear, targets)))
+}
+
 /// Visibility of a link with a cluster end: `m` rays between [`surface_point`]s of
 /// `r` and [`source_point`]s of `s` (`by_power`; else [`surface_point`]s) (Sillion
 /// 1995 §4.3), the visible fraction

@@ -604,15 +604,22 @@ struct LeafSystem {
     /// move for links it did not touch and updated in place for those it did
     /// ([`Solver::settle_local`], `row_patch`).
     move_cluster_cache: FastMap<u32, Vec<(u32, RowEntries)>>,
-    /// Interactive moves: the static masks ([`rows::RowMasks`]) of the rays at the
-    /// quadrature points of row entries whose leaf and surface source both stand
-    /// still, keyed by `(leaf, receiver of the chain link, source)`, what the rays'
+    /// Interactive moves: the static masks ([`rows::RowMasks::Move`]) of the rays at
+    /// the quadrature points and corners of row entries whose leaf and surface
+    /// source both stand still, keyed by `(leaf, receiver of the chain link, source)`, what the rays'
     /// jitter is keyed by ([`Solver::row_ray_ids`]). Made the first time a move
     /// computes the entry, then reused: the rays are cast at the moving objects
     /// alone ([`Solver::move_row_masks`]).
     move_masks: FastMap<MaskKey, u64>,
     /// The masks the rows being computed made, taken into `move_masks` after.
     move_masks_made: std::sync::Mutex<Vec<(MaskKey, u64)>>,
+    /// Interactive moves: the static masks of the rays from the quadrature points
+    /// of leaves that stand still to cluster parts that do
+    /// ([`Solver::row_part_visibility`]), keyed by `(leaf, part, point << 8 |
+    /// rays)`, each with the hash of the points its rays were aimed at.
+    move_part_masks: FastMap<MaskKey, (u64, u64)>,
+    /// The part masks the rows being computed made, taken into `move_part_masks`.
+    move_part_masks_made: std::sync::Mutex<Vec<(MaskKey, (u64, u64))>>,
     /// Rows are being computed for an interactive move ([`Solver::move_row_masks`]).
     move_rows: bool,
 }

@@ -122,9 +122,10 @@ impl Solver<'_> {
     /// How the rays of the row entry of `leaf` (quadrature `q`) for surface `e`,
     /// reached by chain link `l`, treat static geometry: in an interactive move's
     /// rows, where neither end moves, by the masks an earlier move made
-    /// ([`RowMasks::Known`]: the rays the static scene leaves clear are cast at the
-    /// moving objects alone, to the same answer), or making them
-    /// ([`RowMasks::Make`]); elsewhere [`RowMasks::None`]. The rays' keys and ends
+    /// ([`RowMasks::Move`]: the rays the static scene leaves clear are cast at the
+    /// moving objects alone, to the same answer; those of the quadrature points
+    /// and, since, of the leaf's corners), making those not known yet; elsewhere
+    /// [`RowMasks::None`]. The rays' keys and ends
     /// are those of any other move (the leaf, the link's receiver and `e` key
     /// them, [`Solver::row_ray_ids`]), and the static scene stands: the masks hold.
     pub(super) fn move_row_masks(
@@ -142,16 +143,70 @@ impl Solver<'_> {
             return RowMasks::None;
         }
         let r = self.links.ends.as_slice()[l as usize].receiver;
-        match self.sys.move_masks.get(&(leaf.0, r, e)) {
-            Some(&bits) => RowMasks::Known(bits),
-            None => RowMasks::Make,
-        }
+        RowMasks::Move(
+            self.sys
+                .move_masks
+                .get(&(leaf.0, r, e))
+                .copied()
+                .unwrap_or(0),
+        )
     }
 
-    /// Hands the masks `made` to the next moves where `how` made them
-    /// ([`Solver::move_row_masks`]).
+    /// [`Solver::part_visibility`] from the `i`-th quadrature point `x` of `leaf`
+    /// (normal `n`, patch `patch`) to cluster part `e` by `m` rays, in an
+    /// interactive move's rows where both stand still by the static masks an
+    /// earlier move made ([`oracle::point_cluster_visibility_masked`]: the rays the
+    /// static scene leaves clear are cast at the moving objects alone, while the
+    /// points drawn by power are those the masks were made with), making them
+    /// where there are none: the same answer. Elsewhere (a facet, a moving end,
+    /// outside a move's rows, over 64 rays) [`Solver::part_visibility`] itself.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn row_part_visibility(
+        &self,
+        leaf: ElementId,
+        x: DVec3,
+        n: DVec3,
+        patch: u32,
+        e: u32,
+        m: u32,
+        i: u64,
+    ) -> (f64, u32) {
+        if !self.sys.move_rows
+            || e & FACET_BIT != 0
+            || !SOURCES_BY_POWER
+            || m > 64
+            || i > 0xff_ffff
+            || self.elem_moving(leaf)
+            || self.elem_moving(ElementId(e))
+        {
+            return self.part_visibility(x, n, patch, e, m, i);
+        }
+        let key = (leaf.0, e, (i as u32) << 8 | m);
+        let known = self.sys.move_part_masks.get(&key).copied();
+        let h = self.part_ray_key(e, patch, i);
+        let (seen, made) = oracle::point_cluster_visibility_masked(
+            &self.elems,
+            &self.bvh,
+            x,
+            n,
+            patch,
+            ElementId(e),
+            m,
+            h,
+            known,
+        );
+        if let Some(made) = made
+            && let Ok(mut v) = self.sys.move_part_masks_made.lock()
+        {
+            v.push((key, made));
+        }
+        seen
+    }
+
+    /// Hands the masks `made` to the next moves where they hold more than `how`
+    /// knew ([`Solver::move_row_masks`]).
     pub(super) fn keep_move_mask(&self, leaf: ElementId, l: u32, e: u32, how: RowMasks, made: u64) {
-        if !matches!(how, RowMasks::Make) {
+        if !matches!(how, RowMasks::Move(known) if known != made) {
             return;
         }
         let r = self.links.ends.as_slice()[l as usize].receiver;

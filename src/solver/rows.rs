@@ -43,6 +43,28 @@ pub(super) enum RowMasks {
     /// The static part's answers, as [`Window::masks`] keeps them: only the rays
     /// they leave clear are cast, at the moving objects.
     Known(u64),
+    /// An interactive move's masks ([`Solver::move_row_masks`]), the quadrature
+    /// points' and the corners' as far as they are known (`0`: none): the layout
+    /// of [`move_mask`]. What is not known yet is made (cast at the static part
+    /// first), and the mask with it is handed back.
+    Move(u64),
+}
+
+/// The layout of a [`RowMasks::Move`] mask with `m` rays a point: the rays of
+/// point `i` (quadrature points `i < 4`, the leaf's corners `4..8`,
+/// [`Solver::hidden_row_coef`]) at bits `i·m ..`; bit [`move_mask::QUAD`] says the
+/// quadrature points' are known, bit `CORNER + c` corner `c`'s. Corners are
+/// masked only while `8 m` bits fit under the flags ([`move_mask::corners`]).
+pub(super) mod move_mask {
+    /// The flag of the quadrature points' masks.
+    pub(in crate::solver) const QUAD: u32 = 60;
+    /// The flag of corner 0's mask (corner `c`: `CORNER + c`).
+    pub(in crate::solver) const CORNER: u32 = 56;
+
+    /// True if the corners' rays (`m` a point) fit in a mask.
+    pub(in crate::solver) fn corners(m: u32) -> bool {
+        8 * m <= CORNER
+    }
 }
 
 /// What one leaf's row computation hands back ([`Solver::compute_leaf_rows`]): the
@@ -379,8 +401,7 @@ impl Solver<'_> {
         m: u32,
         i: u64,
     ) -> (f64, u32) {
-        let key = oracle::hash3(self.opts.seed ^ 0xc105, e as u64, patch as u64);
-        let h = oracle::hash3(key, i, 3);
+        let h = self.part_ray_key(e, patch, i);
         if e & FACET_BIT != 0 {
             oracle::kernel_weighted_visibility(&self.bvh, m, |j| {
                 let y = self
@@ -401,6 +422,13 @@ impl Solver<'_> {
                 SOURCES_BY_POWER,
             )
         }
+    }
+
+    /// The jitter key of the rays of [`Solver::part_visibility`] from point `i` (on
+    /// patch `patch`) to cluster part `e`.
+    pub(super) fn part_ray_key(&self, e: u32, patch: u32, i: u64) -> u64 {
+        let key = oracle::hash3(self.opts.seed ^ 0xc105, e as u64, patch as u64);
+        oracle::hash3(key, i, 3)
     }
 
     /// The factors from the points `q` (normal `n`) to each facet of cluster `s`
@@ -562,7 +590,7 @@ impl Solver<'_> {
             let at = |m: u32| -> [(f64, u32); 4] {
                 std::array::from_fn(|i| {
                     if i < q.count {
-                        self.part_visibility(q.points[i], n, patch, e, m, i as u64)
+                        self.row_part_visibility(leaf, q.points[i], n, patch, e, m, i as u64)
                     } else {
                         (0.0, 0)
                     }
@@ -734,8 +762,9 @@ impl Solver<'_> {
     /// surface came out too dark against the path tracer.
     ///
     /// `masks` says how the quadrature points' rays treat static geometry
-    /// ([`RowMasks`]); the masks made are returned (`RowMasks::Make`), and the value
-    /// is the same whichever it is.
+    /// ([`RowMasks`]); the masks made are returned (`RowMasks::Make`; for
+    /// `RowMasks::Move` the whole mask, what it knew and what it made: the
+    /// corners' rays too), and the value is the same whichever it is.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn hidden_row_coef(
         &self,
@@ -752,12 +781,29 @@ impl Solver<'_> {
         let ns = DVec3::from_array(gs.normal);
         let ids = self.row_ray_ids(leaf, l, s);
         let m = self.opts.rays_per_point;
-        let made = std::cell::Cell::new(0u64);
+        let made = std::cell::Cell::new(match masks {
+            RowMasks::Move(bits) => bits,
+            _ => 0u64,
+        });
+        let ray_bits = |bits: u64, i: u64| bits >> (i as u32 * m) & ((1 << m) - 1);
         let vis_at = |x: DVec3, i: u64| {
             let r = self.row_rays(ids, g, gs, &ps, ns, x, n, i);
             let mask = match masks {
                 RowMasks::Make if i < 4 => None,
-                RowMasks::Known(bits) if i < 4 => Some(bits >> (i as u32 * m) & ((1 << m) - 1)),
+                RowMasks::Known(bits) if i < 4 => Some(ray_bits(bits, i)),
+                // An interactive move: the quadrature points' and the corners'
+                // masks, made where not known yet.
+                RowMasks::Move(bits) if i < 4 => {
+                    Some(ray_bits(bits, i)).filter(|_| bits >> move_mask::QUAD & 1 == 1)
+                }
+                RowMasks::Move(bits) if i < 8 && move_mask::corners(m) => {
+                    let flag = move_mask::CORNER + (i as u32 - 4);
+                    let known = bits >> flag & 1 == 1;
+                    if !known {
+                        made.set(made.get() | 1 << flag);
+                    }
+                    Some(ray_bits(bits, i)).filter(|_| known)
+                }
                 _ => return oracle::visible_fraction(&self.bvh, &r),
             };
             let rays = oracle::masked_rays(&self.bvh, &r, mask, true);
@@ -784,6 +830,11 @@ impl Solver<'_> {
         };
         let (mut f, mut unoccluded, vmin, vmax) =
             integrate(&mut (0..q.count).map(|i| (q.points[i], q.weights[i], i as u64)));
+        if matches!(masks, RowMasks::Move(_)) {
+            // Every quadrature point whose rays count was cast (the others face
+            // away from the source at every move: both ends stand still).
+            made.set(made.get() | 1 << move_mask::QUAD);
+        }
         if unoccluded > ROW_CORNER_MIN_COEF && (vmax <= 0.0 || vmin >= 1.0) {
             let centre = q.points[..q.count].iter().sum::<DVec3>() / q.count as f64;
             let corners = oracle::poly(g);
