@@ -996,7 +996,17 @@ impl Solver<'_> {
         }
         // Opened for its spread: shares by the kernel taken linear across the
         // source, no polygon factor per child.
-        if !large && let Some(mut shares) = linear_shares(q, n, geoms, gs, node) {
+        // The children's area centroids, as [`oracle::sphere`] takes them.
+        let centroid = |ch: usize| {
+            let gc = &geoms[ch];
+            let m = (gc.n as usize).min(4);
+            let v: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(gc.corners[i]));
+            crate::geometry::centroid_of(&v[..m])
+        };
+        if !large
+            && let Some(mut shares) =
+                linear_shares(q, n, geoms, gs, oracle::sphere(gs), node, centroid)
+        {
             // A child that stays whole stands for a linear radiosity: its share
             // moves from its area's by the part within it too ([`WITHIN_CHILD`]).
             let k = node.child_count as usize;
@@ -2161,19 +2171,23 @@ impl Solver<'_> {
 /// `ȳ`, `K = cos θ_x cos θ_y / r²`, averaged over the points weighted by `K`.
 /// The shares sum to 1, so the row keeps its sum. `None` where the linear kernel
 /// does not hold: a source near a point's horizon or seen edge-on, or a share
-/// moving more than half from its area's.
-fn linear_shares(
+/// moving more than half from its area's. `(c, rad)` is the source's
+/// [`oracle::sphere`], `centroid` a child's area centroid (the final gather has
+/// both computed once per reconstruction).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn linear_shares(
     q: &oracle::Samples,
     n: DVec3,
     geoms: &[Geom],
     gs: &Geom,
+    (c, rad): (DVec3, f64),
     node: Node,
+    centroid: impl Fn(usize) -> DVec3,
 ) -> Option<[f64; 4]> {
     let k = node.child_count as usize;
     if k == 0 || k > 4 {
         return None;
     }
-    let (c, rad) = oracle::sphere(gs);
     let ns = DVec3::from_array(gs.normal);
     let mut g = DVec3::ZERO;
     let mut wsum = 0.0;
@@ -2199,11 +2213,9 @@ fn linear_shares(
     let mut a = [0.0; 4];
     let mut y = [DVec3::ZERO; 4];
     for j in 0..k {
-        let gc = &geoms[node.first_child as usize + j];
-        let m = (gc.n as usize).min(4);
-        let v: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(gc.corners[i]));
-        a[j] = gc.area;
-        y[j] = crate::geometry::centroid_of(&v[..m]);
+        let ch = node.first_child as usize + j;
+        a[j] = geoms[ch].area;
+        y[j] = centroid(ch);
         area += a[j];
         ybar += a[j] * y[j];
     }
