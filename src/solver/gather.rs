@@ -288,12 +288,14 @@ impl Solver<'_> {
     /// leaf radiosities under it). A surface source is opened while `(r/d) ΔB_s >
     /// open_spread · B_ref` ([`SolveOptions::open_spread`]); its children share the
     /// visible fraction the rays to the whole source measured, so the opening costs
-    /// point-to-polygon factors, not rays. The errors have one sign where a source's
+    /// no rays, and where the kernel is linear across the source they share its
+    /// exact factor by that kernel ([`Solver::open_shared`]), so it costs one
+    /// point-to-polygon factor, not one per child. The errors have one sign where a source's
     /// brightest parts are the nearest (the Cornell ceiling sees the floor's bright
     /// middle nearest; BENCHMARKS.md, "Sources whose radiosity varies"). Where every
     /// child stays whole, each stands for a radiosity that still varies inside it:
     /// their factors move from their area shares by [`WITHIN_CHILD`] times what
-    /// their exact factors say, keeping the sum (the radiosity and kernel linear
+    /// their factors say, keeping the sum (the radiosity and kernel linear
     /// across the source; without it the Cornell ceiling read 0.1–0.2% dark).
     ///
     /// With `swept` (a static point and a static source in a time window), a term
@@ -355,6 +357,15 @@ impl Solver<'_> {
             let shaped = !(self.shapes.is_empty()
                 && limits.shapes.quadrants.is_empty()
                 && limits.shapes.cells.is_empty());
+            // The source's exact factor shared among its children by the kernel
+            // taken linear across it, as the leaf rows share it
+            // ([`Solver::push_opened`]), where that holds.
+            if !shaped && self.open_shared(x, n, receiver_patch, s, None, key, limits, out) {
+                for t in &mut out.fixed[first..] {
+                    t.1 *= v;
+                }
+                return;
+            }
             let mut whole: [(usize, f64); 4] = [(usize::MAX, 0.0); 4];
             let mut n_whole = 0;
             for ch in node.first_child..node.first_child + node.child_count {
@@ -574,6 +585,95 @@ impl Solver<'_> {
                 }
             }
         }
+    }
+
+    /// Terms of surface source `s` opened for its radiosity at the point `x`
+    /// (normal `n`) by shares of its exact factor (`f`, computed if `None`) with the
+    /// kernel taken linear across it ([`super::rows::linear_shares`]), as the leaf
+    /// rows open a source for its spread ([`Solver::push_opened`]): a child that
+    /// varies too is opened likewise, one that stays whole moves its share from
+    /// its area's by [`WITHIN_CHILD`] times that. Unoccluded (the caller applies the
+    /// source's visible fraction). False, with nothing pushed, where the linear
+    /// kernel does not hold for `s` (near or grazing): its children are then
+    /// gathered by their own factors.
+    ///
+    /// Why: the point's gather otherwise takes every child's exact factor down to
+    /// the leaves, which was 37% of the empty Cornell box's instructions at eps 0.1
+    /// (3.2 million point-to-polygon factors for 2 175 cells).
+    #[allow(clippy::too_many_arguments)]
+    fn open_shared(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        receiver_patch: u32,
+        s: usize,
+        f: Option<f64>,
+        key: u64,
+        limits: &GatherLimits,
+        out: &mut Terms,
+    ) -> bool {
+        let geoms = self.elems.geoms.as_slice();
+        let node = self.elems.nodes.as_slice()[s];
+        let (c, rad) = limits.sphere(s, &geoms[s]);
+        if rad > self.opts.open_ratio * c.distance(x) {
+            return false;
+        }
+        let at = oracle::Samples {
+            points: [x; 4],
+            weights: [1.0, 0.0, 0.0, 0.0],
+            count: 1,
+        };
+        // The spheres' centres are the area centroids, computed once.
+        let centroid = |ch: usize| limits.sphere(ch, &geoms[ch]).0;
+        let Some(mut shares) =
+            super::rows::linear_shares(&at, n, geoms, &geoms[s], (c, rad), node, centroid)
+        else {
+            return false;
+        };
+        let f = f.unwrap_or_else(|| point_to_polygon(x, n, &oracle::poly(&geoms[s])));
+        if f <= 0.0 {
+            return true;
+        }
+        // Whether child `ch` varies enough to be opened itself (`point_terms`).
+        let varies = |ch: usize| {
+            let gc = &geoms[ch];
+            let (c, rad) = limits.sphere(ch, gc);
+            let d = c.distance(x).max(f64::MIN_POSITIVE);
+            self.elems.nodes.as_slice()[ch].child_count > 0
+                && rad / d * limits.spread[ch] as f64 > limits.open_spread
+        };
+        let k = node.child_count as usize;
+        let child_area: f64 = (0..k)
+            .map(|j| geoms[node.first_child as usize + j].area)
+            .sum::<f64>()
+            .max(f64::MIN_POSITIVE);
+        let mut sum = 0.0;
+        let mut open = [false; 4];
+        for (j, share) in shares.iter_mut().enumerate().take(k) {
+            let ch = (node.first_child as usize) + j;
+            open[j] = varies(ch);
+            if !open[j] {
+                let a = geoms[ch].area / child_area;
+                *share = a + WITHIN_CHILD * (*share - a);
+            }
+            sum += *share;
+        }
+        if sum <= 0.0 || shares.iter().take(k).any(|&x| x < 0.0) {
+            return false;
+        }
+        for j in 0..k {
+            let ch = (node.first_child as usize) + j;
+            let fc = f * shares[j] / sum;
+            if open[j] {
+                // Near or grazing for the linear kernel: its children's own factors.
+                if !self.open_shared(x, n, receiver_patch, ch, Some(fc), key, limits, out) {
+                    self.point_terms(x, n, receiver_patch, ch, true, key, None, limits, out);
+                }
+            } else if fc > 0.0 {
+                out.fixed.push((ch as u32, fc));
+            }
+        }
+        true
     }
 
     /// Final gather at point `x` of leaf `leaf`: `(B(x), valid, fresh)`. `key`: the

@@ -53,7 +53,7 @@ pub mod spacetime;
 
 use facets::{FACET_BIT, MAX_FACETS, source_slot, source_value};
 pub use reconstruct::Reconstruction;
-use rows::{ClusterPart, KeptCoef, RowEntries};
+use rows::{ClusterPart, KeptCoef, OpenedFactors, RowEntries};
 use spacetime::SpaceTimeState;
 use spacetime::interpolate::TimedEntry;
 pub use spacetime::interpolate::{
@@ -592,6 +592,9 @@ struct LeafSystem {
     /// them each round was a sixth of `gen_cubes 65`'s refinement rounds
     /// (`cluster_parts`) and more in their rays (BENCHMARKS.md, "Scale").
     cluster_cache: FastMap<u32, Vec<ClusterPart>>,
+    /// Static solve: each leaf's factors of the children its row opened sources
+    /// into, reused by the next round ([`rows::OpenedFactors`]).
+    opened_factors: FastMap<u32, OpenedFactors>,
     /// Static solve: each element's radiosity spread `ΔB_s` as the last solve left
     /// it ([`Solver::radiosity_spread`]) and the limit a leaf row opens a source by
     /// it ([`ROW_OPEN_SPREAD`]); empty and infinite elsewhere. 4 bytes per element.

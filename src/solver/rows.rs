@@ -82,6 +82,9 @@ pub(super) struct LeafRow {
     pub(super) kept: Vec<KeptCoef>,
     /// A static solve's cluster parts by link, for the next round.
     clusters: Vec<ClusterPart>,
+    /// A static solve's factors of the children its sources opened into, for the
+    /// next round.
+    opened_factors: OpenedFactors,
     /// New opened entries for [`Window::opened`].
     opened: Vec<((u32, u32), RowEntries)>,
     /// New hidden coefficients for [`Window::hidden`].
@@ -133,6 +136,52 @@ struct FactorMemo<'m> {
     leaf: u32,
     kept: &'m FastMap<(u32, u32), f64>,
     fresh: Vec<((u32, u32), f64)>,
+}
+
+/// A static leaf's row's polygon factors of the children it opened sources into
+/// for their size ([`Solver::push_opened`]), sorted by child, kept for the next
+/// round ([`LeafSystem::opened_factors`]). A factor depends on the leaf's
+/// quadrature and the child's polygon alone, so it holds from round to round while
+/// which sources are opened follows the links and the spread the last solve left:
+/// a round that changes few links (the Cornell box's last round at eps 0.1 adds
+/// 18 links to 5 098) computed every opened child's factor again, a third of the
+/// rows' time. A table per row, not one keyed by `(leaf, child)`: the lookups of
+/// one hash map over every row cost what the factors did. The factors are rounded
+/// to `f32` once, so a reused factor equals the first (8 bytes an entry: the
+/// Cornell box with its blocks at eps 0.04 peaks 23 MB higher, at 304 MB).
+#[derive(Default)]
+pub(super) struct OpenedFactors {
+    elems: Box<[u32]>,
+    factors: Box<[f32]>,
+}
+
+/// What one static leaf's row reuses of its [`OpenedFactors`] and takes into the
+/// next round's while it opens sources.
+struct OpenedMemo<'m> {
+    before: Option<&'m OpenedFactors>,
+    used: Vec<(u32, f32)>,
+}
+
+impl OpenedMemo<'_> {
+    /// The factor of child `ch`: the one kept, else `factor()`; kept either way.
+    fn factor(&mut self, ch: u32, factor: impl FnOnce() -> f64) -> f64 {
+        let kept = self
+            .before
+            .and_then(|b| b.elems.binary_search(&ch).ok().map(|i| b.factors[i]));
+        let f = kept.unwrap_or_else(|| factor() as f32);
+        self.used.push((ch, f));
+        f64::from(f)
+    }
+
+    /// The factors this row used, for the next round.
+    fn keep(mut self) -> OpenedFactors {
+        // A leaf's chain links cover the scene once: each child comes once.
+        self.used.sort_unstable_by_key(|e| e.0);
+        OpenedFactors {
+            elems: self.used.iter().map(|e| e.0).collect(),
+            factors: self.used.iter().map(|e| e.1).collect(),
+        }
+    }
 }
 
 /// A closed scene's leaf system is balanced once it absorbs more or less than the
@@ -580,7 +629,7 @@ impl Solver<'_> {
                     }
                     None => (coef, v),
                 };
-                self.push_opened(q, n, e, coef, v, row, None);
+                self.push_opened(q, n, e, coef, v, row, None, None);
                 return;
             }
             // A point whose rays all fall below its horizon or on faces
@@ -713,7 +762,7 @@ impl Solver<'_> {
                 row.push((p.elem, p.coef as f64));
             }
         } else {
-            self.push_opened(q, n, p.elem, p.coef as f64, p.vis as f64, row, None);
+            self.push_opened(q, n, p.elem, p.coef as f64, p.vis as f64, row, None, None);
         }
     }
 
@@ -970,7 +1019,9 @@ impl Solver<'_> {
     ///
     /// `memo`, for a static leaf in a window's frame, holds the factors to static
     /// base elements already computed in the window ([`Window::factors`]): they are
-    /// taken from it, and the new ones handed back in it.
+    /// taken from it, and the new ones handed back in it. `kept`, for a leaf of a
+    /// static solve, the factors its row took in the round before
+    /// ([`OpenedFactors`]), likewise.
     #[allow(clippy::too_many_arguments)]
     fn push_opened(
         &self,
@@ -981,6 +1032,7 @@ impl Solver<'_> {
         vis: f64,
         row: &mut Vec<(u32, f64)>,
         mut memo: Option<&mut FactorMemo>,
+        mut kept: Option<&mut OpenedMemo>,
     ) {
         if coef <= 0.0 {
             return;
@@ -995,7 +1047,17 @@ impl Solver<'_> {
         }
         // Opened for its spread: shares by the kernel taken linear across the
         // source, no polygon factor per child.
-        if !large && let Some(mut shares) = linear_shares(q, n, geoms, gs, node) {
+        // The children's area centroids, as [`oracle::sphere`] takes them.
+        let centroid = |ch: usize| {
+            let gc = &geoms[ch];
+            let m = (gc.n as usize).min(4);
+            let v: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(gc.corners[i]));
+            crate::geometry::centroid_of(&v[..m])
+        };
+        if !large
+            && let Some(mut shares) =
+                linear_shares(q, n, geoms, gs, oracle::sphere(gs), node, centroid)
+        {
             // A child that stays whole stands for a linear radiosity: its share
             // moves from its area's by the part within it too ([`WITHIN_CHILD`]).
             let k = node.child_count as usize;
@@ -1015,7 +1077,16 @@ impl Solver<'_> {
             if sum > 0.0 && shares.iter().take(k).all(|&x| x >= 0.0) {
                 for (j, share) in shares.iter().enumerate().take(k) {
                     let ch = node.first_child + j as u32;
-                    self.push_opened(q, n, ch, coef * share / sum, vis, row, memo.as_deref_mut());
+                    self.push_opened(
+                        q,
+                        n,
+                        ch,
+                        coef * share / sum,
+                        vis,
+                        row,
+                        memo.as_deref_mut(),
+                        kept.as_deref_mut(),
+                    );
                 }
                 return;
             }
@@ -1039,9 +1110,21 @@ impl Solver<'_> {
                         f
                     }
                 },
-                None => factor(),
+                None => match kept.as_deref_mut() {
+                    Some(k) => k.factor(ch, factor),
+                    None => factor(),
+                },
             };
-            self.push_opened(q, n, ch, f * vis, vis, row, memo.as_deref_mut());
+            self.push_opened(
+                q,
+                n,
+                ch,
+                f * vis,
+                vis,
+                row,
+                memo.as_deref_mut(),
+                kept.as_deref_mut(),
+            );
         }
     }
 
@@ -1190,6 +1273,7 @@ impl Solver<'_> {
         let record = self.opts.keep_passive && self.has_motion() && self.st.window.is_none();
         self.sys.move_cluster_cache.clear();
         let mut parts_before = std::mem::take(&mut self.sys.cluster_cache);
+        let mut factors_before = std::mem::take(&mut self.sys.opened_factors);
         // A window's frame records its entries with a moving end, and takes them
         // between the solved frames around it where they hold.
         let timed = self.st.window.as_ref().is_some_and(|w| w.in_frame);
@@ -1221,10 +1305,11 @@ impl Solver<'_> {
         for chunk in self.sys.leaves.chunks(ROW_CHUNK) {
             rows.par_extend(chunk.par_iter().map(|&leaf| {
                 let parts = parts_before.get(&leaf.0).map(Vec::as_slice);
-                self.leaf_row(&inputs, leaf, parts)
+                self.leaf_row(&inputs, leaf, parts, factors_before.get(&leaf.0))
             }));
             for leaf in chunk {
                 parts_before.remove(&leaf.0);
+                factors_before.remove(&leaf.0);
             }
         }
         self.store_leaf_rows(rows, keep_rows);
@@ -1258,18 +1343,20 @@ impl Solver<'_> {
         };
         leaves
             .par_iter()
-            .map(|&leaf| self.leaf_row(&inputs, leaf, None))
+            .map(|&leaf| self.leaf_row(&inputs, leaf, None, None))
             .collect()
     }
 
     /// One leaf's row ([`Solver::compute_leaf_rows`]): each chain link's source
     /// opened at its coefficient over the leaf, from the caches where they hold
-    /// (`parts_before`: the cluster parts an earlier round kept for the leaf).
+    /// (`parts_before`: the cluster parts an earlier round kept for the leaf;
+    /// `factors_before`: the factors of the children its sources opened into).
     fn leaf_row(
         &self,
         inputs: &RowInputs,
         leaf: ElementId,
         parts_before: Option<&[ClusterPart]>,
+        factors_before: Option<&OpenedFactors>,
     ) -> LeafRow {
         let RowInputs {
             geoms,
@@ -1314,6 +1401,13 @@ impl Solver<'_> {
             kept,
             fresh: Vec::new(),
         });
+        // A static solve's leaf keeps the factors of the children it opens into
+        // from round to round ([`OpenedFactors`]).
+        let mut opened_memo =
+            (keep_rows && !keep_clusters && self.st.window.is_none()).then(|| OpenedMemo {
+                before: factors_before,
+                used: Vec::with_capacity(factors_before.map_or(0, |b| b.elems.len())),
+            });
         for l in self.chain_links(leaf) {
             let t = &tr[l as usize];
             let s = ends[l as usize].source;
@@ -1396,6 +1490,7 @@ impl Solver<'_> {
                     k.vis as f64,
                     &mut out.row,
                     memo.as_mut(),
+                    opened_memo.as_mut(),
                 );
                 if keep_clusters {
                     out.move_clusters.push((l, out.row[at..].into()));
@@ -1416,7 +1511,16 @@ impl Solver<'_> {
                     continue;
                 }
                 let at = out.row.len();
-                self.push_opened(&q, n, s, c as f64, v as f64, &mut out.row, memo.as_mut());
+                self.push_opened(
+                    &q,
+                    n,
+                    s,
+                    c as f64,
+                    v as f64,
+                    &mut out.row,
+                    memo.as_mut(),
+                    opened_memo.as_mut(),
+                );
                 let entries = &out.row[at..];
                 if entries.len() > 1 && settled(entries) {
                     out.opened.push((key, entries.into()));
@@ -1458,7 +1562,16 @@ impl Solver<'_> {
             } else {
                 coef
             };
-            self.push_opened(&q, n, s, coef, vis, &mut out.row, memo.as_mut());
+            self.push_opened(
+                &q,
+                n,
+                s,
+                coef,
+                vis,
+                &mut out.row,
+                memo.as_mut(),
+                opened_memo.as_mut(),
+            );
             if keep_clusters {
                 out.move_clusters.push((l, out.row[at..].into()));
             }
@@ -1468,6 +1581,7 @@ impl Solver<'_> {
         out.clusters.sort_by_key(|x| x.link);
         out.move_clusters.sort_unstable_by_key(|x| x.0);
         out.factors = memo.map(|m| m.fresh).unwrap_or_default();
+        out.opened_factors = opened_memo.map(OpenedMemo::keep).unwrap_or_default();
         out
     }
 
@@ -1586,6 +1700,7 @@ impl Solver<'_> {
         self.clear_rows();
         self.sys.row_cache.clear();
         self.sys.cluster_cache.clear();
+        self.sys.opened_factors.clear();
         self.st.frame_rows.0.clear();
         self.st.rows_between = 0;
         let leaves = std::mem::take(&mut self.sys.leaves);
@@ -1595,6 +1710,7 @@ impl Solver<'_> {
                 fresh,
                 kept,
                 clusters,
+                opened_factors,
                 opened: fresh_opened,
                 hidden: fresh_hidden,
                 masks: fresh_masks,
@@ -1641,6 +1757,9 @@ impl Solver<'_> {
                 self.sys.row_cache.insert(leaf.0, kept);
                 if !clusters.is_empty() {
                     self.sys.cluster_cache.insert(leaf.0, clusters);
+                }
+                if !opened_factors.elems.is_empty() {
+                    self.sys.opened_factors.insert(leaf.0, opened_factors);
                 }
             }
             self.push_row(row);
@@ -2103,19 +2222,23 @@ impl Solver<'_> {
 /// `ȳ`, `K = cos θ_x cos θ_y / r²`, averaged over the points weighted by `K`.
 /// The shares sum to 1, so the row keeps its sum. `None` where the linear kernel
 /// does not hold: a source near a point's horizon or seen edge-on, or a share
-/// moving more than half from its area's.
-fn linear_shares(
+/// moving more than half from its area's. `(c, rad)` is the source's
+/// [`oracle::sphere`], `centroid` a child's area centroid (the final gather has
+/// both computed once per reconstruction).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn linear_shares(
     q: &oracle::Samples,
     n: DVec3,
     geoms: &[Geom],
     gs: &Geom,
+    (c, rad): (DVec3, f64),
     node: Node,
+    centroid: impl Fn(usize) -> DVec3,
 ) -> Option<[f64; 4]> {
     let k = node.child_count as usize;
     if k == 0 || k > 4 {
         return None;
     }
-    let (c, rad) = oracle::sphere(gs);
     let ns = DVec3::from_array(gs.normal);
     let mut g = DVec3::ZERO;
     let mut wsum = 0.0;
@@ -2141,11 +2264,9 @@ fn linear_shares(
     let mut a = [0.0; 4];
     let mut y = [DVec3::ZERO; 4];
     for j in 0..k {
-        let gc = &geoms[node.first_child as usize + j];
-        let m = (gc.n as usize).min(4);
-        let v: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(gc.corners[i]));
-        a[j] = gc.area;
-        y[j] = crate::geometry::centroid_of(&v[..m]);
+        let ch = node.first_child as usize + j;
+        a[j] = geoms[ch].area;
+        y[j] = centroid(ch);
         area += a[j];
         ybar += a[j] * y[j];
     }
