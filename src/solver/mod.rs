@@ -2867,7 +2867,18 @@ mod tests {
         assert_facets_show_what_is_seen(&facet_probes(&s), |p| {
             terms.fixed.clear();
             let e = p.e as usize;
-            s.point_terms(p.x, p.n, u32::MAX, e, false, 0, None, &limits, &mut terms);
+            s.point_terms(
+                p.x,
+                p.n,
+                u32::MAX,
+                e,
+                false,
+                false,
+                0,
+                None,
+                &limits,
+                &mut terms,
+            );
             assert!(terms.masked.is_empty());
             assert!(terms.fixed.iter().all(|t| t.0 & FACET_BIT != 0));
             terms.fixed.iter().map(|t| t.1).sum()

@@ -194,7 +194,8 @@ impl OpenedMemo<'_> {
 pub const BALANCE_TRIGGER: f64 = 0.01;
 /// A cluster part that rays from a leaf's points (or a final-gather point) find
 /// partly hidden is cast again with this many times the rays ([`Solver::part_visibility`]'s
-/// callers). Why: with `cluster_rays` = 8 (2 a leaf point) the fraction comes in
+/// callers); so is a surface source a final-gather point finds partly hidden
+/// (`Solver::surface_visibility`). Why: with `cluster_rays` = 8 (2 a leaf point) the fraction comes in
 /// steps of 1/8 and the row or point sums it enters were off by a few percent where
 /// an object hides part of a cluster: in the room with a pillar and a floating box
 /// (`tests/it/solver/enclosures.rs`) at `ρ = 0.99`, balanced, the final gather read
