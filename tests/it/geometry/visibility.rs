@@ -258,6 +258,7 @@ fn the_shadow_cache_never_changes_an_answer() {
 /// surfaces (`occluded_between`, twins skipped) and with the plain trim
 /// (`occluded_by`), over each set of parts; segments within 1° of their end
 /// patches' planes left out. Also the number blocked.
+#[cfg(feature = "embree")]
 fn occlusion_answers(bvh: &SceneBvh, patches: &Patches, n: u64) -> (Vec<bool>, usize) {
     use rhier::geometry::{LastHit, Parts};
     let np = patches.len() as u64;
