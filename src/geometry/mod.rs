@@ -8,13 +8,17 @@
 //! - [`Patches`]: every input polygon placed in world space at a time `t`.
 //! - [`SceneBvh`]: occlusion rays and closest hits through obvhs CWBVHs: one BVH in
 //!   world space for all static objects, one in object space per moving object placed
-//!   by its motion at time `t`. This module is the only user of obvhs.
+//!   by its motion at time `t`. This module is the only user of obvhs. With the
+//!   cargo feature `embree`, occlusion rays may go through Embree 3 instead
+//!   ([`Rays`], chosen by `RHIER_RAYS`), with the same f64 decisions.
 //!
 //! Geometry is `f64` everywhere except inside the BVHs (`f32`, as obvhs stores it);
 //! ray end points are offset relative to the segment length, so results do not depend
 //! on the scene's scale.
 
 mod contact;
+#[cfg(feature = "embree")]
+mod embree;
 mod formfactor;
 mod nearest;
 mod patches;
@@ -30,5 +34,5 @@ pub use nearest::{closest_point_on_polygon, nearest_facing, on_emitters};
 pub use patches::{PatchGeometry, PatchId, Patches, param_point};
 pub use polygon::{MAX_CORNERS, Poly, centroid_of};
 pub use visibility::{
-    FRONT_FIRST_TIE, Hit, LastHit, Parts, SEGMENT_TRIM, SURFACE_TRIM, SceneBvh, twin_patches,
+    FRONT_FIRST_TIE, Hit, LastHit, Parts, Rays, SEGMENT_TRIM, SURFACE_TRIM, SceneBvh, twin_patches,
 };

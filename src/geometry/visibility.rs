@@ -17,6 +17,11 @@
 //! is tested on its f64 corners ([`SceneBvh::occluded_cached`]), so that the answer
 //! does not depend on how the scene's unit rounds to f32.
 //!
+//! Occlusion rays have a second backend, Embree 3 ([`Rays`], the cargo feature
+//! `embree`, `RHIER_RAYS=embree`): it finds the candidates in place of the CWBVH and
+//! the same f64 test decides ([`super::embree`]); closest hits and box queries stay
+//! on obvhs.
+//!
 //! What it does not do: it never decides what a segment's end points may hit. Callers
 //! pass segments between two surface points; the ends are trimmed by a fraction of the
 //! segment's length so the surfaces they start and end on do not count.
@@ -30,7 +35,49 @@ use obvhs::{
 };
 
 use super::patches::Patches;
+use crate::error::{Error, Result};
 use crate::scene::Scene;
+
+/// Which library casts the occlusion rays of a [`SceneBvh`] (closest hits and box
+/// queries are always obvhs'). Both decide each candidate triangle by the same f64
+/// test, so they give the same answers but for rays grazing a triangle's edge
+/// within f32 round-off.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Rays {
+    /// obvhs' CWBVH (the default).
+    #[default]
+    Obvhs,
+    /// Embree 3 (`libembree3`), when rhier is built with the cargo feature `embree`.
+    Embree,
+}
+
+impl Rays {
+    /// The environment variable that chooses the backend of [`SceneBvh::build`]
+    /// (as `RHIER_STORAGE` chooses the pools'): unset, empty or `obvhs` for obvhs,
+    /// `embree` for Embree (only in a build with the feature `embree`). CI runs the
+    /// visibility tests and a set of known-answer solves on both.
+    pub const ENV: &'static str = "RHIER_RAYS";
+
+    /// The backend [`Rays::ENV`] names; refuses `embree` in a build without the
+    /// feature.
+    pub fn from_env() -> Result<Rays> {
+        let value = std::env::var_os(Self::ENV).unwrap_or_default();
+        match value.to_str() {
+            Some("" | "obvhs") => Ok(Rays::Obvhs),
+            Some("embree") if cfg!(feature = "embree") => Ok(Rays::Embree),
+            Some("embree") => Err(Error::Usage(format!(
+                "{}=embree: this rhier was built without Embree \
+                 (cargo build --release --features embree)",
+                Self::ENV
+            ))),
+            _ => Err(Error::Usage(format!(
+                "{}: expected obvhs or embree, found {:?}",
+                Self::ENV,
+                value
+            ))),
+        }
+    }
+}
 
 /// Relative trim of both ends of a visibility segment.
 pub const SEGMENT_TRIM: f64 = 1e-4;
@@ -146,6 +193,10 @@ struct Part {
     /// World box of the part where it is placed (segments that miss it skip the
     /// part).
     world_box: (DVec3, DVec3),
+    /// The part's triangles in Embree (primitive `i` is `tris[i]`), when
+    /// [`Rays::Embree`] casts the occlusion rays.
+    #[cfg(feature = "embree")]
+    embree: Option<super::embree::EmbreeScene>,
 }
 
 impl Part {
@@ -184,6 +235,8 @@ impl Part {
             object,
             unit,
             world_box: (DVec3::ZERO, DVec3::ZERO),
+            #[cfg(feature = "embree")]
+            embree: None,
         };
         part.update_box();
         Some(part)
@@ -290,6 +343,8 @@ impl Part {
 /// Visibility structure of a scene at one time.
 pub struct SceneBvh {
     parts: Vec<Part>,
+    /// What casts the occlusion rays.
+    rays: Rays,
     /// Each patch's back-to-back twin (the same corners in reverse order: a
     /// two-sided polygon's other side), `u32::MAX` for none ([`twin_patches`]).
     twins: Vec<u32>,
@@ -369,8 +424,10 @@ impl SceneBvh {
         parts.extend(Part::build(st, from_unit(unit), u32::MAX, unit));
         SceneBvh {
             parts,
+            rays: Rays::Obvhs,
             twins: twin_patches(patches),
         }
+        .with_env_rays()
     }
 
     /// Builds one world-space BVH of `patches` as they stand, moving or not: a
@@ -386,8 +443,64 @@ impl SceneBvh {
             parts: Part::build(st, from_unit(unit), u32::MAX, unit)
                 .into_iter()
                 .collect(),
+            rays: Rays::Obvhs,
             twins: twin_patches(patches),
         }
+        .with_env_rays()
+    }
+
+    /// `self` casting its occlusion rays with the backend [`Rays::ENV`] names (a
+    /// bad value is refused by `SolveOptions::validate`; here it, or an Embree that
+    /// cannot start, leaves obvhs with a warning on stderr).
+    fn with_env_rays(mut self) -> SceneBvh {
+        let rays = Rays::from_env().unwrap_or_default();
+        if rays != Rays::Obvhs
+            && let Err(e) = self.set_rays(rays)
+        {
+            eprintln!("warning: {e}; casting rays with obvhs");
+        }
+        self
+    }
+
+    /// Casts the occlusion rays with `rays` from now on (building Embree's scenes
+    /// for [`Rays::Embree`]). Errors if this build has no Embree or Embree cannot
+    /// start; `self` is then unchanged.
+    pub fn set_rays(&mut self, rays: Rays) -> Result<()> {
+        match rays {
+            Rays::Obvhs => {
+                #[cfg(feature = "embree")]
+                self.parts.iter_mut().for_each(|p| p.embree = None);
+            }
+            #[cfg(feature = "embree")]
+            Rays::Embree => {
+                let scenes = self
+                    .parts
+                    .iter()
+                    .map(|p| {
+                        let pad = part_reach(&p.tris64) * EMBREE_PAD;
+                        super::embree::EmbreeScene::new(&p.tris64, pad)
+                    })
+                    .collect::<std::result::Result<Vec<_>, String>>()
+                    .map_err(Error::Usage)?;
+                for (p, e) in self.parts.iter_mut().zip(scenes) {
+                    p.embree = Some(e);
+                }
+            }
+            #[cfg(not(feature = "embree"))]
+            Rays::Embree => {
+                return Err(Error::Usage(
+                    "this rhier was built without Embree (cargo build --release --features embree)"
+                        .into(),
+                ));
+            }
+        }
+        self.rays = rays;
+        Ok(())
+    }
+
+    /// What casts the occlusion rays.
+    pub fn rays(&self) -> Rays {
+        self.rays
     }
 
     /// Moves every moving object's BVH to its place at time `t` (no rebuild: only
@@ -526,9 +639,34 @@ impl SceneBvh {
             if moving && part.misses_box(a, d, s0, s1) {
                 continue;
             }
-            let ray = part.local_ray(o, d, t0, t1);
             let (lo, ld) = part.local(o, d);
             let mut blocker = u32::MAX;
+            #[cfg(feature = "embree")]
+            if let Some(scene) = &part.embree {
+                // The same f64 test on the same segment; Embree's f32 range is
+                // wider by `EMBREE_SLACK` so that it holds every hit the test
+                // takes.
+                let hit = scene.occluded(lo, ld, t0 - EMBREE_SLACK, t1 + EMBREE_SLACK, &mut |id| {
+                    let id = id as usize;
+                    if skip.contains(&part.tri_patch[id]) {
+                        return false;
+                    }
+                    let blocks = part.hit64(id, lo, ld, t0, t1).is_finite();
+                    if blocks {
+                        blocker = id as u32;
+                    }
+                    blocks
+                });
+                if hit {
+                    *last = LastHit {
+                        part: ix as u32,
+                        tri: blocker,
+                    };
+                    return true;
+                }
+                continue;
+            }
+            let ray = part.local_ray(o, d, t0, t1);
             let hit = !part.bvh.ray_traverse_miss(ray, |_, id| {
                 let p = part.tri_patch[id];
                 if skip.contains(&p) {
@@ -746,6 +884,16 @@ type Tris = (Vec<Triangle>, Vec<u32>, Vec<[DVec3; 3]>);
 /// the traversal missed that side in metres and millimetres and found it in
 /// kilometres, and the point read 0.34% apart between the scales.
 fn padded_boxes(tris: &[[DVec3; 3]]) -> Vec<Aabb> {
+    let pad = part_reach(tris) * BOX_PAD;
+    let f = |p: DVec3| Vec3A::new(p.x as f32, p.y as f32, p.z as f32);
+    tris.iter()
+        .map(|&[a, b, c]| Aabb::new(f(a.min(b).min(c) - pad), f(a.max(b).max(c) + pad)))
+        .collect()
+}
+
+/// The size of the triangles `tris` plus their farthest coordinate: what their
+/// f32 round-off scales with ([`padded_boxes`]).
+fn part_reach(tris: &[[DVec3; 3]]) -> f64 {
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for t in tris {
         for &v in t {
@@ -754,12 +902,22 @@ fn padded_boxes(tris: &[[DVec3; 3]]) -> Vec<Aabb> {
         }
     }
     let reach = lo.abs().max(hi.abs()).max_element();
-    let pad = ((hi - lo).length() + reach) * BOX_PAD;
-    let f = |p: DVec3| Vec3A::new(p.x as f32, p.y as f32, p.z as f32);
-    tris.iter()
-        .map(|&[a, b, c]| Aabb::new(f(a.min(b).min(c) - pad), f(a.max(b).max(c) + pad)))
-        .collect()
+    (hi - lo).length() + reach
 }
+
+/// Relative dilation of the triangles given to Embree, of [`part_reach`]
+/// (`super::embree::EmbreeScene::new`): the f32 ray strays from the f64 one by
+/// ~2·10⁻⁷ of the reach, and a crossing at `θ` to a triangle's plane by that over
+/// `tan θ`; 10⁻⁵ keeps every hit of the f64 test a candidate down to `θ ≈ 1°`
+/// while adding candidates only in a band of 10⁻⁵ of the scene round each
+/// triangle (10⁻⁴ cost 6% more CPU on `gen_cubes 10`).
+#[cfg(feature = "embree")]
+const EMBREE_PAD: f64 = 1e-5;
+
+/// How much wider (in the segment's parameter) Embree's f32 range is than the f64
+/// test's: the crossing's parameter strays like its place (see [`EMBREE_PAD`]).
+#[cfg(feature = "embree")]
+const EMBREE_SLACK: f64 = 1e-4;
 
 /// Relative widening of the BVH's triangle boxes ([`padded_boxes`]): 16 f32 ulps
 /// of the part's size, as [`Part::update_box`] pads a part's world box. A ray's

@@ -434,9 +434,11 @@ impl SolveOptions {
     /// (`eps <= 0` refines until memory runs out) or silently solves nothing
     /// (`max_rounds = 0`). Settings are named by the `rhier solve` flag that sets
     /// them (`--eps` for [`Self::eps`]); those without a flag by their field. A
-    /// value of [`Storage::ENV`] that names no backend is refused too.
+    /// value of [`Storage::ENV`] or [`crate::geometry::Rays::ENV`] that names no
+    /// backend (or Embree in a build without it) is refused too.
     pub fn validate(&self) -> Result<()> {
         Storage::from_env()?;
+        crate::geometry::Rays::from_env()?;
         check_domains(
             &[
                 ("--eps", Some(self.eps)),

@@ -562,6 +562,10 @@ pub struct ResourceArgs {
     /// Worker threads (default: all cores).
     ///
     /// Results are deterministic for a given seed and thread count.
+    ///
+    /// The occlusion rays are cast by obvhs; in a build with `--features embree`
+    /// (Debian's `libembree-dev`), the environment variable `RHIER_RAYS=embree` casts
+    /// them with Embree 3, with the same f64 decisions (`obvhs`, unset: the default).
     #[arg(long)]
     pub threads: Option<usize>,
 }

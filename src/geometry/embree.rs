@@ -1,0 +1,344 @@
+//! Occlusion rays through Embree 3 (Wald et al., "Embree: a kernel framework for
+//! efficient CPU ray tracing", 2014): the second visibility backend of
+//! [`super::SceneBvh`], compiled in by the cargo feature `embree` and chosen at run
+//! time by [`super::Rays::ENV`].
+//!
+//! A hand-written FFI over the dozen calls of Debian's `libembree-dev` 3.13 that an
+//! occlusion query needs (`rtcore.h`), so that no unmaintained binding crate is
+//! pulled in. Embree only finds the candidates: each triangle is given to it dilated
+//! in its plane by the part's f32 round-off ([`EmbreeScene::new`]), and a filter
+//! called on every candidate hit decides in f64, on the triangle's f64 corners, as
+//! the obvhs backend does ([`super::SceneBvh::occluded_cached`]). The answers are
+//! then the f64 test's on either backend, up to a ray grazing a triangle's edge at
+//! under ~1° (see [`EmbreeScene::new`]).
+//!
+//! What it does not do: closest hits and box queries (the path tracer's bounces,
+//! the shafts' culling) stay on obvhs.
+
+use std::ffi::{c_char, c_int, c_uint, c_void};
+use std::sync::OnceLock;
+
+use glam::DVec3;
+
+/// Embree's opaque handles.
+type RtcDevice = *mut c_void;
+type RtcScene = *mut c_void;
+type RtcGeometry = *mut c_void;
+
+/// `RTC_GEOMETRY_TYPE_TRIANGLE`.
+const GEOMETRY_TYPE_TRIANGLE: c_int = 0;
+/// `RTC_BUFFER_TYPE_INDEX`, `RTC_BUFFER_TYPE_VERTEX`.
+const BUFFER_TYPE_INDEX: c_int = 0;
+const BUFFER_TYPE_VERTEX: c_int = 1;
+/// `RTC_FORMAT_UINT3`, `RTC_FORMAT_FLOAT3`.
+const FORMAT_UINT3: c_int = 0x5003;
+const FORMAT_FLOAT3: c_int = 0x9003;
+/// `RTC_SCENE_FLAG_NONE`. Not `RTC_SCENE_FLAG_ROBUST` (a watertight triangle
+/// test): the dilated triangles overlap their neighbours by far more than Embree's
+/// round-off, and robust mode cost 8% of a solve's CPU on `gen_cubes 10`.
+const SCENE_FLAG_NONE: c_int = 0;
+/// `RTC_BUILD_QUALITY_MEDIUM` (Embree's default): `HIGH` (spatial splits) cast no
+/// faster on `gen_cubes 10`.
+const BUILD_QUALITY_MEDIUM: c_int = 1;
+/// `RTC_INVALID_GEOMETRY_ID`.
+const INVALID_GEOMETRY_ID: c_uint = u32::MAX;
+
+/// `struct RTCIntersectContext` (`rtcore_common.h`, with `RTC_MAX_INSTANCE_LEVEL_COUNT`
+/// 1 and no `RTC_MIN_WIDTH`, as Debian's `rtcore_config.h` has them).
+#[repr(C)]
+struct RtcIntersectContext {
+    flags: c_int,
+    filter: Option<FilterFn>,
+    inst_id: [c_uint; 1],
+}
+
+/// `struct RTCRay` (`rtcore_ray.h`).
+#[repr(C, align(16))]
+struct RtcRay {
+    org: [f32; 3],
+    tnear: f32,
+    dir: [f32; 3],
+    time: f32,
+    tfar: f32,
+    mask: c_uint,
+    id: c_uint,
+    flags: c_uint,
+}
+
+/// `struct RTCFilterFunctionNArguments` (`rtcore_common.h`).
+#[repr(C)]
+struct FilterArgs {
+    valid: *mut c_int,
+    geometry_user_ptr: *mut c_void,
+    context: *mut RtcIntersectContext,
+    ray: *mut c_void,
+    hit: *mut c_void,
+    n: c_uint,
+}
+
+/// `RTCFilterFunctionN`.
+type FilterFn = unsafe extern "C" fn(args: *const FilterArgs);
+
+#[link(name = "embree3")]
+unsafe extern "C" {
+    fn rtcNewDevice(config: *const c_char) -> RtcDevice;
+    fn rtcGetDeviceError(device: RtcDevice) -> c_int;
+    fn rtcNewScene(device: RtcDevice) -> RtcScene;
+    fn rtcSetSceneFlags(scene: RtcScene, flags: c_int);
+    fn rtcSetSceneBuildQuality(scene: RtcScene, quality: c_int);
+    fn rtcCommitScene(scene: RtcScene);
+    fn rtcReleaseScene(scene: RtcScene);
+    fn rtcNewGeometry(device: RtcDevice, kind: c_int) -> RtcGeometry;
+    fn rtcSetNewGeometryBuffer(
+        geometry: RtcGeometry,
+        kind: c_int,
+        slot: c_uint,
+        format: c_int,
+        byte_stride: usize,
+        item_count: usize,
+    ) -> *mut c_void;
+    fn rtcSetGeometryOccludedFilterFunction(geometry: RtcGeometry, filter: Option<FilterFn>);
+    fn rtcCommitGeometry(geometry: RtcGeometry);
+    fn rtcAttachGeometry(scene: RtcScene, geometry: RtcGeometry) -> c_uint;
+    fn rtcReleaseGeometry(geometry: RtcGeometry);
+    fn rtcOccluded1(scene: RtcScene, context: *mut RtcIntersectContext, ray: *mut RtcRay);
+}
+
+/// The process's Embree device, made on first use and never released (it owns
+/// Embree's build threads).
+struct Device(RtcDevice);
+
+// SAFETY: an `RTCDevice` may be used from any thread (Embree 3 API docs,
+// "Thread safety": all API calls are thread safe but for the modification of one
+// object from several threads at once, and rhier never modifies the device).
+unsafe impl Send for Device {}
+// SAFETY: as for `Send`.
+unsafe impl Sync for Device {}
+
+/// The shared device, or why Embree could not make one.
+fn device() -> Result<RtcDevice, String> {
+    static DEVICE: OnceLock<Result<Device, String>> = OnceLock::new();
+    DEVICE
+        .get_or_init(|| {
+            // SAFETY: a null configuration string asks for the defaults; the call
+            // has no other precondition.
+            let d = unsafe { rtcNewDevice(std::ptr::null()) };
+            if d.is_null() {
+                // SAFETY: `rtcGetDeviceError(NULL)` reports the error of the
+                // failed `rtcNewDevice` (Embree docs, rtcGetDeviceError).
+                let e = unsafe { rtcGetDeviceError(std::ptr::null_mut()) };
+                Err(format!("Embree: rtcNewDevice failed (RTCError {e})"))
+            } else {
+                Ok(Device(d))
+            }
+        })
+        .as_ref()
+        .map(|d| d.0)
+        .map_err(Clone::clone)
+}
+
+/// One part's triangles in an Embree scene (one triangle-mesh geometry whose
+/// primitive `i` is the part's triangle `i`).
+pub struct EmbreeScene {
+    scene: RtcScene,
+}
+
+// SAFETY: a committed scene is only read: `rtcOccluded1` on it may be called from
+// any number of threads at once (Embree 3 API docs, rtcCommitScene: "the scene can
+// be used for ray queries ... from multiple threads"), and the scene is released
+// once, by `Drop`, when no query can hold it.
+unsafe impl Send for EmbreeScene {}
+// SAFETY: as for `Send`; `&EmbreeScene` only casts rays.
+unsafe impl Sync for EmbreeScene {}
+
+impl Drop for EmbreeScene {
+    fn drop(&mut self) {
+        // SAFETY: `scene` came from `rtcNewScene` and this is its only owner.
+        unsafe { rtcReleaseScene(self.scene) };
+    }
+}
+
+/// What an occlusion query carries to its filter: Embree's context first, so that
+/// the context pointer Embree hands the filter is this record's (the "extended
+/// intersection context" of the Embree docs).
+#[repr(C)]
+struct QueryContext<'a> {
+    ctx: RtcIntersectContext,
+    /// Decides a candidate triangle: true if it blocks the ray.
+    accept: &'a mut dyn FnMut(u32) -> bool,
+}
+
+/// The occlusion filter: asks the query's `accept` about every candidate hit and
+/// rejects those it refuses (`valid = 0`), so the traversal goes on past them.
+unsafe extern "C" fn occlusion_filter(args: *const FilterArgs) {
+    // SAFETY: Embree passes a valid argument record for the duration of the call.
+    let args = unsafe { &*args };
+    // SAFETY: every query casts with the context of a live `QueryContext`
+    // (`EmbreeScene::occluded`), whose first field is the context Embree passes on.
+    let query = unsafe { &mut *(args.context as *mut QueryContext) };
+    let n = args.n as usize;
+    for i in 0..n {
+        // SAFETY: `valid` has `n` entries (RTCFilterFunctionNArguments).
+        let valid = unsafe { &mut *args.valid.add(i) };
+        if *valid == 0 {
+            continue;
+        }
+        // SAFETY: `hit` is an `RTCHitN` of width `n` in SoA layout: `Ng_x, Ng_y,
+        // Ng_z, u, v, primID, ...`, each `n` 32-bit values (RTCHitN_primID).
+        let prim = unsafe { *(args.hit as *const c_uint).add(5 * n + i) };
+        if !(query.accept)(prim) {
+            *valid = 0;
+        }
+    }
+}
+
+impl EmbreeScene {
+    /// An Embree scene of the triangles `tris` (f64, part space), each dilated in
+    /// its plane by `pad` (every edge moved out by `pad`) before its corners round
+    /// to f32, so that a ray the f64 test finds within round-off of an edge is a
+    /// candidate: the f32 ray strays from the f64 one by a few ulps of the part's
+    /// coordinates (~2·10⁻⁷ of them), and a crossing at angle `θ` to the plane
+    /// moves by that over `tan θ`, which the caller's `pad` (10⁻⁵ of the part's
+    /// reach) covers above `θ ≈ 1°`. A corner's shift is capped at `100 pad`
+    /// (angles under ~1°, slivers). Errors if Embree cannot make its device.
+    pub fn new(tris: &[[DVec3; 3]], pad: f64) -> Result<EmbreeScene, String> {
+        let device = device()?;
+        let n = tris.len();
+        // SAFETY: `device` is live (never released).
+        let scene = unsafe { rtcNewScene(device) };
+        if scene.is_null() {
+            return Err("Embree: rtcNewScene failed".into());
+        }
+        let out = EmbreeScene { scene };
+        // SAFETY: `scene` is live and owned here.
+        unsafe {
+            rtcSetSceneFlags(scene, SCENE_FLAG_NONE);
+            rtcSetSceneBuildQuality(scene, BUILD_QUALITY_MEDIUM);
+        }
+        if n == 0 {
+            // SAFETY: as above; an empty scene commits to one that no ray hits.
+            unsafe { rtcCommitScene(scene) };
+            return Ok(out);
+        }
+        // SAFETY: `device` is live.
+        let geom = unsafe { rtcNewGeometry(device, GEOMETRY_TYPE_TRIANGLE) };
+        if geom.is_null() {
+            return Err("Embree: rtcNewGeometry failed".into());
+        }
+        // SAFETY: `geom` is a live triangle geometry; the buffers Embree allocates
+        // hold `3 n` float3 vertices (12-byte stride, padded by Embree for its
+        // 16-byte loads) and `n` uint3 triangles, written below before the commit.
+        let (vb, ib) = unsafe {
+            (
+                rtcSetNewGeometryBuffer(geom, BUFFER_TYPE_VERTEX, 0, FORMAT_FLOAT3, 12, 3 * n)
+                    as *mut [f32; 3],
+                rtcSetNewGeometryBuffer(geom, BUFFER_TYPE_INDEX, 0, FORMAT_UINT3, 12, n)
+                    as *mut [u32; 3],
+            )
+        };
+        if vb.is_null() || ib.is_null() {
+            // SAFETY: `geom` is owned here and attached nowhere.
+            unsafe { rtcReleaseGeometry(geom) };
+            return Err("Embree: rtcSetNewGeometryBuffer failed".into());
+        }
+        // SAFETY: the buffers hold `3 n` and `n` items (above), are aligned for f32
+        // and u32 (Embree aligns them to 16 bytes), and nothing else uses them yet.
+        let (verts, idx) = unsafe {
+            (
+                std::slice::from_raw_parts_mut(vb, 3 * n),
+                std::slice::from_raw_parts_mut(ib, n),
+            )
+        };
+        for (i, t) in tris.iter().enumerate() {
+            let d = dilate(t, pad);
+            for k in 0..3 {
+                verts[3 * i + k] = [d[k].x as f32, d[k].y as f32, d[k].z as f32];
+            }
+            let b = 3 * i as u32;
+            idx[i] = [b, b + 1, b + 2];
+        }
+        // SAFETY: `geom`'s buffers are filled; the filter is an `extern "C"`
+        // function with Embree's filter signature; attaching hands the scene a
+        // reference, so releasing ours leaves the geometry to the scene.
+        unsafe {
+            rtcSetGeometryOccludedFilterFunction(geom, Some(occlusion_filter));
+            rtcCommitGeometry(geom);
+            rtcAttachGeometry(scene, geom);
+            rtcReleaseGeometry(geom);
+            rtcCommitScene(scene);
+        }
+        Ok(out)
+    }
+
+    /// True if a triangle `i` that the f32 ray `o + t·d`, `t ∈ [tnear, tfar]`,
+    /// crosses (part space) has `accept(i)`. `accept` is asked about candidates
+    /// in no set order, at most until one is accepted.
+    pub fn occluded(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        tnear: f64,
+        tfar: f64,
+        accept: &mut dyn FnMut(u32) -> bool,
+    ) -> bool {
+        let f = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+        let mut ray = RtcRay {
+            org: f(o),
+            tnear: tnear as f32,
+            dir: f(d),
+            time: 0.0,
+            tfar: tfar as f32,
+            mask: u32::MAX,
+            id: 0,
+            flags: 0,
+        };
+        // `rtcInitIntersectContext` (an inline function of the header): incoherent
+        // rays, no context filter, no instance.
+        let mut query = QueryContext {
+            ctx: RtcIntersectContext {
+                flags: 0,
+                filter: None,
+                inst_id: [INVALID_GEOMETRY_ID],
+            },
+            accept,
+        };
+        // SAFETY: `scene` is committed and live for `&self`; the context is the
+        // first field of `query`, which outlives the call and is what the filter
+        // casts it back to; `ray` is a valid, aligned `RTCRay`.
+        unsafe {
+            rtcOccluded1(
+                self.scene,
+                &mut query as *mut QueryContext as *mut RtcIntersectContext,
+                &mut ray,
+            )
+        };
+        // Embree sets `tfar` to -inf on an occluded ray.
+        ray.tfar == f32::NEG_INFINITY
+    }
+}
+
+/// The triangle `t` with each edge moved out by `pad` in its plane: each corner
+/// goes out along its angle's bisector by `pad / sin(half angle)`, capped at
+/// `100 pad`. A degenerate triangle is returned as it is.
+fn dilate(t: &[DVec3; 3], pad: f64) -> [DVec3; 3] {
+    let mut out = *t;
+    for k in 0..3 {
+        let v = t[k];
+        let e1 = (t[(k + 1) % 3] - v).normalize_or_zero();
+        let e2 = (t[(k + 2) % 3] - v).normalize_or_zero();
+        // Corner `v + w` with `w = -(e1 + e2) pad / |e1 × e2|` lies `pad` from
+        // both edge lines, outside.
+        let s = e1.cross(e2).length();
+        if s == 0.0 {
+            return *t;
+        }
+        let w = -(e1 + e2) * (pad / s);
+        let cap = 100.0 * pad;
+        out[k] = v + if w.length() > cap {
+            w * (cap / w.length())
+        } else {
+            w
+        };
+    }
+    out
+}
