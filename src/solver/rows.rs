@@ -1762,6 +1762,21 @@ impl Solver<'_> {
         !self.sys.row_scale.is_empty()
     }
 
+    /// Frees the leaf system's rows and what a static solve keeps of them from
+    /// round to round (the row cache, the cluster parts), once the last round is
+    /// done: the final gather ([`Solver::solution`]) walks the links, not the rows,
+    /// and the rows were its largest company (on `gen_cubes 20`, 92 of the 169 MB
+    /// heap at the reconstruction's peak; BENCHMARKS.md, "Scale"). Read
+    /// [`Solver::power_balance`] first: it is NaN after. A solver whose rows are
+    /// freed is not to be run again.
+    pub fn release_rows(&mut self) {
+        self.sys.row_start = Vec::new();
+        self.sys.row_sources = Vec::new();
+        self.sys.row_coefs = Vec::new();
+        self.sys.row_cache = FastMap::default();
+        self.sys.cluster_cache = FastMap::default();
+    }
+
     /// Balances the leaf system so that it conserves energy, once
     /// [`Solver::solve_balanced`] has found that it does not (else it clears the
     /// scales). In a closed scene ([`Solver::is_closed`]) two sums hold for exact
