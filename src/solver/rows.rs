@@ -101,6 +101,44 @@ pub(super) struct LeafRow {
     passed: Vec<((u32, u32), (f64, f64))>,
 }
 
+impl LeafRow {
+    /// Whether nothing is left of it once its row and kept records are taken: no
+    /// entry for the space-time window's caches or the interactive moves' (what a
+    /// static solve's rows always are).
+    fn is_spent(&self) -> bool {
+        self.move_clusters.is_empty()
+            && self.fresh.is_empty()
+            && self.opened.is_empty()
+            && self.hidden.is_empty()
+            && self.masks.is_empty()
+            && self.factors.is_empty()
+            && self.timed.is_empty()
+            && self.between == 0
+            && self.passed.is_empty()
+    }
+}
+
+/// The leaf rows as [`Solver::compute_leaf_rows`] makes them, chunk by chunk: the
+/// leaf system's CSR ([`LeafSystem`]'s `row_start`, `row_sources`, `row_coefs`) and
+/// what is left of the leaves' [`LeafRow`]s that have more to hand on.
+#[derive(Default)]
+struct LeafRows {
+    start: Vec<u32>,
+    sources: Vec<u32>,
+    coefs: Vec<f64>,
+    rest: Vec<(ElementId, LeafRow)>,
+}
+
+impl LeafRows {
+    /// Appends the next leaf's row, and frees it.
+    fn push(&mut self, row: &mut Vec<(u32, f64)>) {
+        self.sources.extend(row.iter().map(|e| e.0));
+        self.coefs.extend(row.iter().map(|e| e.1));
+        self.start.push(self.sources.len() as u32);
+        *row = Vec::new();
+    }
+}
+
 /// A window cache by the key of a leaf row's entry (its leaf and link, [`Solver::row_key`]).
 type KeyMap<V> = FastMap<(u32, u32), V>;
 
@@ -1302,18 +1340,61 @@ impl Solver<'_> {
         // whole at once (with the parts of the links walked again kept, the
         // 32 × 32 boxes of `the_clutter_keeps_its_light` peaked at 1.28 GB
         // instead of 1.01).
-        let mut rows: Vec<LeafRow> = Vec::with_capacity(self.sys.leaves.len());
+        //
+        // Each chunk's rows go into the leaf system (CSR) and its kept records into
+        // the new caches as soon as it is made, and the old caches' records of its
+        // leaves are freed: a row's entries are held once, as the leaf system holds
+        // them (12 bytes), not also as every leaf's `LeafRow` (16 bytes an entry)
+        // until the last leaf is done, nor beside the last round's rows. On
+        // `gen_furnished.py --detail 0.15 --static` the rows' entries were 374 MB
+        // of `LeafRow`s beside the 335 MB system at the peak (BENCHMARKS.md, "Scale").
+        self.sys.row_start = Vec::new();
+        self.sys.row_sources = Vec::new();
+        self.sys.row_coefs = Vec::new();
+        let mut rows = LeafRows {
+            start: vec![0],
+            ..Default::default()
+        };
+        let mut row_cache = FastMap::default();
+        let mut cluster_cache = FastMap::default();
+        let mut opened_factors = FastMap::default();
         for chunk in self.sys.leaves.chunks(ROW_CHUNK) {
-            rows.par_extend(chunk.par_iter().map(|&leaf| {
-                let parts = parts_before.get(&leaf.0).map(Vec::as_slice);
-                self.leaf_row(&inputs, leaf, parts, factors_before.get(&leaf.0))
-            }));
-            for leaf in chunk {
+            let made: Vec<LeafRow> = chunk
+                .par_iter()
+                .map(|&leaf| {
+                    let parts = parts_before.get(&leaf.0).map(Vec::as_slice);
+                    self.leaf_row(&inputs, leaf, parts, factors_before.get(&leaf.0))
+                })
+                .collect();
+            for (&leaf, mut out) in chunk.iter().zip(made) {
                 parts_before.remove(&leaf.0);
                 factors_before.remove(&leaf.0);
+                self.sys.row_cache.remove(&leaf.0);
+                rows.push(&mut out.row);
+                if keep_rows {
+                    // Held to the next round: without the growth's spare room.
+                    let mut kept = std::mem::take(&mut out.kept);
+                    kept.shrink_to_fit();
+                    row_cache.insert(leaf.0, kept);
+                    let mut clusters = std::mem::take(&mut out.clusters);
+                    clusters.shrink_to_fit();
+                    if !clusters.is_empty() {
+                        cluster_cache.insert(leaf.0, clusters);
+                    }
+                    let factors = std::mem::take(&mut out.opened_factors);
+                    if !factors.elems.is_empty() {
+                        opened_factors.insert(leaf.0, factors);
+                    }
+                }
+                if !out.is_spent() {
+                    rows.rest.push((leaf, out));
+                }
             }
         }
-        self.store_leaf_rows(rows, keep_rows);
+        self.sys.row_cache = row_cache;
+        self.sys.cluster_cache = cluster_cache;
+        self.sys.opened_factors = opened_factors;
+        self.store_leaf_rows(rows);
     }
 
     /// The rows of `leaves` alone, computed as [`Solver::compute_leaf_rows`]
@@ -1696,22 +1777,22 @@ impl Solver<'_> {
     }
 
     /// Installs the leaves' rows ([`Solver::compute_leaf_rows`]) and hands the
-    /// caches what they keep of them.
-    fn store_leaf_rows(&mut self, rows: Vec<LeafRow>, keep_rows: bool) {
-        self.clear_rows();
-        self.sys.row_cache.clear();
-        self.sys.cluster_cache.clear();
-        self.sys.opened_factors.clear();
+    /// space-time window's caches and the interactive moves' what they keep of them.
+    fn store_leaf_rows(&mut self, rows: LeafRows) {
+        let LeafRows {
+            start,
+            sources,
+            coefs,
+            rest,
+        } = rows;
+        self.sys.row_start = start;
+        self.sys.row_sources = sources;
+        self.sys.row_coefs = coefs;
         self.st.frame_rows.0.clear();
         self.st.rows_between = 0;
-        let leaves = std::mem::take(&mut self.sys.leaves);
-        for (&leaf, out) in leaves.iter().zip(rows) {
+        for (leaf, out) in rest {
             let LeafRow {
-                row,
                 fresh,
-                kept,
-                clusters,
-                opened_factors,
                 opened: fresh_opened,
                 hidden: fresh_hidden,
                 masks: fresh_masks,
@@ -1754,35 +1835,9 @@ impl Solver<'_> {
                     }
                 }
             }
-            if keep_rows {
-                self.sys.row_cache.insert(leaf.0, kept);
-                if !clusters.is_empty() {
-                    self.sys.cluster_cache.insert(leaf.0, clusters);
-                }
-                if !opened_factors.elems.is_empty() {
-                    self.sys.opened_factors.insert(leaf.0, opened_factors);
-                }
-            }
-            self.push_row(row);
         }
-        self.sys.leaves = leaves;
         self.st.pass_rows.sort_unstable_by_key(|e| e.0);
         self.st.pass_rows.shrink_to_fit();
-    }
-
-    /// Empties the leaf rows (CSR) before they are pushed again, leaf by leaf.
-    fn clear_rows(&mut self) {
-        self.sys.row_start.clear();
-        self.sys.row_sources.clear();
-        self.sys.row_coefs.clear();
-        self.sys.row_start.push(0);
-    }
-
-    /// Appends the next leaf's row.
-    fn push_row(&mut self, row: Vec<(u32, f64)>) {
-        self.sys.row_sources.extend(row.iter().map(|e| e.0));
-        self.sys.row_coefs.extend(row.iter().map(|e| e.1));
-        self.sys.row_start.push(self.sys.row_sources.len() as u32);
     }
 
     /// Applies `A = I − ρ·(rows ∘ pull)` to leaf radiosities `x` (3 per leaf), with
@@ -1877,6 +1932,23 @@ impl Solver<'_> {
     /// rows could not be (too many left unscaled) reads false.
     pub fn rows_balanced(&self) -> bool {
         !self.sys.row_scale.is_empty()
+    }
+
+    /// Frees the leaf system's rows and what a static solve keeps of them from
+    /// round to round (the row cache, the cluster parts, the opened children's
+    /// factors), once the last round is
+    /// done: the final gather ([`Solver::solution`]) walks the links, not the rows,
+    /// and the rows were its largest company (on `gen_cubes 20`, 92 of the 169 MB
+    /// heap at the reconstruction's peak; BENCHMARKS.md, "Scale"). Read
+    /// [`Solver::power_balance`] first: it is NaN after. A solver whose rows are
+    /// freed is not to be run again.
+    pub fn release_rows(&mut self) {
+        self.sys.row_start = Vec::new();
+        self.sys.row_sources = Vec::new();
+        self.sys.row_coefs = Vec::new();
+        self.sys.row_cache = FastMap::default();
+        self.sys.cluster_cache = FastMap::default();
+        self.sys.opened_factors = FastMap::default();
     }
 
     /// Balances the leaf system so that it conserves energy, once

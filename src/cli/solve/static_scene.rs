@@ -112,6 +112,9 @@ pub fn run(
     if let Some(b) = &bar {
         b.set_message("reconstructing");
     }
+    // Read off the rows before they are freed for the final gather.
+    let balance = solver.power_balance();
+    solver.release_rows();
     let mut solution = solver.solution();
     solution.stats.seconds = start.elapsed().as_secs_f64();
     solution.stats.iterations = records.len() as u32;
@@ -147,7 +150,6 @@ pub fn run(
         write_solution(&out, &solution, write_opts)
             .with_context(|| format!("writing {}", out.display()))?;
     }
-    let balance = solver.power_balance();
     if balance > 1.0 + POWER_ERROR_WARNING {
         eprintln!(
             "rhier: warning: the solution absorbs {:.1}% more power than the scene emits: its form factors sum above 1 somewhere (cluster estimates, quadrature), and the answer is too bright by about as much; reflectance near 1 amplifies this (a finer --eps may help; BENCHMARKS.md, \"Stiff scenes\")",
