@@ -2268,6 +2268,31 @@ mod tests {
         assert!(box_rows < 1e-3, "{box_rows}");
     }
 
+    /// [`Solver::release_rows`] frees only what the final gather does not read:
+    /// the solution after it is the solution before, bit for bit. With a power
+    /// size the size of the scene every leaf is smaller than the power area, so
+    /// every leaf's gather takes its surface sources' visibility from its row's
+    /// kept coefficients (the row cache), which the release once freed too: the
+    /// gathers cast those rays again, and the Cornell box with its blocks at eps
+    /// 0.02 read 0.55% off the lamp for 0.34%.
+    #[test]
+    fn freeing_the_rows_leaves_the_final_gather_as_it_was() {
+        let scene = crate::scene::cornell_box(true);
+        let opts = SolveOptions {
+            power_size: 1.0,
+            max_rounds: 2,
+            ..SolveOptions::default()
+        };
+        let mut s = Solver::new(&scene, opts).unwrap();
+        s.run(|_, _| {}).unwrap();
+        assert!(!s.sys.row_cache.is_empty());
+        let kept = s.solution();
+        s.release_rows();
+        let freed = s.solution();
+        assert!(!kept.leaves.is_empty());
+        assert!(kept.leaves == freed.leaves, "the final gather changed");
+    }
+
     #[test]
     fn a_balanced_leaf_system_gathers_and_sends_whole_hemispheres() {
         let path = std::path::Path::new("tests/data/hung_lamp_room.json");
