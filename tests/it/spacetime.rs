@@ -163,7 +163,7 @@ fn a_finer_tolerance_on_moving_surfaces_refines_them_only() {
 fn each_frame_is_as_accurate_as_the_static_solve_of_that_frame() {
     // The tolerance is the per-frame solve's own discretisation error: against a fine
     // static solve (eps 0.1) of the same frame, space-time must be as close as the
-    // static solve at the same eps (within 20%). Every frame is solved as the
+    // static solve at the same eps (within 5%). Every frame is solved as the
     // per-frame baseline solves it (frozen), and the fine solve draws other rays
     // (another seed): one that shares the coarse solve's rays flatters it.
     let scene = sliding_block(-60.0, 0.8);
@@ -214,13 +214,13 @@ fn each_frame_is_as_accurate_as_the_static_solve_of_that_frame() {
             e_st * 100.0,
             apart * 100.0
         );
-        // 1.15 until the final gather gave each part of a cluster source its own
-        // rays (h45corner): that took the frames' own error at t = 0.4 from 1.90%
-        // to 1.40% and space-time's from 1.98% to 1.63% (1.16 times; 1.07 at
-        // t = 0). Where a window's gather falls behind a frame's is not found yet:
-        // its masked terms cast with as many rays as a frame's (tried) read 1.71%.
-        assert!(e_st <= 1.2 * e_pf, "t = {t}");
-        assert!(apart < 0.015, "t = {t}");
+        // Measured 0.94-0.97 times (1.68%/1.79%, 1.37%/1.40%, 1.39%/1.46%), 0.72-0.80%
+        // apart. 1.08-1.16 times and 0.81-0.98% apart while a window's frames
+        // stored their cells without the mean shift of the static solve's
+        // (`Solver::mean_shifts`); not the gathers: a window's with no swept boxes
+        // (no static masks, no cluster opened for the motion) read 1.62% for 1.63%.
+        assert!(e_st <= 1.05 * e_pf, "t = {t}");
+        assert!(apart < 0.01, "t = {t}");
     }
 }
 
