@@ -323,9 +323,12 @@ impl Solver<'_> {
             return false;
         };
         let s = e.source;
-        // A surface receiver takes nothing from a link that carries nothing even
-        // unoccluded ([`Solver::cluster_link_empty`]): computed in full, to nothing.
-        if old.is_empty() || self.cluster_link_empty(l) {
+        // A surface receiver takes nothing from a link that sees nothing
+        // ([`Solver::push_cluster`]): computed in full, to nothing.
+        let t = &tr[l as usize];
+        let gated =
+            geoms[e.receiver as usize].patch != u32::MAX && (t.f <= 0.0 || t.visibility <= 0.0);
+        if old.is_empty() || gated {
             return false;
         }
         if ends[*p as usize].source == s {

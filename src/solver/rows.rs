@@ -320,14 +320,6 @@ enum KeptParts<'p> {
     Walk(&'p [ClusterPart]),
 }
 
-/// [`Solver::cluster_link_empty`] over the pools' slices.
-fn cluster_link_empty(geoms: &[Geom], ends: &[Ends], tr: &[Transport], l: u32) -> bool {
-    let t = &tr[l as usize];
-    geoms[ends[l as usize].receiver as usize].patch != u32::MAX
-        && (t.f <= 0.0 || t.visibility <= 0.0)
-        && t.spread <= 0.0
-}
-
 /// True if cluster `g`'s box lies wholly behind the tangent plane (normal `n`) of
 /// every point of `q`: nothing in it is above a point's horizon, so it gives the
 /// points nothing, and [`Solver::cluster_parts`] skips its walk (the walk into
@@ -634,10 +626,9 @@ impl Solver<'_> {
         let mut vis = t.visibility as f64;
         if t.f <= 0.0 || vis <= 0.0 {
             // A cluster receiver's estimate is an average over patches that need
-            // not face one way, and the link's few rays may all miss what part of
-            // the cluster its receiver sees: the leaf looks for itself, unless
-            // nothing of the cluster reaches the receiver even unoccluded.
-            if self.cluster_link_empty(l) {
+            // not face one way; the leaf looks for itself.
+            let r = self.links.ends.as_slice()[l as usize].receiver;
+            if self.elems.geoms.as_slice()[r as usize].patch != u32::MAX {
                 return;
             }
             vis = 1.0;
@@ -745,8 +736,8 @@ impl Solver<'_> {
     /// ([`ClusterPart`]) that hang on the link's estimate or on the radiosity
     /// ([`PART_ON_ESTIMATE`]), marking their links to be walked again
     /// ([`WALK_AGAIN`]), and every part of a link whose new estimate
-    /// [`Solver::push_cluster`] would now take nothing from
-    /// ([`Solver::cluster_link_empty`]). What is left, surface parts and facets seen by
+    /// [`Solver::push_cluster`] would now take nothing from (a surface receiver and
+    /// a link that sees nothing). What is left, surface parts and facets seen by
     /// their own rays, is what the rows would cast again to the same answer:
     /// dropping everything made the second round cast every leaf's rows once more,
     /// as long as the first round (`gen_cubes 20`, BENCHMARKS.md "Scale"); dropping
@@ -763,7 +754,9 @@ impl Solver<'_> {
             while from < parts.len() {
                 let l = parts[from].link;
                 let to = from + parts[from..].partition_point(|p| p.link == l);
-                let empty = cluster_link_empty(geoms, ends, tr, l);
+                let t = &tr[l as usize];
+                let surface_receiver = geoms[ends[l as usize].receiver as usize].patch != u32::MAX;
+                let empty = surface_receiver && (t.f <= 0.0 || t.visibility <= 0.0);
                 let link = &parts[from..to];
                 if empty {
                     // Cast again, to nothing.
@@ -786,26 +779,6 @@ impl Solver<'_> {
             *parts = left;
         }
         self.sys.cluster_cache.retain(|_, parts| !parts.is_empty());
-    }
-
-    /// True if a leaf row takes nothing from cluster link `l`
-    /// ([`Solver::push_cluster`]): its receiver is a surface and the link's
-    /// estimate is zero even unoccluded (`spread`, the unoccluded bound, is 0: the
-    /// cluster lies behind the receiver or faces away from it). A link whose
-    /// estimate is zero only because its rays (`cluster_rays`, 8) all met
-    /// something is walked from the leaf's own points: dropping it lost what part
-    /// of the cluster the leaf does see. In the Blender Cornell box
-    /// (`tests/it/solver/exported.rs`) slab clusters of the ceiling that a wall or
-    /// floor element's eight rays all missed were 1.2–1.5% of some room leaves'
-    /// hemisphere (cosine rays from their quadrature points), light that no row
-    /// entry took, amplified by reflectance 0.999.
-    pub(super) fn cluster_link_empty(&self, l: u32) -> bool {
-        cluster_link_empty(
-            self.elems.geoms.as_slice(),
-            self.links.ends.as_slice(),
-            self.links.transports.as_slice(),
-            l,
-        )
     }
 
     /// How many links' kept parts [`Solver::drop_estimate_parts`] left to walk
