@@ -48,7 +48,6 @@ pub mod per_frame;
 mod reconstruct;
 pub mod report;
 mod row_patch;
-mod rowdebug;
 mod rows;
 pub mod spacetime;
 
@@ -831,9 +830,6 @@ impl<'a> Solver<'a> {
         } else {
             Vec::new()
         };
-        if std::env::var_os("RHIER_PROBES_EARLY").is_some() {
-            self.debug_probes();
-        }
         let around = self.error_samples(CLOSURE_SAMPLES);
         self.closed = (!around.is_empty()).then(|| self.closed_around(&around));
         // With an estimate, the first level is `2 eps`.
@@ -1006,13 +1002,6 @@ impl<'a> Solver<'a> {
             if excess > last.estimated_error {
                 last.estimated_error = excess;
                 self.estimate = excess;
-            }
-        }
-        if std::env::var_os("RHIER_ROWDEBUG").is_some() {
-            if std::env::var_os("RHIER_PROBES").is_some() {
-                self.debug_probes();
-            } else {
-                self.debug_loss();
             }
         }
         if let Some(last) = records.last() {
