@@ -223,10 +223,9 @@ fn blender_error(opts: SolveOptions, paths: u32) -> PointError {
 /// (4d294fe, reverted): in the room with a pillar and a floating box
 /// (`solver::enclosures`) at `ρ = 0.9` the leaf system then absorbed 1.0057 of
 /// the emitted power (0.998 without it) and a stored corner read 1.02% off, over
-/// the 1% bar; the walked links take more than they should there, most likely
-/// at the points whose rays all fall below the horizon or on faces turned away,
-/// which then take the fallback visibility 1 with the cluster estimate's factor
-/// (not checked). Left: single
+/// the 1% bar: the walked links take more than they should there, and not by
+/// the fallback visibility 1 of points that cast no ray (the link's 0 in its
+/// place gave the same 1.0057 to four digits); not traced further. Left: single
 /// head patches still missing inside walked clusters (a part whose first rays, 2 a
 /// point, all miss is dropped, one whose rays all hit is taken whole: the
 /// `PARTIAL_CLUSTER_RAYS` trigger decides on the rays it then averages, which
