@@ -71,10 +71,9 @@ impl GatherLimits {
 /// this share. Why: casting every partly hidden part and surface again with 8
 /// times the rays cost the Cornell box with blocks 63% of its final gather's
 /// rays (4.8 of 7.6 million at eps 0.15), about half of them for parts handing
-/// a point under 1% of its light. With this floor (and the rays' targets
-/// filling their grid, `oracle::ray_targets`) the blocks read 0.89% off the lamp
-/// at eps 0.15 in 1.46 CPU s, 0.71% at eps 0.1 in 2.56 (main: 0.98% in 1.75,
-/// 0.80% in 2.91; loaded machine, side by side). In the closed rooms of
+/// a point under 1% of its light; with this floor 2.6 million are cast again
+/// (mostly the lamp's penumbrae) and the blocks read the same off the lamp
+/// (0.98% at eps 0.15 with the rays then targeted; BENCHMARKS.md). In the closed rooms of
 /// `tests/it/solver/enclosures.rs` (uniform `B`: the share is the factor) the
 /// parts a corner point gathers most from are still cast again.
 const RECAST_SHARE: f64 = 0.01;
