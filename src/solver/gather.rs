@@ -65,43 +65,6 @@ impl GatherLimits {
     }
 }
 
-/// The share of a point's gather (per channel) below which a partly hidden part's
-/// unoccluded light (factor × radiosity) is not worth casting again
-/// ([`Recast::floor`]): its base rays' error on the point is then a fraction of
-/// this share. Why: casting every partly hidden part and surface again with 8
-/// times the rays cost the Cornell box with blocks 63% of its final gather's
-/// rays (4.8 of 7.6 million at eps 0.15), about half of them for parts handing
-/// a point under 1% of its light; with this floor 2.6 million are cast again
-/// (mostly the lamp's penumbrae) and the blocks read the same off the lamp
-/// (0.98% at eps 0.15 with the rays then targeted; BENCHMARKS.md). In the closed rooms of
-/// `tests/it/solver/enclosures.rs` (uniform `B`: the share is the factor) the
-/// parts a corner point gathers most from are still cast again.
-const RECAST_SHARE: f64 = 0.01;
-
-/// When the final gather casts a partly hidden part or surface of a source again
-/// with [`super::rows::PARTIAL_CLUSTER_RAYS`] times the rays
-/// ([`Solver::point_terms`]).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Recast {
-    /// The link found its source partly hidden from the point's leaf: a
-    /// sub-cluster part is cast again even where its own rays agree.
-    pub(super) partial: bool,
-    /// Per channel, the unoccluded light (factor × radiosity) a part must hand
-    /// the point to be cast again: [`RECAST_SHARE`] of what the point gathers,
-    /// estimated from its leaf. Zero: every partly hidden part is.
-    pub(super) floor: [f64; 3],
-}
-
-impl Recast {
-    /// Every partly hidden part cast again; `partial` as the link says.
-    pub(super) fn always(partial: bool) -> Self {
-        Recast {
-            partial,
-            floor: [0.0; 3],
-        }
-    }
-}
-
 /// The transfer terms of one link at one point.
 #[derive(Clone, Debug, Default)]
 pub(super) struct Terms {
@@ -260,18 +223,6 @@ fn point_shaft_clear(x: DVec3, n: DVec3, g: &Geom, swept: &[(DVec3, DVec3)]) -> 
 }
 
 impl Solver<'_> {
-    /// Whether a partly hidden part `e` (an element, or a facet, [`FACET_BIT`]) of
-    /// unoccluded factor `f` hands the point enough light to be cast again
-    /// (`recast.floor`).
-    fn worth_recast(&self, e: u32, f: f64, recast: Recast) -> bool {
-        let b = if e & FACET_BIT != 0 {
-            self.facet_b[(e & !FACET_BIT) as usize]
-        } else {
-            self.elems.radiosities.as_slice()[e as usize]
-        };
-        (0..3).any(|c| f * b[c] as f64 >= recast.floor[c])
-    }
-
     /// Adds the term `fv · B_e` of source `e` to `sum`: an element, or a facet
     /// ([`FACET_BIT`]) at its own radiosity, placed as its cluster.
     #[inline]
@@ -362,9 +313,7 @@ impl Solver<'_> {
     /// point's factors summed to 1.0088; 1.0000 with 4096 rays per tile). In the
     /// room with a pillar a wall point gave the same fraction, 0.46, to a
     /// sub-cluster the pillar hid whole and to tiles 34–100% visible (its factors
-    /// summed to 1.0216). Only a part whose unoccluded light is at least
-    /// [`RECAST_SHARE`] of what the point gathers is cast again (`recast`,
-    /// [`Recast`]).
+    /// summed to 1.0216).
     ///
     /// With `swept` (a static point and a static source in a time window), a term
     /// whose shaft from `x` meets a box swept by a moving object becomes a
@@ -379,7 +328,7 @@ impl Solver<'_> {
         receiver_patch: u32,
         s: usize,
         clear: bool,
-        recast: Recast,
+        partial: bool,
         key: u64,
         swept: Option<&[(DVec3, DVec3)]>,
         limits: &GatherLimits,
@@ -445,7 +394,7 @@ impl Solver<'_> {
                     receiver_patch,
                     ch as usize,
                     true,
-                    recast,
+                    partial,
                     key,
                     None,
                     limits,
@@ -486,7 +435,7 @@ impl Solver<'_> {
                     receiver_patch,
                     ch as usize,
                     clear,
-                    recast,
+                    partial,
                     oracle::hash3(key, self.ray_id(ch), 1),
                     swept,
                     limits,
@@ -525,7 +474,7 @@ impl Solver<'_> {
                         .0
                     };
                     let v = cast(self.opts.cluster_rays);
-                    if (v > 0.0 && v < 1.0) || recast.partial {
+                    if (v > 0.0 && v < 1.0) || partial {
                         cast(self.opts.cluster_rays * super::rows::PARTIAL_CLUSTER_RAYS)
                     } else {
                         v
@@ -558,17 +507,13 @@ impl Solver<'_> {
                     } else if g.patch != u32::MAX {
                         let key = oracle::hash3(key, self.ray_id(e), 1) & u64::from(u32::MAX);
                         let ps = oracle::poly(g);
-                        let worth = self.worth_recast(e, k[0], recast);
-                        let r = self.gather_rays(x, n, receiver_patch, g, &ps, key);
-                        self.surface_visibility(r, worth)
+                        self.surface_visibility(self.gather_rays(x, n, receiver_patch, g, &ps, key))
                     } else {
                         let m = self.opts.cluster_rays;
                         let (v, rays) = self.part_visibility(x, n, receiver_patch, e, m, 0);
                         if rays == 0 {
                             *vis.get_or_insert_with(shared)
-                        } else if ((v > 0.0 && v < 1.0) || recast.partial)
-                            && self.worth_recast(e, k[0], recast)
-                        {
+                        } else if (v > 0.0 && v < 1.0) || partial {
                             let m = m * super::rows::PARTIAL_CLUSTER_RAYS;
                             self.part_visibility(x, n, receiver_patch, e, m, 0).0
                         } else {
@@ -676,8 +621,7 @@ impl Solver<'_> {
                 out.masked.push((t, v));
             }
             _ => {
-                let worth = self.worth_recast(s as u32, f, recast);
-                let v = self.surface_visibility(r, worth);
+                let v = self.surface_visibility(r);
                 if v > 0.0 {
                     out.fixed.push((s as u32, f * v));
                 }
@@ -761,7 +705,7 @@ impl Solver<'_> {
                         receiver_patch,
                         ch,
                         true,
-                        Recast::always(false),
+                        false,
                         key,
                         None,
                         limits,
@@ -778,7 +722,7 @@ impl Solver<'_> {
     /// The visible fraction of a surface source by the rays `r`
     /// ([`Solver::gather_rays`]), cast again with
     /// [`super::rows::PARTIAL_CLUSTER_RAYS`] times the rays where they find it
-    /// partly hidden and it is `worth` it ([`Solver::worth_recast`]).
+    /// partly hidden.
     ///
     /// Why: 8 stratified rays give the fraction in steps of 1/8. In the L-shaped
     /// room of `tests/it/solver/enclosures.rs` a floor point by the re-entrant
@@ -786,9 +730,9 @@ impl Solver<'_> {
     /// (0.50 with 4096 rays), and with a near cluster's tiles taken at the
     /// cluster's shared fraction its factors summed to 1.0093 (1.0001 with 4096
     /// rays per tile).
-    fn surface_visibility(&self, mut r: oracle::PointRays, worth: bool) -> f64 {
+    fn surface_visibility(&self, mut r: oracle::PointRays) -> f64 {
         let v = oracle::visible_fraction(&self.bvh, &r);
-        if worth && v > 0.0 && v < 1.0 {
+        if v > 0.0 && v < 1.0 {
             r.m *= super::rows::PARTIAL_CLUSTER_RAYS;
             oracle::visible_fraction(&self.bvh, &r)
         } else {
@@ -957,23 +901,6 @@ impl Solver<'_> {
         // evaluated; a frame between keyframes that skips its solve gathers from
         // links evaluated at another time.
         let links_now = self.st.links_at == self.motion.now;
-        // What the point gathers, per channel, estimated from its leaf
-        // (`(B − E)/ρ`): a partly hidden part is cast again only where its light is
-        // a share of it that matters ([`RECAST_SHARE`]).
-        let floor: [f64; 3] = {
-            let (bl, e, rho) = (
-                b[leaf.ix()],
-                self.patches.emissions[p],
-                self.patches.rhos[p],
-            );
-            std::array::from_fn(|c| {
-                if rho[c] > 0.0 {
-                    RECAST_SHARE * (bl[c] as f64 - e[c]).max(0.0) / rho[c]
-                } else {
-                    f64::INFINITY
-                }
-            })
-        };
         for l in self.chain_links(leaf) {
             let t = &tr[l as usize];
             let s = ends[l as usize].source as usize;
@@ -1039,10 +966,7 @@ impl Solver<'_> {
                     cheap.is_some()
                         || clear
                         || (keep.is_none() && t.shaft_clear() && (!t.varying() || links_now)),
-                    Recast {
-                        partial: t.visibility > 0.0 && t.visibility < 1.0,
-                        floor,
-                    },
+                    t.visibility > 0.0 && t.visibility < 1.0,
                     key,
                     keep.map(|w| &w.swept[..]),
                     limits,

@@ -2900,7 +2900,7 @@ mod tests {
                 u32::MAX,
                 e,
                 false,
-                gather::Recast::always(false),
+                false,
                 0,
                 None,
                 &limits,
