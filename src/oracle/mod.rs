@@ -957,17 +957,35 @@ pub fn visible_fraction_moving(bvh: &SceneBvh, r: &PointRays, mask: u64, vis_sta
     r.weighted(|j, _| open & (1 << j) != 0)
 }
 
-/// The `m` jittered stratified target points on `gs` for the rays of sample `key`.
+/// The `m` jittered stratified target points on `gs` for the rays of sample `key`:
+/// one in each of `m` cells of equal area over the unit square, rows of
+/// `⌈√m⌉` cells, the last row holding the rest across the whole width.
+///
+/// Why the last row: with every row `⌈√m⌉` cells high and wide, a count that is
+/// not a square left cells empty, and the rays never reached that part of the
+/// source (8 rays, a 3 × 3 grid, missed a corner ninth; an emitter's 32, a
+/// 6 × 6 grid, the last sixth but a third of a row).
 fn ray_targets(gs: &Geom, pols: &Poly, m: u32, key: u64) -> impl Iterator<Item = (u32, DVec3)> {
     let side = (m as f64).sqrt().ceil() as u32;
+    let square = side * side == m;
     (0..m).map(move |j| {
         let h = hash3(key, j as u64, 0x9e37);
         let ju = (h & 0xffff_ffff) as f64 / 4294967296.0;
         let jv = (h >> 32) as f64 / 4294967296.0;
-        let (su, sv) = (
-            ((j % side) as f64 + ju) / side as f64,
-            ((j / side) as f64 + jv) / side as f64,
-        );
+        let (su, sv) = if square {
+            (
+                ((j % side) as f64 + ju) / side as f64,
+                ((j / side) as f64 + jv) / side as f64,
+            )
+        } else {
+            // Row `r` holds `k` cells of width `1/k` and height `k/m`.
+            let r = j / side;
+            let k = side.min(m - r * side);
+            (
+                ((j % side) as f64 + ju) / k as f64,
+                ((r * side) as f64 + jv * k as f64) / m as f64,
+            )
+        };
         (j, point_in(gs, pols, su, sv.min(1.0)))
     })
 }

@@ -685,21 +685,11 @@ impl Solver<'_> {
                 && rad / d * limits.spread[ch] as f64 > limits.open_spread
         };
         let k = node.child_count as usize;
-        let child_area: f64 = (0..k)
-            .map(|j| geoms[node.first_child as usize + j].area)
-            .sum::<f64>()
-            .max(f64::MIN_POSITIVE);
-        let mut sum = 0.0;
         let mut open = [false; 4];
-        for (j, share) in shares.iter_mut().enumerate().take(k) {
-            let ch = (node.first_child as usize) + j;
-            open[j] = varies(ch);
-            if !open[j] {
-                let a = geoms[ch].area / child_area;
-                *share = a + WITHIN_CHILD * (*share - a);
-            }
-            sum += *share;
-        }
+        let sum = super::rows::within_child_shares(&mut shares, geoms, node, |j, _| {
+            open[j] = varies(node.first_child as usize + j);
+            !open[j]
+        });
         if sum <= 0.0 || shares.iter().take(k).any(|&x| x < 0.0) {
             return false;
         }

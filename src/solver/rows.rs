@@ -1100,19 +1100,11 @@ impl Solver<'_> {
             // A child that stays whole stands for a linear radiosity: its share
             // moves from its area's by the part within it too ([`WITHIN_CHILD`]).
             let k = node.child_count as usize;
-            let child_area: f64 = (0..k)
-                .map(|j| geoms[node.first_child as usize + j].area)
-                .sum::<f64>()
-                .max(f64::MIN_POSITIVE);
-            let mut sum = 0.0;
-            for (j, share) in shares.iter_mut().enumerate().take(k) {
-                let ch = node.first_child + j as u32;
-                let a = geoms[ch as usize].area / child_area;
-                if !self.row_opens(q, ch, coef * *share).0 {
-                    *share = a + WITHIN_CHILD * (*share - a);
-                }
-                sum += *share;
-            }
+            let sum = within_child_shares(&mut shares, geoms, node, |j, share| {
+                !self
+                    .row_opens(q, node.first_child + j as u32, coef * share)
+                    .0
+            });
             if sum > 0.0 && shares.iter().take(k).all(|&x| x >= 0.0) {
                 for (j, share) in shares.iter().enumerate().take(k) {
                     let ch = node.first_child + j as u32;
@@ -2359,4 +2351,32 @@ pub(super) fn linear_shares(
         out[j] = a[j] / area * (1.0 + t);
     }
     Some(out)
+}
+
+/// The shares of [`linear_shares`] with each child that stays whole moved from
+/// its area's share by [`WITHIN_CHILD`] times the difference (it stands for a
+/// radiosity that goes on varying inside it); their sum is returned, for the
+/// caller to normalise by. `stays_whole(j, share)`: whether child `j` (of
+/// `node`), with its unmoved share, stays whole. One step for the leaf rows
+/// ([`Solver::push_opened`]) and the final gather ([`Solver::open_shared`]).
+pub(super) fn within_child_shares(
+    shares: &mut [f64; 4],
+    geoms: &[Geom],
+    node: Node,
+    mut stays_whole: impl FnMut(usize, f64) -> bool,
+) -> f64 {
+    let k = (node.child_count as usize).min(4);
+    let child_area: f64 = (0..k)
+        .map(|j| geoms[node.first_child as usize + j].area)
+        .sum::<f64>()
+        .max(f64::MIN_POSITIVE);
+    let mut sum = 0.0;
+    for (j, share) in shares.iter_mut().enumerate().take(k) {
+        if stays_whole(j, *share) {
+            let a = geoms[node.first_child as usize + j].area / child_area;
+            *share = a + WITHIN_CHILD * (*share - a);
+        }
+        sum += *share;
+    }
+    sum
 }
