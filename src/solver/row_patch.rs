@@ -37,6 +37,11 @@
 use super::rows::RowMasks;
 use super::*;
 
+/// The share of its row (factor before visibility) from which an entry with a
+/// moving end casts every ray in an interactive move's rows
+/// ([`Solver::move_entry_rays`]); smaller entries cast fewer, in proportion.
+pub(super) const MOVE_FULL_SHARE: f64 = 0.01;
+
 /// How far a move dirtied the rows of the leaves under an element or the entries of
 /// a link ([`Solver::settle_local`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -119,6 +124,26 @@ struct Groups {
 }
 
 impl Solver<'_> {
+    /// The rays a point of the row entry of `leaf` for part `e` casts in an
+    /// interactive move's rows where an end moves (no mask can keep their static
+    /// part): `full` scaled by the entry's share `u` of the row (its factor
+    /// before visibility, at most 1 over a leaf's row) against [`MOVE_FULL_SHARE`],
+    /// at least 1; elsewhere `full`. Why: the rows of the moved object's own
+    /// leaves and the moved object's parts seen from far rows are cast afresh
+    /// at every move, and most of their entries are small (a chair's leaf of
+    /// the 889-polygon room has ~330 surface entries): the visibility noise an
+    /// entry adds to its row grows with `u / sqrt(rays)`, so rays in proportion
+    /// to `u` put them where they count.
+    pub(super) fn move_entry_rays(&self, leaf: ElementId, e: u32, u: f64, full: u32) -> u32 {
+        if !self.sys.move_rows
+            || !(self.elem_moving(leaf) || e & FACET_BIT == 0 && self.elem_moving(ElementId(e)))
+        {
+            return full;
+        }
+        let share = (u / MOVE_FULL_SHARE).clamp(0.0, 1.0);
+        ((full as f64 * share).ceil() as u32).clamp(1, full)
+    }
+
     /// How the rays of the row entry of `leaf` (quadrature `q`) for surface `e`,
     /// reached by chain link `l`, treat static geometry: in an interactive move's
     /// rows, where neither end moves, by the masks an earlier move made

@@ -692,8 +692,11 @@ impl Solver<'_> {
             let partial = cast.iter().any(|&(v, r)| r > 0 && v > 0.0 && v < 1.0)
                 || cast.iter().any(|&(v, r)| r > 0 && v > 0.0)
                     && cast.iter().any(|&(v, r)| r > 0 && v <= 0.0);
-            if partial {
-                seen = at(m * PARTIAL_CLUSTER_RAYS);
+            // (In a move's rows, where an end moves, fewer for a small part:
+            // [`Solver::move_entry_rays`].)
+            let more = self.move_entry_rays(leaf, e, coef, m * PARTIAL_CLUSTER_RAYS);
+            if partial && more > m {
+                seen = at(more);
             }
             let v: f64 = (0..q.count)
                 .map(|i| {
@@ -874,8 +877,18 @@ impl Solver<'_> {
             _ => 0u64,
         });
         let ray_bits = |bits: u64, i: u64| bits >> (i as u32 * m) & ((1 << m) - 1);
+        // Rays cast at everything (an end moves, in a move's rows): fewer for a
+        // small entry ([`Solver::move_entry_rays`]).
+        let m_all = if matches!(masks, RowMasks::None) {
+            let u: f64 = (0..q.count)
+                .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps).max(0.0))
+                .sum();
+            self.move_entry_rays(leaf, s, u, m)
+        } else {
+            m
+        };
         let vis_at = |x: DVec3, i: u64| {
-            let r = self.row_rays(ids, g, gs, &ps, ns, x, n, i);
+            let mut r = self.row_rays(ids, g, gs, &ps, ns, x, n, i);
             let mask = match masks {
                 RowMasks::Make if i < 4 => None,
                 RowMasks::Known(bits) if i < 4 => Some(ray_bits(bits, i)),
@@ -892,7 +905,10 @@ impl Solver<'_> {
                     }
                     Some(ray_bits(bits, i)).filter(|_| known)
                 }
-                _ => return oracle::visible_fraction(&self.bvh, &r),
+                _ => {
+                    r.m = m_all;
+                    return oracle::visible_fraction(&self.bvh, &r);
+                }
             };
             let rays = oracle::masked_rays(&self.bvh, &r, mask, true);
             if mask.is_none() {
