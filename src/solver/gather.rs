@@ -101,6 +101,18 @@ impl Terms {
 /// point by a wall gathers most from the wall's top strip).
 const CELL_OPEN_RATIO: f64 = 0.3;
 
+/// A part of a cluster source whose factor at a final-gather point is at most
+/// this, with no emitter under it, keeps its first rays' visibility where they
+/// find it partly hidden, instead of casting [`super::rows::PARTIAL_CLUSTER_RAYS`]
+/// times the rays again ([`Solver::point_terms`]): its first rays' fraction is
+/// unbiased, and its noise, a few percent of a small term, spreads over the many
+/// parts a cluttered scene's points see. Why: in `tools/gen_cubes.py 20` each
+/// point walks its cluster links down to hundreds of box faces, most of them
+/// partly hidden by other boxes, and their recast rays (64 to a face, 8 first)
+/// were most of the final gather, itself 88% of the solve's 214 CPU s
+/// (BENCHMARKS.md, "Scale").
+const PARTIAL_PART_MIN_FACTOR: f64 = 3e-3;
+
 /// A source is near a point only if the point's normal is within this cosine of
 /// facing it head-on.
 const NEAR_COS: f64 = 0.9;
@@ -502,18 +514,27 @@ impl Solver<'_> {
                         return;
                     }
                     let g = &geoms[e as usize];
+                    // A small part with no emitter under it is not cast again
+                    // ([`PARTIAL_PART_MIN_FACTOR`]).
+                    let recast = k[0] > PARTIAL_PART_MIN_FACTOR
+                        || self.emits_under.get(e as usize).copied().unwrap_or(true);
                     let v = if clear {
                         1.0
                     } else if g.patch != u32::MAX {
                         let key = oracle::hash3(key, self.ray_id(e), 1) & u64::from(u32::MAX);
                         let ps = oracle::poly(g);
-                        self.surface_visibility(self.gather_rays(x, n, receiver_patch, g, &ps, key))
+                        let r = self.gather_rays(x, n, receiver_patch, g, &ps, key);
+                        if recast {
+                            self.surface_visibility(r)
+                        } else {
+                            oracle::visible_fraction(&self.bvh, &r)
+                        }
                     } else {
                         let m = self.opts.cluster_rays;
                         let (v, rays) = self.part_visibility(x, n, receiver_patch, e, m, 0);
                         if rays == 0 {
                             *vis.get_or_insert_with(shared)
-                        } else if (v > 0.0 && v < 1.0) || partial {
+                        } else if recast && ((v > 0.0 && v < 1.0) || partial) {
                             let m = m * super::rows::PARTIAL_CLUSTER_RAYS;
                             self.part_visibility(x, n, receiver_patch, e, m, 0).0
                         } else {
