@@ -92,7 +92,7 @@ impl Solver<'_> {
     /// does, by up to `G δ` where it is all reflected (a ceiling around a flush
     /// lamp). The larger is taken: on the Cornell box with a white of 0.95 and
     /// every row 3% short, `(G − 1) δ` read 2.5% for a measured 4.3% off the
-    /// lamp, `G δ` 4.7% (test below). The term is
+    /// lamp, `G δ` 4.8% (test below). The term is
     /// `sqrt(max(0, (G_k δ_k)² − (2 G_k σ_k)²))` per channel, combined over the
     /// channels by their weight `Σ A B²`.
     pub fn row_ray_check(&self) -> Option<RowCheck> {
