@@ -832,7 +832,7 @@ impl Solver<'_> {
     /// The leaf under element `e` that holds the point `y` of its plane: at each
     /// level the child whose polygon holds it (the nearest centre where rounding
     /// leaves it in none).
-    fn leaf_at(&self, mut e: ElementId, y: DVec3) -> ElementId {
+    pub(super) fn leaf_at(&self, mut e: ElementId, y: DVec3) -> ElementId {
         let geoms = self.elems.geoms.as_slice();
         loop {
             let kids = self.elems.children(e);

@@ -47,12 +47,14 @@ pub(crate) mod moves;
 pub mod per_frame;
 mod reconstruct;
 pub mod report;
+mod row_check;
 mod row_patch;
 mod rows;
 pub mod spacetime;
 
 use facets::{FACET_BIT, MAX_FACETS, source_slot, source_value};
 pub use reconstruct::Reconstruction;
+pub use row_check::RowCheck;
 use rows::{ClusterPart, KeptCoef, OpenedFactors, RowEntries};
 use spacetime::SpaceTimeState;
 use spacetime::interpolate::TimedEntry;
@@ -812,8 +814,10 @@ impl<'a> Solver<'a> {
     /// error where `B` is concave), so it underestimates at fine eps.
     /// [`Solver::solution`] adds the reconstruction's interpolation error, and a
     /// round's estimate is at least the power the leaf system makes or loses
-    /// (`with_power_error`). BENCHMARKS.md, "The estimated error against the true
-    /// error".
+    /// (`with_power_error`); the last round's, at least the light rows summing
+    /// above 1 make ([`Solver::row_excess_error`]) and what rows short of rays
+    /// over the solved field lose ([`Solver::row_ray_check`]). BENCHMARKS.md,
+    /// "The estimated error against the true error".
     pub fn run(
         &mut self,
         mut on_round: impl FnMut(&mut RoundRecord, &Solver),
@@ -992,9 +996,15 @@ impl<'a> Solver<'a> {
             self.shapes = self.leaf_shapes();
         }
         // Rows that sum above 1 make light the change between levels does not see:
-        // the answer's estimate is at least what they add (`row_excess_error`).
-        // Only the last record's, so no refinement decision changes; a run without
-        // an estimate (a space-time window's) skips the pass over the rows.
+        // the answer's estimate is at least what they add (`row_excess_error`),
+        // and at least what rows short of (or above) cosine rays over the solved
+        // field lose, amplified by the bounces (`row_ray_check`). Only the last
+        // record's, so no refinement decision changes: a row bias need not fall
+        // with eps, and a target error or the promise that counted it would halve
+        // eps to `max_rounds` for nothing (a solve with `--target-error` then
+        // stops on the change between levels, and its last estimate may read
+        // above the target: it says what the rows leave). A run without an
+        // estimate (a space-time window's) skips the pass over the rows.
         if let Some(last) = records.last_mut()
             && last.estimated_error.is_finite()
         {
@@ -1002,6 +1012,12 @@ impl<'a> Solver<'a> {
             if excess > last.estimated_error {
                 last.estimated_error = excess;
                 self.estimate = excess;
+            }
+            if let Some(check) = self.row_ray_check()
+                && check.error > last.estimated_error
+            {
+                last.estimated_error = check.error;
+                self.estimate = check.error;
             }
         }
         if let Some(last) = records.last() {

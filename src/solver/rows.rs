@@ -2160,7 +2160,7 @@ impl Solver<'_> {
     /// A field over the elements (`b`, the leaves' values) as the leaf system
     /// pulls it: each leaf's value times its gain ([`Solver::balance_rows`]),
     /// pulled to the inner elements when there are gains, and the facets' values.
-    fn gained(&self, mut b: Vec<[f64; 3]>) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    pub(super) fn gained(&self, mut b: Vec<[f64; 3]>) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
         if !self.sys.leaf_gain.is_empty() {
             for (&l, g) in self.sys.leaves.iter().zip(&self.sys.leaf_gain) {
                 b[l.ix()] = b[l.ix()].map(|v| v * g);
@@ -2178,7 +2178,7 @@ impl Solver<'_> {
 
     /// What leaf `li`'s row (scaled as solved) gathers of the field `b` (with its
     /// facets' values `fb`, [`Solver::gained`]): `Σ_j K_ij b_j`.
-    fn row_gather(&self, li: usize, b: &[[f64; 3]], fb: &[[f64; 3]]) -> [f64; 3] {
+    pub(super) fn row_gather(&self, li: usize, b: &[[f64; 3]], fb: &[[f64; 3]]) -> [f64; 3] {
         let (r0, r1) = (
             self.sys.row_start[li] as usize,
             self.sys.row_start[li + 1] as usize,

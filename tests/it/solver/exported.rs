@@ -232,6 +232,14 @@ fn blender_error(opts: SolveOptions, paths: u32) -> PointError {
 /// biases low-visibility parts low), and the shared visibility of opened children.
 /// Next: a partly hidden surface source's children each with its own rays from the
 /// leaf's points.
+///
+/// The estimate is to see that shortfall (2026-11-30, h45est,
+/// `Solver::row_ray_check`: sampled rows against cosine rays and rays at the
+/// lamp over the solved field, the mean gap amplified by the bounces' gain).
+/// On 128 rows the rows gathered 2.1%, 0.4%, 5.2% less in red, green and blue
+/// (noise 1.4, 0.35, 2.3%), gains 9.2, 22.5, 3.6; on one row in 8 (e4edf1f)
+/// the CLI's estimate still reads 5.23% (`rhier solve` at the defaults, 186 s
+/// of CPU): the term stayed under the other terms. Not yet traced.
 #[test]
 #[ignore = "10.9% off the lamp at eps 0.5, short of 5%, and a minute long (issue 45)"]
 fn blender_cornell_box_agrees_with_the_path_tracer() {
