@@ -878,8 +878,9 @@ impl Solver<'_> {
         });
         let ray_bits = |bits: u64, i: u64| bits >> (i as u32 * m) & ((1 << m) - 1);
         // Rays cast at everything (an end moves, in a move's rows): fewer for a
-        // small entry ([`Solver::move_entry_rays`]).
-        let m_all = if matches!(masks, RowMasks::None) {
+        // small entry ([`Solver::move_entry_rays`]); a static solve skips the
+        // share's point factors.
+        let m_all = if self.sys.move_rows && matches!(masks, RowMasks::None) {
             let u: f64 = (0..q.count)
                 .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps).max(0.0))
                 .sum();
