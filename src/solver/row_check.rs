@@ -370,26 +370,14 @@ impl Solver<'_> {
 /// over its area when weighted by the returned factor (a quad's bilinear
 /// Jacobian over its area; 1 on a triangle, folded into it).
 fn leaf_point(g: &Geom, s: f64, t: f64) -> (DVec3, f64) {
-    let c = |i: usize| DVec3::from_array(g.corners[i]);
-    if g.n == 3 {
-        let (s, t) = if s + t > 1.0 {
-            (1.0 - s, 1.0 - t)
-        } else {
-            (s, t)
-        };
-        (c(0) + s * (c(1) - c(0)) + t * (c(2) - c(0)), 1.0)
-    } else {
-        let (p0, p1, p2, p3) = (c(0), c(1), c(2), c(3));
-        let x = (1.0 - s) * (1.0 - t) * p0 + s * (1.0 - t) * p1 + s * t * p2 + (1.0 - s) * t * p3;
-        let ds = (1.0 - t) * (p1 - p0) + t * (p2 - p3);
-        let dt = (1.0 - s) * (p3 - p0) + s * (p2 - p1);
-        let jac = if g.area > 0.0 {
-            ds.cross(dt).length() / g.area
-        } else {
-            1.0
-        };
-        (x, jac)
+    let c = g.corners.map(DVec3::from_array);
+    let x = oracle::point_at(&c, g.n == 3, s, t);
+    if g.n == 3 || g.area <= 0.0 {
+        return (x, 1.0);
     }
+    let ds = (1.0 - t) * (c[1] - c[0]) + t * (c[2] - c[3]);
+    let dt = (1.0 - s) * (c[3] - c[0]) + s * (c[2] - c[1]);
+    (x, ds.cross(dt).length() / g.area)
 }
 
 #[cfg(test)]
