@@ -420,19 +420,64 @@ mod tests {
         out
     }
 
-    /// Rows known to be short: the Cornell box (white 0.95) solved, then every
-    /// leaf row's coefficients scaled by 0.97 and the leaf system solved again,
-    /// so that every leaf gathers 3% less than its factors see. The answer
-    /// (the final gather over that leaf field) moves off the one before by
-    /// `(G − 1)` to `G` times 3%, `G` the bounces' gain (about 2); the estimate's
-    /// other terms do not see it (no row sums above 1, and the box is open, so
-    /// a deficit of power proves nothing), and the check of the rows against
-    /// rays must: it reads within a factor 1.5 of the measured error, and as
-    /// solved (the rows right) under a fifth of it.
-    #[test]
-    fn rows_short_of_their_rays_raise_the_estimate_by_the_light_they_lose() {
-        let (scene, opts) = solved_box();
-        let mut s = Solver::new(&scene, opts).unwrap();
+    /// Each quad of `scene` cut into 2 × 2 cells of unequal sizes (at 0.35 of
+    /// each side, by the quad's bilinear map), each cell into two triangles
+    /// along alternating diagonals, and each triangle into three of areas
+    /// 0.5 : 0.3 : 0.2 (a fan from an inner point), wound as the polygon: the
+    /// tessellated twin.
+    fn unequal_triangles(mut scene: Scene) -> Scene {
+        const AT: [f64; 3] = [0.0, 0.35, 1.0];
+        for o in &mut scene.objects {
+            o.polygons = o
+                .polygons
+                .iter()
+                .flat_map(|p| {
+                    let v = &p.vertices;
+                    let poly = |t: [DVec3; 3]| crate::scene::Polygon {
+                        vertices: t.to_vec(),
+                        material: p.material,
+                    };
+                    if v.len() == 3 {
+                        // A fan from the point of barycentres (0.5, 0.3, 0.2).
+                        let c = 0.5 * v[0] + 0.3 * v[1] + 0.2 * v[2];
+                        return (0..3).map(|i| poly([v[i], v[(i + 1) % 3], c])).collect();
+                    }
+                    assert_eq!(v.len(), 4, "the Cornell box: quads and triangles");
+                    let at = |a: f64, b: f64| {
+                        (1.0 - a) * (1.0 - b) * v[0]
+                            + a * (1.0 - b) * v[1]
+                            + a * b * v[2]
+                            + (1.0 - a) * b * v[3]
+                    };
+                    let mut out = Vec::new();
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            let c = [
+                                at(AT[i], AT[j]),
+                                at(AT[i + 1], AT[j]),
+                                at(AT[i + 1], AT[j + 1]),
+                                at(AT[i], AT[j + 1]),
+                            ];
+                            let tris = if (i + j) % 2 == 0 {
+                                [[c[0], c[1], c[2]], [c[0], c[2], c[3]]]
+                            } else {
+                                [[c[0], c[1], c[3]], [c[1], c[2], c[3]]]
+                            };
+                            out.extend(tris.map(poly));
+                        }
+                    }
+                    out
+                })
+                .collect();
+        }
+        scene
+    }
+
+    /// What [`rows_short_of_their_rays_raise_the_estimate_by_the_light_they_lose`]
+    /// measures on `scene`: the check as solved, then with every leaf row × 0.97
+    /// the error measured off the lamp, the check, and the row excess term.
+    fn short_rows(scene: &Scene, opts: SolveOptions) -> (f64, f64, RowCheck, f64) {
+        let mut s = Solver::new(scene, opts).unwrap();
         s.run(|_, _| {}).unwrap();
         let pts = grid(&s.patches);
         let on_lamp = crate::geometry::on_emitters(&s.patches, &pts);
@@ -448,16 +493,74 @@ mod tests {
         let excess = s.row_excess_error();
         let balance = s.power_balance();
         eprintln!(
-            "as solved {:.2e}; rows x0.97: measured {measured:.4}, check {:.4} \
+            "{} patches: as solved {:.2e} (gap {:.4?} ± {:.4?}); rows x0.97: measured {measured:.4}, check {:.4} \
              (gap {:.4?} ± {:.4?}, gain {:.3?}), row excess {excess:.2e}, balance {balance:.4}",
-            as_solved.error, check.error, check.gap, check.gap_noise, check.gain
+            s.patches.len(),
+            as_solved.error,
+            as_solved.gap,
+            as_solved.gap_noise,
+            check.error,
+            check.gap,
+            check.gap_noise,
+            check.gain
+        );
+        (as_solved.error, measured, check, excess)
+    }
+
+    /// The bars of both tests below. The rows' 3% loss (`δ`) shows in the
+    /// answer: over 2% off the lamp. The check reads `G δ`, `G` the bounces'
+    /// gain; the answer (a final gather over the leaf field) is off by between
+    /// `(G − 1) δ` and `G δ`, so the check reads at least the measured error
+    /// and at most `G / (G − 1)` (about 2 here, gains 1.7–2.2) times it. As
+    /// solved, and the row excess term, it reads under a fifth of it.
+    ///
+    /// Measured (2026-11-30, 39cf2f2): the box of quads 4.32% off the lamp,
+    /// the check 4.79% (gaps 2.1–2.4%; as solved −0.7 to −0.9%: its rows
+    /// gather a little more than rays); the unequal triangles 4.50%, the check
+    /// 7.58% (gaps 3.5–3.9%; as solved +0.2 to +0.7%). The bar was "within a
+    /// factor 1.5" before the twin: the quads met it by their negative gap as
+    /// solved. The check's gap without its gain (`δ` alone) reads 2.24% and
+    /// 3.56%, with `G − 1` 2.55% and 4.03%: under the measured error, failed.
+    fn assert_short_rows_seen(
+        name: &str,
+        (as_solved, measured, check, excess): (f64, f64, RowCheck, f64),
+    ) {
+        assert!(
+            measured > 0.02,
+            "{name}: rows x0.97 moved the answer {measured}"
         );
         assert!(
-            check.error > measured / 1.5 && check.error < measured * 1.5,
-            "check {} for a measured {measured}",
+            check.error >= measured && check.error < measured * 2.0,
+            "{name}: check {} for a measured {measured}",
             check.error
         );
-        assert!(as_solved.error < measured / 5.0, "{}", as_solved.error);
-        assert!(excess < measured / 5.0, "{excess}");
+        assert!(as_solved < measured / 5.0, "{name}: as solved {as_solved}");
+        assert!(excess < measured / 5.0, "{name}: row excess {excess}");
+    }
+
+    /// Rows known to be short: the Cornell box (white 0.95) solved, then every
+    /// leaf row's coefficients scaled by 0.97 and the leaf system solved again,
+    /// so that every leaf gathers 3% less than its factors see. The answer
+    /// (the final gather over that leaf field) moves off the one before by
+    /// `(G − 1)` to `G` times 3%, `G` the bounces' gain (about 2); the estimate's
+    /// other terms do not see it (no row sums above 1, and the box is open, so
+    /// a deficit of power proves nothing), and the check of the rows against
+    /// rays must: it reads between 1 and 2 times the measured error, and as
+    /// solved (the rows right) under a fifth of it ([`assert_short_rows_seen`]).
+    #[test]
+    fn rows_short_of_their_rays_raise_the_estimate_by_the_light_they_lose() {
+        let (scene, opts) = solved_box();
+        assert_short_rows_seen("box", short_rows(&scene, opts));
+    }
+
+    /// The tessellated twin of
+    /// [`rows_short_of_their_rays_raise_the_estimate_by_the_light_they_lose`]:
+    /// every quad of the box cut into 8 triangles of unequal sizes and each
+    /// triangle (the right wall's two) into 3
+    /// ([`unequal_triangles`]), the same bars.
+    #[test]
+    fn rows_short_of_their_rays_raise_the_estimate_on_unequal_triangles() {
+        let (scene, opts) = solved_box();
+        assert_short_rows_seen("triangles", short_rows(&unequal_triangles(scene), opts));
     }
 }
