@@ -8,11 +8,13 @@
 //! it: [`Solver::keep_restore_point`] keeps them each round). [`Solver::from_hierarchy`]
 //! builds the solver of the same scene (patches, BVH, clusters and patch roots, as
 //! [`Solver::new`] makes them, deterministically), checks the stored pools as
-//! untrusted input against it, installs them, and builds the leaf rows and solves
-//! the leaf system once, as the solve's last round did: no refinement, no link
-//! evaluated again. Given the pools of a solve at the same settings the rows, the
-//! solve and so the radiosity are those of the solve's last round, bit for bit
-//! (the rows and GMRES add in a fixed order).
+//! untrusted input against it, installs them with the leaf rows of the last
+//! round (kept too, so no ray is cast: building them again was half the solve's
+//! time on the interactive bench room) and solves the leaf system once from where
+//! the last round started: no refinement, no link evaluated again. Given the
+//! pools of a solve at the same settings, the radiosity is the solve's, bit for
+//! bit (GMRES adds in a fixed order). A hierarchy without rows has them built
+//! again from the stored radiosities, the same rows as the solve's last round.
 
 use std::path::Path;
 
@@ -109,7 +111,44 @@ impl<'a> Solver<'a> {
             directions: r.directions.clone(),
             ends: self.links.ends.as_slice().to_vec(),
             transports: self.links.transports.as_slice().to_vec(),
+            row_start: self.sys.row_start.clone(),
+            row_sources: self.sys.row_sources.clone(),
+            row_coefs: self.sys.row_coefs.clone(),
+            row_links: self.row_links(),
         })
+    }
+
+    /// The leaf rows' entries by chain link as [`Hierarchy::row_links`] keeps
+    /// them (each a range of its row); empty when a cache entry is not one.
+    fn row_links(&self) -> Vec<[u32; 4]> {
+        let mut leaves: Vec<&u32> = self.sys.move_cluster_cache.keys().collect();
+        leaves.sort_unstable();
+        let mut out = Vec::new();
+        for &leaf in leaves {
+            let li = self.sys.leaf_index.get(leaf as usize).copied();
+            let Some(li) = li.filter(|&x| (x as usize) + 1 < self.sys.row_start.len()) else {
+                return Vec::new();
+            };
+            let (r0, r1) = (
+                self.sys.row_start[li as usize] as usize,
+                self.sys.row_start[li as usize + 1] as usize,
+            );
+            for (link, entries) in &self.sys.move_cluster_cache[&leaf] {
+                // The entries are a copy of the row's from where the link's began
+                // (rows.rs, `leaf_row`).
+                let found = (r0..=r1.saturating_sub(entries.len())).find(|&k| {
+                    entries.iter().enumerate().all(|(j, e)| {
+                        self.sys.row_sources[k + j] == e.0
+                            && self.sys.row_coefs[k + j].to_bits() == e.1.to_bits()
+                    })
+                });
+                let Some(k) = found else {
+                    return Vec::new();
+                };
+                out.push([leaf, *link, (k - r0) as u32, entries.len() as u32]);
+            }
+        }
+        out
     }
 
     /// The solver of `scene` (as [`Solver::new`] builds it) with the stored pools
@@ -164,9 +203,110 @@ impl<'a> Solver<'a> {
         s.closed = (!around.is_empty()).then(|| s.closed_around(&around));
         s.drop_passive_links();
         s.index_links();
-        let residual = s.solve_rows()?;
+        let residual = if h.row_start.is_empty() {
+            s.solve_rows()?
+        } else {
+            s.install_rows(h, file)?;
+            if !s.st.balance_fixed {
+                s.sys.balancing = false;
+            }
+            s.solve_balanced()?
+        };
         s.check_sound(residual)?;
         Ok(s)
+    }
+}
+
+impl Solver<'_> {
+    /// Installs the stored leaf rows of `h` (checked: one row per leaf, starts
+    /// rising to the entry count, sources existing elements (or facets), finite
+    /// coefficients, chain-link ranges inside their row and naming existing links).
+    fn install_rows(&mut self, h: &Hierarchy, file: &Path) -> Result<()> {
+        let bad = |place: String, expected: String, found: String| {
+            Err(Error::invalid(
+                file,
+                format!("hierarchy section, {place}"),
+                expected,
+                found,
+            ))
+        };
+        let nl = self.sys.leaves.len();
+        let ne = h.row_sources.len();
+        if h.row_start.len() != nl + 1 || h.row_coefs.len() != ne {
+            return bad(
+                "leaf rows".into(),
+                format!(
+                    "{} row starts (one per leaf and one more) and one coefficient per entry",
+                    nl + 1
+                ),
+                format!(
+                    "{} row starts, {ne} sources, {} coefficients",
+                    h.row_start.len(),
+                    h.row_coefs.len()
+                ),
+            );
+        }
+        let rising = h.row_start[0] == 0
+            && h.row_start.windows(2).all(|w| w[0] <= w[1])
+            && h.row_start[nl] as usize == ne;
+        if !rising {
+            return bad(
+                "leaf rows".into(),
+                format!("row starts rising from 0 to {ne}"),
+                "starts out of order or out of range".into(),
+            );
+        }
+        let (n, facets) = (self.elems.len(), self.facets.count());
+        let fb = super::facets::FACET_BIT;
+        for (k, (&src, c)) in h.row_sources.iter().zip(&h.row_coefs).enumerate() {
+            let ok = if src & fb != 0 {
+                ((src & !fb) as usize) < facets
+            } else {
+                (src as usize) < n
+            };
+            if !ok || !c.is_finite() {
+                return bad(
+                    format!("leaf row entry {k}"),
+                    format!("a source below {n} and a finite coefficient"),
+                    format!("source {src}, coefficient {c}"),
+                );
+            }
+        }
+        let nlinks = self.links.len();
+        let mut cache: super::FastMap<u32, Vec<(u32, super::rows::RowEntries)>> =
+            super::FastMap::default();
+        let mut last = None;
+        for (k, &[leaf, link, first, count]) in h.row_links.iter().enumerate() {
+            let li = self.sys.leaf_index.get(leaf as usize).copied();
+            let range = li.filter(|&x| x != u32::MAX).and_then(|li| {
+                let (r0, r1) = (
+                    h.row_start[li as usize] as u64,
+                    h.row_start[li as usize + 1] as u64,
+                );
+                let (a, b) = (r0 + first as u64, r0 + first as u64 + count as u64);
+                (b <= r1).then_some(a as usize..b as usize)
+            });
+            let sorted = last.is_none_or(|p| p < (leaf, link));
+            let Some(range) = range.filter(|_| sorted && (link as usize) < nlinks) else {
+                return bad(
+                    format!("leaf row link {k}"),
+                    format!("a leaf, a link below {nlinks} and a range of its row, sorted"),
+                    format!("leaf {leaf}, link {link}, entries {first} + {count}"),
+                );
+            };
+            last = Some((leaf, link));
+            let entries: super::rows::RowEntries = h.row_sources[range.clone()]
+                .iter()
+                .copied()
+                .zip(h.row_coefs[range].iter().copied())
+                .collect();
+            cache.entry(leaf).or_default().push((link, entries));
+        }
+        self.sys.row_start = h.row_start.clone();
+        self.sys.row_sources = h.row_sources.clone();
+        self.sys.row_coefs = h.row_coefs.clone();
+        self.sys.move_cluster_cache = cache;
+        Ok(())
     }
 }
 

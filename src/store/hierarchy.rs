@@ -38,6 +38,18 @@ pub struct Hierarchy {
     pub ends: Vec<Ends>,
     /// Link transports.
     pub transports: Vec<Transport>,
+    /// The leaf system's rows as the solve's last round built them (CSR over the
+    /// leaves in id order; empty: not kept, the session builds them again): the
+    /// start of each leaf's entries (leaves + 1).
+    pub row_start: Vec<u32>,
+    /// Each row entry's source element.
+    pub row_sources: Vec<u32>,
+    /// Each row entry's coefficient.
+    pub row_coefs: Vec<f64>,
+    /// Each row's entries by chain link, `[leaf, link, first, count]` (`first`
+    /// counted from the row's start), sorted by leaf then link: what a session's
+    /// first move keeps of the rows it does not touch.
+    pub row_links: Vec<[u32; 4]>,
 }
 
 impl Hierarchy {
@@ -58,6 +70,10 @@ impl Hierarchy {
             directions: bytes(&self.directions),
             ends: bytes(&self.ends),
             transports: bytes(&self.transports),
+            row_start: bytes(&self.row_start),
+            row_sources: bytes(&self.row_sources),
+            row_coefs: bytes(&self.row_coefs),
+            row_links: bytes(&self.row_links),
         }
     }
 
@@ -93,6 +109,22 @@ impl Hierarchy {
         e("directions", &r.directions, size_of::<Emission>())?;
         column("ends", &r.ends, links, size_of::<Ends>())?;
         column("transports", &r.transports, links, size_of::<Transport>())?;
+        let multiple = |name: &str, b: &[u8], size: usize| -> Result<u64> {
+            if b.len() % size == 0 {
+                Ok((b.len() / size) as u64)
+            } else {
+                Err(Error::invalid(
+                    path,
+                    format!("{place}, column {name}"),
+                    format!("a whole number of records of {size} bytes"),
+                    format!("{} bytes", b.len()),
+                ))
+            }
+        };
+        multiple("row_start", &r.row_start, 4)?;
+        let entries = multiple("row_sources", &r.row_sources, 4)?;
+        column("row_coefs", &r.row_coefs, entries, 8)?;
+        multiple("row_links", &r.row_links, 16)?;
         if elements >= u64::from(u32::MAX) || links >= u64::from(u32::MAX) {
             return Err(Error::invalid(
                 path,
@@ -111,6 +143,10 @@ impl Hierarchy {
             directions: typed(&r.directions),
             ends: typed(&r.ends),
             transports: typed(&r.transports),
+            row_start: typed(&r.row_start),
+            row_sources: typed(&r.row_sources),
+            row_coefs: typed(&r.row_coefs),
+            row_links: typed(&r.row_links),
         })
     }
 }

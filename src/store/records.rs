@@ -232,6 +232,16 @@ pub struct HierarchyRecord {
     pub ends: Vec<u8>,
     /// Link `Transport` records, 16 bytes each.
     pub transports: Vec<u8>,
+    /// Leaf rows: the start of each leaf's entries, `u32` each (leaves + 1; none
+    /// when the rows are not kept).
+    pub row_start: Vec<u8>,
+    /// Leaf rows: each entry's source, `u32` each.
+    pub row_sources: Vec<u8>,
+    /// Leaf rows: each entry's coefficient, `f64` each.
+    pub row_coefs: Vec<u8>,
+    /// Each leaf row's entries by chain link: `[leaf, link, first entry, entries]`,
+    /// `u32` each, sorted by leaf then link.
+    pub row_links: Vec<u8>,
 }
 
 fn v3(v: DVec3) -> [f64; 3] {

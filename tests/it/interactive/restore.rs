@@ -93,10 +93,20 @@ fn check_restored(what: &str, scene: &Scene) {
             .unwrap();
     let back = Hierarchy::from_archived(Path::new("mem.rhier"), "section", archived).unwrap();
     assert!(back == h, "{what}: the record does not round-trip");
+    assert!(!h.row_start.is_empty() && !h.row_links.is_empty(), "{what}");
     let file = Path::new("mem.rhier");
     let mut solved = Session::start(&stage, options(), Settings::default()).unwrap();
     let mut restored =
         Session::restore(&stage, options(), Settings::default(), &back, file).unwrap();
+    // Without the stored rows, built again from the stored radiosities.
+    let bare = Hierarchy {
+        row_start: Vec::new(),
+        row_sources: Vec::new(),
+        row_coefs: Vec::new(),
+        row_links: Vec::new(),
+        ..h.clone()
+    };
+    let rebuilt = Session::restore(&stage, options(), Settings::default(), &bare, file).unwrap();
     assert_eq!(
         solved.solver().elems.len(),
         restored.solver().elems.len(),
@@ -110,6 +120,10 @@ fn check_restored(what: &str, scene: &Scene) {
         "{what}: restored against solved at start-up: largest difference {diff:.3e} of the largest B, bit for bit: {same}"
     );
     assert!(same, "{what}: the restored radiosity differs by {diff:e}");
+    let b_rebuilt = probe(&rebuilt.solution(), &pts, 0.0).unwrap();
+    let (diff, same) = compare(&b_rebuilt, &b_solved);
+    eprintln!("{what}: rows built again: largest difference {diff:.3e}, bit for bit: {same}");
+    assert!(same, "{what}: the rows built again give {diff:e}");
     let shadowed = b_solved
         .iter()
         .step_by(3)
@@ -207,6 +221,15 @@ fn a_bad_hierarchy_is_refused() {
     let mut b = h.clone();
     b.transports[3].flags[0] = 9;
     expect(&b, &["hierarchy section, link 3", "state"]);
+    let mut b = h.clone();
+    b.row_sources[5] = n as u32 + 2;
+    expect(&b, &["hierarchy section, leaf row entry 5", "source"]);
+    let mut b = h.clone();
+    b.row_start[1] = b.row_start[2] + 1;
+    expect(&b, &["hierarchy section, leaf rows", "rising"]);
+    let mut b = h.clone();
+    b.row_links[4][3] = u32::MAX;
+    expect(&b, &["hierarchy section, leaf row link 4"]);
     let mut b = h.clone();
     b.radiosities[2][0] = f32::INFINITY;
     expect(&b, &["hierarchy section, element 2", "finite radiosity"]);
