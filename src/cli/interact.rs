@@ -183,8 +183,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut probe_out = args.probe_out.as_deref().map(Lines::create).transpose()?;
     let mut recorder = args.out.as_ref().map(|_| Recorder::new(args.fps));
     let start = std::time::Instant::now();
-    let mut session = match &hierarchy {
-        Some((h, from)) => Session::restore(&stage, opts, settings, h, from)
+    let restored = hierarchy.is_some();
+    // The stored columns are dropped once the session's pools hold them.
+    let mut session = match hierarchy {
+        Some((h, from)) => Session::restore(&stage, opts, settings, &h, from)
             .with_context(|| format!("starting from {}", from.display()))?,
         None => Session::start(&stage, opts, settings).context("solving the scene")?,
     };
@@ -192,7 +194,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let (active, passive) = session.solver().links.counts();
         eprintln!(
             "{} in {:.3} s: {} elements, {active} active / {passive} passive links; reading moves",
-            if hierarchy.is_some() {
+            if restored {
                 "restored the stored hierarchy"
             } else {
                 "solved"
