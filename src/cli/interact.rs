@@ -14,7 +14,8 @@ use rhier::interactive::store::{Keep, Policy};
 use rhier::interactive::{MoveStats, Session, Settings, Stage, Traversal, Update, parse_move};
 use rhier::playback::probe::{ProbePoint, probe, read_probe_points};
 use rhier::pools::Storage;
-use rhier::store::Reader;
+use rhier::scene::Scene;
+use rhier::store::{Hierarchy, Reader};
 
 use super::solve::common::{AccuracyArgs, SceneArgs};
 
@@ -48,11 +49,16 @@ pub struct Args {
     /// The scene and how it is loaded.
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Start from the scene of a stored solution solved with `--keep-links`.
+    /// Start from a stored hierarchy instead of solving at start-up.
     ///
-    /// The file must hold a links section (`rhier solve --keep-links`); its scene
-    /// is solved again at start-up with the accuracy flags given here (the stored
-    /// hierarchy is checked, not yet restored).
+    /// The file must come from `rhier solve SCENE --keep-links --movable NAMES`:
+    /// it holds every element and link of the solve a session makes at start-up,
+    /// and the session takes them up (checked against the scene, the leaf system
+    /// solved once, no refinement). The scene is SCENE when given, else the one
+    /// stored in the file. `--movable` (default: the file's objects) and the
+    /// accuracy flags must be those of the solve; a difference is refused, naming
+    /// it. A file without links, or with the links of a plain static solve, is
+    /// refused too.
     #[arg(long, value_name = "SOLVED.rhier")]
     pub from: Option<PathBuf>,
     /// The moves, one JSON line each (`-`: standard input); formats/interactive.md.
@@ -152,28 +158,23 @@ impl Lines {
 /// Runs `rhier interact`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let settings = settings(&args)?;
-    let (scene, _stem) = match &args.from {
+    let (scene, hierarchy) = match &args.from {
         Some(from) => {
-            let r = Reader::open(from).with_context(|| format!("reading {}", from.display()))?;
-            let links = r
-                .links()
-                .with_context(|| format!("reading {}", from.display()))?;
-            if links.is_empty() {
-                anyhow::bail!(
-                    "{}: the file holds no links; solve the scene with `rhier solve --keep-links` to interact from it",
-                    from.display()
-                );
-            }
-            let sol = r.to_solution()?;
-            (sol.scene, String::new())
+            let (scene, h) = read_from(&args, from)?;
+            (scene, Some((h, from)))
         }
-        None => args.scene.load()?,
+        None => (args.scene.load()?.0, None),
     };
     // The solver's pools on the backend `RHIER_STORAGE` names (RAM by default), as
     // a static solve without `--storage` places them.
     let storage = Storage::from_env().with_context(|| format!("reading {}", Storage::ENV))?;
     let opts = args.accuracy.solve_options(storage)?;
-    let stage = Stage::new(&scene, args.movable.as_deref())?;
+    let movable = match (&args.movable, &hierarchy) {
+        (Some(m), _) => Some(m.clone()),
+        (None, Some((h, _))) => Some(h.movable.clone()),
+        (None, None) => None,
+    };
+    let stage = Stage::new(&scene, movable.as_deref())?;
     let points = match &args.probe {
         Some(p) => Some(read_probe_points(p)?),
         None => None,
@@ -182,11 +183,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut probe_out = args.probe_out.as_deref().map(Lines::create).transpose()?;
     let mut recorder = args.out.as_ref().map(|_| Recorder::new(args.fps));
     let start = std::time::Instant::now();
-    let mut session = Session::start(&stage, opts, settings).context("solving the scene")?;
+    let restored = hierarchy.is_some();
+    // The stored columns are dropped once the session's pools hold them.
+    let mut session = match hierarchy {
+        Some((h, from)) => Session::restore(&stage, opts, settings, &h, from)
+            .with_context(|| format!("starting from {}", from.display()))?,
+        None => Session::start(&stage, opts, settings).context("solving the scene")?,
+    };
     if !args.quiet {
         let (active, passive) = session.solver().links.counts();
         eprintln!(
-            "solved in {:.3} s: {} elements, {active} active / {passive} passive links; reading moves",
+            "{} in {:.3} s: {} elements, {active} active / {passive} passive links; reading moves",
+            if restored {
+                "restored the stored hierarchy"
+            } else {
+                "solved"
+            },
             start.elapsed().as_secs_f64(),
             session.solver().elems.len()
         );
@@ -206,6 +218,39 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     result
+}
+
+/// The scene and the persisted hierarchy of `--from`: the links section must be
+/// there (`--keep-links`), and the hierarchy section (`--movable`). The scene is
+/// SCENE when given, else the file's.
+fn read_from(args: &Args, from: &Path) -> anyhow::Result<(Scene, Hierarchy)> {
+    let r = Reader::open(from).with_context(|| format!("reading {}", from.display()))?;
+    let links = r
+        .links()
+        .with_context(|| format!("reading {}", from.display()))?;
+    if links.is_empty() {
+        anyhow::bail!(
+            "{}: the file holds no links; solve the scene with `rhier solve --keep-links --movable NAMES` to interact from it",
+            from.display()
+        );
+    }
+    drop(links);
+    let Some(h) = r
+        .hierarchy()
+        .with_context(|| format!("reading {}", from.display()))?
+    else {
+        anyhow::bail!(
+            "{}: the file holds the links of a static solve but no hierarchy section; solve the scene with `rhier solve --keep-links --movable NAMES` (the objects the session moves) to interact from it",
+            from.display()
+        );
+    };
+    let given = args.scene.scene.is_some() || args.scene.builtin.is_some() || args.scene.blocks;
+    let scene = if given {
+        args.scene.load()?.0
+    } else {
+        r.to_solution()?.scene
+    };
+    Ok((scene, h))
 }
 
 /// The per-move outputs that need the final gather.

@@ -30,6 +30,7 @@
 //! which costs time, not accuracy), or descend the link hierarchy instead of
 //! scanning the link pool (every link's box is tested; shafts only where it meets).
 
+use std::path::Path;
 use std::time::Instant;
 
 use glam::{DAffine3, DVec3};
@@ -39,12 +40,14 @@ use super::predict::{Aabb, Method, Predictor};
 use super::stage::Stage;
 use super::stats::MoveStats;
 use super::store::{Policy, SHAFT_BYTES, ShaftStore};
-use crate::Result;
 use crate::pools::elements::Geom;
 use crate::pools::{LinkId, LinkState};
 use crate::shafts::{Shaft, box_shaft_misses};
 use crate::solution::Solution;
+use crate::solver::restore::options_differ;
 use crate::solver::{FastMap, SolveOptions, Solver};
+use crate::store::Hierarchy;
+use crate::{Error, Result};
 
 /// How a move finds the links it affects.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -133,8 +136,46 @@ impl<'a> Session<'a> {
         if stage.scene.has_emitter() {
             solver.run(|_, _| {})?;
         }
+        Ok(Self::with_solver(stage, solver, settings))
+    }
+
+    /// Starts a session on `stage` from the persisted hierarchy `h` read from
+    /// `file` (`rhier solve --keep-links --movable`), without solving: the stored
+    /// pools are checked and taken up ([`Solver::from_hierarchy`]: the leaf rows built
+    /// and the leaf system solved once, no refinement). `h` must have been solved
+    /// with the objects `stage` lets move and at the settings `opts`: a mismatch
+    /// is refused with a message naming what differs.
+    pub fn restore(
+        stage: &'a Stage,
+        mut opts: SolveOptions,
+        settings: Settings,
+        h: &Hierarchy,
+        file: &Path,
+    ) -> Result<Self> {
+        opts.keep_passive = true;
+        let movable = stage.movable_names();
+        if h.movable != movable {
+            return Err(Error::Usage(format!(
+                "{}: its hierarchy was solved with --movable {}, not {}; give the same objects to both",
+                file.display(),
+                list(&h.movable),
+                list(&movable)
+            )));
+        }
+        if let Some(what) = options_differ(&h.options, &opts) {
+            return Err(Error::Usage(format!(
+                "{}: its hierarchy was solved at other settings ({what}); give `rhier interact` the accuracy flags the solve had",
+                file.display()
+            )));
+        }
+        let solver = Solver::from_hierarchy(&stage.scene, opts, h, file)?;
+        Ok(Self::with_solver(stage, solver, settings))
+    }
+
+    /// A session on a solver that holds the solution of `stage` at its scene poses.
+    fn with_solver(stage: &'a Stage, solver: Solver<'a>, settings: Settings) -> Self {
         let n = stage.scene.objects.len();
-        Ok(Session {
+        Session {
             stage,
             pairs: solver.link_pairs(),
             solver,
@@ -145,7 +186,7 @@ impl<'a> Session<'a> {
             moves: 0,
             changed: Vec::new(),
             affected: Vec::new(),
-        })
+        }
     }
 
     /// The solver (pools, leaf system) as the last move left it.
@@ -467,4 +508,13 @@ fn union(a: Aabb, b: Aabb) -> Aabb {
 
 fn meets_any(b: Aabb, boxes: &[Aabb]) -> bool {
     crate::shafts::meets_any(b.0, b.1, boxes)
+}
+
+/// `names` comma-separated, or `(none)`.
+fn list(names: &[String]) -> String {
+    if names.is_empty() {
+        "(none)".into()
+    } else {
+        names.join(",")
+    }
 }

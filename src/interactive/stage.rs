@@ -72,6 +72,18 @@ impl Stage {
         })
     }
 
+    /// The names of the objects moves may place, in scene order (what a persisted
+    /// hierarchy records: [`crate::store::Hierarchy::movable`]).
+    pub fn movable_names(&self) -> Vec<String> {
+        self.scene
+            .objects
+            .iter()
+            .zip(&self.movable)
+            .filter(|(_, m)| **m)
+            .map(|(o, _)| o.name.clone())
+            .collect()
+    }
+
     /// The scene with each object of `poses` (object index → pose) held at that
     /// pose by a one-key track: the scene a move's solution belongs to.
     pub fn posed(&self, poses: &[Pose]) -> Scene {

@@ -47,6 +47,7 @@ pub(crate) mod moves;
 pub mod per_frame;
 mod reconstruct;
 pub mod report;
+pub mod restore;
 mod row_check;
 mod row_patch;
 mod rows;
@@ -566,6 +567,10 @@ pub struct Solver<'a> {
     motion: Motion,
     /// The state of a space-time solve (all empty in a static solve).
     st: SpaceTimeState,
+    /// What [`Solver::hierarchy`] stores beside the pools: the radiosities and
+    /// directions each round's leaf rows were built at (`None`: not kept;
+    /// [`Solver::keep_restore_point`]).
+    restore_point: Option<restore::RestorePoint>,
 }
 
 /// The leaf system: the leaves, their rows over the chain links'
@@ -755,6 +760,7 @@ impl<'a> Solver<'a> {
                 ..Motion::default()
             },
             st: SpaceTimeState::new(t),
+            restore_point: None,
         };
         s.motion.moving_patch = (0..s.patches.len())
             .map(|i| {
@@ -927,6 +933,7 @@ impl<'a> Solver<'a> {
             }
             self.drop_passive_links();
             self.index_links();
+            self.mark_restore_point();
             let residual = self.solve_rows()?;
             b_ref = self.b_ref();
             #[cfg(debug_assertions)]

@@ -1913,7 +1913,7 @@ impl Solver<'_> {
     /// its answer both ways and no closer to the path tracer. What rows left
     /// unscaled miss is lost, and the error estimate and the CLI's warning say so
     /// (BENCHMARKS.md, "Stiff scenes").
-    fn solve_balanced(&mut self) -> Result<f64> {
+    pub(super) fn solve_balanced(&mut self) -> Result<f64> {
         if !self.balance_rows() && !self.st.balance_fixed {
             self.sys.balancing = false;
         }

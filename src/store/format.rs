@@ -16,8 +16,12 @@ use crate::error::{Error, Result};
 /// `type` on DOS).
 pub const MAGIC: [u8; 10] = [0x89, b'R', b'H', b'I', b'E', b'R', 0x0D, 0x0A, 0x1A, 0x0A];
 
-/// Format version this code writes (2: the optional provenance section).
-pub const VERSION: u32 = 2;
+/// Newest format version this code reads and writes (2: the optional provenance
+/// section; 3: the optional hierarchy section).
+pub const VERSION: u32 = 3;
+/// The version written in a file without a hierarchy section: such a file is
+/// byte for byte what a version-2 writer made.
+pub const BASE_VERSION: u32 = 2;
 /// Oldest format version this code still reads.
 pub const OLDEST_READABLE: u32 = 1;
 /// The version a reader must have at least to read what this code writes without
@@ -26,6 +30,10 @@ pub const MIN_READER_VERSION: u32 = 1;
 /// The version a reader must have at least to read a file with a provenance
 /// section (a section kind version 1 does not know).
 pub const PROVENANCE_READER_VERSION: u32 = 2;
+/// The version a reader must have at least to read a file with a hierarchy
+/// section (`rhier solve --keep-links --movable`; a section kind version 2 does
+/// not know). Such a file's version is 3 too.
+pub const HIERARCHY_READER_VERSION: u32 = 3;
 
 /// Size of the header in bytes.
 pub const HEADER_LEN: usize = 64;
@@ -76,6 +84,9 @@ pub enum SectionKind {
     Links = 6,
     /// Where a space-time file's windows come from (version 2; at most one).
     Provenance = 7,
+    /// The element pool and the links' transports of an interactive session's
+    /// start-up solve (version 3; at most one; `rhier solve --keep-links --movable`).
+    Hierarchy = 8,
 }
 
 impl SectionKind {
@@ -89,6 +100,7 @@ impl SectionKind {
             5 => SectionKind::Stats,
             6 => SectionKind::Links,
             7 => SectionKind::Provenance,
+            8 => SectionKind::Hierarchy,
             _ => return None,
         })
     }
@@ -103,6 +115,7 @@ impl SectionKind {
             SectionKind::Stats => "stats",
             SectionKind::Links => "links",
             SectionKind::Provenance => "provenance",
+            SectionKind::Hierarchy => "hierarchy",
         }
     }
 }

@@ -15,6 +15,7 @@
 //! code on a [`crate::solution::Solution`] in memory and on a [`Reader`].
 
 pub mod format;
+pub mod hierarchy;
 pub mod journal;
 pub mod live;
 pub mod memory;
@@ -25,6 +26,7 @@ pub mod samples;
 pub mod writer;
 
 pub use format::{Codec, Header, SectionEntry, SectionKind};
+pub use hierarchy::Hierarchy;
 pub use live::{Live, Stretch};
 pub use memory::MemoryReport;
 pub use reader::{Reader, StoredObject};

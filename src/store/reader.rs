@@ -754,6 +754,33 @@ impl Reader {
             .collect())
     }
 
+    /// The hierarchy section (written by `rhier solve --keep-links --movable`), or
+    /// `None` when the file has none. Its columns' sizes are checked here; what
+    /// they hold, against the scene, by [`crate::solver::Solver::from_hierarchy`].
+    pub fn hierarchy(&self) -> Result<Option<super::Hierarchy>> {
+        let mut found = self
+            .sections
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| e.kind == SectionKind::Hierarchy);
+        let i = match (found.next(), found.next()) {
+            (None, _) => return Ok(None),
+            (Some((i, _)), None) => i,
+            (Some(_), Some((j, _))) => {
+                return Err(Error::invalid(
+                    &self.path,
+                    self.place(j),
+                    "at most one hierarchy section",
+                    "two or more",
+                ));
+            }
+        };
+        let bytes = self.section_bytes(i)?;
+        let r = rkyv::access::<super::records::ArchivedHierarchyRecord, rancor::Error>(&bytes)
+            .map_err(|e| rkyv_err(&self.path, self.place(i), "the hierarchy record", e))?;
+        super::Hierarchy::from_archived(&self.path, &self.place(i), r).map(Some)
+    }
+
     /// Every leaf of every chunk, validated (reads the whole file).
     pub fn all_leaves(&self) -> Result<Vec<Leaf>> {
         let mut out = Vec::new();
@@ -819,7 +846,7 @@ fn check_raw_len(kind: SectionKind, items: u64, raw_len: u64) -> std::result::Re
                 Err(format!("1 stats record of {want} bytes"))
             };
         }
-        SectionKind::Scene | SectionKind::Provenance => {
+        SectionKind::Scene | SectionKind::Provenance | SectionKind::Hierarchy => {
             return if items == 1 {
                 Ok(())
             } else {

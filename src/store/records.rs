@@ -3,7 +3,7 @@
 //!
 //! Each section holds one rkyv archive of one root value ([`SceneRecord`],
 //! `Vec<PatchRecord>`, `Vec<LeafRecord>`, [`ChunkIndexRecord`], [`StatsRecord`],
-//! `Vec<LinkRecord>`, [`ProvenanceRecord`]). rkyv is pinned to little-endian, unaligned, 64-bit relative
+//! `Vec<LinkRecord>`, [`ProvenanceRecord`], [`HierarchyRecord`]). rkyv is pinned to little-endian, unaligned, 64-bit relative
 //! pointers (Cargo.toml features `little_endian`, `unaligned`, `pointer_width_64`), so
 //! an archive is read in place from any byte offset of a mapped file and may exceed
 //! 2 GiB. These types are plain mirrors of the in-memory contract
@@ -203,6 +203,46 @@ pub struct LinkRecord {
 }
 
 const _: () = assert!(std::mem::size_of::<ArchivedLinkRecord>() == 48);
+
+/// The persisted hierarchy of an interactive session's start-up solve
+/// (`rhier solve --keep-links --movable`; formats/rhier.md, "Hierarchy"): the
+/// element pool in pool order and the link pool, each column the little-endian
+/// bytes of its `repr(C)` records ([`crate::store::Hierarchy`] holds them typed).
+#[derive(Archive, Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub struct HierarchyRecord {
+    /// Names of the objects the session may move, in scene order.
+    pub movable: Vec<String>,
+    /// The solve settings, as JSON (`SolveOptions` without its storage).
+    pub options: String,
+    /// Number of elements.
+    pub elements: u64,
+    /// Number of links.
+    pub links: u64,
+    /// `Node` records, 16 bytes each.
+    pub nodes: Vec<u8>,
+    /// `Geom` records, 168 bytes each.
+    pub geoms: Vec<u8>,
+    /// Time ranges, `[f32; 2]` each.
+    pub times: Vec<u8>,
+    /// Radiosities the last leaf rows were built at, `[f32; 3]` each.
+    pub radiosities: Vec<u8>,
+    /// `Emission` records the last leaf rows were built at, 36 bytes each.
+    pub directions: Vec<u8>,
+    /// Link `Ends` records, 8 bytes each.
+    pub ends: Vec<u8>,
+    /// Link `Transport` records, 16 bytes each.
+    pub transports: Vec<u8>,
+    /// Leaf rows: the start of each leaf's entries, `u32` each (leaves + 1; none
+    /// when the rows are not kept).
+    pub row_start: Vec<u8>,
+    /// Leaf rows: each entry's source, `u32` each.
+    pub row_sources: Vec<u8>,
+    /// Leaf rows: each entry's coefficient, `f64` each.
+    pub row_coefs: Vec<u8>,
+    /// Each leaf row's entries by chain link: `[leaf, link, first entry, entries]`,
+    /// `u32` each, sorted by leaf then link.
+    pub row_links: Vec<u8>,
+}
 
 fn v3(v: DVec3) -> [f64; 3] {
     v.to_array()

@@ -27,8 +27,9 @@ use std::path::{Path, PathBuf};
 use rkyv::rancor;
 
 use super::format::{
-    Codec, FLAG_COMPRESSED, FLAG_LINKS, FLAG_MOVING, HEADER_LEN, Header, MIN_READER_VERSION,
-    PROVENANCE_READER_VERSION, SectionEntry, SectionKind, VERSION, crc32,
+    BASE_VERSION, Codec, FLAG_COMPRESSED, FLAG_LINKS, FLAG_MOVING, HEADER_LEN,
+    HIERARCHY_READER_VERSION, Header, MIN_READER_VERSION, PROVENANCE_READER_VERSION, SectionEntry,
+    SectionKind, VERSION, crc32,
 };
 use super::records::{
     CameraRecord, ChunkIndexRecord, ChunkRecord, LinkRecord, MaterialRecord, ObjectRecord,
@@ -145,6 +146,8 @@ pub struct Writer {
     chunks: Vec<ChunkRecord>,
     links: Vec<LinkRecord>,
     provenance: Option<ProvenanceRecord>,
+    /// The hierarchy section, if any ([`Writer::write_hierarchy`]).
+    hierarchy: Option<super::records::HierarchyRecord>,
 }
 
 impl std::fmt::Debug for Writer {
@@ -232,6 +235,7 @@ impl Writer {
             chunks: Vec::new(),
             links: Vec::new(),
             provenance: None,
+            hierarchy: None,
         };
         w.emit(&[0u8; HEADER_LEN])?;
         for kind in [SectionKind::Scene, SectionKind::Patches] {
@@ -328,6 +332,7 @@ impl Writer {
             chunks: Vec::new(),
             links: Vec::new(),
             provenance: None,
+            hierarchy: None,
         };
         if !(scene.time.start.is_finite() && scene.time.end.is_finite())
             || scene.time.end < scene.time.start
@@ -512,6 +517,12 @@ impl Writer {
         }
     }
 
+    /// Queues the hierarchy section (`rhier solve --keep-links --movable`): the
+    /// file's version becomes [`VERSION`] (3) and a reader needs version 3.
+    pub fn write_hierarchy(&mut self, h: &super::Hierarchy) {
+        self.hierarchy = Some(h.to_record());
+    }
+
     /// The counters of the file so far (sections and chunks written, bytes), for
     /// `solve --stats` while the solve streams; the solver adds its pools with
     /// [`super::MemoryReport::add_pool`].
@@ -601,11 +612,18 @@ impl Writer {
             self.section(SectionKind::Provenance, &bytes, 1, false)?;
             min_reader_version = PROVENANCE_READER_VERSION;
         }
+        let mut version = BASE_VERSION;
+        if let Some(h) = self.hierarchy.take() {
+            let bytes = archive(&self.path, &h)?;
+            self.section(SectionKind::Hierarchy, &bytes, 1, self.options.compress)?;
+            min_reader_version = HIERARCHY_READER_VERSION;
+            version = VERSION;
+        }
         let table: Vec<u8> = self.entries.iter().flat_map(|e| e.encode()).collect();
         let table_offset = self.pos;
         self.emit(&table)?;
         let header = Header {
-            version: VERSION,
+            version,
             min_reader_version,
             flags: self.flags,
             table_offset,

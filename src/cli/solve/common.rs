@@ -244,6 +244,22 @@ pub struct OutputArgs {
     /// each window's links when the window is written.
     #[arg(long)]
     pub keep_links: bool,
+    /// With --keep-links: solve the scene as `rhier interact --movable` stages it,
+    /// and keep its hierarchy for `rhier interact --from`.
+    ///
+    /// The objects named (comma-separated) are the ones an interactive session
+    /// may move: their patches are kept apart from the others' (contact meshing
+    /// cuts along static objects only) and the solve is the one a session makes
+    /// at start-up. The file then also holds the hierarchy section (every element
+    /// and link of the solve, formats/rhier.md), from which `rhier interact
+    /// --from FILE` starts without solving again. A static scene only.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        requires = "keep_links",
+        value_name = "NAMES"
+    )]
+    pub movable: Option<Vec<String>>,
     /// Print the memory counters of the run.
     ///
     /// Elements, links, the BVH and the stored cells, with the bytes each holds (a

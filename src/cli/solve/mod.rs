@@ -43,7 +43,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for w in &scene.warnings {
         eprintln!("rhier: warning: {w}");
     }
-    if scene.has_motion() {
+    if let Some(movable) = &args.output.movable {
+        if scene.has_motion() || sharded {
+            anyhow::bail!(
+                "--movable: solves a static scene for `rhier interact`; {stem} has motion or is sharded"
+            );
+        }
+        static_scene::run_staged(&args.output, &scene, &stem, opts, start, movable)
+    } else if scene.has_motion() {
         spacetime::run(&args, &scene, &stem, opts, start)
     } else if sharded {
         anyhow::bail!(

@@ -8,6 +8,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context;
+use rhier::interactive::{Pose, Stage};
 use rhier::playback::{ProbePoint, probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
 use rhier::solution::PointError;
@@ -215,6 +216,81 @@ pub fn run(
 /// The solver's links (active and passive) as the store records them: element ids in
 /// solver numbering, coefficient `ρ_receiver · F` per channel (clusters use 1), the
 /// link's spread as its error bound.
+/// `rhier solve --keep-links --movable NAMES`: solves `scene` as an interactive
+/// session stages it ([`Stage`]: the named objects movable) and writes the file
+/// with its links and its hierarchy section, for `rhier interact --from`.
+pub fn run_staged(
+    output: &OutputArgs,
+    scene: &Scene,
+    stem: &str,
+    opts: SolveOptions,
+    start: Instant,
+    movable: &[String],
+) -> anyhow::Result<()> {
+    let stage = Stage::new(scene, Some(movable))?;
+    if !stage.scene.has_emitter() {
+        return super::common::write_zero(output, scene, stem, start, |path| {
+            Ok(report::write_csv(path, &[])?)
+        });
+    }
+    let mut solver = Solver::new(&stage.scene, opts)?;
+    solver.keep_restore_point();
+    let quiet = output.quiet;
+    let records: Vec<RoundRecord> = solver.run(|rec, _| {
+        if !quiet {
+            eprintln!("{}", rec.summary());
+        }
+    })?;
+    let hierarchy = solver
+        .hierarchy(stage.movable_names())
+        .context("the solve kept no hierarchy")?;
+    let mut solution = solver.solution();
+    solution.scene = stage.posed(&vec![Pose::IDENTITY; stage.scene.objects.len()]);
+    solution.stats.seconds = start.elapsed().as_secs_f64();
+    solution.stats.iterations = records.len() as u32;
+    if let Some(last) = records.last() {
+        solution.stats.residual = last.residual;
+    }
+    if let Some(path) = &output.report {
+        report::write_csv(path, &records)?;
+    }
+    let t = solution.scene.time.start;
+    if let (Some(points), Some(out)) = (
+        output.probe.as_deref().map(read_probe_points).transpose()?,
+        &output.probe_out,
+    ) {
+        write_probe_results(out, &probe(&solution, &points, t)?)?;
+    }
+    let out = output.out_path(stem);
+    let write_opts = WriteOptions {
+        keep_links: true,
+        ..WriteOptions::default()
+    };
+    let mut w = Writer::create(&out, &SolutionHeader::of(&solution), write_opts)?;
+    w.write_chunk(
+        solution.scene.time.start,
+        solution.scene.time.end,
+        &solution.leaves,
+    )?;
+    w.write_links(&link_records(&solver));
+    w.write_hierarchy(&hierarchy);
+    w.finish(&solution.stats)
+        .with_context(|| format!("writing {}", out.display()))?;
+    if !quiet {
+        eprintln!(
+            "solved {} patches for `rhier interact --movable {}` in {:.3} s: {} elements, {} active / {} passive links; wrote {} with its hierarchy",
+            solution.patches.len(),
+            movable.join(","),
+            solution.stats.seconds,
+            solution.stats.elements,
+            solution.stats.links_active,
+            solution.stats.links_passive,
+            out.display()
+        );
+    }
+    Ok(())
+}
+
 fn link_records(solver: &Solver) -> Vec<LinkRecord> {
     let geoms = solver.elems.geoms.as_slice();
     let times = solver.elems.times.as_slice();

@@ -4,4 +4,5 @@
 
 mod cli;
 mod moves;
+mod restore;
 mod shafts;

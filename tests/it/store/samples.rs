@@ -76,10 +76,10 @@ fn corruptions(valid: &[u8]) -> Vec<(&'static str, Vec<u8>, &'static str)> {
     b[1] = b'X';
     out.push(("wrong_magic.rhier", b, "magic"));
     let mut b = valid.to_vec();
-    b[12..16].copy_from_slice(&3u32.to_le_bytes());
-    b[16..20].copy_from_slice(&3u32.to_le_bytes());
+    b[12..16].copy_from_slice(&4u32.to_le_bytes());
+    b[16..20].copy_from_slice(&4u32.to_le_bytes());
     reseal(&mut b);
-    out.push(("future_version.rhier", b, "needing a reader of version 3"));
+    out.push(("future_version.rhier", b, "needing a reader of version 4"));
     let mut b = valid.to_vec();
     let e = entry_of(valid, SectionKind::Chunk, 0);
     b[e + 16..e + 24].copy_from_slice(&(1u64 << 60).to_le_bytes());
