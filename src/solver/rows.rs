@@ -877,9 +877,6 @@ impl Solver<'_> {
             _ => 0u64,
         });
         let ray_bits = |bits: u64, i: u64| bits >> (i as u32 * m) & ((1 << m) - 1);
-        // Rays cast at everything (an end moves, in a move's rows): fewer for a
-        // small entry ([`Solver::move_entry_rays`]); a static solve skips the
-        // share's point factors.
         // The factors at the quadrature points, taken once (the share below and
         // the integral).
         let fq: [f64; 4] = std::array::from_fn(|i| {
@@ -889,6 +886,9 @@ impl Solver<'_> {
                 0.0
             }
         });
+        // Rays cast at everything (an end moves, in a move's rows): fewer for a
+        // small entry ([`Solver::move_entry_rays`]); a static solve skips the
+        // share.
         let m_all = if self.sys.move_rows && matches!(masks, RowMasks::None) {
             let u: f64 = (0..q.count).map(|i| q.weights[i] * fq[i].max(0.0)).sum();
             self.move_entry_rays(leaf, s, u, m)
