@@ -386,6 +386,8 @@ impl<'a> Session<'a> {
         let geoms = self.solver.elems.geoms.as_slice();
         let ends = self.solver.links.ends.as_slice();
         let now: Vec<Aabb> = old.iter().chain(new).copied().collect();
+        // Each element's box once, not each link end's.
+        let elem_boxes: Vec<Aabb> = geoms.iter().map(geom_box).collect();
         for (i, e) in ends.iter().enumerate() {
             let l = i as u32;
             if holding[e.receiver as usize] || holding[e.source as usize] {
@@ -394,7 +396,11 @@ impl<'a> Session<'a> {
                 continue;
             }
             let (gr, gs) = (&geoms[e.receiver as usize], &geoms[e.source as usize]);
-            let reach = union(geom_box(gr), geom_box(gs));
+            let (br, bs) = (
+                elem_boxes[e.receiver as usize],
+                elem_boxes[e.source as usize],
+            );
+            let reach = union(br, bs);
             if !meets_any(reach, &now) {
                 if every {
                     f.affected.push(LinkId(l));
@@ -409,7 +415,6 @@ impl<'a> Session<'a> {
             } else {
                 Some(self.shafts.get(l, true, || shaft_between(gr, gs)))
             };
-            let (br, bs) = (geom_box(gr), geom_box(gs));
             let mut hit = false;
             for (k, b) in now.iter().enumerate() {
                 if !meets_any(reach, std::slice::from_ref(b)) {
@@ -450,6 +455,7 @@ impl Session<'_> {
         let around = boxes
             .iter()
             .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |a, &b| union(a, b));
+        let elem_boxes: Vec<Aabb> = geoms.iter().map(geom_box).collect();
         for (i, e) in ends.iter().enumerate() {
             let (r, s) = (e.receiver as usize, e.source as usize);
             let (gr, gs) = (&geoms[r], &geoms[s]);
@@ -460,7 +466,7 @@ impl Session<'_> {
             {
                 continue;
             }
-            let reach = union(geom_box(gr), geom_box(gs));
+            let reach = union(elem_boxes[r], elem_boxes[s]);
             if meets_any(reach, std::slice::from_ref(&around)) && meets_any(reach, boxes) {
                 self.shafts.get(i as u32, false, || shaft_between(gr, gs));
             }

@@ -269,6 +269,13 @@ impl Solver<'_> {
             }
             return keep;
         }
+        // A cluster source that holds no moved patch, the shaft from the leaf to
+        // its box clear of the moved boxes: every entry kept, as the walk below
+        // would keep them at its first step (`reuse(s)`), without grouping them.
+        if !patch.holding[s as usize] && patch.clear(leaf_box, super::geom_box(gs)) {
+            row.extend_from_slice(old);
+            return true;
+        }
         let nodes = self.elems.nodes.as_slice();
         let groups = patch.groups(nodes, s, old);
         let mut kept = Vec::new();

@@ -877,13 +877,20 @@ impl Solver<'_> {
             _ => 0u64,
         });
         let ray_bits = |bits: u64, i: u64| bits >> (i as u32 * m) & ((1 << m) - 1);
+        // The factors at the quadrature points, taken once (the share below and
+        // the integral).
+        let fq: [f64; 4] = std::array::from_fn(|i| {
+            if i < q.count {
+                point_to_polygon(q.points[i], n, &ps)
+            } else {
+                0.0
+            }
+        });
         // Rays cast at everything (an end moves, in a move's rows): fewer for a
         // small entry ([`Solver::move_entry_rays`]); a static solve skips the
-        // share's point factors.
+        // share.
         let m_all = if self.sys.move_rows && matches!(masks, RowMasks::None) {
-            let u: f64 = (0..q.count)
-                .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps).max(0.0))
-                .sum();
+            let u: f64 = (0..q.count).map(|i| q.weights[i] * fq[i].max(0.0)).sum();
             self.move_entry_rays(leaf, s, u, m)
         } else {
             m
@@ -921,7 +928,10 @@ impl Solver<'_> {
             let (mut f, mut unoccluded) = (0.0, 0.0);
             let (mut vmin, mut vmax) = (1.0f64, 0.0f64);
             for (x, w, i) in pts {
-                let fx = point_to_polygon(x, n, &ps);
+                let fx = match fq.get(i as usize) {
+                    Some(&f) if i < q.count as u64 => f,
+                    _ => point_to_polygon(x, n, &ps),
+                };
                 if fx <= 0.0 {
                     continue;
                 }
