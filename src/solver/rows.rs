@@ -831,6 +831,7 @@ impl Solver<'_> {
     /// are cast again, which finds nothing again), [`KeptParts::Walk`] with the
     /// parts to take as kept where some hang on an estimate that changed
     /// ([`Solver::drop_estimate_parts`]; nothing is pushed then).
+    #[allow(clippy::too_many_arguments)]
     fn push_kept_cluster<'p>(
         &self,
         leaf: ElementId,
