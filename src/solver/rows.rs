@@ -639,7 +639,7 @@ impl Solver<'_> {
         let mut part = |e: u32, k: [f64; 4]| {
             if let Some(p) = known.get(next_known).filter(|p| p.elem == e) {
                 next_known += 1;
-                self.push_part(leaf, q, n, p, row);
+                self.push_part(q, n, p, row);
                 if let Some(k) = kept.as_deref_mut() {
                     k.push(*p);
                 }
@@ -668,7 +668,7 @@ impl Solver<'_> {
                     }
                     None => (coef, v),
                 };
-                self.push_opened(leaf, q, n, e, coef, v, row, None, None);
+                self.push_opened(q, n, e, coef, v, row, None, None);
                 return;
             }
             // A point whose rays all fall below its horizon or on faces
@@ -798,30 +798,13 @@ impl Solver<'_> {
 
     /// The row entries of kept cluster part `p` ([`ClusterPart`]): a surface part
     /// opened at its coefficient and visibility, a cluster part at its entry.
-    fn push_part(
-        &self,
-        leaf: ElementId,
-        q: &oracle::Samples,
-        n: DVec3,
-        p: &ClusterPart,
-        row: &mut Vec<(u32, f64)>,
-    ) {
+    fn push_part(&self, q: &oracle::Samples, n: DVec3, p: &ClusterPart, row: &mut Vec<(u32, f64)>) {
         if p.vis < 0.0 {
             if p.coef > 0.0 {
                 row.push((p.elem, p.coef as f64));
             }
         } else {
-            self.push_opened(
-                leaf,
-                q,
-                n,
-                p.elem,
-                p.coef as f64,
-                p.vis as f64,
-                row,
-                None,
-                None,
-            );
+            self.push_opened(q, n, p.elem, p.coef as f64, p.vis as f64, row, None, None);
         }
     }
 
@@ -831,10 +814,8 @@ impl Solver<'_> {
     /// are cast again, which finds nothing again), [`KeptParts::Walk`] with the
     /// parts to take as kept where some hang on an estimate that changed
     /// ([`Solver::drop_estimate_parts`]; nothing is pushed then).
-    #[allow(clippy::too_many_arguments)]
     fn push_kept_cluster<'p>(
         &self,
-        leaf: ElementId,
         q: &oracle::Samples,
         n: DVec3,
         l: u32,
@@ -851,7 +832,7 @@ impl Solver<'_> {
             return KeptParts::Walk(&parts[from + 1..to]);
         }
         for p in &parts[from..to] {
-            self.push_part(leaf, q, n, p, row);
+            self.push_part(q, n, p, row);
         }
         kept.extend_from_slice(&parts[from..to]);
         KeptParts::Used
@@ -1100,7 +1081,6 @@ impl Solver<'_> {
     #[allow(clippy::too_many_arguments)]
     fn push_opened(
         &self,
-        leaf: ElementId,
         q: &oracle::Samples,
         n: DVec3,
         s: u32,
@@ -1143,21 +1123,14 @@ impl Solver<'_> {
                     .0
             });
             if sum > 0.0 && shares.iter().take(k).all(|&x| x >= 0.0) {
-                let own = self.children_visibility(leaf, q, n, node, vis, &shares[..k]);
                 for (j, share) in shares.iter().enumerate().take(k) {
                     let ch = node.first_child + j as u32;
-                    // Its own rays' fraction in place of the source's.
-                    let (c, v) = match own {
-                        Some(o) => (coef * share / sum * o[j] / vis, o[j]),
-                        None => (coef * share / sum, vis),
-                    };
                     self.push_opened(
-                        leaf,
                         q,
                         n,
                         ch,
-                        c,
-                        v,
+                        coef * share / sum,
+                        vis,
                         row,
                         memo.as_deref_mut(),
                         kept.as_deref_mut(),
@@ -1167,9 +1140,7 @@ impl Solver<'_> {
             }
         }
         let base_len = self.st.window.as_ref().map_or(0, |w| w.frame.elems_len);
-        let k = node.child_count as usize;
-        let mut fs = [0.0; 4];
-        for (j, ch) in (node.first_child..node.first_child + node.child_count).enumerate() {
+        for ch in node.first_child..node.first_child + node.child_count {
             let factor = || {
                 let ps = oracle::poly(&self.elems.geoms.as_slice()[ch as usize]);
                 (0..q.count)
@@ -1192,13 +1163,7 @@ impl Solver<'_> {
                     None => factor(),
                 },
             };
-            if k <= 4 {
-                fs[j] = f;
-                continue;
-            }
-            // More than 4 children: they share the source's fraction.
             self.push_opened(
-                leaf,
                 q,
                 n,
                 ch,
@@ -1209,90 +1174,6 @@ impl Solver<'_> {
                 kept.as_deref_mut(),
             );
         }
-        if k > 4 {
-            return;
-        }
-        let own = self.children_visibility(leaf, q, n, node, vis, &fs[..k]);
-        for (j, ch) in (node.first_child..node.first_child + node.child_count).enumerate() {
-            let (f, v) = (fs[j], own.map_or(vis, |o| o[j]));
-            self.push_opened(
-                leaf,
-                q,
-                n,
-                ch,
-                f * v,
-                v,
-                row,
-                memo.as_deref_mut(),
-                kept.as_deref_mut(),
-            );
-        }
-    }
-
-    /// Each child's own visible fraction from the leaf's quadrature points
-    /// (`rays_per_point` rays a point, weighted by the point's factor to the
-    /// child), where a surface source partly hidden from the leaf (visible
-    /// fraction `vis` strictly between 0 and 1) is opened into its children
-    /// ([`Solver::push_opened`]): each child then takes its unoccluded share
-    /// (`shares[j]`: its factor, or its share of the source's) times its own
-    /// fraction, not the source's. `None` where the source is not partly hidden,
-    /// or where no child's rays see anything though the source's did (a shadow
-    /// edge between the points that the source's corners found): the children
-    /// then share `vis`.
-    ///
-    /// Why: the children all took the source's fraction, so a child the head of
-    /// the Blender Cornell box hid whole from a floor leaf took a share of the
-    /// light (0.0064 of the row, truth 0) that a brighter child it did not hide
-    /// should have: the floor and wall sources so opened left the box's worst
-    /// rows 1.3% short of light though their coefficients summed right (issue
-    /// 45; `tests/it/solver/exported.rs`). Scaling the children's fractions so
-    /// that they kept the source's coefficient instead put a source's whole
-    /// coefficient on a child its rays barely saw, breaking reciprocity: green
-    /// came out 15% darker, and the linear solve stalled at a residual of 1.5e-4.
-    fn children_visibility(
-        &self,
-        leaf: ElementId,
-        q: &oracle::Samples,
-        n: DVec3,
-        node: Node,
-        vis: f64,
-        shares: &[f64],
-    ) -> Option<[f64; 4]> {
-        if !(vis > 0.0 && vis < 1.0) || shares.len() > 4 {
-            return None;
-        }
-        let geoms = self.elems.geoms.as_slice();
-        let g = &geoms[leaf.ix()];
-        let leaf_ray = self.ray_id(leaf.0);
-        let mut own = [0.0; 4];
-        for (j, o) in own.iter_mut().enumerate().take(shares.len()) {
-            let ch = node.first_child + j as u32;
-            let gc = &geoms[ch as usize];
-            let pc = oracle::poly(gc);
-            let ch_ray = self.ray_id(ch);
-            let (mut seen, mut all) = (0.0, 0.0);
-            for i in 0..q.count {
-                let f = point_to_polygon(q.points[i], n, &pc);
-                if f <= 0.0 {
-                    continue;
-                }
-                let r = oracle::PointRays {
-                    x: q.points[i],
-                    n,
-                    gs: gc,
-                    pols: &pc,
-                    ns: DVec3::from_array(gc.normal),
-                    m: self.opts.rays_per_point,
-                    key: oracle::hash3(self.opts.seed ^ 0x1eb2, ch_ray, leaf_ray << 3 | i as u64),
-                    skip: [g.patch, gc.patch],
-                };
-                seen += q.weights[i] * f * oracle::visible_fraction(&self.bvh, &r);
-                all += q.weights[i] * f;
-            }
-            *o = if all > 0.0 { seen / all } else { 0.0 };
-        }
-        let took: f64 = shares.iter().zip(&own).map(|(s, o)| s * o).sum();
-        (took > 0.0).then_some(own)
     }
 
     /// The key of a static leaf's row entry for chain link `l` from source `s` in
@@ -1662,7 +1543,7 @@ impl Solver<'_> {
             let at = out.row.len();
             if gs.patch == u32::MAX {
                 let reused = clusters_before.map_or(KeptParts::None, |parts| {
-                    self.push_kept_cluster(leaf, &q, n, l, parts, &mut out.row, &mut out.clusters)
+                    self.push_kept_cluster(&q, n, l, parts, &mut out.row, &mut out.clusters)
                 });
                 let known = match reused {
                     KeptParts::Used => None,
@@ -1693,7 +1574,6 @@ impl Solver<'_> {
             {
                 out.kept.push(k);
                 self.push_opened(
-                    leaf,
                     &q,
                     n,
                     s,
@@ -1723,7 +1603,6 @@ impl Solver<'_> {
                 }
                 let at = out.row.len();
                 self.push_opened(
-                    leaf,
                     &q,
                     n,
                     s,
@@ -1775,7 +1654,6 @@ impl Solver<'_> {
                 coef
             };
             self.push_opened(
-                leaf,
                 &q,
                 n,
                 s,
