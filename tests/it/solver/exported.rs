@@ -243,7 +243,7 @@ fn blender_error(opts: SolveOptions, paths: u32) -> PointError {
 /// Scaling the children's fractions to keep the source's coefficient made green
 /// 15% dark instead (a child the rays barely saw took the whole coefficient).
 /// Reverted for three tests it broke, not yet traced: a static space-time window
-/// no longer equals the static solve bit for bit (2e-6 apart: the children's
+/// no longer equals the static solve bit for bit (2e-6 apart; most likely the children's
 /// coefficient divides by the cached `f32` visibility), a space-time frame 1.65%
 /// from the fine solve against the per-frame 1.56%, and `tiled_lamp`'s one-quad
 /// room stopping `Refined` at an estimate of 1.96%; the stiff room's leaf system
