@@ -233,6 +233,24 @@ fn blender_error(opts: SolveOptions, paths: u32) -> PointError {
 /// Next: a partly hidden surface source's children each with its own rays from the
 /// leaf's points.
 ///
+/// Each child its own rays (2026-11-30, h45blend3, f771d3d, reverted): where a
+/// row opens a partly hidden surface source into its children, each child took
+/// its own rays' visible fraction from the leaf's points (4 rays a point,
+/// weighted by the point's factor to it) in place of the source's. This test
+/// read 7.58% off the lamp, worst point 16.6% (green at point 28); against
+/// 200,000 paths 10.6% → 7.1%, red 7.8% → 3.1% dark, green 7.6% → 6.5%; the
+/// Cornell blocks 0.89% → 0.86% and 0.71% → 0.66% at eps 0.15 and 0.1 (CPU +8%).
+/// Scaling the children's fractions to keep the source's coefficient made green
+/// 15% dark instead (a child the rays barely saw took the whole coefficient).
+/// Reverted for three tests it broke, not yet traced: a static space-time window
+/// no longer equals the static solve bit for bit (2e-6 apart; most likely the children's
+/// coefficient divides by the cached `f32` visibility), a space-time frame 1.65%
+/// from the fine solve against the per-frame 1.56%, and `tiled_lamp`'s one-quad
+/// room stopping `Refined` at an estimate of 1.96%; the stiff room's leaf system
+/// (`a_stiff_room_is_balanced_and_keeps_its_light`) then absorbed 0.9914 and was
+/// no longer balanced (its mean 0.52% off). The change between levels read 0.99
+/// on this box, most likely from the leaves inside the slabs.
+///
 /// The estimate is to see that shortfall (2026-11-30, h45est,
 /// `Solver::row_ray_check`: sampled rows against cosine rays and rays at the
 /// lamp over the solved field, the mean gap amplified by the bounces' gain).
