@@ -20,7 +20,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{CLOSURE_SAMPLES, SolveOptions, Solver};
+use super::{CLOSURE_SAMPLES, FastMap, SolveOptions, Solver};
 use crate::pools::elements::{ElementKind, Emission};
 use crate::pools::{ElementId, ElementPool, LinkPool};
 use crate::scene::Scene;
@@ -133,15 +133,29 @@ impl<'a> Solver<'a> {
                 self.sys.row_start[li as usize] as usize,
                 self.sys.row_start[li as usize + 1] as usize,
             );
+            // Where each (source, coefficient) starts in the row, so a link's range
+            // is found by its first entry, not by a scan of the row per link.
+            let mut starts: FastMap<(u32, u64), Vec<usize>> = FastMap::default();
+            for k in r0..r1 {
+                let key = (self.sys.row_sources[k], self.sys.row_coefs[k].to_bits());
+                starts.entry(key).or_default().push(k);
+            }
             for (link, entries) in &self.sys.move_cluster_cache[&leaf] {
                 // The entries are a copy of the row's from where the link's began
                 // (rows.rs, `leaf_row`).
-                let found = (r0..=r1.saturating_sub(entries.len())).find(|&k| {
-                    entries.iter().enumerate().all(|(j, e)| {
-                        self.sys.row_sources[k + j] == e.0
-                            && self.sys.row_coefs[k + j].to_bits() == e.1.to_bits()
-                    })
-                });
+                let fits = |k: usize| {
+                    k + entries.len() <= r1
+                        && entries.iter().enumerate().all(|(j, e)| {
+                            self.sys.row_sources[k + j] == e.0
+                                && self.sys.row_coefs[k + j].to_bits() == e.1.to_bits()
+                        })
+                };
+                let found = match entries.first() {
+                    None => Some(r0),
+                    Some(e0) => starts
+                        .get(&(e0.0, e0.1.to_bits()))
+                        .and_then(|ks| ks.iter().copied().find(|&k| fits(k))),
+                };
                 let Some(k) = found else {
                     return Vec::new();
                 };
