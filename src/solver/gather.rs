@@ -113,6 +113,24 @@ const CELL_OPEN_RATIO: f64 = 0.3;
 /// (BENCHMARKS.md, "Scale").
 const PARTIAL_PART_MIN_FACTOR: f64 = 3e-3;
 
+/// Fewest rays [`small_part_rays`] gives a part.
+const SMALL_PART_MIN_RAYS: u32 = 2;
+
+/// The first rays of a cluster part with factor `k` at a final-gather point that
+/// is not cast again ([`PARTIAL_PART_MIN_FACTOR`]): `m` times `k` over that
+/// bound, rounded up, at least [`SMALL_PART_MIN_RAYS`].
+///
+/// Why: a part's visibility noise enters the point's value times its factor,
+/// so the rays that make the sum's variance least go to each part in proportion
+/// to its factor (times its radiosity and `√(v(1−v))`, which the point does not
+/// know before casting). In `tools/gen_cubes.py 20` a point sees hundreds of box
+/// faces at factors of 1e-4 to 1e-3, each cast 8 rays, most of the final gather's
+/// rays (BENCHMARKS.md, "Scale").
+fn small_part_rays(m: u32, k: f64) -> u32 {
+    let scaled = (f64::from(m) * k / PARTIAL_PART_MIN_FACTOR).ceil();
+    (scaled as u32).clamp(SMALL_PART_MIN_RAYS.min(m), m)
+}
+
 /// A source is near a point only if the point's normal is within this cosine of
 /// facing it head-on.
 const NEAR_COS: f64 = 0.9;
@@ -518,24 +536,28 @@ impl Solver<'_> {
                     // ([`PARTIAL_PART_MIN_FACTOR`]).
                     let recast = k[0] > PARTIAL_PART_MIN_FACTOR
                         || self.emits_under.get(e as usize).copied().unwrap_or(true);
+                    // Such a part's first rays, fewer by its factor
+                    // ([`small_part_rays`]).
+                    let rays = |m: u32| if recast { m } else { small_part_rays(m, k[0]) };
                     let v = if clear {
                         1.0
                     } else if g.patch != u32::MAX {
                         let key = oracle::hash3(key, self.ray_id(e), 1) & u64::from(u32::MAX);
                         let ps = oracle::poly(g);
-                        let r = self.gather_rays(x, n, receiver_patch, g, &ps, key);
+                        let mut r = self.gather_rays(x, n, receiver_patch, g, &ps, key);
                         if recast {
                             self.surface_visibility(r)
                         } else {
+                            r.m = rays(r.m);
                             oracle::visible_fraction(&self.bvh, &r)
                         }
                     } else {
-                        let m = self.opts.cluster_rays;
+                        let m = rays(self.opts.cluster_rays);
                         let (v, rays) = self.part_visibility(x, n, receiver_patch, e, m, 0);
                         if rays == 0 {
                             *vis.get_or_insert_with(shared)
                         } else if recast && ((v > 0.0 && v < 1.0) || partial) {
-                            let m = m * super::rows::PARTIAL_CLUSTER_RAYS;
+                            let m = self.opts.cluster_rays * super::rows::PARTIAL_CLUSTER_RAYS;
                             self.part_visibility(x, n, receiver_patch, e, m, 0).0
                         } else {
                             v
