@@ -236,14 +236,8 @@ impl Solver<'_> {
     /// rising to the entry count, sources existing elements (or facets), finite
     /// coefficients, chain-link ranges inside their row and naming existing links).
     fn install_rows(&mut self, h: &Hierarchy, file: &Path) -> Result<()> {
-        let bad = |place: String, expected: String, found: String| {
-            Err(Error::invalid(
-                file,
-                format!("hierarchy section, {place}"),
-                expected,
-                found,
-            ))
-        };
+        let bad =
+            |place: String, expected: String, found: String| invalid(file, place, expected, found);
         let nl = self.sys.leaves.len();
         let ne = h.row_sources.len();
         if h.row_start.len() != nl + 1 || h.row_coefs.len() != ne {
@@ -326,14 +320,8 @@ impl Solver<'_> {
 
 /// The checks of [`Solver::from_hierarchy`] that the pools' own `validate` does not make.
 fn check(s: &Solver, h: &Hierarchy, file: &Path) -> Result<()> {
-    let bad = |place: String, expected: String, found: String| {
-        Err(Error::invalid(
-            file,
-            format!("hierarchy section, {place}"),
-            expected,
-            found,
-        ))
-    };
+    let bad =
+        |place: String, expected: String, found: String| invalid(file, place, expected, found);
     let n = h.nodes.len();
     let cols = [
         ("geoms", h.geoms.len()),
@@ -510,4 +498,14 @@ fn check(s: &Solver, h: &Hierarchy, file: &Path) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The error for a bad `place` of the hierarchy section of `file`.
+fn invalid<T>(file: &Path, place: String, expected: String, found: String) -> Result<T> {
+    Err(Error::invalid(
+        file,
+        format!("hierarchy section, {place}"),
+        expected,
+        found,
+    ))
 }

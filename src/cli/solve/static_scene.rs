@@ -11,11 +11,11 @@ use anyhow::Context;
 use rhier::interactive::{Pose, Stage};
 use rhier::playback::{ProbePoint, probe, read_probe_points, write_probe_results};
 use rhier::scene::Scene;
-use rhier::solution::PointError;
+use rhier::solution::{PointError, Solution};
 use rhier::solver::report;
 use rhier::solver::{RoundRecord, SolveOptions, Solver};
 use rhier::store::{
-    LinkRecord, MemoryReport, SolutionHeader, WriteOptions, Writer, write_solution,
+    Hierarchy, LinkRecord, MemoryReport, SolutionHeader, WriteOptions, Writer, write_solution,
 };
 
 use super::common::OutputArgs;
@@ -138,15 +138,7 @@ pub fn run(
         ..WriteOptions::default()
     };
     if output.keep_links {
-        let mut w = Writer::create(&out, &SolutionHeader::of(&solution), write_opts)?;
-        w.write_chunk(
-            solution.scene.time.start,
-            solution.scene.time.end,
-            &solution.leaves,
-        )?;
-        w.write_links(&link_records(&solver));
-        w.finish(&solution.stats)
-            .with_context(|| format!("writing {}", out.display()))?;
+        write_with_links(&out, &solution, &solver, None)?;
     } else {
         write_solution(&out, &solution, write_opts)
             .with_context(|| format!("writing {}", out.display()))?;
@@ -213,9 +205,6 @@ pub fn run(
     Ok(())
 }
 
-/// The solver's links (active and passive) as the store records them: element ids in
-/// solver numbering, coefficient `ρ_receiver · F` per channel (clusters use 1), the
-/// link's spread as its error bound.
 /// `rhier solve --keep-links --movable NAMES`: solves `scene` as an interactive
 /// session stages it ([`Stage`]: the named objects movable) and writes the file
 /// with its links and its hierarchy section, for `rhier interact --from`.
@@ -262,20 +251,7 @@ pub fn run_staged(
         write_probe_results(out, &probe(&solution, &points, t)?)?;
     }
     let out = output.out_path(stem);
-    let write_opts = WriteOptions {
-        keep_links: true,
-        ..WriteOptions::default()
-    };
-    let mut w = Writer::create(&out, &SolutionHeader::of(&solution), write_opts)?;
-    w.write_chunk(
-        solution.scene.time.start,
-        solution.scene.time.end,
-        &solution.leaves,
-    )?;
-    w.write_links(&link_records(&solver));
-    w.write_hierarchy(&hierarchy);
-    w.finish(&solution.stats)
-        .with_context(|| format!("writing {}", out.display()))?;
+    write_with_links(&out, &solution, &solver, Some(&hierarchy))?;
     if !quiet {
         eprintln!(
             "solved {} patches for `rhier interact --movable {}` in {:.3} s: {} elements, {} active / {} passive links; wrote {} with its hierarchy",
@@ -291,6 +267,35 @@ pub fn run_staged(
     Ok(())
 }
 
+/// Writes `solution` to `out` with the links of `solver` (`--keep-links`) and, for
+/// `--movable`, its hierarchy section.
+fn write_with_links(
+    out: &Path,
+    solution: &Solution,
+    solver: &Solver,
+    hierarchy: Option<&Hierarchy>,
+) -> anyhow::Result<()> {
+    let write_opts = WriteOptions {
+        keep_links: true,
+        ..WriteOptions::default()
+    };
+    let mut w = Writer::create(out, &SolutionHeader::of(solution), write_opts)?;
+    w.write_chunk(
+        solution.scene.time.start,
+        solution.scene.time.end,
+        &solution.leaves,
+    )?;
+    w.write_links(&link_records(solver));
+    if let Some(h) = hierarchy {
+        w.write_hierarchy(h);
+    }
+    w.finish(&solution.stats)
+        .with_context(|| format!("writing {}", out.display()))
+}
+
+/// The solver's links (active and passive) as the store records them: element ids in
+/// solver numbering, coefficient `ρ_receiver · F` per channel (clusters use 1), the
+/// link's spread as its error bound.
 fn link_records(solver: &Solver) -> Vec<LinkRecord> {
     let geoms = solver.elems.geoms.as_slice();
     let times = solver.elems.times.as_slice();

@@ -38,7 +38,7 @@ pub fn room(tiling: Tiling, y: f64) -> Scene {
 }
 
 /// Settings light enough for a test, the same for the session and the fresh solves.
-fn options() -> SolveOptions {
+pub(super) fn options() -> SolveOptions {
     SolveOptions {
         eps: 0.25,
         max_rounds: 6,

@@ -15,17 +15,9 @@ use rhier::scene::Scene;
 use rhier::solver::{SolveOptions, Solver};
 use rhier::store::Hierarchy;
 
-use super::moves::room;
+use super::moves::{options, room};
 use crate::common::shapes::Tiling;
 use crate::common::{example, rhier, succeed};
-
-fn options() -> SolveOptions {
-    SolveOptions {
-        eps: 0.25,
-        max_rounds: 6,
-        ..SolveOptions::default()
-    }
-}
 
 /// Points on the floor and two walls, 12 × 12 each (the crate floats: none is
 /// inside it).
