@@ -225,16 +225,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// SCENE when given, else the file's.
 fn read_from(args: &Args, from: &Path) -> anyhow::Result<(Scene, Hierarchy)> {
     let r = Reader::open(from).with_context(|| format!("reading {}", from.display()))?;
-    let links = r
-        .links()
-        .with_context(|| format!("reading {}", from.display()))?;
-    if links.is_empty() {
+    // Only the sections a session uses are read and validated: the hierarchy (which
+    // holds the links in pool form) and the scene's tables. The links section is only
+    // counted, and the leaves are not read (`rhier inspect` checks those).
+    if r.link_count() == 0 {
         anyhow::bail!(
             "{}: the file holds no links; solve the scene with `rhier solve --keep-links --movable NAMES` to interact from it",
             from.display()
         );
     }
-    drop(links);
     let Some(h) = r
         .hierarchy()
         .with_context(|| format!("reading {}", from.display()))?
@@ -248,7 +247,7 @@ fn read_from(args: &Args, from: &Path) -> anyhow::Result<(Scene, Hierarchy)> {
     let scene = if given {
         args.scene.load()?.0
     } else {
-        r.to_solution()?.scene
+        r.scene()
     };
     Ok((scene, h))
 }

@@ -790,9 +790,20 @@ impl Reader {
         Ok(out)
     }
 
-    /// The whole solution in memory: the scene rebuilt from the stored objects and
-    /// patches (polygons dropped by the solver are not stored), every leaf, the stats.
-    pub fn to_solution(&self) -> Result<Solution> {
+    /// How many link records the links section holds (0 when the file has none), from
+    /// the section table, which [`Reader::open`] checked against the section's size;
+    /// the records themselves are not read.
+    pub fn link_count(&self) -> u64 {
+        self.sections
+            .iter()
+            .filter(|e| e.kind == SectionKind::Links)
+            .map(|e| e.items)
+            .sum()
+    }
+
+    /// The scene rebuilt from the stored objects and patches (polygons dropped by the
+    /// solver are not stored), without reading any leaf.
+    pub fn scene(&self) -> Scene {
         let mut objects: Vec<Object> = self
             .objects
             .iter()
@@ -808,14 +819,19 @@ impl Reader {
                 material: MaterialId(p.material),
             });
         }
+        Scene {
+            time: self.time,
+            materials: self.materials.clone(),
+            objects,
+            camera: self.camera,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// The whole solution in memory: [`Reader::scene`], every leaf, the stats.
+    pub fn to_solution(&self) -> Result<Solution> {
         Ok(Solution {
-            scene: Scene {
-                time: self.time,
-                materials: self.materials.clone(),
-                objects,
-                camera: self.camera,
-                warnings: Vec::new(),
-            },
+            scene: self.scene(),
             patches: self.patches.clone(),
             leaves: self.all_leaves()?,
             stats: self.stats.clone(),
