@@ -25,6 +25,7 @@
 //!   nearly the same factors in both hierarchies, but the update's reconstruction left
 //!   that 0.12 m² triangle one cell across the door's new shadow edge, where the
 //!   fresh solve's split it.
+//!
 //! The worst-point bar is set above what was measured for these two reasons.
 
 use glam::{DQuat, DVec3};
