@@ -6,6 +6,7 @@ shaft bytes and shafts built on the fly side by side.
 
 usage: tools/interactive_bench.py OUT_DIR [--tables N] [--moves M] [--eps E] [--rhier BIN]
                                   [--paths straight,curved,jittery] [--modes all,budget,none]
+                                  [--scene chair|door]
 
 Writes OUT_DIR/room.json (a 6 x 6 m room, a lamp, N x N tables of 4 legs and a top,
 a chair of 5 boxes, each box's faces cut in 2 x 2 quads: N = 15, the default, gives
@@ -15,6 +16,12 @@ a chair of 5 boxes, each box's faces cut in 2 x 2 quads: N = 15, the default, gi
 - all:     every shaft kept (no budget, max age huge), no prediction;
 - budget:  --shaft-budget 1 MB, linear prediction;
 - none:    no shaft stored (--shaft-store none --max-age 0), no prediction.
+
+--scene door (issue 49's second scene, a large object moving): the same room and
+tables with the chair left out and a 0.9 x 2 m door, 4 cm thick, 1 cm over the floor
+beside the tables (x 4.6-5.5 at z = 3, each face cut 2 x 2), swung on its hinge
+(the vertical line x = 4.6, z = 3) from 0 to 1.5 rad in M equal steps: path
+"swing" (OUT_DIR/swing.jsonl), object "door". `--tables 3` gives 889 polygons.
 """
 import json
 import math
@@ -23,6 +30,16 @@ import random
 import statistics
 import subprocess
 import sys
+
+
+MATERIALS = {
+    "white": {"reflectance": [0.7, 0.7, 0.7]},
+    "red": {"reflectance": [0.6, 0.1, 0.1]},
+    "green": {"reflectance": [0.1, 0.6, 0.1]},
+    "wood": {"reflectance": [0.5, 0.35, 0.2]},
+    "blue": {"reflectance": [0.1, 0.2, 0.6]},
+    "lamp": {"reflectance": [0.5, 0.5, 0.5], "emission": [20.0, 20.0, 20.0]},
+}
 
 
 def quad(a, b, c, d, m):
@@ -57,7 +74,7 @@ def box(lo, hi, m, n=2):
     )
 
 
-def scene(tables):
+def scene(tables, door=False):
     s, h = 6.0, 2.6
     room = (
         tiled([0, 0, 0], [0, 0, s], [s, 0, s], [s, 0, 0], "white", 8)
@@ -80,6 +97,15 @@ def scene(tables):
                 lx, lz = x0 + a * (w - leg), z0 + b * (w - leg)
                 furniture += box([lx, 0, lz], [lx + leg, 0.4, lz + leg], "wood", 1)
             furniture += box([x0, 0.4, z0], [x0 + w, 0.45, z0 + w], "wood", 2)
+    if door:
+        leaf = box([4.6, 0.01, 2.98], [5.5, 2.0, 3.02], "blue", 2)
+        objects = [
+            {"name": "room", "polygons": room},
+            {"name": "lamp", "polygons": lamp},
+            {"name": "furniture", "polygons": furniture},
+            {"name": "door", "polygons": leaf},
+        ]
+        return {"rhier_scene": 1, "materials": MATERIALS, "objects": objects}, len(room) + 1 + len(furniture) + len(leaf)
     chair = []
     c0 = [2.6, 0.0, 2.6]
     for (a, b) in [(0, 0), (1, 0), (0, 1), (1, 1)]:
@@ -89,14 +115,7 @@ def scene(tables):
     chair += box([c0[0], 0.5, c0[2] + 0.36], [c0[0] + 0.4, 0.95, c0[2] + 0.4], "blue", 2)
     return {
         "rhier_scene": 1,
-        "materials": {
-            "white": {"reflectance": [0.7, 0.7, 0.7]},
-            "red": {"reflectance": [0.6, 0.1, 0.1]},
-            "green": {"reflectance": [0.1, 0.6, 0.1]},
-            "wood": {"reflectance": [0.5, 0.35, 0.2]},
-            "blue": {"reflectance": [0.1, 0.2, 0.6]},
-            "lamp": {"reflectance": [0.5, 0.5, 0.5], "emission": [20.0, 20.0, 20.0]},
-        },
+        "materials": MATERIALS,
         "objects": [
             {"name": "room", "polygons": room},
             {"name": "lamp", "polygons": lamp},
@@ -123,6 +142,20 @@ def paths(moves):
     return out
 
 
+def swing(moves, hinge=(4.6, 3.0), top=1.5):
+    """The door's poses: turned about the vertical line through `hinge` by
+    `top * k / moves`, k = 1..moves (a rotation about y as a quaternion, and the
+    translation that keeps the hinge in place)."""
+    out = []
+    for k in range(1, moves + 1):
+        a = top * k / moves
+        c, s = math.cos(a), math.sin(a)
+        x, z = hinge
+        t = [x - (c * x + s * z), 0.0, z - (-s * x + c * z)]
+        out.append({"object": "door", "translation": t, "rotation": [0.0, math.sin(a / 2), 0.0, math.cos(a / 2)]})
+    return out
+
+
 MODES = {
     "all": ["--predict", "none", "--max-age", "1000000"],
     "budget": ["--predict", "linear", "--shaft-budget", "1000000"],
@@ -140,7 +173,8 @@ def main():
     tables, moves, eps = int(opt("--tables", "15")), int(opt("--moves", "100")), opt("--eps", "1")
     rhier = opt("--rhier", "target/release/rhier")
     os.makedirs(out, exist_ok=True)
-    sc, n = scene(tables)
+    door = opt("--scene", "chair") == "door"
+    sc, n = scene(tables, door)
     path = os.path.join(out, "room.json")
     with open(path, "w") as f:
         json.dump(sc, f)
@@ -149,18 +183,24 @@ def main():
     print("|---|---|---|---|---|---|---|")
     want_paths = opt("--paths", "straight,curved,jittery").split(",")
     want_modes = opt("--modes", ",".join(MODES)).split(",")
-    for name, ts in paths(moves).items():
+    if door:
+        runs = {"swing": swing(moves)}
+        want_paths = ["swing"]
+    else:
+        runs = {name: [{"object": "chair", "translation": t} for t in ts] for name, ts in paths(moves).items()}
+    movable = "door" if door else "chair"
+    for name, lines in runs.items():
         if name not in want_paths:
             continue
         mv = os.path.join(out, f"{name}.jsonl")
         with open(mv, "w") as f:
-            for t in ts:
-                f.write(json.dumps({"object": "chair", "translation": t}) + "\n")
+            for line in lines:
+                f.write(json.dumps(line) + "\n")
         for mode, flags in MODES.items():
             if mode not in want_modes:
                 continue
             st = os.path.join(out, f"{name}-{mode}.jsonl")
-            cmd = [rhier, "interact", path, "--movable", "chair", "--moves", mv, "--stats", st,
+            cmd = [rhier, "interact", path, "--movable", movable, "--moves", mv, "--stats", st,
                    "--eps", eps, "-q"] + flags
             subprocess.run(cmd, check=True)
             rows = [json.loads(l) for l in open(st)]

@@ -3,6 +3,7 @@
 //! evaluated again), and the command line around it.
 
 mod cli;
+mod door;
 mod moves;
 mod restore;
 mod shafts;

@@ -70,8 +70,9 @@ fn points() -> Vec<ProbePoint> {
     out
 }
 
-/// The crate moved to `pose`: the scene a fresh solve of that configuration starts from.
-fn posed(scene: &Scene, pose: Pose) -> Scene {
+/// Object 1 (the crate) moved to `pose`: the scene a fresh solve of that
+/// configuration starts from.
+pub(super) fn posed(scene: &Scene, pose: Pose) -> Scene {
     let mut s = scene.clone();
     let m = pose.to_affine();
     for p in &mut s.objects[1].polygons {
@@ -130,13 +131,47 @@ fn settings(traversal: Traversal) -> Settings {
     }
 }
 
+/// What [`check_moves_with`] holds each move to against a fresh solve of its
+/// configuration.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Bars {
+    /// Most relative RMS at the probe points off the emitters.
+    pub rms: f64,
+    /// Most relative error at one point, if bounded.
+    pub worst: Option<f64>,
+    /// Also solve each configuration at `eps / 2` and hold the update as close to
+    /// it as the fresh solve is, within 1% (costs a finer solve a move).
+    pub finer: bool,
+}
+
 /// Runs `poses` on a session over `scene`, and checks each move against a fresh
-/// solve and against the brute force.
+/// solve and against the brute force at [`options`], with the bars the hovering
+/// and sliding boxes meet there.
 fn check_moves(what: &str, scene: &Scene, poses: &[Pose]) {
-    let movable = ["crate".to_string()];
+    let bars = Bars {
+        rms: 0.02,
+        worst: None,
+        finer: true,
+    };
+    check_moves_with(what, scene, poses, &options(), bars);
+}
+
+/// Runs `poses` (of the scene's object 1, the movable one) on a session over
+/// `scene` at `opts`, and checks each move against a fresh solve at `opts` (held
+/// to `bars`) and against the brute force: every surface link whose transport the
+/// brute force saw change was found, and the radiosity is the brute force's
+/// within 0.5% RMS.
+pub(super) fn check_moves_with(
+    what: &str,
+    scene: &Scene,
+    poses: &[Pose],
+    opts: &SolveOptions,
+    bars: Bars,
+) {
+    let movable = [scene.objects[1].name.clone()];
     let stage = Stage::new(scene, Some(&movable)).unwrap();
-    let mut fast = Session::start(&stage, options(), settings(Traversal::Affected)).unwrap();
-    let mut brute = Session::start(&stage, options(), settings(Traversal::Every)).unwrap();
+    let mut fast = Session::start(&stage, opts.clone(), settings(Traversal::Affected)).unwrap();
+    let mut brute = Session::start(&stage, opts.clone(), settings(Traversal::Every)).unwrap();
     for (i, &pose) in poses.iter().enumerate() {
         let ref_scene = posed(scene, pose);
         let pts = outside(&ref_scene, points());
@@ -175,39 +210,56 @@ fn check_moves(what: &str, scene: &Scene, poses: &[Pose]) {
         let b = probe(&fast.solution(), &pts, 0.0).unwrap();
         let b_brute = probe(&brute.solution(), &pts, 0.0).unwrap();
         let ref_stage = Stage::new(&ref_scene, Some(&movable)).unwrap();
-        let fresh = Session::start(&ref_stage, options(), settings(Traversal::Affected)).unwrap();
+        let fresh =
+            Session::start(&ref_stage, opts.clone(), settings(Traversal::Affected)).unwrap();
         let b_ref = probe(&fresh.solution(), &pts, 0.0).unwrap();
         let (rms, worst) = error(&b, &b_ref);
-        // A finer solve of the configuration: how far each answer is from the truth.
-        let fine_opts = SolveOptions {
-            eps: options().eps / 2.0,
-            ..options()
-        };
-        let fine = Session::start(&ref_stage, fine_opts, settings(Traversal::Affected)).unwrap();
-        let b_fine = probe(&fine.solution(), &pts, 0.0).unwrap();
-        let (fast_fine, _) = error(&b, &b_fine);
-        let (fresh_fine, _) = error(&b_ref, &b_fine);
         let (rms_brute, worst_brute) = error(&b, &b_brute);
-        eprintln!(
-            "{what}, move {i}: against a fresh solve {:.3}% RMS (worst point {:.2}%), against the brute force {:.4}% (worst {:.3}%); against a solve at eps / 2: {:.3}% (the fresh solve {:.3}%); {} of {} links affected",
+        let mut line = format!(
+            "{what}, move {i}: against a fresh solve {:.3}% RMS (worst point {:.2}%), against the brute force {:.4}% (worst {:.3}%); {} of {} links affected",
             100.0 * rms,
             100.0 * worst,
             100.0 * rms_brute,
             100.0 * worst_brute,
-            100.0 * fast_fine,
-            100.0 * fresh_fine,
             stats.links_affected,
             stats.links_total
         );
-        // Two solves of one configuration whose hierarchies differ differ by about
-        // their own error (here 1-2% against the finer solve): the bar is that the
-        // update is as close to the finer solve as the fresh solve is, within 1%,
-        // and within 2% of the fresh solve.
-        assert!(rms < 0.02, "{what}, move {i}: {rms} against a fresh solve");
+        if bars.finer {
+            // A finer solve of the configuration: how far each answer is from the truth.
+            let fine_opts = SolveOptions {
+                eps: opts.eps / 2.0,
+                ..opts.clone()
+            };
+            let fine =
+                Session::start(&ref_stage, fine_opts, settings(Traversal::Affected)).unwrap();
+            let b_fine = probe(&fine.solution(), &pts, 0.0).unwrap();
+            let (fast_fine, _) = error(&b, &b_fine);
+            let (fresh_fine, _) = error(&b_ref, &b_fine);
+            line += &format!(
+                "; against a solve at eps / 2: {:.3}% (the fresh solve {:.3}%)",
+                100.0 * fast_fine,
+                100.0 * fresh_fine
+            );
+            // Two solves of one configuration whose hierarchies differ differ by
+            // about their own error (at `options()` 1-2% against the finer solve):
+            // the update must be as close to the finer solve as the fresh solve
+            // is, within 1%.
+            assert!(
+                fast_fine < fresh_fine + 0.01,
+                "{what}, move {i}: {fast_fine} against the finer solve, the fresh solve {fresh_fine}"
+            );
+        }
+        eprintln!("{line}");
         assert!(
-            fast_fine < fresh_fine + 0.01,
-            "{what}, move {i}: {fast_fine} against the finer solve, the fresh solve {fresh_fine}"
+            rms <= bars.rms,
+            "{what}, move {i}: {rms} RMS against a fresh solve"
         );
+        if let Some(w) = bars.worst {
+            assert!(
+                worst <= w,
+                "{what}, move {i}: a point {worst} off a fresh solve"
+            );
+        }
         assert!(
             rms_brute < 0.005,
             "{what}, move {i}: {rms_brute} against the brute force"
@@ -215,7 +267,7 @@ fn check_moves(what: &str, scene: &Scene, poses: &[Pose]) {
     }
 }
 
-fn shift(x: f64, y: f64, z: f64) -> Pose {
+pub(super) fn shift(x: f64, y: f64, z: f64) -> Pose {
     Pose {
         translation: DVec3::new(x, y, z),
         rotation: DQuat::IDENTITY,
@@ -258,12 +310,39 @@ fn a_box_sliding_on_the_floor_keeps_its_contacts_right() {
     }
 }
 
+/// At [`options`] (`eps` 0.25) the unequal-triangle room's first move after the
+/// far jump was 1.67% RMS off a fresh solve, one floor point 46% off: there the
+/// fresh solve is the one that is wrong (78% off a solve at `eps / 2`, the
+/// update 3.6%). The point's leaf gathers the lamp through the same 16 links in
+/// all three hierarchies; the fresh solve's reconstruction left that
+/// 0.19 m² triangle one cell across the crate's new shadow edge (its centre
+/// within `recon_tol` of its corners' interpolant), the update's split it. The
+/// other worst points lie behind the crate, where the fresh solve is 10-16% off
+/// the finer one and the update 2-6%. At `eps` 0.25 two solves of one
+/// configuration differ by their own error (1.1-1.4% RMS against `eps / 2`);
+/// at `eps` 0.125 the update is 0.31-0.58% RMS off a fresh solve, worst point
+/// 5.9% (h49far, measured with examples run beside the tests).
 #[test]
 fn a_far_jump_and_a_turn_find_every_link_they_change() {
+    let opts = SolveOptions {
+        eps: 0.125,
+        ..options()
+    };
+    let bars = Bars {
+        rms: 0.01,
+        worst: Some(0.10),
+        finer: false,
+    };
     for tiling in [Tiling::Quads(2), Tiling::UnequalTriangles(2)] {
         let scene = room(tiling, 0.3);
         let moves = [shift(2.0, 0.0, 1.5), turn(0.6, 0.3), turn(1.2, 0.3)];
-        check_moves(&format!("jump and turn {tiling:?}"), &scene, &moves);
+        check_moves_with(
+            &format!("jump and turn {tiling:?}"),
+            &scene,
+            &moves,
+            &opts,
+            bars,
+        );
     }
 }
 
