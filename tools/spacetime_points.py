@@ -10,7 +10,13 @@ seeds 1 + 2, averaged as there) and prints, per file:
     rms      relative RMS error over points, channels and times (the bench's error);
     worst    the largest point error: at one point and time, the RMS over the three
              channels of B - B_ref, divided by the RMS of B_ref over everything;
-    p99, p999  the 99th and 99.9th percentiles of those point errors.
+    p99, p999  the 99th and 99.9th percentiles of those point errors;
+    moving   where `spacetime_bench.py` left the moving objects' probes
+             (NAME_moving_points_tI.json): their relative RMS error (the bench's
+             `error_moving`), the share of its squared error on the probes facing
+             down (normal y below -0.9: ACTOR's actors' bottom faces, 1 cm over the
+             floor, carry 74-93% of it, BENCHMARKS.md "Space-time against frame by
+             frame") and the error of the other probes alone.
 
 Usage (after a `spacetime_bench.py` run of the same scene into OUT_DIR):
     python3 tools/spacetime_points.py --rhier target/release/rhier --scene actor \\
@@ -50,6 +56,13 @@ def main():
         domain = json.load(fh)["time"]
     times = frame_times(domain["start"], domain["end"], a.ref_fps)
     ref = average([probe_all(a.rhier, r, points, times) for r in refs])
+    moving = [os.path.join(a.out_dir, f"{stem}_moving_points_t{i}.json") for i in range(len(times))]
+    if not all(os.path.exists(m) for m in moving):
+        moving = None
+    if moving:
+        ref_moving = average([probe_all(a.rhier, r, moving, times) for r in refs])
+        with open(moving[0]) as fh:
+            down = [q["n"][1] < -0.9 for q in json.load(fh)]
     den = sum(b[k] ** 2 for frame in ref for b in frame for k in range(3))
     count = sum(3 for frame in ref for _ in frame)
     rms_ref = math.sqrt(den / count)
@@ -66,7 +79,26 @@ def main():
 
         print(f"{os.path.basename(f)}: rms {100 * relative_rms(values, ref):.3f}%  "
               f"worst {100 * errs[-1]:.1f}%  p99 {100 * pick(0.99):.1f}%  "
-              f"p999 {100 * pick(0.999):.1f}%")
+              f"p999 {100 * pick(0.999):.1f}%" + (moving_errors(a.rhier, f, moving, times, ref_moving, down)
+                                                   if moving else ""))
+
+
+def moving_errors(rhier, f, moving, times, ref, down):
+    """The moving probes' RMS error, the share of its square on the probes facing
+    down, and the RMS error of the others."""
+    values = probe_all(rhier, f, moving, times)
+    sq = [0.0, 0.0]
+    den = [0.0, 0.0]
+    for vf, rf in zip(values, ref):
+        for b, r, d in zip(vf, rf, down):
+            for k in range(3):
+                sq[d] += (b[k] - r[k]) ** 2
+                den[d] += r[k] ** 2
+    total = sq[0] + sq[1]
+    share = sq[1] / total if total > 0 else 0.0
+    rest = math.sqrt(sq[0] / den[0]) if den[0] > 0 else 0.0
+    return (f"  moving {100 * math.sqrt(total / (den[0] + den[1])):.2f}% "
+            f"({sum(down)} facing down: {100 * share:.0f}% of its square; the rest {100 * rest:.2f}%)")
 
 
 if __name__ == "__main__":

@@ -3,7 +3,7 @@
 use glam::{DQuat, DVec3};
 use rhier::geometry::{Patches, SceneBvh};
 use rhier::playback::{ProbePoint, probe};
-use rhier::scene::{MotionKey, MotionTrack, Scene, TimeDomain, cornell_box};
+use rhier::scene::{MotionKey, MotionTrack, Polygon, Scene, TimeDomain, cornell_box};
 use rhier::shafts::Shaft;
 use rhier::solution::relative_rms;
 use rhier::solution::{Leaf, Solution, SolveStats};
@@ -159,15 +159,15 @@ fn a_finer_tolerance_on_moving_surfaces_refines_them_only() {
     );
 }
 
-#[test]
-fn each_frame_is_as_accurate_as_the_static_solve_of_that_frame() {
-    // The tolerance is the per-frame solve's own discretisation error: against a fine
-    // static solve (eps 0.1) of the same frame, space-time must be as close as the
-    // static solve at the same eps (within 5%). Every frame is solved as the
-    // per-frame baseline solves it (frozen), and the fine solve draws other rays
-    // (another seed): one that shares the coarse solve's rays flatters it.
-    let scene = sliding_block(-60.0, 0.8);
-    let windows = solve_all(&scene, &st(5.0, 0.4));
+/// Each frame of a space-time solve of `scene` (the sliding block's layout: windows
+/// of 0.4 s at 5 fps, keyframes every 8 frames) against the static solve of that
+/// frame at the same eps (0.5), both against a fine static solve (eps 0.1, another
+/// seed: one that shares the coarse solve's rays flatters it), at the points
+/// `pts(t)` of t = 0, 0.4 and 0.8 s: `(t, per-frame error, space-time error, the
+/// two apart)`, relative RMS. Every frame is solved as the per-frame baseline
+/// solves it (frozen).
+fn frame_errors(scene: &Scene, pts: impl Fn(f64) -> Vec<ProbePoint>) -> Vec<(f64, f64, f64, f64)> {
+    let windows = solve_all(scene, &st(5.0, 0.4));
     assert_eq!(
         frame_instants(
             TimeDomain {
@@ -185,43 +185,196 @@ fn each_frame_is_as_accurate_as_the_static_solve_of_that_frame() {
         3,
         "2 frames per window: 0.0 0.2 | 0.4 0.6 | 0.8"
     );
-    let pts = cornell_points();
     let fixed = |eps: f64, seed: u64, t: f64| {
         let o = SolveOptions {
             eps,
             seed,
             ..opts()
         };
-        let mut s = Solver::at_time(&scene, o, t, [0.0, 0.8]).unwrap();
+        let mut s = Solver::at_time(scene, o, t, [0.0, 0.8]).unwrap();
         s.freeze_motion();
         s.run(|_, _| {}).unwrap();
         s.solution()
     };
     let seed = opts().seed;
-    for t in [0.0, 0.4, 0.8] {
-        let base = fixed(0.5, seed, t);
-        let fine = probe(&fixed(0.1, seed ^ 1, t), &pts, t).unwrap();
-        let per_frame = probe(&base, &pts, t).unwrap();
-        let space_time = probe(&as_solution(&scene, &base, &windows), &pts, t).unwrap();
-        let (e_pf, e_st) = (
-            relative_rms(&per_frame, &fine),
-            relative_rms(&space_time, &fine),
-        );
-        let apart = relative_rms(&space_time, &per_frame);
-        eprintln!(
-            "t = {t}: per-frame {:.3}%, space-time {:.3}% from the fine solve; {:.3}% apart",
-            e_pf * 100.0,
-            e_st * 100.0,
-            apart * 100.0
-        );
+    [0.0, 0.4, 0.8]
+        .into_iter()
+        .map(|t| {
+            let pts = pts(t);
+            let base = fixed(0.5, seed, t);
+            let fine = probe(&fixed(0.1, seed ^ 1, t), &pts, t).unwrap();
+            let per_frame = probe(&base, &pts, t).unwrap();
+            let space_time = probe(&st_solution(scene, &windows), &pts, t).unwrap();
+            let (e_pf, e_st) = (
+                relative_rms(&per_frame, &fine),
+                relative_rms(&space_time, &fine),
+            );
+            let apart = relative_rms(&space_time, &per_frame);
+            eprintln!(
+                "t = {t}: per-frame {:.3}%, space-time {:.3}% from the fine solve; {:.3}% apart",
+                e_pf * 100.0,
+                e_st * 100.0,
+                apart * 100.0
+            );
+            (t, e_pf, e_st, apart)
+        })
+        .collect()
+}
+
+/// The windows of a space-time solve of `scene` (at [`opts`], the windows of
+/// `st(5.0, 0.4)`) as one solution on the space-time solve's own patches: a
+/// static solve at another time may cut them otherwise where a moving object
+/// touches the room (the fanned block's triangles at 0.4 s: 86 patches, 88 at 0).
+fn st_solution(scene: &Scene, windows: &[WindowOutput]) -> Solution {
+    let t = SpaceTime::new(scene, opts(), st(5.0, 0.4), |_, _| {}).unwrap();
+    Solution {
+        scene: scene.clone(),
+        patches: t.patches().to_vec(),
+        leaves: windows
+            .iter()
+            .flat_map(|w| w.leaves.iter().copied())
+            .collect(),
+        stats: SolveStats::default(),
+    }
+}
+
+#[test]
+fn each_frame_is_as_accurate_as_the_static_solve_of_that_frame() {
+    // The tolerance is the per-frame solve's own discretisation error: against a fine
+    // static solve of the same frame, space-time must be as close as the static
+    // solve at the same eps (within 5%), on the room (`cornell_points`; the moving
+    // block's own faces are
+    // `the_moving_surfaces_are_as_accurate_as_in_the_static_solve_of_each_frame`).
+    let scene = sliding_block(-60.0, 0.8);
+    for (t, e_pf, e_st, apart) in frame_errors(&scene, |_| cornell_points()) {
         // Measured 0.94-0.97 times (1.68%/1.79%, 1.37%/1.40%, 1.39%/1.46%), 0.72-0.80%
-        // apart. 1.08-1.16 times and 0.81-0.98% apart while a window's frames
+        // apart; at b9da3ca 0.96, 1.04 and 0.98 times (1.94%/2.03%, 1.65%/1.58%,
+        // 1.69%/1.72%), 0.69-0.83% apart. 1.08-1.16 times and 0.81-0.98% apart while a window's frames
         // stored their cells without the mean shift of the static solve's
         // (`Solver::mean_shifts`); not the gathers: a window's with no swept boxes
         // (no static masks, no cluster opened for the motion) read 1.62% for 1.63%.
         assert!(e_st <= 1.05 * e_pf, "t = {t}");
         assert!(apart < 0.01, "t = {t}");
     }
+}
+
+/// `k × k` points on each face of `scene`'s moving objects (bilinear in the face's
+/// first, second and last vertex, inset from its edges), where the object is at `t`,
+/// facing out of it.
+fn moving_face_points(scene: &Scene, k: usize, t: f64) -> Vec<ProbePoint> {
+    let mut out = Vec::new();
+    for o in scene.objects.iter().filter(|o| o.is_moving()) {
+        let to_world = o.to_world(t);
+        for p in &o.polygons {
+            let v = &p.vertices;
+            let n = to_world.transform_vector3(p.normal()).normalize();
+            for i in 0..k {
+                for j in 0..k {
+                    let (a, b) = ((i as f64 + 0.5) / k as f64, (j as f64 + 0.5) / k as f64);
+                    // A triangle folds its upper half onto the lower.
+                    let (a, b) = if v.len() == 3 && a + b > 1.0 {
+                        (1.0 - a, 1.0 - b)
+                    } else {
+                        (a, b)
+                    };
+                    let last = v[v.len() - 1];
+                    let local = if v.len() == 3 {
+                        v[0] + a * (v[1] - v[0]) + b * (last - v[0])
+                    } else {
+                        v[0] + a * (v[1] - v[0])
+                            + b * (last - v[0])
+                            + a * b * (v[2] - v[1] - last + v[0])
+                    };
+                    out.push(ProbePoint {
+                        p: to_world.transform_point3(local),
+                        n,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// `scene` with every quad cut into four triangles meeting at a point off its
+/// centre (weights 0.4, 0.3, 0.2, 0.1 of its corners), so the triangles are of
+/// unequal sizes, as a modeller's mesh is: the tessellated twin of a scene of quads.
+fn fanned(scene: &Scene) -> Scene {
+    let mut out = scene.clone();
+    for o in &mut out.objects {
+        o.polygons = o
+            .polygons
+            .iter()
+            .flat_map(|p| {
+                let v = &p.vertices;
+                if v.len() != 4 {
+                    return vec![p.clone()];
+                }
+                let c = 0.4 * v[0] + 0.3 * v[1] + 0.2 * v[2] + 0.1 * v[3];
+                (0..4)
+                    .map(|i| Polygon {
+                        vertices: vec![v[i], v[(i + 1) % 4], c],
+                        material: p.material,
+                    })
+                    .collect()
+            })
+            .collect();
+    }
+    out
+}
+
+/// [`frame_errors`] at the faces of `scene`'s moving objects (4 × 4 points each),
+/// held to the static solve: as accurate within 5%, and apart by less than the
+/// static solve's own error (the room's 1% of
+/// `each_frame_is_as_accurate_as_the_static_solve_of_that_frame` is not a bound
+/// here: the block's faces read 2.4% off the fine solve at t = 0, space-time
+/// 2.0%, 1.4% apart).
+fn moving_faces_as_accurate(name: &str, scene: &Scene) {
+    eprintln!("{name}:");
+    for (t, e_pf, e_st, apart) in frame_errors(scene, |t| moving_face_points(scene, 4, t)) {
+        assert!(e_st <= 1.05 * e_pf, "{name}, t = {t}");
+        assert!(apart < e_pf, "{name}, t = {t}");
+    }
+}
+
+#[test]
+fn the_moving_surfaces_are_as_accurate_as_in_the_static_solve_of_each_frame() {
+    // `each_frame_is_as_accurate_as_the_static_solve_of_that_frame` on the sliding
+    // block's own faces (top and sides), which that test's room points leave out:
+    // the light of a moving surface takes other paths in a window (its points
+    // gather afresh from the shared hierarchy, with their direct light apart,
+    // `Solver::direct_light`). Measured (b9da3ca): 0.84-0.96 times the static
+    // solve's error (2.01%/2.41%, 1.37%/1.43%, 1.41%/1.54%), 0.41-1.43% apart.
+    //
+    // ACTOR's actors read 6.7% off the reference in space-time at `--eps 1` and
+    // 3.8% in per-frame at `--eps 0.3`, but per-frame at `--eps 1` reads 7.1%: the
+    // gap was the eps, 74-93% of it on the five probes of the actors' bottom
+    // faces, 1 cm over the floor ("Space-time against frame by frame" in
+    // BENCHMARKS.md); this test holds the two methods to each other at one eps.
+    moving_faces_as_accurate("quads", &sliding_block(-60.0, 0.8));
+}
+
+#[test]
+#[ignore = "open: in the windows after the first, space-time reads the fanned block's \
+            faces 7.4-7.5% off the fine static solve, the static solve 1.6-1.7%"]
+fn the_moving_surfaces_are_as_accurate_as_in_the_static_solve_of_each_frame_in_triangles() {
+    // The tessellated twin: the same scene with every quad in four triangles
+    // (`fanned`). Measured (b9da3ca) here: at t = 0 (the first window) 3.72%
+    // against the static solve's 3.64%, 1.04% apart; at 0.4 and 0.8 s 7.48% and
+    // 7.40% against 1.71% and 1.62%, 7.0-7.5% apart. The same through the CLI
+    // (`rhier solve` of the scene as JSON, `--fps 5 --window 0.4 --key-stride 8`,
+    // against `rhier solve` of the scene frozen at 0.4 s, eps 0.5 and 0.1, `rhier
+    // probe` at the same points): at 0.4 s the static solve reads 1.5% off the fine
+    // one and space-time 6.9%, too bright on two of the four sides (0.025 for 0.007
+    // at one point); the quads' space-time is 0.58% from their static solve there.
+    // Room in triangles and block in quads: 8.8% off; block in triangles alone:
+    // 4.2%, as the quads (4.0%) against this fine solve, from which the quads'
+    // own solves stand 4% off: which tessellation is right there needs the path
+    // tracer.
+    // `rhier solve --per-frame` refuses the fanned scene ("frame 2 at t = 0.4:
+    // expected the 88 patches of frame 0, found 86"): the block's triangles are
+    // cut at their contacts with the floor otherwise at 0.4 s than at 0.
+    moving_faces_as_accurate("triangles", &fanned(&sliding_block(-60.0, 0.8)));
 }
 
 /// A `k × k` grid of upward points on the Cornell floor, leaving out the strip the
