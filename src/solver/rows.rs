@@ -1151,11 +1151,14 @@ impl Solver<'_> {
         }
         let base_len = self.st.window.as_ref().map_or(0, |w| w.frame.elems_len);
         for ch in node.first_child..node.first_child + node.child_count {
+            // Rounded to `f32` as [`OpenedFactors`] keeps it, so a static solve
+            // and a space-time window ([`Window::factors`], `f64`) open a source
+            // into the same entries.
             let factor = || {
                 let ps = oracle::poly(&self.elems.geoms.as_slice()[ch as usize]);
                 (0..q.count)
                     .map(|i| q.weights[i] * point_to_polygon(q.points[i], n, &ps))
-                    .sum::<f64>()
+                    .sum::<f64>() as f32 as f64
             };
             // Asked only with a memo: a static scene or a moving leaf pays nothing.
             let steady = || (ch as usize) < base_len && !self.elem_moving(ElementId(ch));
@@ -1652,17 +1655,19 @@ impl Solver<'_> {
             if let Some(k) = tkey {
                 out.timed.push((k, (coef as f32, vis as f32)));
             }
-            // Rounded once, so a reused coefficient equals the first.
-            let coef = if keep_rows {
+            // Rounded once as every cache keeps them (`f32`), so a reused entry
+            // equals the first: a space-time window's frames read both from its
+            // caches, a static solve's later rounds from [`KeptCoef`], and a
+            // static solve and the shared part of a space-time solve of the same
+            // scene then build the same rows.
+            let (coef, vis) = (coef as f32 as f64, vis as f32 as f64);
+            if keep_rows {
                 out.kept.push(KeptCoef {
                     link: l,
                     coef: coef as f32,
                     vis: vis as f32,
                 });
-                coef as f32 as f64
-            } else {
-                coef
-            };
+            }
             self.push_opened(
                 &q,
                 n,
