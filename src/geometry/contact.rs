@@ -99,13 +99,8 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
         let hidden = |piece: &Poly| {
             let x = inner_point(piece);
             let behind_is_back_face = |dir: DVec3| {
-                bvh.intersect_front_first_static(
-                    x + dir * (tol * 4.0),
-                    dir * patches.diameter,
-                    0.0,
-                    1.0,
-                )
-                .is_some_and(|h| patches.normals[h.patch as usize].dot(dir) > 0.0)
+                bvh.intersect_front_first(x + dir * (tol * 4.0), dir * patches.diameter, 0.0, 1.0)
+                    .is_some_and(|h| patches.normals[h.patch as usize].dot(dir) > 0.0)
             };
             let on = |&j: &usize| patches.polys[j].contains(patches.normals[j], x, tol);
             // A solid open at both ends (a pillar from floor to ceiling, its ends

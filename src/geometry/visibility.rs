@@ -720,42 +720,13 @@ impl SceneBvh {
         self.closest_hit(o, d, smin, smax, FRONT_FIRST_TIE)
     }
 
-    /// [`SceneBvh::intersect_front_first`] among the static objects' patches only:
-    /// what lies behind a static patch whatever the moving objects do (contact
-    /// meshing's hidden pieces; a piece hidden by where a moving object stands at one
-    /// time is seen at another).
-    pub fn intersect_front_first_static(
-        &self,
-        o: DVec3,
-        d: DVec3,
-        smin: f64,
-        smax: f64,
-    ) -> Option<Hit> {
-        self.closest_hit_in(o, d, (smin, smax), FRONT_FIRST_TIE, true)
-    }
-
     /// Closest hit, back faces pushed `tie` further along the ray.
     fn closest_hit(&self, o: DVec3, d: DVec3, smin: f64, smax: f64, tie: f64) -> Option<Hit> {
-        self.closest_hit_in(o, d, (smin, smax), tie, false)
-    }
-
-    /// [`SceneBvh::closest_hit`] over every part, or over the static part only.
-    fn closest_hit_in(
-        &self,
-        o: DVec3,
-        d: DVec3,
-        (smin, smax): (f64, f64),
-        tie: f64,
-        static_only: bool,
-    ) -> Option<Hit> {
         let back = 2.0 * NODE_EPSILON;
         let o = o - d * back;
         // The best hit and its key (its parameter, pushed if it faces away).
         let mut best: Option<(Hit, f64)> = None;
         for part in &self.parts {
-            if static_only && part.object != u32::MAX {
-                continue;
-            }
             let tmax = best.map_or(smax, |(_, key)| key);
             let ray = part.local_ray(o, d, smin + back, tmax + back);
             // A mirroring motion turns the triangles' winding over.

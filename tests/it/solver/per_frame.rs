@@ -228,69 +228,6 @@ fn a_scene_without_motion_gives_the_same_values_every_frame() {
     assert_eq!(probe(&plain, &pts, 0.0).unwrap(), first);
 }
 
-/// [`moving_cornell`] with the short block resting on the floor (no gap) as it
-/// slides, and, with `triangles`, every static quad but the lamp's (the room's
-/// and the tall block's) cut into two triangles. The floor is cut along both blocks' footprints; the pieces under the
-/// sliding block are hidden at some frames only.
-fn resting_cornell(triangles: bool) -> Scene {
-    let mut s = moving_cornell();
-    for o in &mut s.objects {
-        if o.name == "short_block"
-            && let Some(m) = &mut o.motion
-        {
-            for k in &mut m.keys {
-                k.translation.y = 0.0;
-            }
-        }
-        if triangles && o.name != "short_block" && o.name != "light" {
-            o.polygons = o
-                .polygons
-                .iter()
-                .flat_map(|p| {
-                    let v = &p.vertices;
-                    [[0, 1, 2], [0, 2, 3]].map(|t| scene::Polygon {
-                        vertices: t.iter().map(|&i| v[i]).collect(),
-                        material: p.material,
-                    })
-                })
-                .collect();
-        }
-    }
-    s
-}
-
-/// Every frame has the patches of frame 0 (the file's): contact meshing hides
-/// a floor piece only under static solids. Hidden under the block where it
-/// stood at one frame, the floor of the triangle twin lost two patches at
-/// t = 0.4 and the per-frame solve was refused ("expected the 73 patches of
-/// frame 0, found 71").
-#[test]
-fn a_block_sliding_on_the_floor_keeps_every_frame_s_patches() {
-    for triangles in [false, true] {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("resting.rhier");
-        let scene = resting_cornell(triangles);
-        let (reports, solutions, reader) = solve_to_file(&scene, 5.0, &path);
-        assert_eq!(reports.len(), 6, "triangles {triangles}");
-        for (r, s) in reports.iter().zip(&solutions) {
-            assert_eq!(
-                s.patches, solutions[0].patches,
-                "triangles {triangles}: frame {} at t = {}",
-                r.index, r.t
-            );
-        }
-        assert_eq!(reader.patches(), &solutions[0].patches[..]);
-        // Floor under the block's right edge at t = 0 (x 273 mm at z = 169),
-        // out from under it (x 213 mm) by t = 1: lit then.
-        let spot = [ProbePoint {
-            p: DVec3::new(250.0, 0.0, 169.0),
-            n: DVec3::Y,
-        }];
-        let b = probe(&reader, &spot, 1.0).unwrap();
-        assert!(b[0][0] > 0.0, "triangles {triangles}: floor {:?}", b[0]);
-    }
-}
-
 #[test]
 fn a_static_domain_is_one_frame() {
     let dir = tempfile::tempdir().unwrap();
