@@ -785,8 +785,8 @@ fn whole_domain(solution: &Solution) -> (f64, f64) {
 pub struct FrameWriter<'p> {
     path: &'p Path,
     options: WriteOptions,
-    /// The writer and the patch count of the first frame, once it is in.
-    open: Option<(Writer, usize)>,
+    /// The writer and the patches of the first frame, once it is in.
+    open: Option<(Writer, Vec<PatchGeometry>)>,
 }
 
 impl<'p> FrameWriter<'p> {
@@ -809,13 +809,23 @@ impl<'p> FrameWriter<'p> {
         solution: &Solution,
     ) -> Result<()> {
         let w = match &mut self.open {
-            Some((w, patch_count)) => {
-                if solution.patches.len() != *patch_count {
+            Some((w, first)) => {
+                // The same patches, not only as many: a frame whose patches were
+                // cut or dropped otherwise would be played back on frame 0's.
+                if solution.patches.len() != first.len() {
                     return Err(Error::invalid(
                         self.path,
                         format!("frame {index} at t = {t}"),
-                        format!("the {patch_count} patches of frame 0"),
+                        format!("the {} patches of frame 0", first.len()),
                         format!("{} patches", solution.patches.len()),
+                    ));
+                }
+                if let Some(k) = (0..first.len()).find(|&k| solution.patches[k] != first[k]) {
+                    return Err(Error::invalid(
+                        self.path,
+                        format!("frame {index} at t = {t}, patch {k}"),
+                        "frame 0's patch",
+                        "another polygon",
                     ));
                 }
                 w
@@ -826,7 +836,7 @@ impl<'p> FrameWriter<'p> {
                     patches: &solution.patches,
                 };
                 let w = Writer::create(self.path, &header, self.options)?;
-                &mut self.open.insert((w, solution.patches.len())).0
+                &mut self.open.insert((w, solution.patches.clone())).0
             }
         };
         w.write_chunk(range[0], range[1], &solution.leaves)

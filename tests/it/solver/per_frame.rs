@@ -310,3 +310,32 @@ fn cli_per_frame_writes_the_file_and_one_report_row_per_frame() {
     let o = run(&["--builtin", "actor75"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// A frame whose patches are not frame 0's is refused, naming the frame and the
+/// patch, even with as many patches: its leaves would be played back on frame 0's
+/// polygons.
+#[test]
+fn a_frame_with_other_patches_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("other.rhier");
+    let mut scene = scene::cornell_box(false);
+    scene.time = TimeDomain {
+        start: 0.0,
+        end: 1.0,
+    };
+    let (first, _) = rhier::solver::solve(&scene, coarse()).unwrap();
+    let mut other = first.clone();
+    other.patches[2].vertices[0].x += 1.0;
+    let mut file = FrameWriter::new(&path, WriteOptions::default());
+    file.push(&scene, (0, 0.0, [0.0, 0.5]), &first).unwrap();
+    let e = file
+        .push(&scene, (1, 0.5, [0.5, 1.0]), &other)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("other.rhier") && e.contains("frame 1") && e.contains("patch 2"),
+        "{e}"
+    );
+    drop(file);
+    assert!(!path.exists(), "a refused per-frame solve leaves no file");
+}
