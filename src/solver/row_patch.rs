@@ -172,7 +172,6 @@ impl Solver<'_> {
             self.sys
                 .move_masks
                 .get(&(leaf.0, r, e))
-                .copied()
                 .unwrap_or(0),
         )
     }
@@ -207,7 +206,7 @@ impl Solver<'_> {
             return self.part_visibility(x, n, patch, e, m, i);
         }
         let key = (leaf.0, e, (i as u32) << 8 | m);
-        let known = self.sys.move_part_masks.get(&key).copied();
+        let known = self.sys.move_part_masks.get(&key);
         let h = self.part_ray_key(e, patch, i);
         let (seen, made) = oracle::point_cluster_visibility_masked(
             &self.elems,
