@@ -621,15 +621,17 @@ struct LeafSystem {
     /// source both stand still, keyed by `(leaf, receiver of the chain link, source)`, what the rays'
     /// jitter is keyed by ([`Solver::row_ray_ids`]). Made the first time a move
     /// computes the entry, then reused: the rays are cast at the moving objects
-    /// alone ([`Solver::move_row_masks`]).
-    move_masks: FastMap<MaskKey, u64>,
+    /// alone ([`Solver::move_row_masks`]). Held by leaf, each leaf's masks in a
+    /// map of their own ([`ByLeaf`]): a row looks up only its leaf's.
+    move_masks: ByLeaf<u64>,
     /// The masks the rows being computed made, taken into `move_masks` after.
     move_masks_made: std::sync::Mutex<Vec<(MaskKey, u64)>>,
     /// Interactive moves: the static masks of the rays from the quadrature points
     /// of leaves that stand still to cluster parts that do
     /// ([`Solver::row_part_visibility`]), keyed by `(leaf, part, point << 8 |
-    /// rays)`, each with the hash of the points its rays were aimed at.
-    move_part_masks: FastMap<MaskKey, (u64, u64)>,
+    /// rays)`, each with the hash of the points its rays were aimed at; by leaf
+    /// as `move_masks`.
+    move_part_masks: ByLeaf<(u64, u64)>,
     /// The part masks the rows being computed made, taken into `move_part_masks`.
     move_part_masks_made: std::sync::Mutex<Vec<(MaskKey, (u64, u64))>>,
     /// Rows are being computed for an interactive move ([`Solver::move_row_masks`]).
@@ -639,6 +641,29 @@ struct LeafSystem {
 /// What an interactive move's row masks are keyed by: `(leaf, receiver of the
 /// chain link, surface source)` ([`LeafSystem::move_masks`]).
 type MaskKey = (u32, u32, u32);
+
+/// Values keyed by a [`MaskKey`] held by its leaf: `leaf → (rest of the key →
+/// value)`. Why not one map over the whole key: a move's rows look each mask up
+/// once, and in the 10k-polygon room (millions of masks) nearly every lookup of
+/// one map missed the cache twice (its control bytes, then its bucket): a quarter
+/// of a move's processor time (`perf`, moves 2–3). A row's lookups stay in its
+/// leaf's map, small enough to stay in the core's cache while the row is computed.
+#[derive(Default)]
+pub(super) struct ByLeaf<V>(FastMap<u32, FastMap<(u32, u32), V>>);
+
+impl<V: Copy> ByLeaf<V> {
+    /// The value at `key`, if any.
+    pub(super) fn get(&self, key: &MaskKey) -> Option<V> {
+        self.0.get(&key.0)?.get(&(key.1, key.2)).copied()
+    }
+
+    /// Inserts `made` (a later value replaces an earlier one at the same key).
+    pub(super) fn extend(&mut self, made: impl IntoIterator<Item = (MaskKey, V)>) {
+        for (k, v) in made {
+            self.0.entry(k.0).or_default().insert((k.1, k.2), v);
+        }
+    }
+}
 
 /// What moves in the scene and where it stands now: per patch and per cluster
 /// whether it moves, and the moving objects' boxes at the time they are placed at.

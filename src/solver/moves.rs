@@ -317,6 +317,7 @@ impl<'a> Solver<'a> {
                 boxes: boxes.to_vec(),
                 near: near.to_vec(),
                 stale: std::mem::take(&mut stale),
+                order: super::row_patch::tree_order(self.elems.nodes.as_slice()),
             };
             rows_done += self.update_rows(&dirty, &patch);
             rows_s += t.elapsed().as_secs_f64();

@@ -67,6 +67,8 @@ pub(super) struct RowPatch {
     /// The links the move evaluated again or added, by how far their kept entries
     /// are stale.
     pub(super) stale: FastMap<u32, Dirty>,
+    /// Each element's place in the element tree ([`tree_order`]).
+    pub(super) order: Vec<(u32, u32)>,
 }
 
 impl RowPatch {
@@ -87,40 +89,77 @@ impl RowPatch {
             .all(|&x| crate::shafts::box_shaft_misses(a, b, x))
     }
 
-    /// The old entries of a link to source `s` under each element that holds no
-    /// moved patch, on the way up from the entry to `s` or to the first element
-    /// that holds one (indices into `old`; entries that hold a moved patch
-    /// themselves are under none: they are computed again), and the elements
-    /// that were opened (an entry lies strictly under them).
-    fn groups(&self, nodes: &[Node], s: u32, old: &[(u32, f64)]) -> Groups {
-        let mut out = Groups::default();
-        for (i, &(x, _)) in old.iter().enumerate() {
-            let (mut a, mut kept) = (x, true);
-            loop {
-                kept = kept && self.holding.get(a as usize) == Some(&false);
-                if kept {
-                    out.under.entry(a).or_default().push(i as u32);
-                }
-                if a == s {
-                    break;
-                }
-                a = nodes[a as usize].parent;
-                if a == u32::MAX || !out.opened.insert(a) && !kept {
-                    break;
-                }
-            }
-        }
-        out
+    /// The old entries of a link to source `s` (all under it), sorted by where
+    /// they lie in the element tree ([`RowPatch::order`]), to find those under an
+    /// element ([`Groups::under`]) and the elements that were opened
+    /// ([`Groups::opened`]) by binary search.
+    fn groups(&self, old: &[(u32, f64)]) -> Groups {
+        let mut by_order: Vec<(u32, u32)> = old
+            .iter()
+            .enumerate()
+            .map(|(i, &(x, _))| (self.order[x as usize].0, i as u32))
+            .collect();
+        by_order.sort_unstable();
+        Groups { by_order }
     }
 }
 
-/// A stale link's old entries by the elements they lie under ([`RowPatch::groups`]).
-#[derive(Default)]
+/// Each element's place in a depth-first walk of the element tree: `(first, end)`,
+/// its own number and one past its last descendant's, so that `y` lies under `x`
+/// (or is `x`) exactly when `first(x) ≤ first(y) < end(x)`.
+pub(super) fn tree_order(nodes: &[Node]) -> Vec<(u32, u32)> {
+    let mut order = vec![(0u32, 0u32); nodes.len()];
+    let mut next = 0u32;
+    // (element, children entered yet)
+    let mut stack: Vec<(u32, bool)> = Vec::new();
+    for root in 0..nodes.len() as u32 {
+        if nodes[root as usize].parent != u32::MAX {
+            continue;
+        }
+        stack.push((root, false));
+        while let Some((e, entered)) = stack.pop() {
+            let node = nodes[e as usize];
+            if entered {
+                order[e as usize].1 = next;
+                continue;
+            }
+            order[e as usize].0 = next;
+            next += 1;
+            stack.push((e, true));
+            // Children pushed last first: entered in order.
+            for c in (node.first_child..node.first_child + node.child_count).rev() {
+                stack.push((c, false));
+            }
+        }
+    }
+    order
+}
+
+/// A stale link's old entries by where they lie in the element tree
+/// ([`RowPatch::groups`]).
 struct Groups {
-    /// Per element that holds no moved patch: the entries under it.
-    under: FastMap<u32, Vec<u32>>,
-    /// The elements an entry lies strictly under.
-    opened: ahash::AHashSet<u32>,
+    /// `(first(x), index into the old entries)` of each old entry `x`, sorted.
+    by_order: Vec<(u32, u32)>,
+}
+
+impl Groups {
+    /// The old entries under element `c` (or `c` itself), in the order of the old
+    /// entries; `c` must hold no moved patch (then neither does any entry under it).
+    /// Written to `out`, which is cleared first.
+    fn under(&self, (first, end): (u32, u32), out: &mut Vec<u32>) {
+        let lo = self.by_order.partition_point(|x| x.0 < first);
+        let hi = self.by_order.partition_point(|x| x.0 < end);
+        out.clear();
+        out.extend(self.by_order[lo..hi].iter().map(|x| x.1));
+        out.sort_unstable();
+    }
+
+    /// True if an old entry lies strictly under element `(first, end)`: it was
+    /// opened.
+    fn opened(&self, (first, end): (u32, u32)) -> bool {
+        let lo = self.by_order.partition_point(|x| x.0 <= first);
+        self.by_order.get(lo).is_some_and(|x| x.0 < end)
+    }
 }
 
 impl Solver<'_> {
@@ -168,13 +207,7 @@ impl Solver<'_> {
             return RowMasks::None;
         }
         let r = self.links.ends.as_slice()[l as usize].receiver;
-        RowMasks::Move(
-            self.sys
-                .move_masks
-                .get(&(leaf.0, r, e))
-                .copied()
-                .unwrap_or(0),
-        )
+        RowMasks::Move(self.sys.move_masks.get(&(leaf.0, r, e)).unwrap_or(0))
     }
 
     /// [`Solver::part_visibility`] from the `i`-th quadrature point `x` of `leaf`
@@ -207,7 +240,7 @@ impl Solver<'_> {
             return self.part_visibility(x, n, patch, e, m, i);
         }
         let key = (leaf.0, e, (i as u32) << 8 | m);
-        let known = self.sys.move_part_masks.get(&key).copied();
+        let known = self.sys.move_part_masks.get(&key);
         let h = self.part_ray_key(e, patch, i);
         let (seen, made) = oracle::point_cluster_visibility_masked(
             &self.elems,
@@ -277,22 +310,26 @@ impl Solver<'_> {
             return true;
         }
         let nodes = self.elems.nodes.as_slice();
-        let groups = patch.groups(nodes, s, old);
+        let groups = patch.groups(old);
         let mut kept = Vec::new();
+        let mut group = Vec::new();
         let mut reuse = |c: u32| -> bool {
+            // A part that holds a moved patch is computed again (so is every
+            // element above one: none under a part that holds none does).
+            if patch.holding[c as usize] {
+                return false;
+            }
+            groups.under(patch.order[c as usize], &mut group);
             // A part that gave nothing before: its parent was opened.
-            let group = groups.under.get(&c).map(Vec::as_slice);
-            let was_empty = || {
-                !patch.holding[c as usize]
-                    && (c == s || groups.opened.contains(&nodes[c as usize].parent))
-            };
-            if group.is_none() && !was_empty() {
+            let was_empty =
+                || c == s || groups.opened(patch.order[nodes[c as usize].parent as usize]);
+            if group.is_empty() && !was_empty() {
                 return false;
             }
             if !patch.clear(leaf_box, super::geom_box(&geoms[c as usize])) {
                 return false;
             }
-            kept.extend(group.unwrap_or(&[]).iter().map(|&i| old[i as usize]));
+            kept.extend(group.iter().map(|&i| old[i as usize]));
             true
         };
         if !reuse(s) {
@@ -372,5 +409,71 @@ impl Solver<'_> {
         }
         let sub: Vec<(u32, f64)> = old.iter().copied().filter(|&(x, _)| under(x, s)).collect();
         !sub.is_empty() && self.patch_entries(patch, leaf, l, q, n, &sub, row)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two trees: 0 → {1, 2}, 1 → {3, 4}, 4 → {5}; and 6 → {7}. `tree_order`'s
+    /// "under" (`first(x) ≤ first(y) < end(x)`) is the parent walk's for every pair.
+    #[test]
+    fn tree_order_puts_each_subtree_in_one_range() {
+        let node = |parent: u32, first_child: u32, child_count: u32| Node {
+            parent,
+            first_child,
+            child_count,
+            kind: 0,
+            depth: 0,
+            pad: [0; 2],
+        };
+        let nodes = [
+            node(u32::MAX, 1, 2),
+            node(0, 3, 2),
+            node(0, 0, 0),
+            node(1, 0, 0),
+            node(1, 5, 1),
+            node(4, 0, 0),
+            node(u32::MAX, 7, 1),
+            node(6, 0, 0),
+        ];
+        let order = tree_order(&nodes);
+        let walk_under = |mut y: u32, x: u32| loop {
+            if y == x {
+                return true;
+            }
+            y = nodes[y as usize].parent;
+            if y == u32::MAX {
+                return false;
+            }
+        };
+        for x in 0..nodes.len() as u32 {
+            for y in 0..nodes.len() as u32 {
+                let (f, e) = order[x as usize];
+                let fy = order[y as usize].0;
+                assert_eq!(f <= fy && fy < e, walk_under(y, x), "{y} under {x}");
+            }
+        }
+        let old = [(5, 0.5), (2, 0.25), (3, 0.125), (7, 1.0)];
+        let groups = Groups {
+            by_order: {
+                let mut v: Vec<(u32, u32)> = old
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &(x, _))| (order[x as usize].0, i as u32))
+                    .collect();
+                v.sort_unstable();
+                v
+            },
+        };
+        let mut out = Vec::new();
+        groups.under(order[1], &mut out);
+        assert_eq!(out, [0, 2]);
+        groups.under(order[0], &mut out);
+        assert_eq!(out, [0, 1, 2]);
+        // 4 was opened (5 lies under it), 5 itself and 2 were not.
+        assert!(groups.opened(order[4]) && groups.opened(order[0]));
+        assert!(!groups.opened(order[5]) && !groups.opened(order[2]));
     }
 }
