@@ -113,6 +113,19 @@ const CELL_OPEN_RATIO: f64 = 0.3;
 /// (BENCHMARKS.md, "Scale").
 const PARTIAL_PART_MIN_FACTOR: f64 = 3e-3;
 
+/// A cluster with no emitter under it, far for its size, whose unoccluded
+/// estimate at a final-gather point ([`cluster_kernel`]) is at most this is kept
+/// whole there ([`Solver::whole_cluster`]), not walked down to every face
+/// ([`Solver::cluster_parts`]).
+///
+/// Why: a cluster of boxes has faces looking every way, so its cone never
+/// tells which face a point sees and the walk opened it to every face, each
+/// with its own factor and rays; in `tools/gen_cubes.py 20` a point's walk
+/// reached hundreds of box faces, the walk and their rays over 40% of the run.
+/// The bound is [`PARTIAL_PART_MIN_FACTOR`]'s: a part below it already took rays
+/// by its factor alone.
+const WHOLE_CLUSTER_MAX_FACTOR: f64 = PARTIAL_PART_MIN_FACTOR;
+
 /// Fewest rays [`small_part_rays`] gives a part.
 const SMALL_PART_MIN_RAYS: u32 = 2;
 
@@ -345,6 +358,10 @@ impl Solver<'_> {
     /// sub-cluster the pillar hid whole and to tiles 34–100% visible (its factors
     /// summed to 1.0216).
     ///
+    /// A cluster far for its size whose estimate at the point is small
+    /// ([`WHOLE_CLUSTER_MAX_FACTOR`]) is kept whole, not walked to its parts
+    /// ([`Solver::whole_cluster`]).
+    ///
     /// With `swept` (a static point and a static source in a time window), a term
     /// whose shaft from `x` meets a box swept by a moving object becomes a
     /// [`MaskedTerm`] (its rays' static visibility kept); the others are fixed. A
@@ -526,47 +543,73 @@ impl Solver<'_> {
                 // stratified rays, as a surface source is, a sub-cluster by rays
                 // drawn by power ([`Solver::part_visibility`]); the cluster's
                 // fraction where those rays all fall on faces turned away.
+                if let Some(t) = self.whole_cluster(x, n, receiver_patch, s as u32, clear, limits) {
+                    if t > 0.0 {
+                        out.fixed.push((s as u32, t));
+                    }
+                    return;
+                }
                 let mut vis = None;
-                self.cluster_parts(&at, n, s as u32, &mut |e, k| {
-                    if k[0] <= 0.0 {
-                        return;
-                    }
-                    let g = &geoms[e as usize];
-                    // A small part with no emitter under it is not cast again
-                    // ([`PARTIAL_PART_MIN_FACTOR`]).
-                    let recast = k[0] > PARTIAL_PART_MIN_FACTOR
-                        || self.emits_under.get(e as usize).copied().unwrap_or(true);
-                    // Such a part's first rays, fewer by its factor
-                    // ([`small_part_rays`]).
-                    let rays = |m: u32| if recast { m } else { small_part_rays(m, k[0]) };
-                    let v = if clear {
-                        1.0
-                    } else if g.patch != u32::MAX {
-                        let key = oracle::hash3(key, self.ray_id(e), 1) & u64::from(u32::MAX);
-                        let ps = oracle::poly(g);
-                        let mut r = self.gather_rays(x, n, receiver_patch, g, &ps, key);
-                        if recast {
-                            self.surface_visibility(r)
-                        } else {
-                            r.m = rays(r.m);
-                            oracle::visible_fraction(&self.bvh, &r)
+                // Small clusters kept whole ([`Solver::whole_cluster`]), their terms
+                // apart while the walk holds `out`.
+                let mut wholes: Vec<(u32, f64)> = Vec::new();
+                let mut whole =
+                    |e: u32| match self.whole_cluster(x, n, receiver_patch, e, clear, limits) {
+                        Some(t) => {
+                            if t > 0.0 {
+                                wholes.push((e, t));
+                            }
+                            true
                         }
-                    } else {
-                        let m = rays(self.opts.cluster_rays);
-                        let (v, rays) = self.part_visibility(x, n, receiver_patch, e, m, 0);
-                        if rays == 0 {
-                            *vis.get_or_insert_with(shared)
-                        } else if recast && ((v > 0.0 && v < 1.0) || partial) {
-                            let m = self.opts.cluster_rays * super::rows::PARTIAL_CLUSTER_RAYS;
-                            self.part_visibility(x, n, receiver_patch, e, m, 0).0
-                        } else {
-                            v
-                        }
+                        None => false,
                     };
-                    if v > 0.0 {
-                        out.fixed.push((e, k[0] * v));
-                    }
-                });
+                self.cluster_parts_reusing(
+                    &at,
+                    n,
+                    s as u32,
+                    &mut |e, k| {
+                        if k[0] <= 0.0 {
+                            return;
+                        }
+                        let g = &geoms[e as usize];
+                        // A small part with no emitter under it is not cast again
+                        // ([`PARTIAL_PART_MIN_FACTOR`]).
+                        let recast = k[0] > PARTIAL_PART_MIN_FACTOR
+                            || self.emits_under.get(e as usize).copied().unwrap_or(true);
+                        // Such a part's first rays, fewer by its factor
+                        // ([`small_part_rays`]).
+                        let rays = |m: u32| if recast { m } else { small_part_rays(m, k[0]) };
+                        let v = if clear {
+                            1.0
+                        } else if g.patch != u32::MAX {
+                            let key = oracle::hash3(key, self.ray_id(e), 1) & u64::from(u32::MAX);
+                            let ps = oracle::poly(g);
+                            let mut r = self.gather_rays(x, n, receiver_patch, g, &ps, key);
+                            if recast {
+                                self.surface_visibility(r)
+                            } else {
+                                r.m = rays(r.m);
+                                oracle::visible_fraction(&self.bvh, &r)
+                            }
+                        } else {
+                            let m = rays(self.opts.cluster_rays);
+                            let (v, rays) = self.part_visibility(x, n, receiver_patch, e, m, 0);
+                            if rays == 0 {
+                                *vis.get_or_insert_with(shared)
+                            } else if recast && ((v > 0.0 && v < 1.0) || partial) {
+                                let m = self.opts.cluster_rays * super::rows::PARTIAL_CLUSTER_RAYS;
+                                self.part_visibility(x, n, receiver_patch, e, m, 0).0
+                            } else {
+                                v
+                            }
+                        };
+                        if v > 0.0 {
+                            out.fixed.push((e, k[0] * v));
+                        }
+                    },
+                    &mut whole,
+                );
+                out.fixed.append(&mut wholes);
                 return;
             }
             // With facets, as the leaf rows: each facet by rays to its own patches
@@ -664,7 +707,15 @@ impl Solver<'_> {
                 out.masked.push((t, v));
             }
             _ => {
-                let v = self.surface_visibility(r);
+                // A small source with no emitter under it: rays by its factor,
+                // not cast again ([`small_part_rays`]).
+                let v = if f <= PARTIAL_PART_MIN_FACTOR && self.non_emitting_surface(s) {
+                    let mut r = r;
+                    r.m = small_part_rays(r.m, f);
+                    oracle::visible_fraction(&self.bvh, &r)
+                } else {
+                    self.surface_visibility(r)
+                };
                 if v > 0.0 {
                     out.fixed.push((s as u32, f * v));
                 }
@@ -760,6 +811,69 @@ impl Solver<'_> {
             }
         }
         true
+    }
+
+    /// The term `factor · visibility` of cluster `e` kept whole at the final-gather
+    /// point `x` (normal `n`, on patch `receiver_patch`), if it is: in a static
+    /// scene, a cluster with no emitter under it, far for its size
+    /// ([`SolveOptions::cluster_open_ratio`]), whose unoccluded estimate is at most
+    /// [`WHOLE_CLUSTER_MAX_FACTOR`]; its visibility by as many rays as
+    /// [`small_part_rays`] gives that factor (none if `clear`). `None`: the caller
+    /// opens it (also where every ray falls on faces turned away).
+    fn whole_cluster(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        receiver_patch: u32,
+        e: u32,
+        clear: bool,
+        limits: &GatherLimits,
+    ) -> Option<f64> {
+        let i = e as usize;
+        let g = &self.elems.geoms.as_slice()[i];
+        if self.has_motion()
+            || g.patch != u32::MAX
+            || self.emits_under.get(i).copied().unwrap_or(true)
+        {
+            return None;
+        }
+        let (c, r) = limits.sphere(i, g);
+        if r >= self.opts.cluster_open_ratio * c.distance(x) {
+            return None;
+        }
+        let k = self.whole_cluster_factor(x, n, i, (c, r));
+        if k > WHOLE_CLUSTER_MAX_FACTOR {
+            return None;
+        }
+        if k <= 0.0 || clear {
+            return Some(k.max(0.0));
+        }
+        let m = small_part_rays(self.opts.cluster_rays, k);
+        let (v, rays) = self.part_visibility(x, n, receiver_patch, e, m, 0);
+        (rays > 0).then_some(k * v)
+    }
+
+    /// The unoccluded factor from the point `x` (normal `n`) to cluster `e`
+    /// (bounding sphere `sphere`) taken whole: the links' estimate
+    /// ([`cluster_kernel`]), the cluster's light leaving by the axes its surfaces
+    /// face ([`oracle::cluster_emission`]). Times the visibility by rays drawn by
+    /// power into the cluster ([`Solver::part_visibility`]) and the cluster's
+    /// radiosity, it is `Σ F_i V_i B_i` over the cluster's surfaces where their
+    /// faces are axis-aligned: `A B̄ R(v)` is then their projected power.
+    pub(super) fn whole_cluster_factor(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        e: usize,
+        sphere: (DVec3, f64),
+    ) -> f64 {
+        let g = &self.elems.geoms.as_slice()[e];
+        let b = self.elems.radiosities.as_slice()[e]
+            .iter()
+            .copied()
+            .fold(0.0f32, f32::max) as f64;
+        let dir = &self.elems.directions.as_slice()[e];
+        cluster_kernel(g, sphere.0, sphere.1, dir, b, x, n)
     }
 
     /// The visible fraction of a surface source by the rays `r`
