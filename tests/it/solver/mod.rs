@@ -12,4 +12,5 @@ mod known;
 mod per_frame;
 mod scale;
 mod scale_free;
+mod shadow_edge;
 mod tiled_lamp;
