@@ -2815,28 +2815,48 @@ mod tests {
         seen: f64,
     }
 
+    /// The clusters of `cube_grid`'s cube faces (eight or more patches, none above
+    /// the cubes: the lamp hangs at y = 9) with `min_facets` facets or more, each
+    /// with its patches, its sphere `(c, r)` and 24 points six radii out, facing
+    /// it, level with the cubes and above them, along the rows and across.
+    #[allow(clippy::type_complexity)]
+    fn cube_cluster_views(
+        s: &Solver,
+        min_facets: usize,
+    ) -> Vec<(u32, Vec<u32>, (DVec3, f64), Vec<(DVec3, DVec3)>)> {
+        let geoms = s.elems.geoms.as_slice();
+        let mut out = Vec::new();
+        for e in 0..geoms.len() as u32 {
+            if geoms[e as usize].patch != u32::MAX || s.facets.of(e).len() < min_facets {
+                continue;
+            }
+            let under = patches_under(s, e);
+            if under.len() < 8 || under.iter().any(|&p| geoms[p as usize].corners[0][1] > 2.0) {
+                continue;
+            }
+            let (c, r) = oracle::sphere(&geoms[e as usize]);
+            let views = (0..24)
+                .map(|j| {
+                    let elev: f64 = [0.0, 0.25, 0.6, 1.0][j % 4];
+                    let azim: f64 = [0.0, 0.3, 0.785, 1.2, 1.571, 2.5][j / 4];
+                    let dir =
+                        DVec3::new(elev.cos() * azim.cos(), elev.sin(), elev.cos() * azim.sin());
+                    (c + dir * r * 6.0, -dir)
+                })
+                .collect();
+            out.push((e, under, (c, r), views));
+        }
+        out
+    }
+
     /// The [`FacetProbe`]s of `s` (a solver of `cube_grid`), 24 directions per
     /// cluster, level with the cubes and above them, along the rows and across.
     fn facet_probes(s: &Solver) -> Vec<FacetProbe> {
         let geoms = s.elems.geoms.as_slice();
         let all = patches_under(s, 0);
         let mut probes = Vec::new();
-        for e in 0..geoms.len() as u32 {
-            if geoms[e as usize].patch != u32::MAX || s.facets.of(e).len() < 3 {
-                continue;
-            }
-            let under = patches_under(s, e);
-            // Clusters of cube faces only (the lamp hangs at y = 9).
-            if under.len() < 8 || under.iter().any(|&p| geoms[p as usize].corners[0][1] > 2.0) {
-                continue;
-            }
-            let (c, r) = oracle::sphere(&geoms[e as usize]);
-            for j in 0..24 {
-                let elev: f64 = [0.0, 0.25, 0.6, 1.0][j % 4];
-                let azim: f64 = [0.0, 0.3, 0.785, 1.2, 1.571, 2.5][j / 4];
-                let dir = DVec3::new(elev.cos() * azim.cos(), elev.sin(), elev.cos() * azim.sin());
-                let x = c + dir * r * 6.0;
-                let n = -dir;
+        for (e, under, (c, r), views) in cube_cluster_views(s, 3) {
+            for (x, n) in views {
                 let q = oracle::Samples {
                     points: [x; 4],
                     weights: [1.0, 0.0, 0.0, 0.0],
@@ -2988,20 +3008,8 @@ mod tests {
         let b = |e: u32| b_of(&s.elems, e as usize);
         let all = patches_under(&s, 0);
         let (mut used, mut sum_err, mut sum_signed, mut worst) = (0, 0.0, 0.0, 0.0f64);
-        for e in 0..geoms.len() as u32 {
-            if geoms[e as usize].patch != u32::MAX {
-                continue;
-            }
-            let under = patches_under(&s, e);
-            if under.len() < 8 || under.iter().any(|&p| geoms[p as usize].corners[0][1] > 2.0) {
-                continue;
-            }
-            let (c, r) = oracle::sphere(&geoms[e as usize]);
-            for j in 0..24 {
-                let elev: f64 = [0.0, 0.25, 0.6, 1.0][j % 4];
-                let azim: f64 = [0.0, 0.3, 0.785, 1.2, 1.571, 2.5][j / 4];
-                let dir = DVec3::new(elev.cos() * azim.cos(), elev.sin(), elev.cos() * azim.sin());
-                let (x, n) = (c + dir * r * 6.0, -dir);
+        for (e, under, (c, r), views) in cube_cluster_views(&s, 0) {
+            for (x, n) in views {
                 let k = s.whole_cluster_factor(x, n, e as usize, (c, r));
                 let (v, _) = s.part_visibility(x, n, u32::MAX, e, 256, 0);
                 let kept = k * v * b(e);
