@@ -378,3 +378,17 @@ pub fn touching_boxes() -> Scene {
         ..Default::default()
     }
 }
+
+/// [`lit_room`] tiled as `tiling` with one box `[lo, hi]` (one quad a face, facing
+/// out, of reflectance 0.6, 0.2, 0.2) as the object `name`: the scene of the
+/// interactive and shadow tests, whose box moves or casts the shadow.
+pub fn lit_room_with_box(tiling: Tiling, name: &str, lo: DVec3, hi: DVec3) -> Scene {
+    let (white, lamp, red) = (MaterialId(0), MaterialId(1), MaterialId(2));
+    let walls = lit_room(tiling, white, lamp);
+    let b = tiled_box(lo, hi, Tiling::Quads(1), false, red);
+    Scene {
+        materials: lit_room_materials([0.6, 0.2, 0.2]),
+        objects: vec![Object::still("room", walls), Object::still(name, b)],
+        ..Default::default()
+    }
+}

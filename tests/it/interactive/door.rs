@@ -30,30 +30,22 @@
 
 use glam::{DQuat, DVec3};
 use rhier::interactive::Pose;
-use rhier::scene::{MaterialId, Object, Scene};
+use rhier::scene::Scene;
 use rhier::solver::SolveOptions;
 
 use super::moves::{Bars, check_moves_with, options};
-use crate::common::shapes::{Tiling, lit_room, lit_room_materials, tiled_box};
+use crate::common::shapes::{Tiling, lit_room_with_box};
 
 /// [`lit_room`] (4 × 2.5 × 4 m, tiled as `tiling`) with a 0.9 × 2 m door, 4 cm
 /// thick, standing 1 cm over the floor across the middle of the room (`z` = 2,
 /// `x` from 1 to 1.9 under the lamp's edge), hinged at `x` = 1.
 pub fn door_room(tiling: Tiling) -> Scene {
-    let (white, lamp, red) = (MaterialId(0), MaterialId(1), MaterialId(2));
-    let walls = lit_room(tiling, white, lamp);
-    let door = tiled_box(
+    lit_room_with_box(
+        tiling,
+        "door",
         DVec3::new(1.0, 0.01, 1.98),
         DVec3::new(1.9, 2.0, 2.02),
-        Tiling::Quads(1),
-        false,
-        red,
-    );
-    Scene {
-        materials: lit_room_materials([0.6, 0.2, 0.2]),
-        objects: vec![Object::still("room", walls), Object::still("door", door)],
-        ..Default::default()
-    }
+    )
 }
 
 /// The door turned by `angle` about its hinge (the vertical line `x` = 1, `z` = 2).

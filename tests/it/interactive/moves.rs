@@ -13,28 +13,20 @@ use rhier::interactive::predict::Method;
 use rhier::interactive::store::Policy;
 use rhier::interactive::{ObjectMove, Pose, Session, Settings, Stage, Traversal, Update};
 use rhier::playback::probe::{ProbePoint, probe};
-use rhier::scene::{MaterialId, Object, Scene};
+use rhier::scene::Scene;
 use rhier::solver::SolveOptions;
 
-use crate::common::shapes::{Tiling, lit_room, lit_room_materials, tiled_box};
+use crate::common::shapes::{Tiling, lit_room_with_box};
 
 /// A 4 × 2.5 × 4 room (tiled as `tiling`) lit by a ceiling lamp, with a
 /// 0.6 × 0.5 × 0.6 box "crate" at `[1.0, y, 1.4]` (`y = 0`: on the floor).
 pub fn room(tiling: Tiling, y: f64) -> Scene {
-    let (white, lamp, red) = (MaterialId(0), MaterialId(1), MaterialId(2));
-    let walls = lit_room(tiling, white, lamp);
-    let crate_ = tiled_box(
+    lit_room_with_box(
+        tiling,
+        "crate",
         DVec3::new(1.0, y, 1.4),
         DVec3::new(1.6, y + 0.5, 2.0),
-        Tiling::Quads(1),
-        false,
-        red,
-    );
-    Scene {
-        materials: lit_room_materials([0.6, 0.2, 0.2]),
-        objects: vec![Object::still("room", walls), Object::still("crate", crate_)],
-        ..Default::default()
-    }
+    )
 }
 
 /// Settings light enough for a test, the same for the session and the fresh solves.

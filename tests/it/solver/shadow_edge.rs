@@ -16,31 +16,21 @@
 //! midpoints of its parent leaf do not reach). The quads 0.67% RMS, worst 5.5%.
 //! The bars sit between the two.
 
-use crate::common::shapes::{Tiling, lit_room, lit_room_materials, tiled_box};
+use crate::common::shapes::{Tiling, lit_room_with_box};
 use glam::DVec3;
 use rhier::playback::probe::{ProbePoint, probe};
-use rhier::scene::{MaterialId, Object, Scene};
+use rhier::scene::Scene;
 use rhier::solver::{SolveOptions, solve};
 
 /// The room tiled as `tiling`, the crate (0.6 × 0.5 × 0.6 m) at
 /// `[3.0, 0.3, 2.9]`–`[3.6, 0.8, 3.5]`, off the lamp's edge.
 fn crate_room(tiling: Tiling) -> Scene {
-    let (white, lamp, red) = (MaterialId(0), MaterialId(1), MaterialId(2));
-    let crate_ = tiled_box(
+    lit_room_with_box(
+        tiling,
+        "crate",
         DVec3::new(3.0, 0.3, 2.9),
         DVec3::new(3.6, 0.8, 3.5),
-        Tiling::Quads(1),
-        false,
-        red,
-    );
-    Scene {
-        materials: lit_room_materials([0.6, 0.2, 0.2]),
-        objects: vec![
-            Object::still("room", lit_room(tiling, white, lamp)),
-            Object::still("crate", crate_),
-        ],
-        ..Default::default()
-    }
+    )
 }
 
 /// 16 × 16 floor points, 0.25 m apart.
