@@ -5,17 +5,23 @@ shafts stored three ways, update time per move (median, 95th percentile), reside
 shaft bytes and shafts built on the fly side by side.
 
 usage: tools/interactive_bench.py OUT_DIR [--tables N] [--moves M] [--eps E] [--rhier BIN]
-                                  [--paths straight,curved,jittery] [--modes all,budget,none]
-                                  [--scene chair|door]
+                                  [--paths straight,curved,jittery] [--modes all,budget,none,budget-mean,budget-matrix]
+                                  [--scene chair|door] [--stats-only]
 
 Writes OUT_DIR/room.json (a 6 x 6 m room, a lamp, N x N tables of 4 legs and a top,
 a chair of 5 boxes, each box's faces cut in 2 x 2 quads: N = 15, the default, gives
 10 489 polygons), OUT_DIR/{straight,curved,jittery}.jsonl and OUT_DIR/<path>-<mode>.jsonl
-(the stats), and prints one table row per path and mode:
+(the stats), and prints one table row per path and mode (`--modes`, default
+all,budget,none):
 
 - all:     every shaft kept (no budget, max age huge), no prediction;
-- budget:  --shaft-budget 1 MB, linear prediction;
-- none:    no shaft stored (--shaft-store none --max-age 0), no prediction.
+- budget:  --shaft-budget 1 MB, linear prediction (eq. 1);
+- none:    no shaft stored (--shaft-store none --max-age 0), no prediction;
+- budget-mean, budget-matrix: the budget with `--predict mean:4` (eq. 2) or
+  `matrix` (eq. 3).
+
+With `--stats-only`, the runs are not made again: the rows are read from the
+OUT_DIR/<path>-<mode>.jsonl files an earlier run wrote.
 
 --scene door (issue 49's second scene, a large object moving): the same room and
 tables with the chair left out and a 0.9 x 2 m door, 4 cm thick, 1 cm over the floor
@@ -160,7 +166,29 @@ MODES = {
     "all": ["--predict", "none", "--max-age", "1000000"],
     "budget": ["--predict", "linear", "--shaft-budget", "1000000"],
     "none": ["--predict", "none", "--shaft-store", "none", "--max-age", "0"],
+    # The budget with the other predictors (not run unless named in --modes).
+    "budget-mean": ["--predict", "mean:4", "--shaft-budget", "1000000"],
+    "budget-matrix": ["--predict", "matrix", "--shaft-budget", "1000000"],
 }
+DEFAULT_MODES = "all,budget,none"
+
+
+def row(name, mode, rows):
+    """One table row from a run's per-move statistics: the update's wall time
+    (median, 95th percentile), the shaft and row parts of it (medians), the shafts
+    kept against all, those built on the fly after move 2, and the fraction of the
+    shafts a move needed that were ready (kept or predicted) when it came."""
+    ms = lambda key: sorted(r[key] * 1000 for r in rows)
+    times = ms("total_s")
+    p95 = times[min(len(times) - 1, int(0.95 * len(times)))]
+    later = rows[2:]
+    built = sum(r["shafts_built"] for r in later)
+    ready = sum(r["shafts_existing"] for r in later)
+    frac = f"{100 * ready / (ready + built):.1f}%" if ready + built else "–"
+    return (f"| {name} | {mode} | {statistics.median(times):.1f} | {p95:.1f} | "
+            f"{statistics.median(ms('shaft_s')):.2f} | {statistics.median(ms('rows_s')):.0f} | "
+            f"{rows[-1]['resident_shaft_bytes'] / 1024:.0f} | {rows[-1]['all_shaft_bytes'] / 1024:.0f} | "
+            f"{built} | {frac} |")
 
 
 def main():
@@ -179,10 +207,11 @@ def main():
     with open(path, "w") as f:
         json.dump(sc, f)
     print(f"{n} polygons -> {path}", file=sys.stderr)
-    print("| path | shafts | median ms | p95 ms | resident KiB (last) | all shafts KiB | built on the fly (after move 2) |")
-    print("|---|---|---|---|---|---|---|")
+    print("| path | shafts | median ms | p95 ms | shaft ms (median) | rows ms (median) | "
+          "resident KiB (last) | all shafts KiB | built on the fly (after move 2) | ready (after move 2) |")
+    print("|---|---|---|---:|---:|---:|---:|---:|---:|---:|")
     want_paths = opt("--paths", "straight,curved,jittery").split(",")
-    want_modes = opt("--modes", ",".join(MODES)).split(",")
+    want_modes = opt("--modes", DEFAULT_MODES).split(",")
     if door:
         runs = {"swing": swing(moves)}
         want_paths = ["swing"]
@@ -202,13 +231,10 @@ def main():
             st = os.path.join(out, f"{name}-{mode}.jsonl")
             cmd = [rhier, "interact", path, "--movable", movable, "--moves", mv, "--stats", st,
                    "--eps", eps, "-q"] + flags
-            subprocess.run(cmd, check=True)
+            if "--stats-only" not in args:
+                subprocess.run(cmd, check=True)
             rows = [json.loads(l) for l in open(st)]
-            times = sorted(r["total_s"] * 1000 for r in rows)
-            p95 = times[min(len(times) - 1, int(0.95 * len(times)))]
-            built = sum(r["shafts_built"] for r in rows[2:])
-            print(f"| {name} | {mode} | {statistics.median(times):.1f} | {p95:.1f} | "
-                  f"{rows[-1]['resident_shaft_bytes'] / 1024:.0f} | {rows[-1]['all_shaft_bytes'] / 1024:.0f} | {built} |")
+            print(row(name, mode, rows))
 
 
 if __name__ == "__main__":
