@@ -735,7 +735,9 @@ impl<'a> Solver<'a> {
 
     /// Places the scene as it stands at time `t` (one frame of an animation) and
     /// labels the solution's leaves with the time range `range`. The patch set does
-    /// not depend on `t`: contact meshing only cuts along static objects.
+    /// not depend on `t`: contact meshing only cuts along static objects, and hides
+    /// the pieces inside moving ones where they stand at the scene's start time
+    /// ([`split_at_contacts`]).
     pub fn at_time(scene: &'a Scene, opts: SolveOptions, t: f64, range: [f32; 2]) -> Result<Self> {
         opts.validate()?;
         let mut patches = Patches::at_time(scene, t);

@@ -406,7 +406,10 @@ pub struct AccuracyArgs {
     /// a contact; a patch is also cut along the outline of a polygon hanging
     /// parallel just in front of it (a lamp just under a ceiling). In a cluttered
     /// scene the cuts multiply the patches. A face hovering close over another is
-    /// not a contact: see `--near-gap`.
+    /// not a contact: see `--near-gap`. Moving objects cut nothing; the pieces of
+    /// a static patch inside a moving object where it stands at the scene's start
+    /// are dropped for the whole animation (every frame gets the same patches), so
+    /// the floor under where a sliding block starts stays missing after it leaves.
     #[arg(long)]
     pub no_contact_meshing: bool,
     /// Most refine-and-solve rounds.

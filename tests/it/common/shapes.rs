@@ -392,3 +392,26 @@ pub fn lit_room_with_box(tiling: Tiling, name: &str, lo: DVec3, hi: DVec3) -> Sc
         ..Default::default()
     }
 }
+
+/// `polygons` with every quad cut into four triangles meeting at a point off its
+/// centre (weights 0.4, 0.3, 0.2, 0.1 of its corners), so the triangles are of
+/// unequal sizes, as a modeller's mesh is: the tessellated twin of a mesh of quads.
+/// Other polygons are kept as they are.
+pub fn fan_quads(polygons: &[Polygon]) -> Vec<Polygon> {
+    polygons
+        .iter()
+        .flat_map(|p| {
+            let v = &p.vertices;
+            if v.len() != 4 {
+                return vec![p.clone()];
+            }
+            let c = 0.4 * v[0] + 0.3 * v[1] + 0.2 * v[2] + 0.1 * v[3];
+            (0..4)
+                .map(|i| Polygon {
+                    vertices: vec![v[i], v[(i + 1) % 4], c],
+                    material: p.material,
+                })
+                .collect()
+        })
+        .collect()
+}

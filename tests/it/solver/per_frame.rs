@@ -14,7 +14,7 @@ use rhier::solver::per_frame::{FrameReport, frame_times, solve_per_frame};
 use rhier::solver::{SolveOptions, Solver};
 use rhier::store::{FrameWriter, Reader, WriteOptions};
 
-use crate::common::{rhier, succeeded};
+use crate::common::{rhier, shapes, succeeded};
 
 /// Coarse settings: the tests check bookkeeping, not accuracy.
 fn coarse() -> SolveOptions {
@@ -226,6 +226,57 @@ fn a_scene_without_motion_gives_the_same_values_every_frame() {
     // And the same as the plain static solve of the scene.
     let (plain, _) = rhier::solver::solve(&scene, coarse()).unwrap();
     assert_eq!(probe(&plain, &pts, 0.0).unwrap(), first);
+}
+
+/// The Cornell box with blocks, its short block resting on the floor and sliding
+/// 60 mm towards the red wall over [0, 0.8] s, and every other object's quads fanned
+/// into unequal triangles (`shapes::fan_quads`): `h45st4`'s `sb_roomtris.json`. The
+/// floor is four triangles meeting under the short block, cut along the tall
+/// block's contact lines.
+fn block_sliding_on_fanned_floor() -> Scene {
+    let mut s = scene::cornell_box(true);
+    s.time = TimeDomain {
+        start: 0.0,
+        end: 0.8,
+    };
+    for o in &mut s.objects {
+        if o.name == "short_block" {
+            o.motion = Some(MotionTrack {
+                keys: vec![
+                    MotionKey::identity(0.0),
+                    MotionKey {
+                        translation: DVec3::new(-60.0, 0.0, 0.0),
+                        ..MotionKey::identity(0.8)
+                    },
+                ],
+            });
+        } else {
+            o.polygons = shapes::fan_quads(&o.polygons);
+        }
+    }
+    s
+}
+
+/// Every frame has the patches of frame 0, the file's: contact meshing hides the
+/// floor's pieces under the sliding block where it stands at the start, in every
+/// frame. Hidden where it stood at each frame's time, the floor lost two pieces at
+/// t = 0.4 and the file refused the frame ("frame 2 at t = 0.4: expected the 73
+/// patches of frame 0, found 71").
+#[test]
+fn a_block_sliding_on_a_fanned_floor_keeps_every_frame_s_patches() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("sliding.rhier");
+    let scene = block_sliding_on_fanned_floor();
+    let (reports, solutions, reader) = solve_to_file(&scene, 5.0, &path);
+    assert_eq!(reports.len(), 5);
+    for (r, s) in reports.iter().zip(&solutions) {
+        assert_eq!(
+            s.patches, solutions[0].patches,
+            "frame {} at t = {}",
+            r.index, r.t
+        );
+    }
+    assert_eq!(reader.patches(), &solutions[0].patches[..]);
 }
 
 #[test]
