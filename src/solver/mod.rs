@@ -611,6 +611,10 @@ struct LeafSystem {
     row_spread_limit: f64,
     /// How many leaves there were when `row_spread` was taken.
     row_spread_leaves: usize,
+    /// Each element's [`oracle::sphere`] while [`Solver::compute_leaf_rows`]
+    /// makes the rows, empty otherwise ([`Solver::row_sphere`]). 32 bytes per
+    /// element for that time.
+    row_spheres: Vec<(DVec3, f64)>,
     /// Interactive moves: each leaf's entries by chain link (sorted by link), as
     /// the session's start-up or the last move computed them, reused by the next
     /// move for links it did not touch and updated in place for those it did

@@ -4,8 +4,8 @@
 //! final-gathered ([`Solver::gather_point`], in parallel batches of
 //! [`GATHER_BATCH`] points, each point once however many cells share it:
 //! [`VertexCache`]); a cell whose centre differs from the mean of its corners by more
-//! than the reconstruction tolerance (on a root cell, or an edge's midpoint from the
-//! mean of its ends) splits along the directions in which it is
+//! than the reconstruction tolerance (on a root cell a source is partly hidden from,
+//! or an edge's midpoint from the mean of its ends) splits along the directions in which it is
 //! long enough ([`Cell::split_dirs`]), and the cells that stop are stored with
 //! their corner values (bilinear within the cell), each corner raised by the
 //! share of its cells' centre offsets their interpolant misses ([`MEAN_SHIFT`]).
@@ -275,7 +275,8 @@ impl Solver<'_> {
     /// Cells start as the hierarchy's leaves and split (in parameter space, like
     /// elements) while the gather at a cell's centre differs from the interpolant of
     /// its corners by more than `recon_tol · B_ref` (`recon_tol_moving` on a moving
-    /// object's surface), or, on a root cell (a leaf), the gather at the midpoint of
+    /// object's surface), or, on a root cell (a leaf) a shadow edge may cross
+    /// (`Solver::shadow_may_cross`), the gather at the midpoint of
     /// an edge the split would cut differs from the mean of its ends by as much (a
     /// shadow edge crossing a big leaf away from its centre: a 0.19 m² floor
     /// triangle read 66% off a solve at `eps / 2`, `tests/it/solver/shadow_edge.rs`),
@@ -406,11 +407,13 @@ impl Solver<'_> {
                 // root cells only: a shadow edge crossing a big leaf where its
                 // centre does not see it. Every cell testing them stored 32% more
                 // cells on `gen_cubes 12` for 50% more CPU, the roots 5% and 9%.
+                // Only where a source is partly hidden (`shadow_may_cross`).
                 let dirs = c.split_dirs(min_len, &self.patches);
                 let mut mids = [usize::MAX; 4];
                 let n = c.n as usize;
+                let edges = test_mids && self.shadow_may_cross(c.leaf);
                 for (i, slot) in mids.iter_mut().enumerate().take(n) {
-                    if test_mids && c.cuts_edge(i, dirs) {
+                    if edges && c.cuts_edge(i, dirs) {
                         let (a, b) = (c.uv[i], c.uv[(i + 1) % n]);
                         let m = [(a[0] + b[0]) * 0.5, (a[1] + b[1]) * 0.5];
                         *slot = cache.register(c, m, centre);
@@ -480,8 +483,9 @@ impl Solver<'_> {
                 };
                 let mut off = dev(cv, interp);
                 // An edge's midpoint off its ends' mean: a shadow edge crossing the
-                // cell where its centre does not see it (a root cell only).
-                for i in (0..n).filter(|&i| test_mids && c.cuts_edge(i, dirs)) {
+                // cell where its centre does not see it (a root cell a shadow edge
+                // may cross only).
+                for i in (0..n).filter(|&i| mids[i] != usize::MAX) {
                     let (m, m_ok) = cache.values[mids[i]];
                     if m_ok {
                         off = off.max(dev(m, mean3(&[vals[i], vals[(i + 1) % n]])));
@@ -595,6 +599,35 @@ impl Solver<'_> {
             },
         };
         (recon, cell_leaves)
+    }
+
+    /// Whether a shadow boundary may cross leaf `leaf`, so that its root cell tests
+    /// its edges' midpoints: a source of its chain (its links and its ancestors')
+    /// is partly hidden from it, by the link's rays (a link not proved clear by a
+    /// shaft, whose visible fraction is strictly between 0 and 1), by the leaf's
+    /// own row (its quadrature points' rays, kept in a static solve) or because the
+    /// link varies in a time window (a moving object may cross it). A leaf every
+    /// source of which is proved clear, or seen whole or hidden whole by every ray
+    /// cast for it, has no shadow edge those rays saw.
+    ///
+    /// Why: the midpoints were a quarter of the empty Cornell box's run time at
+    /// eps 0.1 (no occluder in the box, no shadow edge for them to find): CPU
+    /// 0.676 → 0.532 s with this test, 0.35% → 0.36% off the lamp; the box with
+    /// its blocks tests 900 of its 925 leaves (BENCHMARKS.md, "Static solver:
+    /// error against run time (Cornell box)").
+    fn shadow_may_cross(&self, leaf: ElementId) -> bool {
+        let tr = self.links.transports.as_slice();
+        let partial = |v: f32| v > 0.0 && v < 1.0;
+        let by_link = self.chain_links(leaf).any(|l| {
+            let t = &tr[l as usize];
+            t.varying() || (!t.shaft_clear() && partial(t.visibility))
+        });
+        by_link
+            || self
+                .sys
+                .row_cache
+                .get(&leaf.0)
+                .is_some_and(|row| row.iter().any(|k| partial(k.vis)))
     }
 
     /// The planes of the static emitters, for [`Solver::straddled_planes`]: (unit

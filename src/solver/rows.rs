@@ -1043,7 +1043,7 @@ impl Solver<'_> {
             return (false, false);
         }
         let ratio = self.opts.row_open_ratio;
-        let (c, rad) = oracle::sphere(gs);
+        let (c, rad) = self.row_sphere(s as usize, gs);
         let near = (0..q.count)
             .map(|i| q.points[i].distance(c))
             .fold(f64::INFINITY, f64::min);
@@ -1054,6 +1054,21 @@ impl Solver<'_> {
             large || coef * (rad / near.max(rad)) * spread > self.sys.row_spread_limit,
             large,
         )
+    }
+
+    /// [`oracle::sphere`] of element `s` (geometry `g`): from the table
+    /// [`Solver::compute_leaf_rows`] makes for its rows, or computed.
+    ///
+    /// Why: the rows ask it of an opened source's children three times each (its
+    /// shares, whether each opens, and again as it is pushed), for every leaf
+    /// that opens it: the centroids were 6% of the empty Cornell box's CPU at
+    /// eps 0.1 (BENCHMARKS.md, "Static solver: error against run time").
+    fn row_sphere(&self, s: usize, g: &Geom) -> (DVec3, f64) {
+        self.sys
+            .row_spheres
+            .get(s)
+            .copied()
+            .unwrap_or_else(|| oracle::sphere(g))
     }
 
     /// Pushes a leaf's row entry for source `s` (coefficient `coef`, visible
@@ -1114,15 +1129,17 @@ impl Solver<'_> {
         // Opened for its spread: shares by the kernel taken linear across the
         // source, no polygon factor per child.
         // The children's area centroids, as [`oracle::sphere`] takes them.
-        let centroid = |ch: usize| {
-            let gc = &geoms[ch];
-            let m = (gc.n as usize).min(4);
-            let v: [DVec3; 4] = std::array::from_fn(|i| DVec3::from_array(gc.corners[i]));
-            crate::geometry::centroid_of(&v[..m])
-        };
+        let centroid = |ch: usize| self.row_sphere(ch, &geoms[ch]).0;
         if !large
-            && let Some(mut shares) =
-                linear_shares(q, n, geoms, gs, oracle::sphere(gs), node, centroid)
+            && let Some(mut shares) = linear_shares(
+                q,
+                n,
+                geoms,
+                gs,
+                self.row_sphere(s as usize, gs),
+                node,
+                centroid,
+            )
         {
             // A child that stays whole stands for a linear radiosity: its share
             // moves from its area's by the part within it too ([`WITHIN_CHILD`]).
@@ -1310,6 +1327,14 @@ impl Solver<'_> {
             self.sys.row_spread = self.radiosity_spread();
             self.sys.row_spread_limit = ROW_OPEN_SPREAD * self.rms_radiosity();
         }
+        // The elements stay as they are while the rows are made.
+        self.sys.row_spheres = self
+            .elems
+            .geoms
+            .as_slice()
+            .par_iter()
+            .map(oracle::sphere)
+            .collect();
         let elems = &self.elems;
         let geoms = elems.geoms.as_slice();
         let ends = self.links.ends.as_slice();
@@ -1413,6 +1438,7 @@ impl Solver<'_> {
                 }
             }
         }
+        self.sys.row_spheres = Vec::new();
         self.sys.row_cache = row_cache;
         self.sys.cluster_cache = cluster_cache;
         self.sys.opened_factors = opened_factors;
