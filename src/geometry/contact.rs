@@ -90,22 +90,6 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
             .get(patches.objects[i] as usize)
             .is_some_and(|o| o.is_moving())
     };
-    // Each patch's normal where the hidden test's BVH holds it: a moving one's at
-    // the start time.
-    let hit_normals: Vec<DVec3> = (0..patches.len())
-        .map(|j| {
-            if !moving(j) {
-                return patches.normals[j];
-            }
-            let g = &patches.geometry[j];
-            let w = scene.objects[patches.objects[j] as usize].to_world(start);
-            let mut c = [DVec3::ZERO; 4];
-            for (o, &v) in c.iter_mut().zip(&g.vertices[..g.corners as usize]) {
-                *o = w.transform_point3(v);
-            }
-            Poly::new(&c[..g.corners as usize]).normal()
-        })
-        .collect();
     let mut out = Patches::default();
     let mut stats = ContactStats::default();
     for i in 0..patches.len() {
@@ -139,7 +123,7 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
             let x = inner_point(piece);
             let behind_is_back_face = |dir: DVec3| {
                 bvh.intersect_front_first(x + dir * (tol * 4.0), dir * patches.diameter, 0.0, 1.0)
-                    .is_some_and(|h| hit_normals[h.patch as usize].dot(dir) > 0.0)
+                    .is_some_and(|h| h.back)
             };
             let on = |&j: &usize| patches.polys[j].contains(patches.normals[j], x, tol);
             // A solid open at both ends (a pillar from floor to ceiling, its ends

@@ -165,6 +165,9 @@ pub struct Hit {
     pub patch: u32,
     /// Ray parameter of the hit (in units of the given direction's length).
     pub t: f64,
+    /// The triangle hit faces away from the ray, as its part is placed (its
+    /// back face was hit).
+    pub back: bool,
 }
 
 /// One BVH with the triangles it indexes.
@@ -751,6 +754,7 @@ impl SceneBvh {
                 let hit = Hit {
                     patch: part.tri_patch[id],
                     t: key - pushed,
+                    back: away(id),
                 };
                 best = Some((hit, key));
             }
