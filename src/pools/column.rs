@@ -1,7 +1,10 @@
 //! [`Column`]: one growable array of `Pod` records on RAM or on a memory-mapped file.
 //!
-//! The mmap backend creates an anonymous-named file in the scratch directory (removed
-//! on drop), sizes it to the capacity, maps it read-write and doubles it (remapping)
+//! The mmap backend creates a file in the scratch directory and, on Unix, unlinks it
+//! at once: the open handle and the mapping keep its pages, and the space returns to
+//! the file system when the column drops or the process ends, however it ends (a
+//! killed solve leaves no scratch files behind). Elsewhere the file is removed on
+//! drop. It sizes the file to the capacity, maps it read-write and doubles it (remapping)
 //! when full. Slices of the mapping are cast with bytemuck; the mapping is page
 //! aligned, so every `Pod` type up to page alignment is correctly aligned.
 
@@ -85,6 +88,9 @@ impl<T: Pod> Column<T> {
                     .create_new(true)
                     .open(&path)
                     .map_err(|e| Error::io(&path, e))?;
+                // Best effort: if the unlink fails the file is removed on drop.
+                #[cfg(unix)]
+                let _ = std::fs::remove_file(&path);
                 let cap = (4096 / std::mem::size_of::<T>().max(1)).max(1);
                 let map = map_file(&file, &path, cap * std::mem::size_of::<T>())?;
                 Backing::Mmap {
@@ -252,8 +258,11 @@ impl<T: Pod> Column<T> {
 impl<T: Pod> Drop for Column<T> {
     fn drop(&mut self) {
         if let Backing::Mmap { path, .. } = &self.backing {
-            // Best effort: a scratch file left behind is harmless and named as ours.
-            let _ = std::fs::remove_file(path);
+            // Unlinked at creation on Unix; elsewhere, best effort: a scratch file
+            // left behind is named as ours.
+            if !cfg!(unix) {
+                let _ = std::fs::remove_file(path);
+            }
         }
     }
 }
@@ -357,5 +366,18 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         exercise(&Storage::Mmap(dir.path().to_owned()));
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    /// On Unix a live column's file is already unlinked: a process killed while it
+    /// holds columns leaves nothing in the scratch directory.
+    #[cfg(unix)]
+    #[test]
+    fn a_live_mapped_column_leaves_no_file_to_clean() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut c = Column::<[f32; 3]>::new(&Storage::Mmap(dir.path().to_owned()), "t").unwrap();
+        c.extend_from_slice(&vec![[1.0, 2.0, 3.0]; 10_000]).unwrap();
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        assert_eq!(c[9_999], [1.0, 2.0, 3.0]);
+        assert!(c.reserved_bytes() >= 120_000);
     }
 }
