@@ -957,6 +957,23 @@ pub fn visible_fraction_moving(bvh: &SceneBvh, r: &PointRays, mask: u64, vis_sta
     r.weighted(|j, _| open & (1 << j) != 0)
 }
 
+/// The rays of `mask` (of `r`'s) that a moving object blocks, one bit each: what
+/// [`masked_rays`] hands back as [`MaskedRays::blocked`] for the same rays, without
+/// their kernel weights (an interactive move's rows ask it of an entry whose rays
+/// may come out as they did at the move that last computed it,
+/// `Solver::unchanged_part`).
+pub fn moving_blocked(bvh: &SceneBvh, r: &PointRays, mask: u64) -> u64 {
+    let r = r.capped();
+    let mut blocked = 0u64;
+    let mut last = LastHit::default();
+    for (j, y) in r.targets() {
+        if mask & (1 << j) != 0 && bvh.occluded_between(r.x, y, r.skip, Parts::Moving, &mut last) {
+            blocked |= 1 << j;
+        }
+    }
+    blocked
+}
+
 /// The `m` jittered stratified target points on `gs` for the rays of sample `key`:
 /// one in each of `m` cells of equal area over the unit square, rows of
 /// `⌈√m⌉` cells, the last row holding the rest across the whole width.

@@ -638,6 +638,13 @@ struct LeafSystem {
     move_part_masks: ByLeaf<(u64, u64)>,
     /// The part masks the rows being computed made, taken into `move_part_masks`.
     move_part_masks_made: std::sync::Mutex<Vec<(MaskKey, (u64, u64))>>,
+    /// Interactive moves: per row entry of a surface part whose leaf and part both
+    /// stand still, keyed as `move_masks`, the rays a moving object blocked when a
+    /// move last computed it and a print of the entries it gave
+    /// ([`Solver::unchanged_part`]).
+    move_traces: ByLeaf<(u64, u64)>,
+    /// The records the rows being computed made, taken into `move_traces`.
+    move_traces_made: std::sync::Mutex<Vec<(MaskKey, (u64, u64))>>,
     /// Rows are being computed for an interactive move ([`Solver::move_row_masks`]).
     move_rows: bool,
 }

@@ -430,6 +430,9 @@ impl<'a> Solver<'a> {
         if let Ok(made) = self.sys.move_part_masks_made.get_mut() {
             self.sys.move_part_masks.extend(made.drain(..));
         }
+        if let Ok(made) = self.sys.move_traces_made.get_mut() {
+            self.sys.move_traces.extend(made.drain(..));
+        }
         let balanced = !old_scale.is_empty();
         let mut fresh = redo.iter().zip(fresh);
         let mut next = fresh.next();

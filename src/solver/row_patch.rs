@@ -33,8 +33,19 @@
 //! space-time window keeps them, [`RowMasks`]) and the later moves cast only those,
 //! at the moving objects alone ([`Solver::move_row_masks`]): the same answer, bit
 //! for bit, for a ray that misses the moved object's box at the cost of a box test.
+//!
+//! Nor is every entry whose shaft meets a moved box computed again: a surface entry
+//! between a leaf and a part that both stand still depends on the moving objects
+//! only through which of its rays they block. The move that computes it keeps that
+//! set (a bit a ray, beside the masks) and a print of the entries it gave
+//! ([`Solver::keep_move_trace`]); a later move casts the same rays at the moving
+//! objects alone and, where they block the same rays and the old entries are the
+//! printed ones, keeps them ([`Solver::unchanged_part`]): what a recomputation
+//! would give, bit for bit, without its form factors, kernel weights and opening.
+//! A chair moved 1 cm leaves most of the rays of the entries its box shades as
+//! they were (blocked or not): only the entries its shadow edges cross change.
 
-use super::rows::RowMasks;
+use super::rows::{RowMasks, move_mask};
 use super::*;
 
 /// The share of its row (factor before visibility) from which an entry with a
@@ -273,6 +284,93 @@ impl Solver<'_> {
         }
     }
 
+    /// Hands the next moves the rays a moving object blocked in the entries
+    /// `entries` that surface part `e` of chain link `l` gave the row of `leaf`
+    /// (`traced`, [`Solver::hidden_row_coef`]; 0: nothing to hand), with a
+    /// print of the entries ([`entries_print`]), for [`Solver::unchanged_part`].
+    pub(super) fn keep_move_trace(
+        &self,
+        leaf: ElementId,
+        l: u32,
+        e: u32,
+        traced: u64,
+        entries: &[(u32, f64)],
+    ) {
+        if traced == 0 || !self.sys.move_rows {
+            return;
+        }
+        let r = self.links.ends.as_slice()[l as usize].receiver;
+        if let Ok(mut v) = self.sys.move_traces_made.lock() {
+            v.push(((leaf.0, r, e), (traced, entries_print(entries.iter()))));
+        }
+    }
+
+    /// True if the entries of surface part `e` of chain link `l` in the row of
+    /// `leaf` (quadrature `q`, normal `n`), where neither moves, are those under it
+    /// in `old` (indices `group`) and a recomputation would give them again: the
+    /// move that computed them last kept which of their rays a moving object
+    /// blocked ([`Solver::keep_move_trace`]), the old entries are the ones it gave
+    /// (their print), and the same rays, cast again at the moving objects alone
+    /// through the static masks, are blocked the same now. The entry depends on
+    /// the two ends' geometry and on those rays' answers only (the static part of
+    /// each is its mask), so it comes out bit for bit as it did: its form factors,
+    /// kernel weights and opening are not taken again. Where a moving object
+    /// blocks other rays than it did (it moved over the entry's shadow edge),
+    /// false: the entry is computed again.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn unchanged_part(
+        &self,
+        leaf: ElementId,
+        l: u32,
+        e: u32,
+        q: &oracle::Samples,
+        n: DVec3,
+        old: &[(u32, f64)],
+        group: &[u32],
+    ) -> bool {
+        let RowMasks::Move(bits) = self.move_row_masks(leaf, l, e, q) else {
+            return false;
+        };
+        let r = self.links.ends.as_slice()[l as usize].receiver;
+        let Some((traced, print)) = self.sys.move_traces.get(&(leaf.0, r, e)) else {
+            return false;
+        };
+        let m = self.opts.rays_per_point;
+        if traced >> move_mask::SEEN & 1 == 0
+            || bits >> move_mask::QUAD & 1 == 0
+            || !move_mask::corners(m)
+            || print != entries_print(group.iter().map(|&i| &old[i as usize]))
+        {
+            return false;
+        }
+        let geoms = self.elems.geoms.as_slice();
+        let (g, gs) = (&geoms[leaf.ix()], &geoms[e as usize]);
+        let ps = oracle::poly(gs);
+        let ns = DVec3::from_array(gs.normal);
+        let ids = self.row_ray_ids(leaf, l, e);
+        let mut now = 0u64;
+        let mut cast = |x: DVec3, i: u64| {
+            let mask = bits >> (i as u32 * m) & ((1 << m) - 1);
+            if mask != 0 {
+                let rays = self.row_rays(ids, g, gs, &ps, ns, x, n, i);
+                now |= oracle::moving_blocked(&self.bvh, &rays, mask) << (i as u32 * m);
+            }
+        };
+        for i in 0..q.count {
+            cast(q.points[i], i as u64);
+        }
+        if traced >> move_mask::CORNERS_SEEN & 1 == 1 {
+            // The corners the last computation looked at had their masks made then.
+            let centre = q.points[..q.count].iter().sum::<DVec3>() / q.count as f64;
+            for (c, &x) in oracle::poly(g).corners().iter().enumerate() {
+                if bits >> (move_mask::CORNER + c as u32) & 1 == 1 {
+                    cast(x + CORNER_INSET * (centre - x), 4 + c as u64);
+                }
+            }
+        }
+        now == traced & ((1 << (8 * m)) - 1)
+    }
+
     /// Keeps the old entries `old` of stale link `l` (source `s`) in the row of
     /// `leaf` where the move cannot have changed them, computing the rest again
     /// into `row` (module docs). Returns false, having pushed nothing, where
@@ -296,7 +394,13 @@ impl Solver<'_> {
         let leaf_box = super::geom_box(&geoms[leaf.ix()]);
         let gs = &geoms[s as usize];
         if gs.patch != u32::MAX {
-            let keep = !patch.holding[s as usize] && patch.clear(leaf_box, super::geom_box(gs));
+            let keep = !patch.holding[s as usize]
+                && (patch.clear(leaf_box, super::geom_box(gs))
+                    // (A link a shaft proved clear casts no ray: integrated.)
+                    || !self.links.transports.as_slice()[l as usize].shaft_clear() && {
+                        let all: Vec<u32> = (0..old.len() as u32).collect();
+                        self.unchanged_part(leaf, l, s, q, n, old, &all)
+                    });
             if keep {
                 row.extend_from_slice(old);
             }
@@ -323,14 +427,16 @@ impl Solver<'_> {
             // A part that gave nothing before: its parent was opened.
             let was_empty =
                 || c == s || groups.opened(patch.order[nodes[c as usize].parent as usize]);
-            if group.is_empty() && !was_empty() {
-                return false;
+            let known = !group.is_empty() || was_empty();
+            // Its shaft clear of the moved boxes, or (a surface) its rays blocked
+            // by the moving objects as at the move that computed its entries.
+            let same = known && patch.clear(leaf_box, super::geom_box(&geoms[c as usize]))
+                || geoms[c as usize].patch != u32::MAX
+                    && self.unchanged_part(leaf, l, c, q, n, old, &group);
+            if same {
+                kept.extend(group.iter().map(|&i| old[i as usize]));
             }
-            if !patch.clear(leaf_box, super::geom_box(&geoms[c as usize])) {
-                return false;
-            }
-            kept.extend(group.iter().map(|&i| old[i as usize]));
-            true
+            same
         };
         if !reuse(s) {
             self.push_cluster(leaf, l, q, n, s, row, None, &mut reuse);
@@ -410,6 +516,14 @@ impl Solver<'_> {
         let sub: Vec<(u32, f64)> = old.iter().copied().filter(|&(x, _)| under(x, s)).collect();
         !sub.is_empty() && self.patch_entries(patch, leaf, l, q, n, &sub, row)
     }
+}
+
+/// A print of row entries `(source, coefficient)`, bit for bit and in order
+/// ([`Solver::keep_move_trace`]).
+fn entries_print<'a>(entries: impl Iterator<Item = &'a (u32, f64)>) -> u64 {
+    entries.fold(0x5eed_0e17, |h, &(x, c)| {
+        oracle::hash3(h, u64::from(x), c.to_bits())
+    })
 }
 
 #[cfg(test)]

@@ -65,6 +65,13 @@ pub(super) mod move_mask {
     pub(in crate::solver) fn corners(m: u32) -> bool {
         8 * m <= CORNER
     }
+
+    /// In the record of the rays a moving object blocked
+    /// (`Solver::hidden_row_coef`, same layout below the flags): the
+    /// record holds.
+    pub(in crate::solver) const SEEN: u32 = 63;
+    /// In the same record: the corners were looked at.
+    pub(in crate::solver) const CORNERS_SEEN: u32 = 62;
 }
 
 /// What one leaf's row computation hands back ([`Solver::compute_leaf_rows`]): the
@@ -99,6 +106,9 @@ pub(super) struct LeafRow {
     between: u64,
     /// Coefficients for the frame's next pass (`Solver::pass_rows`).
     passed: Vec<((u32, u32), (f64, f64))>,
+    /// The rays a moving object blocked in the entry [`Solver::fresh_row_coef`]
+    /// just computed ([`Solver::hidden_row_coef`]; 0: none to keep).
+    trace: u64,
 }
 
 impl LeafRow {
@@ -652,8 +662,9 @@ impl Solver<'_> {
             let facet = e & FACET_BIT != 0;
             if !facet && geoms[e as usize].patch != u32::MAX {
                 let how = self.move_row_masks(leaf, l, e, q);
-                let ((coef, v), made) = self.hidden_row_coef(leaf, l, e, q, n, how);
+                let ((coef, v), made, traced) = self.hidden_row_coef(leaf, l, e, q, n, how);
                 self.keep_move_mask(leaf, l, e, how, made);
+                let at = row.len();
                 // Rounded once, so a reused part equals the first.
                 let (coef, v) = match kept.as_deref_mut() {
                     Some(k) => {
@@ -669,6 +680,7 @@ impl Solver<'_> {
                     None => (coef, v),
                 };
                 self.push_opened(q, n, e, coef, v, row, None, None);
+                self.keep_move_trace(leaf, l, e, traced, &row[at..]);
                 return;
             }
             // A point whose rays all fall below its horizon or on faces
@@ -855,7 +867,14 @@ impl Solver<'_> {
     /// `masks` says how the quadrature points' rays treat static geometry
     /// ([`RowMasks`]); the masks made are returned (`RowMasks::Make`; for
     /// `RowMasks::Move` the whole mask, what it knew and what it made: the
-    /// corners' rays too), and the value is the same whichever it is.
+    /// corners' rays too), and the value is the same whichever it is. Third, what
+    /// an interactive move's rows keep to know the entry unchanged at a later move
+    /// ([`Solver::unchanged_part`]): for `RowMasks::Move`, the rays a moving object
+    /// blocked (bit `i·m + j`: ray `j` of point `i`, quadrature points and corners
+    /// as in [`move_mask`]) with [`move_mask::SEEN`] set, and
+    /// [`move_mask::CORNERS_SEEN`] if the corners were looked at; 0 (nothing to
+    /// keep) where a point's rays were cast without a mask (the finer rule, corners
+    /// that do not fit in one) and for the other `masks`.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn hidden_row_coef(
         &self,
@@ -865,7 +884,7 @@ impl Solver<'_> {
         q: &oracle::Samples,
         n: DVec3,
         masks: RowMasks,
-    ) -> ((f64, f64), u64) {
+    ) -> ((f64, f64), u64, u64) {
         let gs = &self.elems.geoms.as_slice()[s as usize];
         let g = &self.elems.geoms.as_slice()[leaf.ix()];
         let ps = oracle::poly(gs);
@@ -877,6 +896,11 @@ impl Solver<'_> {
             _ => 0u64,
         });
         let ray_bits = |bits: u64, i: u64| bits >> (i as u32 * m) & ((1 << m) - 1);
+        // The rays a moving object blocked (`hidden_row_coef`); `None` once a
+        // point's rays were cast without a mask.
+        let traced = std::cell::Cell::new(
+            matches!(masks, RowMasks::Move(_) if move_mask::corners(m)).then_some(0u64),
+        );
         // The factors at the quadrature points, taken once (the share below and
         // the integral).
         let fq: [f64; 4] = std::array::from_fn(|i| {
@@ -914,6 +938,7 @@ impl Solver<'_> {
                     Some(ray_bits(bits, i)).filter(|_| known)
                 }
                 _ => {
+                    traced.set(None);
                     r.m = m_all;
                     return oracle::visible_fraction(&self.bvh, &r);
                 }
@@ -921,6 +946,9 @@ impl Solver<'_> {
             let rays = oracle::masked_rays(&self.bvh, &r, mask, true);
             if mask.is_none() {
                 made.set(made.get() | rays.mask << (i as u32 * m));
+            }
+            if let Some(t) = traced.get() {
+                traced.set(Some(t | rays.blocked << (i as u32 * m)));
             }
             rays.vis_now
         };
@@ -951,6 +979,9 @@ impl Solver<'_> {
             made.set(made.get() | 1 << move_mask::QUAD);
         }
         if unoccluded > ROW_CORNER_MIN_COEF && (vmax <= 0.0 || vmin >= 1.0) {
+            if let Some(t) = traced.get() {
+                traced.set(Some(t | 1 << move_mask::CORNERS_SEEN));
+            }
             let centre = q.points[..q.count].iter().sum::<DVec3>() / q.count as f64;
             let corners = oracle::poly(g);
             let common = vmax;
@@ -959,6 +990,7 @@ impl Solver<'_> {
                 point_to_polygon(x, n, &ps) > 0.0 && (vis_at(x, 4 + i as u64) - common).abs() > 0.5
             });
             if disagree {
+                traced.set(None);
                 let fine = oracle::fine_samples(g);
                 (f, unoccluded, _, _) = integrate(
                     &mut fine
@@ -973,7 +1005,8 @@ impl Solver<'_> {
         } else {
             0.0
         };
-        ((f, vis), made.get())
+        let traced = traced.get().map_or(0, |t| t | 1 << move_mask::SEEN);
+        ((f, vis), made.get(), traced)
     }
 
     /// The visible fraction of surface source `s` (geometry `gs`, polygon `ps`,
@@ -1001,7 +1034,7 @@ impl Solver<'_> {
     /// point `i` at `x`, keyed by [`Solver::row_ray_key`], the leaf's and the
     /// source's patches skipped.
     #[allow(clippy::too_many_arguments)]
-    fn row_rays<'a>(
+    pub(super) fn row_rays<'a>(
         &self,
         ids: RowRayIds,
         g: &Geom,
@@ -1704,6 +1737,8 @@ impl Solver<'_> {
                 memo.as_mut(),
                 opened_memo.as_mut(),
             );
+            let trace = std::mem::take(&mut out.trace);
+            self.keep_move_trace(leaf, l, s, trace, &out.row[at..]);
             if keep_clusters {
                 out.move_clusters.push((l, out.row[at..].into()));
             }
@@ -1809,7 +1844,8 @@ impl Solver<'_> {
                     } else {
                         moved
                     };
-                    let (cv, made) = self.hidden_row_coef(leaf, l, s, q, n, cast);
+                    let (cv, made, trace) = self.hidden_row_coef(leaf, l, s, q, n, cast);
+                    out.trace = trace;
                     if matches!(how, RowMasks::Make) {
                         out.masks.push((key, made));
                     }

@@ -639,7 +639,10 @@ fn row_terms_kept_over_a_window_are_the_ones_computed_afresh() {
             masked_now += 1;
             let q = oracle::samples(g);
             let n = DVec3::from_array(g.normal);
-            let coef = |how| s.hidden_row_coef(ElementId(leaf), l, src, &q, n, how);
+            let coef = |how| {
+                let (cv, made, _) = s.hidden_row_coef(ElementId(leaf), l, src, &q, n, how);
+                (cv, made)
+            };
             let (all, _) = coef(RowMasks::None);
             let (known, _) = coef(RowMasks::Known(bits));
             let (made, again) = coef(RowMasks::Make);
