@@ -169,7 +169,18 @@ fn a_finer_tolerance_on_moving_surfaces_refines_them_only() {
 /// two apart)`, relative RMS. Every frame is solved as the per-frame baseline
 /// solves it (frozen).
 fn frame_errors(scene: &Scene, pts: impl Fn(f64) -> Vec<ProbePoint>) -> Vec<(f64, f64, f64, f64)> {
-    let windows = solve_all(scene, &st(5.0, 0.4));
+    frame_errors_seeded(scene, opts().seed, pts)
+}
+
+/// [`frame_errors`] with every solve (space-time, per-frame, fine) at `seed`
+/// (the fine one at `seed ^ 1`).
+fn frame_errors_seeded(
+    scene: &Scene,
+    seed: u64,
+    pts: impl Fn(f64) -> Vec<ProbePoint>,
+) -> Vec<(f64, f64, f64, f64)> {
+    let seeded = SolveOptions { seed, ..opts() };
+    let windows = run_frames(scene, seeded.clone(), &st(5.0, 0.4)).0;
     assert_eq!(
         frame_instants(
             TimeDomain {
@@ -198,7 +209,6 @@ fn frame_errors(scene: &Scene, pts: impl Fn(f64) -> Vec<ProbePoint>) -> Vec<(f64
         s.run(|_, _| {}).unwrap();
         s.solution()
     };
-    let seed = opts().seed;
     [0.0, 0.4, 0.8]
         .into_iter()
         .map(|t| {
@@ -206,7 +216,7 @@ fn frame_errors(scene: &Scene, pts: impl Fn(f64) -> Vec<ProbePoint>) -> Vec<(f64
             let base = fixed(0.5, seed, t);
             let fine = probe(&fixed(0.1, seed ^ 1, t), &pts, t).unwrap();
             let per_frame = probe(&base, &pts, t).unwrap();
-            let space_time = probe(&st_solution(scene, &windows), &pts, t).unwrap();
+            let space_time = probe(&st_solution(scene, seeded.clone(), &windows), &pts, t).unwrap();
             let (e_pf, e_st) = (
                 relative_rms(&per_frame, &fine),
                 relative_rms(&space_time, &fine),
@@ -223,12 +233,12 @@ fn frame_errors(scene: &Scene, pts: impl Fn(f64) -> Vec<ProbePoint>) -> Vec<(f64
         .collect()
 }
 
-/// The windows of a space-time solve of `scene` (at [`opts`], the windows of
+/// The windows of a space-time solve of `scene` (at options `o`, the windows of
 /// `st(5.0, 0.4)`) as one solution on the space-time solve's own patches, which
 /// are those of a static solve at any time of the domain (contact meshing hides
 /// pieces under moving objects where they stand at the start).
-fn st_solution(scene: &Scene, windows: &[WindowOutput]) -> Solution {
-    let t = SpaceTime::new(scene, opts(), st(5.0, 0.4), |_, _| {}).unwrap();
+fn st_solution(scene: &Scene, o: SolveOptions, windows: &[WindowOutput]) -> Solution {
+    let t = SpaceTime::new(scene, o, st(5.0, 0.4), |_, _| {}).unwrap();
     Solution {
         scene: scene.clone(),
         patches: t.patches().to_vec(),
@@ -308,17 +318,41 @@ fn fanned(scene: &Scene) -> Scene {
     out
 }
 
-/// [`frame_errors`] at the faces of `scene`'s moving objects (4 × 4 points each),
-/// held to the static solve: as accurate within 5%, and apart by less than the
-/// static solve's own error (the room's 1% of
+/// [`frame_errors_seeded`] at the faces of `scene`'s moving objects (4 × 4 points
+/// each) at every seed of `seeds`, held to the static solve: at each frame the
+/// mean error over the seeds as small within 5%, and at each seed apart by less
+/// than the static solve's own error (the room's 1% of
 /// `each_frame_is_as_accurate_as_the_static_solve_of_that_frame` is not a bound
 /// here: the block's faces read 2.4% off the fine solve at t = 0, space-time
 /// 2.0%, 1.4% apart).
-fn moving_faces_as_accurate(name: &str, scene: &Scene) {
+///
+/// Why a mean over seeds: on the triangles' faces the per-frame solve's own error
+/// moves with the seed by more than the 5% bar (t = 0.8: 3.99%, 5.06%, 5.09% and
+/// 5.54% at seeds 0x5eed, 1, 2, 3; main bc60554), and so does the ratio of the two
+/// errors at one seed (0.98–1.10 there; 0.99–1.05 at t = 0.4, 1.01–1.05 at t = 0):
+/// at one seed the bar measured the rays' luck, not the method. Over those four
+/// seeds space-time was 1.027, 1.014 and 1.012 times the static solve.
+fn moving_faces_as_accurate(name: &str, scene: &Scene, seeds: &[u64]) {
     eprintln!("{name}:");
-    for (t, e_pf, e_st, apart) in frame_errors(scene, |t| moving_face_points(scene, 4, t)) {
+    let runs: Vec<_> = seeds
+        .iter()
+        .map(|&seed| frame_errors_seeded(scene, seed, |t| moving_face_points(scene, 4, t)))
+        .collect();
+    for (i, &(t, ..)) in runs[0].iter().enumerate() {
+        let n = seeds.len() as f64;
+        let e_pf = runs.iter().map(|r| r[i].1).sum::<f64>() / n;
+        let e_st = runs.iter().map(|r| r[i].2).sum::<f64>() / n;
+        eprintln!(
+            "t = {t}: over {} seeds per-frame {:.3}%, space-time {:.3}% ({:.3} times)",
+            seeds.len(),
+            e_pf * 100.0,
+            e_st * 100.0,
+            e_st / e_pf
+        );
         assert!(e_st <= 1.05 * e_pf, "{name}, t = {t}");
-        assert!(apart < e_pf, "{name}, t = {t}");
+        for r in &runs {
+            assert!(r[i].3 < r[i].1, "{name}, t = {t}");
+        }
     }
 }
 
@@ -336,15 +370,17 @@ fn the_moving_surfaces_are_as_accurate_as_in_the_static_solve_of_each_frame() {
     // gap was the eps, 74-93% of it on the five probes of the actors' bottom
     // faces, 1 cm over the floor ("Space-time against frame by frame" in
     // BENCHMARKS.md); this test holds the two methods to each other at one eps.
-    moving_faces_as_accurate("quads", &sliding_block(-60.0, 0.8));
+    moving_faces_as_accurate("quads", &sliding_block(-60.0, 0.8), &[opts().seed]);
 }
 
 #[test]
 fn the_moving_surfaces_are_as_accurate_as_in_the_static_solve_of_each_frame_in_triangles() {
     // The tessellated twin: the same scene with every quad in four triangles
-    // (`fanned`). Measured here: 3.78%, 3.41% and 3.91% against the static solve's
-    // 3.61%, 3.26% and 3.99% at t = 0, 0.4 and 0.8 s (1.045, 1.046 and 0.98
-    // times), 0.58-0.76% apart. At b9da3ca, 7.48% and 7.40% against 1.71% and
+    // (`fanned`), over three seeds (`moving_faces_as_accurate`: at one seed the
+    // ratio moves 0.98-1.10 with the seed). Measured at the default seed (main
+    // bc60554): 3.78%, 3.41% and 3.91% against the static solve's 3.61%, 3.26% and
+    // 3.99% at t = 0, 0.4 and 0.8 s (1.045, 1.046 and 0.98 times), 0.58-0.76%
+    // apart. At b9da3ca, 7.48% and 7.40% against 1.71% and
     // 1.62% at 0.4 and 0.8 s: contact meshing hid the floor's pieces under the
     // block where it stood at each solve's own time, so the space-time solve
     // (hidden at 0) and the static solve of the frame had other floors there,
@@ -353,7 +389,8 @@ fn the_moving_surfaces_are_as_accurate_as_in_the_static_solve_of_each_frame_in_t
     // start (`geometry::contact`, "Moving objects"), which leaves the floor under
     // where it started missing after it has left: the static solve's own error
     // at 0.4 s rose from 1.7% to 3.3% with it.
-    moving_faces_as_accurate("triangles", &fanned(&sliding_block(-60.0, 0.8)));
+    let seeds = [opts().seed, 1, 2];
+    moving_faces_as_accurate("triangles", &fanned(&sliding_block(-60.0, 0.8)), &seeds);
 }
 
 /// A `k × k` grid of upward points on the Cornell floor, leaving out the strip the
