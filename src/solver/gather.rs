@@ -144,6 +144,26 @@ fn small_part_rays(m: u32, k: f64) -> u32 {
     (scaled as u32).clamp(SMALL_PART_MIN_RAYS.min(m), m)
 }
 
+/// The rays a non-emitting surface source with factor `k` at a final-gather
+/// point is cast again with where its `m` first rays find it partly hidden
+/// ([`Solver::surface_visibility`]): [`small_part_rays`]' rule carried on above
+/// [`PARTIAL_PART_MIN_FACTOR`], `m` times `k` over that bound, at least twice
+/// the first rays and at most [`super::rows::PARTIAL_CLUSTER_RAYS`] times them
+/// (the full recast from a factor of 8 × 3e-3 = 0.024 up).
+///
+/// Why: as for the small parts, a source's visibility noise enters the point
+/// times its factor, so the rays that make the sum's variance least go in
+/// proportion to it. In `tools/gen_cubes.py 20` the final gather's recasts at
+/// the chain's partly hidden surface sources, 64 rays each whatever their
+/// factor, were 17% of the solve's samples and the largest single item
+/// (`perf record`, BENCHMARKS.md "Scale"): a point by the boxes sees many box
+/// faces partly hidden at factors of 3e-3 to 2e-2.
+fn recast_rays(m: u32, k: f64) -> u32 {
+    let full = m * super::rows::PARTIAL_CLUSTER_RAYS;
+    let scaled = (f64::from(m) * k / PARTIAL_PART_MIN_FACTOR).ceil();
+    (scaled.min(f64::from(full)) as u32).clamp((2 * m).min(full), full)
+}
+
 /// A source is near a point only if the point's normal is within this cosine of
 /// facing it head-on.
 const NEAR_COS: f64 = 0.9;
@@ -586,7 +606,7 @@ impl Solver<'_> {
                             let ps = oracle::poly(g);
                             let mut r = self.gather_rays(x, n, receiver_patch, g, &ps, key);
                             if recast {
-                                self.surface_visibility(r)
+                                self.surface_visibility(r, k[0])
                             } else {
                                 r.m = rays(r.m);
                                 oracle::visible_fraction(&self.bvh, &r)
@@ -714,7 +734,7 @@ impl Solver<'_> {
                     r.m = small_part_rays(r.m, f);
                     oracle::visible_fraction(&self.bvh, &r)
                 } else {
-                    self.surface_visibility(r)
+                    self.surface_visibility(r, f)
                 };
                 if v > 0.0 {
                     out.fixed.push((s as u32, f * v));
@@ -876,10 +896,10 @@ impl Solver<'_> {
         cluster_kernel(g, sphere.0, sphere.1, dir, b, x, n)
     }
 
-    /// The visible fraction of a surface source by the rays `r`
-    /// ([`Solver::gather_rays`]), cast again with
-    /// [`super::rows::PARTIAL_CLUSTER_RAYS`] times the rays where they find it
-    /// partly hidden.
+    /// The visible fraction of a surface source with factor `k` at the point by
+    /// the rays `r` ([`Solver::gather_rays`]), cast again where they find it
+    /// partly hidden: with [`super::rows::PARTIAL_CLUSTER_RAYS`] times the rays at
+    /// an emitter, by [`recast_rays`] (in proportion to `k`) elsewhere.
     ///
     /// Why: 8 stratified rays give the fraction in steps of 1/8. In the L-shaped
     /// room of `tests/it/solver/enclosures.rs` a floor point by the re-entrant
@@ -887,10 +907,17 @@ impl Solver<'_> {
     /// (0.50 with 4096 rays), and with a near cluster's tiles taken at the
     /// cluster's shared fraction its factors summed to 1.0093 (1.0001 with 4096
     /// rays per tile).
-    fn surface_visibility(&self, mut r: oracle::PointRays) -> f64 {
+    fn surface_visibility(&self, mut r: oracle::PointRays, k: f64) -> f64 {
         let v = oracle::visible_fraction(&self.bvh, &r);
         if v > 0.0 && v < 1.0 {
-            r.m *= super::rows::PARTIAL_CLUSTER_RAYS;
+            let emits = self.patches.emissions[r.gs.patch as usize]
+                .iter()
+                .any(|&e| e > 0.0);
+            r.m = if !emits {
+                recast_rays(r.m, k)
+            } else {
+                r.m * super::rows::PARTIAL_CLUSTER_RAYS
+            };
             oracle::visible_fraction(&self.bvh, &r)
         } else {
             v
