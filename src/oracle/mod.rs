@@ -942,19 +942,12 @@ pub struct MaskedRays {
 /// of `mask` are cast at the moving objects first, and only if one is blocked are
 /// the kernel weights computed. With no ray blocked the answer is `vis_static`.
 pub fn visible_fraction_moving(bvh: &SceneBvh, r: &PointRays, mask: u64, vis_static: f64) -> f64 {
-    let r = r.capped();
-    let mut blocked = 0u64;
-    let mut last = LastHit::default();
-    for (j, y) in r.targets() {
-        if mask & (1 << j) != 0 && bvh.occluded_between(r.x, y, r.skip, Parts::Moving, &mut last) {
-            blocked |= 1 << j;
-        }
-    }
+    let blocked = moving_blocked(bvh, r, mask);
     if blocked == 0 {
         return vis_static;
     }
     let open = mask & !blocked;
-    r.weighted(|j, _| open & (1 << j) != 0)
+    r.capped().weighted(|j, _| open & (1 << j) != 0)
 }
 
 /// The rays of `mask` (of `r`'s) that a moving object blocks, one bit each: what
