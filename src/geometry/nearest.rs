@@ -77,7 +77,7 @@ pub fn on_emitters(patches: &super::Patches, points: &[(DVec3, DVec3)]) -> Vec<b
         .iter()
         .map(|&(p, n)| {
             nearest_facing(&patches.polys, &patches.normals, p, n)
-                .is_some_and(|(i, _)| patches.emissions[i].iter().any(|&e| e > 0.0))
+                .is_some_and(|(i, _)| patches.emits(i))
         })
         .collect()
 }

@@ -98,6 +98,11 @@ impl Patches {
         self.polys.is_empty()
     }
 
+    /// True if patch `i` emits light in some channel.
+    pub fn emits(&self, i: usize) -> bool {
+        self.emissions[i].iter().any(|&e| e > 0.0)
+    }
+
     /// World point of patch `i` at parameter `(u, v)` ([`param_point`]).
     pub fn point(&self, i: usize, u: f64, v: f64) -> DVec3 {
         let p = &self.polys[i];

@@ -303,10 +303,7 @@ impl Solver<'_> {
 
     /// Rays from a reconstruction point to the surface element `gs` (4× to emitters).
     fn corner_rays_to(&self, gs: &Geom) -> u32 {
-        let emitter = self.patches.emissions[gs.patch as usize]
-            .iter()
-            .any(|&e| e > 0.0);
-        if emitter {
+        if self.patches.emits(gs.patch as usize) {
             self.opts.corner_rays * 4
         } else {
             self.opts.corner_rays
@@ -910,10 +907,7 @@ impl Solver<'_> {
     fn surface_visibility(&self, mut r: oracle::PointRays, k: f64) -> f64 {
         let v = oracle::visible_fraction(&self.bvh, &r);
         if v > 0.0 && v < 1.0 {
-            let emits = self.patches.emissions[r.gs.patch as usize]
-                .iter()
-                .any(|&e| e > 0.0);
-            r.m = if !emits {
+            r.m = if !self.patches.emits(r.gs.patch as usize) {
                 recast_rays(r.m, k)
             } else {
                 r.m * super::rows::PARTIAL_CLUSTER_RAYS
@@ -1192,7 +1186,7 @@ impl Solver<'_> {
     /// the sources whose rays the final gather may take from elsewhere.
     fn non_emitting_surface(&self, s: usize) -> bool {
         let p = self.elems.geoms.as_slice()[s].patch;
-        p != u32::MAX && !self.patches.emissions[p as usize].iter().any(|&e| e > 0.0)
+        p != u32::MAX && !self.patches.emits(p as usize)
     }
 
     /// The visible fraction of non-emitting surface source `s` (chain link `l`) seen

@@ -815,9 +815,7 @@ impl<'a> Solver<'a> {
         if s.opts.cluster_facets && !s.has_motion() {
             s.facets = facets::ClusterFacets::build(&s.elems);
         }
-        s.emits_under = any_patch_under(&s.elems, |p| {
-            s.patches.emissions[p].iter().any(|&e| e > 0.0)
-        });
+        s.emits_under = any_patch_under(&s.elems, |p| s.patches.emits(p));
         // Initial guess B = E at the patch roots, pulled up.
         for i in 0..s.elems.len() {
             let g = s.elems.geoms.as_slice()[i];

@@ -635,10 +635,7 @@ impl Solver<'_> {
     fn emitter_planes(&self) -> Vec<(DVec3, f64, f64, DVec3)> {
         let p = &self.patches;
         (0..p.len())
-            .filter(|&j| {
-                p.emissions[j].iter().any(|&e| e > 0.0)
-                    && self.motion.moving_patch.get(j) != Some(&true)
-            })
+            .filter(|&j| p.emits(j) && self.motion.moving_patch.get(j) != Some(&true))
             .map(|j| {
                 let poly = &p.polys[j];
                 let n = p.normals[j];

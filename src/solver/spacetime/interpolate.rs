@@ -404,7 +404,7 @@ impl Solver<'_> {
     /// there are more than [`MAX_DIRECT_EMITTERS`].
     pub(in crate::solver) fn emitters_now(&self) -> Option<Vec<Emitter>> {
         let lit: Vec<usize> = (0..self.patches.len())
-            .filter(|&p| self.patches.emissions[p].iter().any(|&e| e > 0.0))
+            .filter(|&p| self.patches.emits(p))
             .take(MAX_DIRECT_EMITTERS + 1)
             .collect();
         (lit.len() <= MAX_DIRECT_EMITTERS).then(|| {
