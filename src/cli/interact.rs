@@ -124,6 +124,17 @@ pub struct Args {
     /// slow as solving again; kept to measure the local update against).
     #[arg(long, value_enum, default_value = "local")]
     pub update: UpdateKind,
+    /// Do not prime the session before the first move.
+    ///
+    /// By default, once the scene is solved or restored, the session moves each
+    /// movable object to where it already stands before reading the first move:
+    /// the rows near the objects are computed again as a move computes them,
+    /// keeping which of their rays static geometry blocks, and the shafts around
+    /// the objects are built. The first move then costs what later moves cost;
+    /// the start-up costs about what the first move would have. The radiosity is
+    /// the solve's either way. With --no-prime the first move does that work.
+    #[arg(long)]
+    pub no_prime: bool,
     /// No progress lines on stderr.
     #[arg(short, long)]
     pub quiet: bool,
@@ -202,6 +213,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             start.elapsed().as_secs_f64(),
             session.solver().elems.len()
         );
+    }
+    if !args.no_prime {
+        let t = std::time::Instant::now();
+        if let Some(p) = session.prime().context("priming the session")? {
+            if !args.quiet {
+                eprintln!(
+                    "primed in {:.3} s: {} rows, {} shafts built",
+                    t.elapsed().as_secs_f64(),
+                    p.rows_recomputed,
+                    p.shafts_built
+                );
+            }
+        }
     }
     let mut io = Outputs {
         points: points.as_deref(),

@@ -24,6 +24,19 @@
 //!    part, Fig. 1 (with `--predict none` shafts are only built on the fly);
 //! 5. runs the shaft collector (Fig. 2) and reports [`MoveStats`].
 //!
+//! **Priming** ([`Session::prime`]). A move keeps, for the rows it computes,
+//! which of their rays static geometry blocks and which the moved objects
+//! blocked, so that the next move casts only the rays at the moved objects and
+//! keeps the entries whose rays they block as before ([`crate::solver::Solver`]'s
+//! row patching). The first move finds none of that and computes its rows in
+//! full, with every ray (in the 889-polygon room of `tools/interactive_bench.py`
+//! about twice the processor time of a later move). A session primes itself before it reads the first
+//! move: a move of each movable object to where it stands, which finds the links
+//! around the objects, evaluates them again (their transports come out as they
+//! were: nothing changed), computes the rows near the objects as a move does and
+//! builds the shafts around them (paper 000, section 3.2: shafts built ahead of
+//! the movement). It costs the start-up about what it spares the first move.
+//!
 //! With [`Traversal::Every`] step 2 takes every link as affected: the brute force
 //! the tests hold the traversal to. What it does not do yet: re-activate passive
 //! links whose refinement a move made needless (the hierarchy only gets finer,
@@ -219,8 +232,39 @@ impl<'a> Session<'a> {
 
     /// Applies one move (module docs) and returns its statistics.
     pub fn apply(&mut self, moves: &[ObjectMove]) -> Result<MoveStats> {
-        let start = Instant::now();
         self.moves += 1;
+        self.step(moves, true)
+    }
+
+    /// Makes ready, before the first move, what the first move of the movable
+    /// objects would otherwise make itself: a move of each to where it stands
+    /// (module docs, "Priming"). Returns its statistics (move 0), or `None`
+    /// where there is nothing to prime (no movable object, or [`Update::Full`],
+    /// whose moves keep nothing between them). No link changes; the rows it
+    /// computes again are drawn as a move draws them, so the light moves by the
+    /// rows' noise (under 4e-4 at the points of `interactive::prime`'s test), and
+    /// from the first move on the session is an unprimed one's within 1e-6.
+    pub fn prime(&mut self) -> Result<Option<MoveStats>> {
+        if self.settings.update != Update::Local {
+            return Ok(None);
+        }
+        let here: Vec<ObjectMove> = (0..self.poses.len() as u32)
+            .filter(|&o| self.stage.movable[o as usize])
+            .map(|o| ObjectMove {
+                object: o,
+                pose: self.poses[o as usize],
+            })
+            .collect();
+        if here.is_empty() {
+            return Ok(None);
+        }
+        self.step(&here, false).map(Some)
+    }
+
+    /// Applies `moves` (module docs); `record`: a move of the user's, which the
+    /// predictor learns from (not a priming move).
+    fn step(&mut self, moves: &[ObjectMove], record: bool) -> Result<MoveStats> {
+        let start = Instant::now();
         self.shafts.begin_move();
         let n = self.poses.len();
         let mut moved = vec![false; n];
@@ -235,8 +279,10 @@ impl<'a> Session<'a> {
             self.poses[m.object as usize] = m.pose;
         }
         let new = self.object_boxes(&moved);
-        for (m, &(_, b)) in moves.iter().zip(&new) {
-            self.predictor.record(m.object, m.pose.to_affine(), b);
+        if record {
+            for (m, &(_, b)) in moves.iter().zip(&new) {
+                self.predictor.record(m.object, m.pose.to_affine(), b);
+            }
         }
         let t_trav = Instant::now();
         let holding = self.solver.elements_holding(&moved);

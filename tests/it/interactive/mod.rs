@@ -5,5 +5,6 @@
 mod cli;
 mod door;
 mod moves;
+mod prime;
 mod restore;
 mod shafts;
