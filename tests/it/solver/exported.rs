@@ -110,189 +110,40 @@ fn blender_error(opts: SolveOptions, paths: u32) -> PointError {
     err
 }
 
-/// The Blender Cornell box against the path tracer, off the lamp: short of the
-/// bar. Before (2026-11-29, base colours × 0.8, 31 points, 20,000 paths): the room
-/// read 0.1–4% of the path tracer at default settings (contact meshing dropped the
-/// room side of every slab) while the path tracer itself read 25–90% dark (it
-/// stopped on back twins). Now 11.8% relative RMS off the lamp (worst point 24%,
-/// the ceiling), every point 74–101% of the path tracer and the estimate 15.4%;
-/// and the solve takes minutes (1 m 40 s of CPU at `--eps 2 --max-rounds 1`), too
-/// long for CI. Measured again 2026-11-29 on main at b24f13c (and the same with the
-/// oracle reading the receiver's centre): 23.2% relative RMS off the lamp, worst
-/// 43% (red wall, low back corner), every point 57–90% of the path tracer, the
-/// estimate 2.1%; 6–11 minutes under load. The loss grows with the bounces: the
-/// blue channel (reflected by the white surfaces only, so its light bounces
-/// least) is within 1–5% at most points while red and green are 15–40% dark, the
-/// mark of rows whose factors sum under 1 (light leaking at the slabs' overlaps
-/// or around the lamp box) amplified by `1/(1 − ρ)`. Not a regression: the
-/// binary of ec918e2, the commit that recorded 11.8%, gives 22.8% on this setup
-/// (`rhier solve` at the defaults, these 29 points off the lamp, 20,000 paths,
-/// seed 13) against 22.6% at 0f94ecf; the 11.8% was most likely taken with the
-/// base colours × 0.8 of the paragraph's "before".
+/// The Blender Cornell box against the path tracer at the 29 points off the
+/// lamp (issue 45 part 4): short of the 5% bar, and minutes of CPU under load.
 ///
-/// Where the light goes (2026-11-29, h45blend; `rhier solve` at the defaults against
-/// `rhier reference` at these 29 points, 4,000 paths): not the slabs. The same room
-/// rebuilt from one-sided quads (the slabs' room faces closed at the corners, no
-/// twins), with the file's two-sided lamp box and head, is as far off (25.5%); without
-/// the head it is within the reference's noise (3.5%), and with the head one-sided 7.1%
-/// (that run also cut the floor along the chin). The two-sided head is what loses the
-/// red and green (it reflects 0.999 of them, and none of the blue): its inside is a
-/// cavity of back-to-back twins open only at the eyes, and its chin dips 7 mm through
-/// the floor. With it the leaf system's GMRES stalls (relative residual 6–7e-4 after
-/// 2,000 applications each round, 1e-6 without it or with it one-sided); a basis of 150
-/// and 6,000 applications leave it at 4.3e-3, 1.2e-3, 7.4e-4, 6.6e-4 over the rounds,
-/// so the restart is not what holds it. What does: the head's leaf rows. After the
-/// first round of that rebuilt room, 1,687 of its 6,680 leaves sum their factors above
-/// 1 (1,338 above 1.01, the largest 2.14; area 1.25 of 8.8 m², twins counted), where
-/// the room's and the lamp's rows stay within 1.024 and 1.003 (`Solver::row_sums`): at
-/// `ρ = 0.999` such rows make `ρK` expand, and no Krylov solve settles them. Next:
-/// which entries those rows double (a twin and its original, the cavity's cluster
-/// parts, the chin's crossing). The estimate now counts the residual over `1 − ρ_max`
-/// (70% here), no longer 2%. Since `TWIN_GAP` (a leaf's own twin a hair in front
-/// of some of its points took a factor of 1): 13.6% off the lamp, worst point 29%
-/// (the red wall low at the back), every wall now reading *under* the reference,
-/// and the solve's estimate 93% (this test, 520 s at load 2–4).
+/// Now (2026-12-01, e61cb15, `rhier solve` at the defaults against 100,000
+/// paths): 10.5% off the lamp, worst point 17.2% (17, the back wall), red,
+/// green and blue at 0.905, 0.906 and 0.972 of the reference on the mean; the
+/// estimate reads 5.2%, half the error.
 ///
-/// Why the head's rows sum above 1 (2026-11-30, h45export; Suzanne alone,
-/// two-sided, in a closed one-quad-per-wall room, uniform `E = 1`, `ρ = 0.9`, one
-/// round): each entry of a leaf's row was compared with 2,000 cosine rays from each
-/// of the leaf's quadrature points. The worst row (1.38, an inner twin at the
-/// lips) counts 0.3 of the room that no ray from its quadrature points reaches:
-/// those points see nothing of the room, but two of the leaf's corners do (a lip
-/// lies 0.14 mm over it), so `hidden_row_coef` integrates those entries on the
-/// finer rule, at 0.43–0.51 visible, while the entry of the lip folded over it
-/// keeps the three-point rule (0.78). Entries of one row integrated on different
-/// rules no longer share the points at which their factors sum to at most 1:
-/// that, not a twin counted twice, is what lifts the rows. Next: integrate a
-/// leaf's whole row on the finer rule once one entry needs it. Rays between
-/// surface points now skip both ends' twins and trim `1e-9` of the length
-/// (`SURFACE_TRIM`), no longer `1e-4`, so that a fold 0.14 mm away blocks a 1 m
-/// ray: that row 1.38 → 1.31; this test 12.4% off the lamp, worst point 26% (the
-/// red wall low at the back), every wall still under the reference, 94 s of CPU
-/// (8 min wall at load 15–20), and the estimate now 2.5% (most likely the leaf system no
-/// longer stalls; not checked), and nothing else in the estimate sees the bias.
-/// Since `Solver::row_excess_error` (the light rows summing above 1 make, a lower
-/// bound) this test reads 10.9% off the lamp, worst point 23.9%, and the estimate
-/// 4.5% (the CLI's at eps 0.5: 5.2%; 2.9% before): still under half the error
-/// (ab64889, 59 s quiet).
-///
-/// Where the light goes now (2026-11-30, h45blend, 101c135, `rhier solve` at the
-/// defaults: 10.9% off the lamp, worst 23.9%, every wall *under* the path tracer
-/// in red and green, blue within a few percent; tracing code in commit 1698973,
-/// and 4bd761d, reverted): not the rows that sum above 1. Those (802 above 1.01, the largest
-/// 1.52) all lie outside the room: slab faces inside other slabs where they
-/// overlap, the slabs' outer twins, the ceiling over the lamp (whose rows miss
-/// the lamp's top 0.1 mm below entirely, which the gap's own light cannot
-/// reach the room to matter). Not the final gather either: one bounce cast from
-/// the probe points (20,000 cosine rays each) over the solved leaf field reads
-/// 10.2% off, as dark. Not the geometry: the contact-meshed scene and the file's
-/// own meet every probe point's rays at the same place (at most 1 in 20,000
-/// differ). What is: the room side's rows gather less than cosine rays from the
-/// same quadrature points over the same leaf field (256 rays a point): floor
-/// 1.35% (red), white walls 2.4–2.6%, red wall 3.0% (red), green wall 2.5%
-/// (green), blue 0.35–0.8%; spread over many entries (the lamp's bottom opened
-/// into quarters, floor entries part hidden by the head, each ±0.002) and up to
-/// 0.5% of the hemisphere that rays reach and no entry covers (single patches
-/// of the head that a row's cluster walk left out, a strip of the ceiling
-/// near the red wall's front corner in a back-wall row); per row the deficit
-/// reaches 4% (back wall behind the head: 0.829 against 0.868). Red and green light is reflected at 0.999 by all but one wall
-/// and the head and leaves by the open front: a 2% deficit per bounce comes out
-/// about 10% dark. Next: which of those entries are biased rather than noisy
-/// (the rows' visibility with `rays_per_point` rays against many), and what the
-/// uncovered part is.
-///
-/// Bias or noise (2026-11-30, h45blend2, 7e346c7 against 200,000 paths at these 29
-/// points: 10.3% off the lamp, worst 17.3%; red and green 7.5% dark on average,
-/// blue 3.4%). Every entry of twelve of the worst room rows re-evaluated from the
-/// leaf's quadrature points with 1,024 rays a point (the rows cast 4): the entries'
-/// coefficients are not low on the whole (row sums 0.55–0.96, from 4% under to 1.7% over),
-/// but the light they gather is, by 1.3% over those rows (selected as the worst,
-/// so partly noise): mostly floor and white-wall sources partly hidden by the head
-/// and opened into children that all take the parent's visible fraction, so a
-/// child under the head that no ray reaches (row 0.0064, truth 0) takes light a
-/// visible, brighter child should (a floor source: 0.074 of light short over
-/// eleven rows against 0.014 of coefficient). The uncovered part was most of
-/// the rest: a cluster link to a surface receiver whose eight estimate rays all
-/// met something (`f = 0`, visibility 0) was dropped from every row under it,
-/// though the leaves see part of the cluster: slab clusters of the ceiling were
-/// 1.2–1.5% of a floor or back-wall leaf's hemisphere. Walking such links
-/// from the leaf's points like any other (`Solver::cluster_link_empty`: only a
-/// link that carries nothing even unoccluded would be skipped): 9.2% off the lamp,
-/// worst 15.4%, red and green 6.5% dark, blue 3.3% (the Cornell box and its blocks
-/// unchanged, 0.299% and 0.98% off the lamp at eps 0.1 and 0.15). Not kept
-/// (4d294fe, reverted): in the room with a pillar and a floating box
-/// (`solver::enclosures`) at `ρ = 0.9` the leaf system then absorbed 1.0057 of
-/// the emitted power (0.998 without it) and a stored corner read 1.02% off, over
-/// the 1% bar: the walked links take more than they should there, and not by
-/// the fallback visibility 1 of points that cast no ray (the link's 0 in its
-/// place gave the same 1.0057 to four digits); not traced further. Left: single
-/// head patches still missing inside walked clusters (a part whose first rays, 2 a
-/// point, all miss is dropped, one whose rays all hit is taken whole: the
-/// `PARTIAL_CLUSTER_RAYS` trigger decides on the rays it then averages, which
-/// biases low-visibility parts low), and the shared visibility of opened children.
-/// Next: a partly hidden surface source's children each with its own rays from the
-/// leaf's points.
-///
-/// Each child its own rays (2026-11-30, h45blend3, f771d3d, reverted): where a
-/// row opens a partly hidden surface source into its children, each child took
-/// its own rays' visible fraction from the leaf's points (4 rays a point,
-/// weighted by the point's factor to it) in place of the source's. This test
-/// read 7.58% off the lamp, worst point 16.6% (green at point 28); against
-/// 200,000 paths 10.6% → 7.1%, red 7.8% → 3.1% dark, green 7.6% → 6.5%; the
-/// Cornell blocks 0.89% → 0.86% and 0.71% → 0.66% at eps 0.15 and 0.1 (CPU +8%).
-/// Scaling the children's fractions to keep the source's coefficient made green
-/// 15% dark instead (a child the rays barely saw took the whole coefficient).
-/// Reverted for three tests it broke. Traced since (h45blend4, f771d3d again):
-/// - `spacetime::a_static_scene_makes_no_varying_link_and_equals_the_static_solve`
-///   (1.8e-5 apart at a leaf's green): the static solve took a fresh entry's
-///   visibility and an opened child's factor in `f64`, a window's frame from its
-///   `f32` caches; the children's coefficient divides by that visibility. With
-///   both rounded to `f32` where they are made (kept since), the static solve and
-///   the space-time solve's shared part end at the same residuals to the last bit
-///   (on the rows with the source's fraction shared, that test now reads 0 apart,
-///   1.2e-7 before).
-///   What is left is the frame's pass: it builds the rows again (which sources
-///   open follows the spread the last solve left), and where an opening flips, a
-///   source's children with their own fractions no longer sum to its
-///   coefficient, so its row changes; GMRES then iterates on from a static solve
-///   that had stopped at a residual of 9.991e-7 (tolerance 1e-6). With a
-///   tolerance of 1e-8 in both: 8.0e-7 apart with the children's rays, 3.6e-7
-///   without (bar 1e-6).
-/// - `solver::tiled_lamp::the_default_solve_refines_below_eps_while_its_estimate_is_above_the_promise`:
-///   the one-quad room with the lamp 20 cm down and turned 10°, against 100,000
-///   paths at its 19 points: at eps 0.5 (two levels) 3.05% RMS off the lamp,
-///   worst 5.3%, estimate 1.96% with the children's rays; 2.68%, worst 6.2%,
-///   estimate 3.73% without; at eps 0.25 0.37% against 1.89%, at 0.125 0.51%
-///   against 0.90%; tiled 6 × 6, 0.41% against 0.67% at every eps. The answer is
-///   better from eps 0.25 on, but at eps 0.5 the change between levels reads
-///   1.96% where the truth is 3.05%, under the promise (2.5%), so the solve no
-///   longer halves eps. Most likely the change between the levels measured
-///   mostly the children's shared visibility that refinement replaced by their
-///   own; with their own rays from the first level on that change is gone, and
-///   nothing sees the coarse level's mean deficit (−1.8%, the floor by a wall and
-///   the ceiling by the lamp 4.5–5.3% dark). Not fixed: the estimate needs a term
-///   for it.
-/// - `spacetime::each_frame_is_as_accurate_as_the_static_solve_of_that_frame`: the
-///   per-frame solve gains from the children's rays (t = 0: 2.03% → 1.93%,
-///   t = 0.4: 1.58% → 1.56% from the fine solve), the space-time frames less
-///   (1.94% → 1.88%) or not at all (1.649% at t = 0.4 either way): 1.056 times
-///   at t = 0.4, over the 1.05 bar. Not traced (the frame's rows take cached
-///   entries and opened rows of earlier frames).
-///
-/// The stiff room's leaf system (`a_stiff_room_is_balanced_and_keeps_its_light`)
-/// then absorbed 0.9914 unbalanced, within `BALANCE_TRIGGER`, its mean 0.52% off.
-/// The change between levels read 0.99 on this box, most likely from the leaves
-/// inside the slabs.
-///
-/// The estimate is to see that shortfall (2026-11-30, h45est,
-/// `Solver::row_ray_check`: sampled rows against cosine rays and rays at the
-/// lamp over the solved field, the mean gap amplified by the bounces' gain).
-/// On 128 rows the rows gathered 2.1%, 0.4%, 5.2% less in red, green and blue
-/// (noise 1.4, 0.35, 2.3%), gains 9.2, 22.5, 3.6; on one row in 8 (e4edf1f)
-/// the CLI's estimate still reads 5.23% (`rhier solve` at the defaults, 186 s
-/// of CPU): the term stayed under the other terms. Not yet traced.
+/// Where the light goes (the traces are in the commits that touched this test):
+/// not the slabs, the contact meshing or the final gather (the room rebuilt from
+/// one-sided quads is as far off; without the head it is within the reference's
+/// noise; one bounce cast from the probe points over the solved leaf field is as
+/// dark). The two-sided head reflects 0.999 of red and green, so a row that
+/// gathers 2% short per bounce comes out about 10% dark in those channels. The
+/// room's rows gather 1-3% less than cosine rays from the same points over the
+/// same field, in entries the head partly hides:
+/// - opened surface sources, whose children share the source's visible
+///   fraction: a child the head hides takes light a brighter one should.
+///   Each child's own rays' fraction (f771d3d, 8ea1afc, both reverted) read
+///   7.1-7.6% here but biases the rows (the children cast only where the
+///   source's rays came out partly hidden: the stiff room absorbed 0.9915, the
+///   door's local update drifted 1.21% from a fresh solve); the source's
+///   fraction moved by the children's rays (8ea1afc) kept the sums but stalled
+///   the leaf system (residual 8e-5) and read 16.1%, green 20% dark.
+/// - cluster parts decided by their first rays (`PARTIAL_CLUSTER_RAYS`): a part
+///   whose first rays (2 a point) all meet something is dropped, one whose rays
+///   all pass is taken whole, only the others are cast again, so a part 10%
+///   visible from each point is dropped about half the time. Walking the links
+///   whose estimate rays all met something (4d294fe, reverted) read 9.2% but
+///   unbalanced the pillar room (1.0057).
+/// Next: the children's own rays without the gate (cast wherever the entry's
+/// visibility came from rays), and the same for the cluster parts.
 #[test]
-#[ignore = "11.1% off the lamp at eps 0.5 (8a0d374), short of 5%, and a minute and a half long (issue 45)"]
+#[ignore = "10.5% off the lamp against 100,000 paths at eps 0.5 (e61cb15; 11.1% against the test's 4,000 at 8a0d374), short of 5%, and minutes long (issue 45)"]
 fn blender_cornell_box_agrees_with_the_path_tracer() {
     let err = blender_error(
         SolveOptions {
