@@ -205,6 +205,90 @@ fn bench(c: &mut Criterion) {
     g.bench_function("rhier_scene_bvh", |b| b.iter(rhier_count));
     g.bench_function("bare_obvhs_loop", |b| b.iter(bare_count));
     g.finish();
+    bundles(c);
+}
+
+/// The solver's rays on a scene: bundles of 8 segments from a point of one patch to
+/// 8 points of another that faces it (as a row's or the final gather's rays to a
+/// surface source), both patches skipped, one shadow cache per bundle
+/// (`occluded_between`), cast through each occlusion backend of one build. Scene:
+/// `RHIER_BENCH_SCENE` (a scene file, e.g. `tools/gen_cubes.py 20 c20.json`; its
+/// patches split at contacts as the solver's are), else the box grid above at n = 20.
+/// Prints each backend's answers' count of blocked rays (they must agree) and the
+/// best-of-5 single-thread rays/s; then criterion times each.
+fn bundles(c: &mut Criterion) {
+    use rhier::geometry::{LastHit, Parts, Rays, split_at_contacts};
+    let scene = match std::env::var_os("RHIER_BENCH_SCENE") {
+        Some(path) => match rhier::scene::load(Path::new(&path)) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("RHIER_BENCH_SCENE: {e}");
+                std::process::exit(1);
+            }
+        },
+        None => boxes_scene(20),
+    };
+    let patches = Patches::at_time(&scene, 0.0);
+    let patches = split_at_contacts(&scene, &patches, 0.0).0;
+    let mut bvh = SceneBvh::build(&scene, &patches, 0.0);
+    let u = rhier::oracle::unit;
+    let n = patches.len() as u64;
+    let mut rays: Vec<[(DVec3, DVec3, [u32; 2]); 8]> = Vec::new();
+    let mut k = 0u64;
+    while rays.len() < 20_000 {
+        k += 1;
+        let i = (hash3(11, k, 0) % n) as usize;
+        let j = (hash3(12, k, 0) % n) as usize;
+        let x = patches.point(i, u(hash3(13, k, 0)), u(hash3(14, k, 0)));
+        let y = patches.point(j, 0.5, 0.5);
+        if i == j || patches.normals[i].dot(y - x) <= 0.0 || patches.normals[j].dot(x - y) <= 0.0 {
+            continue;
+        }
+        let mut b = [(x, y, [i as u32, j as u32]); 8];
+        for (r, e) in b.iter_mut().enumerate() {
+            let (s, t) = ((r % 3) as f64, (r / 3) as f64);
+            e.1 = patches.point(
+                j,
+                (s + u(hash3(15, k, r as u64))) / 3.0,
+                (t + u(hash3(16, k, r as u64))) / 3.0,
+            );
+        }
+        rays.push(b);
+    }
+    let cast = |bvh: &SceneBvh| {
+        let mut blocked = 0usize;
+        for b in &rays {
+            let mut last = LastHit::default();
+            for &(x, y, skip) in b {
+                blocked += usize::from(bvh.occluded_between(x, y, skip, Parts::All, &mut last));
+            }
+        }
+        blocked
+    };
+    let mut backends = vec![Rays::Obvhs, Rays::Cwbvh];
+    if bvh.set_rays(Rays::Embree).is_ok() {
+        backends.push(Rays::Embree);
+    }
+    let total = rays.len() * 8;
+    let mut g = c.benchmark_group(format!("bundles_{}_patches", patches.len()));
+    g.throughput(Throughput::Elements(total as u64));
+    for rays_by in backends {
+        bvh.set_rays(rays_by).expect("backend set above");
+        let blocked = cast(&bvh);
+        let best = (0..5)
+            .map(|_| {
+                let t = Instant::now();
+                std::hint::black_box(cast(&bvh));
+                t.elapsed().as_secs_f64()
+            })
+            .fold(f64::INFINITY, f64::min);
+        println!(
+            "bundles: {rays_by:?}: {blocked} of {total} rays blocked, {:.3} M rays/s (best of 5)",
+            total as f64 / best / 1e6
+        );
+        g.bench_function(format!("{rays_by:?}"), |b| b.iter(|| cast(&bvh)));
+    }
+    g.finish();
 }
 
 /// Runs `count` 9 times (after one warm-up) and returns its answer and the rates in rays

@@ -8,8 +8,9 @@
 //! - [`Patches`]: every input polygon placed in world space at a time `t`.
 //! - [`SceneBvh`]: occlusion rays and closest hits through obvhs CWBVHs: one BVH in
 //!   world space for all static objects, one in object space per moving object placed
-//!   by its motion at time `t`. This module is the only user of obvhs. With the
-//!   cargo feature `embree`, occlusion rays may go through Embree 3 instead
+//!   by its motion at time `t`. This module is the only user of obvhs. Occlusion rays
+//!   go through a 4-wide BVH collapsed from obvhs' PLOC tree (`wide`); obvhs' CWBVH
+//!   or, with the cargo feature `embree`, Embree 3 may find their candidates instead
 //!   ([`Rays`], chosen by `RHIER_RAYS`), with the same f64 decisions.
 //!
 //! Geometry is `f64` everywhere except inside the BVHs (`f32`, as obvhs stores it);
@@ -24,6 +25,7 @@ mod nearest;
 mod patches;
 mod polygon;
 mod visibility;
+mod wide;
 
 pub use contact::{ContactStats, split_at_contacts};
 pub use formfactor::{

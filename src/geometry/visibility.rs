@@ -13,12 +13,16 @@
 //! shadow cache, 1986). On ACTOR a third of the rays are blocked and two thirds of
 //! those by the triangle cached; the answers are the traversal's.
 //!
-//! Occlusion is decided in f64: the f32 BVH finds the candidate triangles, and each
+//! Occlusion is decided in f64: an f32 BVH finds the candidate triangles, and each
 //! is tested on its f64 corners ([`SceneBvh::occluded_cached`]), so that the answer
-//! does not depend on how the scene's unit rounds to f32.
+//! does not depend on how the scene's unit rounds to f32. The occlusion rays' BVH is
+//! a 4-wide one with plain f32 boxes over the same padded triangle boxes
+//! ([`super::wide::Bvh4`], from obvhs' PLOC tree); the CWBVH, whose byte-quantised
+//! boxes cost more to decode than a ray's f64 tests, keeps closest hits and box
+//! queries, and may find the occlusion candidates instead (`RHIER_RAYS=cwbvh`).
 //!
-//! Occlusion rays have a second backend, Embree 3 ([`Rays`], the cargo feature
-//! `embree`, `RHIER_RAYS=embree`): it finds the candidates in place of the CWBVH and
+//! Occlusion rays have a third backend, Embree 3 ([`Rays`], the cargo feature
+//! `embree`, `RHIER_RAYS=embree`): it finds the candidates in place of the BVHs and
 //! the same f64 test decides ([`super::embree`]); closest hits and box queries stay
 //! on obvhs.
 //!
@@ -35,27 +39,32 @@ use obvhs::{
 };
 
 use super::patches::Patches;
+use super::wide::Bvh4;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 
-/// Which library casts the occlusion rays of a [`SceneBvh`] (closest hits and box
-/// queries are always obvhs'). Both decide each candidate triangle by the same f64
-/// test, so they give the same answers but for rays grazing a triangle's edge
-/// within f32 round-off.
+/// Which BVH finds the candidates of the occlusion rays of a [`SceneBvh`] (closest
+/// hits and box queries are always obvhs' CWBVH's). All decide each candidate triangle
+/// by the same f64 test, so they give the same answers (Embree's but for rays grazing
+/// a triangle's edge at under ~1°, [`super::embree`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Rays {
-    /// obvhs' CWBVH (the default).
+    /// The default: obvhs' PLOC BVH collapsed to 4 wide with plain f32 boxes,
+    /// traversed by rhier ([`super::wide::Bvh4`]).
     #[default]
     Obvhs,
+    /// obvhs' CWBVH traversal (the default before issue 48's rays; kept to compare).
+    Cwbvh,
     /// Embree 3 (`libembree3`), when rhier is built with the cargo feature `embree`.
     Embree,
 }
 
 impl Rays {
     /// The environment variable that chooses the backend of [`SceneBvh::build`]
-    /// (as `RHIER_STORAGE` chooses the pools'): unset, empty or `obvhs` for obvhs,
-    /// `embree` for Embree (only in a build with the feature `embree`). CI runs the
-    /// visibility tests and a set of known-answer solves on both.
+    /// (as `RHIER_STORAGE` chooses the pools'): unset, empty or `obvhs` for the
+    /// default, `cwbvh` for obvhs' CWBVH traversal, `embree` for Embree (only in a
+    /// build with the feature `embree`). CI runs the visibility tests and a set of
+    /// known-answer solves on obvhs and Embree.
     pub const ENV: &'static str = "RHIER_RAYS";
 
     /// The backend [`Rays::ENV`] names; refuses `embree` in a build without the
@@ -64,6 +73,7 @@ impl Rays {
         let value = std::env::var_os(Self::ENV).unwrap_or_default();
         match value.to_str() {
             Some("" | "obvhs") => Ok(Rays::Obvhs),
+            Some("cwbvh") => Ok(Rays::Cwbvh),
             Some("embree") if cfg!(feature = "embree") => Ok(Rays::Embree),
             Some("embree") => Err(Error::Usage(format!(
                 "{}=embree: this rhier was built without Embree \
@@ -71,7 +81,7 @@ impl Rays {
                 Self::ENV
             ))),
             _ => Err(Error::Usage(format!(
-                "{}: expected obvhs or embree, found {:?}",
+                "{}: expected obvhs, cwbvh or embree, found {:?}",
                 Self::ENV,
                 value
             ))),
@@ -173,6 +183,9 @@ pub struct Hit {
 /// One BVH with the triangles it indexes.
 struct Part {
     bvh: CwBvh,
+    /// The occlusion rays' BVH over the same padded boxes (primitive `i` is
+    /// `tris[i]`), for [`Rays::Obvhs`].
+    wide: Bvh4,
     /// Triangles in BVH order (indexed by the BVH's primitive ids).
     tris: Vec<Triangle>,
     /// Patch of each triangle in `tris`.
@@ -223,13 +236,15 @@ impl Part {
             .iter()
             .map(|&i| (tris[i as usize], tri_patch[i as usize]))
             .unzip();
-        let tris64 = bvh
+        let tris64: Vec<[DVec3; 3]> = bvh
             .primitive_indices
             .iter()
             .map(|&i| tris64[i as usize])
             .collect();
+        let wide = Bvh4::build(&padded_boxes(&tris64));
         let mut part = Part {
             bvh,
+            wide,
             tris,
             tri_patch,
             tris64,
@@ -300,6 +315,7 @@ impl Part {
     /// Parameter in `[tmin, tmax]` where the segment `o + s·d` (part space, f64)
     /// meets triangle `id` in f64 (Möller & Trumbore 1997, edges included), or
     /// infinity. See [`SceneBvh::occluded_cached`] for why f64.
+    #[allow(clippy::manual_range_contains)]
     fn hit64(&self, id: usize, o: DVec3, d: DVec3, tmin: f64, tmax: f64) -> f64 {
         let [v0, v1, v2] = self.tris64[id];
         let (e1, e2) = (v1 - v0, v2 - v0);
@@ -311,6 +327,12 @@ impl Part {
         let inv = 1.0 / det;
         let c = o - v0;
         let u = c.dot(p) * inv;
+        // What the test below refuses for any `v` (`u + v > 1` if `u > 1`, `v ≥ 0`:
+        // rounding is monotone), before `v` is computed; a NaN goes on as before
+        // (which `!(0.0..=1.0).contains(&u)` would not let it).
+        if u < 0.0 || u > 1.0 {
+            return f64::INFINITY;
+        }
         let q = c.cross(e1);
         let v = d.dot(q) * inv;
         if u < 0.0 || v < 0.0 || u + v > 1.0 {
@@ -470,7 +492,7 @@ impl SceneBvh {
     /// start; `self` is then unchanged.
     pub fn set_rays(&mut self, rays: Rays) -> Result<()> {
         match rays {
-            Rays::Obvhs => {
+            Rays::Obvhs | Rays::Cwbvh => {
                 #[cfg(feature = "embree")]
                 self.parts.iter_mut().for_each(|p| p.embree = None);
             }
@@ -669,19 +691,37 @@ impl SceneBvh {
                 }
                 continue;
             }
-            let ray = part.local_ray(o, d, t0, t1);
-            let hit = !part.bvh.ray_traverse_miss(ray, |_, id| {
-                let p = part.tri_patch[id];
-                if skip.contains(&p) {
-                    return f32::INFINITY;
-                }
-                if part.hit64(id, lo, ld, t0, t1).is_finite() {
-                    blocker = id as u32;
-                    0.0
-                } else {
-                    f32::INFINITY
-                }
-            });
+            let hit = if self.rays == Rays::Cwbvh {
+                let ray = part.local_ray(o, d, t0, t1);
+                !part.bvh.ray_traverse_miss(ray, |_, id| {
+                    let p = part.tri_patch[id];
+                    if skip.contains(&p) {
+                        return f32::INFINITY;
+                    }
+                    if part.hit64(id, lo, ld, t0, t1).is_finite() {
+                        blocker = id as u32;
+                        0.0
+                    } else {
+                        f32::INFINITY
+                    }
+                })
+            } else {
+                // The f32 range is wider than the f64 test's by `WIDE_SLACK`: the
+                // padded boxes hold every hit the test takes with a margin, and
+                // this keeps the range's own rounding out of the way.
+                part.wide
+                    .any_hit(lo, ld, t0 - WIDE_SLACK, t1 + WIDE_SLACK, |id| {
+                        let id = id as usize;
+                        if skip.contains(&part.tri_patch[id]) {
+                            return false;
+                        }
+                        let blocks = part.hit64(id, lo, ld, t0, t1).is_finite();
+                        if blocks {
+                            blocker = id as u32;
+                        }
+                        blocks
+                    })
+            };
             if hit {
                 *last = LastHit {
                     part: ix as u32,
@@ -845,6 +885,7 @@ impl SceneBvh {
                     + std::mem::size_of_val(p.tris.as_slice())
                     + std::mem::size_of_val(p.tri_patch.as_slice())
                     + std::mem::size_of_val(p.tris64.as_slice())
+                    + p.wide.resident_bytes()
             })
             .sum()
     }
@@ -922,6 +963,11 @@ const EMBREE_PAD: f64 = 1e-5;
 /// test's: the crossing's parameter strays like its place (see [`EMBREE_PAD`]).
 #[cfg(feature = "embree")]
 const EMBREE_SLACK: f64 = 1e-4;
+
+/// How much wider (in the segment's parameter) the f32 range of a [`Bvh4`]
+/// traversal is than the f64 test's: a few f32 ulps of the parameter (which is
+/// below 1.001), far below the boxes' padding ([`BOX_PAD`]) in units of a segment.
+const WIDE_SLACK: f64 = 1e-6;
 
 /// Relative widening of the BVH's triangle boxes ([`padded_boxes`]): 16 f32 ulps
 /// of the part's size, as [`Part::update_box`] pads a part's world box. A ray's

@@ -582,9 +582,11 @@ pub struct ResourceArgs {
     ///
     /// Results are deterministic for a given seed and thread count.
     ///
-    /// The occlusion rays are cast by obvhs; in a build with `--features embree`
-    /// (Debian's `libembree-dev`), the environment variable `RHIER_RAYS=embree` casts
-    /// them with Embree 3, with the same f64 decisions (`obvhs`, unset: the default).
+    /// The occlusion rays are cast through a 4-wide BVH built by obvhs;
+    /// `RHIER_RAYS=cwbvh` casts them through obvhs' CWBVH (the default before), and
+    /// in a build with `--features embree` (Debian's `libembree-dev`)
+    /// `RHIER_RAYS=embree` with Embree 3, all with the same f64 decisions (`obvhs`,
+    /// unset: the default).
     #[arg(long)]
     pub threads: Option<usize>,
 }

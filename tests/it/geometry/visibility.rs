@@ -257,9 +257,8 @@ fn the_shadow_cache_never_changes_an_answer() {
 /// pairs (`n` pairs, 8 segments each), in every form the solver asks: between
 /// surfaces (`occluded_between`, twins skipped) and with the plain trim
 /// (`occluded_by`), over each set of parts; segments within 1° of their end
-/// patches' planes left out. Also the number blocked.
-#[cfg(feature = "embree")]
-fn occlusion_answers(bvh: &SceneBvh, patches: &Patches, n: u64) -> (Vec<bool>, usize) {
+/// patches' planes left out when `all` is false. Also the number blocked.
+fn occlusion_answers(bvh: &SceneBvh, patches: &Patches, n: u64, all: bool) -> (Vec<bool>, usize) {
     use rhier::geometry::{LastHit, Parts};
     let np = patches.len() as u64;
     let mut out = Vec::new();
@@ -284,7 +283,7 @@ fn occlusion_answers(bvh: &SceneBvh, patches: &Patches, n: u64) -> (Vec<bool>, u
                 // such a ray by the cosine it makes, under sin 1°.
                 let e = y - x;
                 let sin = (patches.normals[i].dot(e).abs()).min(patches.normals[j].dot(e).abs());
-                if sin < 1f64.to_radians().sin() * e.length() {
+                if !all && sin < 1f64.to_radians().sin() * e.length() {
                     continue;
                 }
                 out.push(bvh.occluded_between(x, y, skip, which, &mut last));
@@ -330,10 +329,10 @@ fn embree_answers_every_occlusion_query_as_obvhs() {
         let mut bvh = SceneBvh::build(scene, &patches, t);
         assert_eq!(bvh.rays(), Rays::from_env().unwrap(), "{name}");
         bvh.set_rays(Rays::Obvhs).unwrap();
-        let (obvhs, blocked) = occlusion_answers(&bvh, &patches, 3000);
+        let (obvhs, blocked) = occlusion_answers(&bvh, &patches, 3000, false);
         bvh.set_rays(Rays::Embree).unwrap();
         assert_eq!(bvh.rays(), Rays::Embree);
-        let (embree, _) = occlusion_answers(&bvh, &patches, 3000);
+        let (embree, _) = occlusion_answers(&bvh, &patches, 3000, false);
         let differ = obvhs.iter().zip(&embree).filter(|(a, b)| a != b).count();
         assert!(
             blocked > obvhs.len() / 20,
@@ -349,8 +348,8 @@ fn embree_answers_every_occlusion_query_as_obvhs() {
     }
 }
 
-/// Without the feature `embree`, asking for Embree is an error that leaves obvhs
-/// casting the rays, and `RHIER_RAYS=embree` is refused rather than ignored.
+/// Without the feature `embree`, asking for Embree is an error that leaves the
+/// backend casting the rays as it was, and `RHIER_RAYS=embree` is refused rather than ignored.
 #[cfg(not(feature = "embree"))]
 #[test]
 fn embree_is_refused_without_the_feature() {
@@ -358,6 +357,140 @@ fn embree_is_refused_without_the_feature() {
     let scene = rhier::scene::cornell_box(true);
     let patches = Patches::at_time(&scene, 0.0);
     let mut bvh = SceneBvh::build(&scene, &patches, 0.0);
+    let before = bvh.rays();
+    assert_ne!(before, Rays::Embree);
     assert!(bvh.set_rays(Rays::Embree).is_err());
-    assert_eq!(bvh.rays(), Rays::Obvhs);
+    assert_eq!(bvh.rays(), before);
+}
+
+/// Segments made to graze: between corners of two patches (through vertices, along
+/// shared edges), between points on their edges, and between points of patches in
+/// one plane (along coplanar neighbours, which only round-off can make a segment
+/// cross); each cast as between surfaces (twins skipped), with the plain trim, and
+/// the patches' skips dropped (so that the segments' own end patches and their
+/// neighbours are candidates at the trim); over every set of parts. Also the number
+/// blocked.
+fn grazing_answers(bvh: &SceneBvh, patches: &Patches, n: u64) -> (Vec<bool>, usize) {
+    use rhier::geometry::{LastHit, Parts};
+    let np = patches.len() as u64;
+    let mut out = Vec::new();
+    let mut last = LastHit::default();
+    // A point on the boundary of patch `i`: corner `c`, or along the edge from it.
+    let edge = |i: usize, c: usize, s: f64| {
+        let v = patches.polys[i].corners();
+        v[c % v.len()].lerp(v[(c + 1) % v.len()], s)
+    };
+    for k in 0..n {
+        let (i, j) = (
+            (hash3(k, 1, 15) % np) as usize,
+            (hash3(k, 2, 15) % np) as usize,
+        );
+        let coplanar = (patches.normals[i].dot(patches.normals[j]) - 1.0).abs() < 1e-12
+            && patches.normals[i]
+                .dot(patches.polys[j].corners()[0] - patches.polys[i].corners()[0])
+                .abs()
+                < 1e-12;
+        let mut segs = Vec::new();
+        for r in 0..4u64 {
+            let (ci, cj) = (
+                (hash3(k, r, 16) % 8) as usize,
+                (hash3(k, r, 17) % 8) as usize,
+            );
+            segs.push((edge(i, ci, 0.0), edge(j, cj, 0.0)));
+            let (si, sj) = (u(hash3(k, r, 18)), u(hash3(k, r, 19)));
+            segs.push((edge(i, ci, si), edge(j, cj, sj)));
+            segs.push((edge(i, ci, 0.5), edge(j, cj, 0.5)));
+            if coplanar || r == 0 {
+                let x = patches.point(i, u(hash3(k, r, 20)), u(hash3(k, r, 21)));
+                let y = patches.point(j, u(hash3(k, r, 22)), u(hash3(k, r, 23)));
+                segs.push((x, y));
+            }
+        }
+        for (x, y) in segs {
+            if (y - x).length() == 0.0 {
+                continue;
+            }
+            for which in [Parts::All, Parts::Static, Parts::Moving] {
+                let skip = [i as u32, j as u32];
+                out.push(bvh.occluded_between(x, y, skip, which, &mut last));
+                out.push(bvh.occluded_by(x, y, skip, which));
+                out.push(bvh.occluded_by(x, y, [u32::MAX; 2], which));
+            }
+        }
+    }
+    let blocked = out.iter().filter(|&&b| b).count();
+    (out, blocked)
+}
+
+/// The default occlusion traversal (`Rays::Obvhs`, rhier's 4-wide BVH over obvhs'
+/// PLOC tree, `geometry::wide`) answers every query as obvhs' CWBVH traversal
+/// (`Rays::Cwbvh`, the default before): both are built on the same padded triangle
+/// boxes and decide each candidate by the same f64 test, so an answer could differ
+/// only if one of them lost a candidate the f64 test hits. Random segments between
+/// patches, with no angle left out, and the grazing ones of [`grazing_answers`]
+/// (through corners, along edges, in the plane of coplanar neighbours, ends' patches
+/// not skipped), on the Cornell box with its blocks, ACTOR mid-motion (moving parts
+/// in object space), the touching boxes of `solver::scale_free` (T-junctions, faces
+/// in contact), a room with a pillar in 6×6 quads per face (coplanar tiles), and
+/// the same in millimetres and kilometres (scale-free f32).
+#[test]
+fn the_4_wide_traversal_answers_every_occlusion_query_as_the_cwbvh() {
+    type Answers = fn(&SceneBvh, &Patches, u64) -> (Vec<bool>, usize);
+    use crate::common::shapes::{self, Tiling};
+    use rhier::geometry::Rays;
+    let t = 1.2;
+    let m = rhier::scene::MaterialId(0);
+    let pillar = || {
+        shapes::uniform_scene(
+            shapes::room_with_pillar_and_box(Tiling::Quads(6), m),
+            0.5,
+            1.0,
+        )
+    };
+    let scaled = |mut s: rhier::scene::Scene, k: f64| {
+        for o in &mut s.objects {
+            for p in &mut o.polygons {
+                for v in &mut p.vertices {
+                    *v *= k;
+                }
+            }
+        }
+        s
+    };
+    let scenes = [
+        ("cornell", rhier::scene::cornell_box(true)),
+        ("actor", rhier::scene::actor_scene(75)),
+        ("touching boxes", shapes::touching_boxes()),
+        ("pillar room, 6x6 quads", pillar()),
+        ("pillar room in mm", scaled(pillar(), 1e3)),
+        ("pillar room in km", scaled(pillar(), 1e-3)),
+    ];
+    for (name, scene) in &scenes {
+        let patches = Patches::at_time(scene, t);
+        let mut bvh = SceneBvh::build(scene, &patches, t);
+        for (kind, answers) in [
+            (
+                "random",
+                (|b, p, n| occlusion_answers(b, p, n, true)) as Answers,
+            ),
+            ("grazing", grazing_answers),
+        ] {
+            bvh.set_rays(Rays::Obvhs).unwrap();
+            let (wide, blocked) = answers(&bvh, &patches, 1500);
+            bvh.set_rays(Rays::Cwbvh).unwrap();
+            let (cwbvh, _) = answers(&bvh, &patches, 1500);
+            let differ = wide.iter().zip(&cwbvh).filter(|(a, b)| a != b).count();
+            assert!(
+                blocked > wide.len() / 20 && blocked < wide.len() * 19 / 20,
+                "{name}, {kind}: {blocked} of {} blocked",
+                wide.len()
+            );
+            assert_eq!(
+                differ,
+                0,
+                "{name}, {kind}: {differ} of {} answers differ",
+                wide.len()
+            );
+        }
+    }
 }
