@@ -140,6 +140,7 @@ fn blender_error(opts: SolveOptions, paths: u32) -> PointError {
 ///   visible from each point is dropped about half the time. Walking the links
 ///   whose estimate rays all met something (4d294fe, reverted) read 9.2% but
 ///   unbalanced the pillar room (1.0057).
+///
 /// Next: the children's own rays without the gate (cast wherever the entry's
 /// visibility came from rays), and the same for the cluster parts.
 #[test]
