@@ -46,11 +46,11 @@ use crate::scene::Scene;
 /// Which BVH finds the candidates of the occlusion rays of a [`SceneBvh`] (closest
 /// hits and box queries are always obvhs' CWBVH's). All decide each candidate triangle
 /// by the same f64 test, so they give the same answers (Embree's but for rays grazing
-/// a triangle's edge at under ~1°, [`super::embree`]).
+/// a triangle's edge at under ~1°, `geometry::embree`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Rays {
     /// The default: obvhs' PLOC BVH collapsed to 4 wide with plain f32 boxes,
-    /// traversed by rhier ([`super::wide::Bvh4`]).
+    /// traversed by rhier (`geometry::wide`).
     #[default]
     Obvhs,
     /// obvhs' CWBVH traversal (the default before issue 48's rays; kept to compare).
