@@ -666,62 +666,50 @@ impl SceneBvh {
             }
             let (lo, ld) = part.local(o, d);
             let mut blocker = u32::MAX;
-            #[cfg(feature = "embree")]
-            if let Some(scene) = &part.embree {
-                // The same f64 test on the same segment; Embree's f32 range is
-                // wider by `EMBREE_SLACK` so that it holds every hit the test
-                // takes.
-                let hit = scene.occluded(lo, ld, t0 - EMBREE_SLACK, t1 + EMBREE_SLACK, &mut |id| {
-                    let id = id as usize;
-                    if skip.contains(&part.tri_patch[id]) {
-                        return false;
-                    }
-                    let blocks = part.hit64(id, lo, ld, t0, t1).is_finite();
-                    if blocks {
-                        blocker = id as u32;
-                    }
-                    blocks
-                });
-                if hit {
-                    *last = LastHit {
-                        part: ix as u32,
-                        tri: blocker,
-                    };
-                    return true;
+            // Every backend's candidates are decided by the same f64 test on the
+            // same segment; the first that blocks is remembered for the cache.
+            let mut blocks = |id: usize| {
+                if skip.contains(&part.tri_patch[id]) {
+                    return false;
                 }
-                continue;
-            }
-            let hit = if self.rays == Rays::Cwbvh {
-                let ray = part.local_ray(o, d, t0, t1);
-                !part.bvh.ray_traverse_miss(ray, |_, id| {
-                    let p = part.tri_patch[id];
-                    if skip.contains(&p) {
-                        return f32::INFINITY;
-                    }
-                    if part.hit64(id, lo, ld, t0, t1).is_finite() {
-                        blocker = id as u32;
-                        0.0
-                    } else {
-                        f32::INFINITY
-                    }
-                })
-            } else {
-                // The f32 range is wider than the f64 test's by `WIDE_SLACK`: the
-                // padded boxes hold every hit the test takes with a margin, and
-                // this keeps the range's own rounding out of the way.
-                part.wide
-                    .any_hit(lo, ld, t0 - WIDE_SLACK, t1 + WIDE_SLACK, |id| {
-                        let id = id as usize;
-                        if skip.contains(&part.tri_patch[id]) {
-                            return false;
-                        }
-                        let blocks = part.hit64(id, lo, ld, t0, t1).is_finite();
-                        if blocks {
-                            blocker = id as u32;
-                        }
-                        blocks
-                    })
+                let hit = part.hit64(id, lo, ld, t0, t1).is_finite();
+                if hit {
+                    blocker = id as u32;
+                }
+                hit
             };
+            // (Only Embree breaks out of the block early.)
+            #[cfg_attr(not(feature = "embree"), allow(unused_labels))]
+            let hit =
+                'found: {
+                    #[cfg(feature = "embree")]
+                    if let Some(scene) = &part.embree {
+                        // Embree's f32 range is wider by `EMBREE_SLACK` so that it
+                        // holds every hit the test takes.
+                        break 'found scene.occluded(
+                            lo,
+                            ld,
+                            t0 - EMBREE_SLACK,
+                            t1 + EMBREE_SLACK,
+                            &mut |id| blocks(id as usize),
+                        );
+                    }
+                    if self.rays == Rays::Cwbvh {
+                        let ray = part.local_ray(o, d, t0, t1);
+                        !part.bvh.ray_traverse_miss(ray, |_, id| {
+                            if blocks(id) { 0.0 } else { f32::INFINITY }
+                        })
+                    } else {
+                        // The f32 range is wider than the f64 test's by
+                        // `WIDE_SLACK`: the padded boxes hold every hit the test
+                        // takes with a margin, and this keeps the range's own
+                        // rounding out of the way.
+                        part.wide
+                            .any_hit(lo, ld, t0 - WIDE_SLACK, t1 + WIDE_SLACK, |id| {
+                                blocks(id as usize)
+                            })
+                    }
+                };
             if hit {
                 *last = LastHit {
                     part: ix as u32,
