@@ -56,6 +56,7 @@ pub mod spacetime;
 use facets::{FACET_BIT, MAX_FACETS, source_slot, source_value};
 pub use reconstruct::Reconstruction;
 pub use row_check::RowCheck;
+pub use row_patch::KeptByTrace;
 use rows::{ClusterPart, KeptCoef, OpenedFactors, RowEntries};
 use spacetime::SpaceTimeState;
 use spacetime::interpolate::TimedEntry;
@@ -645,6 +646,10 @@ struct LeafSystem {
     move_traces: ByLeaf<(u64, u64)>,
     /// The records the rows being computed made, taken into `move_traces`.
     move_traces_made: std::sync::Mutex<Vec<(MaskKey, (u64, u64))>>,
+    /// Interactive moves: how many static parts the updated rows kept by their
+    /// traces, and the check of them against a recomputation when asked
+    /// ([`Solver::check_kept_parts`]).
+    move_kept: row_patch::KeptTally,
     /// Rows are being computed for an interactive move ([`Solver::move_row_masks`]).
     move_rows: bool,
 }

@@ -47,6 +47,7 @@
 
 use super::rows::{RowMasks, move_mask};
 use super::*;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 /// The share of its row (factor before visibility) from which an entry with a
 /// moving end casts every ray in an interactive move's rows
@@ -80,6 +81,87 @@ pub(super) struct RowPatch {
     pub(super) stale: FastMap<u32, Dirty>,
     /// Each element's place in the element tree ([`tree_order`]).
     pub(super) order: Vec<(u32, u32)>,
+}
+
+/// How many static surface parts an interactive move's rows kept by their
+/// traces ([`Solver::unchanged_part`]), counted from the session's start; and,
+/// while [`Solver::check_kept_parts`] is on, how many of those kept in a
+/// cluster walk were computed again beside and how many came out otherwise.
+#[derive(Default)]
+pub(super) struct KeptTally {
+    surface: AtomicU64,
+    check: AtomicBool,
+    checked: AtomicU64,
+    differ: AtomicU64,
+}
+
+/// [`Solver::kept_parts`]: the static parts an interactive session's moves kept
+/// by the rays a moving object blocked (`row_patch`), from the session's start.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KeptByTrace {
+    /// Surface parts and surface sources kept ([`Solver::unchanged_part`]).
+    pub surface: u64,
+    /// Of the parts kept in a cluster walk while [`Solver::check_kept_parts`]
+    /// was on, how many were computed again to compare.
+    pub checked: u64,
+    /// Of those, how many the recomputation gave otherwise (bit for bit, in
+    /// order): 0 if keeping is exact.
+    pub differ: u64,
+}
+
+impl Solver<'_> {
+    /// The static parts the interactive moves' rows kept by their traces so far
+    /// ([`KeptByTrace`]).
+    pub fn kept_parts(&self) -> KeptByTrace {
+        let t = &self.sys.move_kept;
+        KeptByTrace {
+            surface: t.surface.load(Ordering::Relaxed),
+            checked: t.checked.load(Ordering::Relaxed),
+            differ: t.differ.load(Ordering::Relaxed),
+        }
+    }
+
+    /// While `on`, every part an interactive move's rows keep in a cluster walk
+    /// by its trace is also computed again as the walk would compute it, and
+    /// compared with the kept entries ([`KeptByTrace::differ`]): for tests; it
+    /// costs what keeping spares.
+    pub fn check_kept_parts(&self, on: bool) {
+        self.sys.move_kept.check.store(on, Ordering::Relaxed);
+    }
+
+    /// Counts part `e` of chain link `l`, kept by its trace with the entries
+    /// `group` of `old` in the row of `leaf` in a cluster walk, and, while
+    /// [`Solver::check_kept_parts`] is on, computes it again to compare.
+    #[allow(clippy::too_many_arguments)]
+    fn tally_kept(
+        &self,
+        leaf: ElementId,
+        l: u32,
+        e: u32,
+        q: &oracle::Samples,
+        n: DVec3,
+        old: &[(u32, f64)],
+        group: &[u32],
+    ) {
+        let t = &self.sys.move_kept;
+        t.surface.fetch_add(1, Ordering::Relaxed);
+        if !t.check.load(Ordering::Relaxed) {
+            return;
+        }
+        // The walk takes the part as the source of its own: the same factors,
+        // rays and opening.
+        let mut fresh = Vec::new();
+        self.push_cluster(leaf, l, q, n, e, &mut fresh, None, &mut |_| false);
+        let same = fresh.len() == group.len()
+            && fresh.iter().zip(group).all(|(a, &i)| {
+                let b = old[i as usize];
+                a.0 == b.0 && a.1.to_bits() == b.1.to_bits()
+            });
+        t.checked.fetch_add(1, Ordering::Relaxed);
+        if !same {
+            t.differ.fetch_add(1, Ordering::Relaxed);
+        }
+    }
 }
 
 impl RowPatch {
@@ -307,7 +389,7 @@ impl Solver<'_> {
 
     /// True if the entries of surface part `e` of chain link `l` in the row of
     /// `leaf` (quadrature `q`, normal `n`), where neither moves, are those under it
-    /// in `old` (indices `group`) and a recomputation would give them again: the
+    /// in `old` (indices `group`; `None`: all of `old`) and a recomputation would give them again: the
     /// move that computed them last kept which of their rays a moving object
     /// blocked ([`Solver::keep_move_trace`]), the old entries are the ones it gave
     /// (their print), and the same rays, cast again at the moving objects alone
@@ -326,7 +408,7 @@ impl Solver<'_> {
         q: &oracle::Samples,
         n: DVec3,
         old: &[(u32, f64)],
-        group: &[u32],
+        group: Option<&[u32]>,
     ) -> bool {
         let RowMasks::Move(bits) = self.move_row_masks(leaf, l, e, q) else {
             return false;
@@ -339,7 +421,11 @@ impl Solver<'_> {
         if traced >> move_mask::SEEN & 1 == 0
             || bits >> move_mask::QUAD & 1 == 0
             || !move_mask::corners(m)
-            || print != entries_print(group.iter().map(|&i| &old[i as usize]))
+            || print
+                != match group {
+                    Some(g) => entries_print(g.iter().map(|&i| &old[i as usize])),
+                    None => entries_print(old.iter()),
+                }
         {
             return false;
         }
@@ -397,10 +483,11 @@ impl Solver<'_> {
             let keep = !patch.holding[s as usize]
                 && (patch.clear(leaf_box, super::geom_box(gs))
                     // (A link a shaft proved clear casts no ray: integrated.)
-                    || !self.links.transports.as_slice()[l as usize].shaft_clear() && {
-                        let all: Vec<u32> = (0..old.len() as u32).collect();
-                        self.unchanged_part(leaf, l, s, q, n, old, &all)
-                    });
+                    || !self.links.transports.as_slice()[l as usize].shaft_clear()
+                        && self.unchanged_part(leaf, l, s, q, n, old, None) && {
+                            self.sys.move_kept.surface.fetch_add(1, Ordering::Relaxed);
+                            true
+                        });
             if keep {
                 row.extend_from_slice(old);
             }
@@ -432,7 +519,11 @@ impl Solver<'_> {
             // by the moving objects as at the move that computed its entries.
             let same = known && patch.clear(leaf_box, super::geom_box(&geoms[c as usize]))
                 || geoms[c as usize].patch != u32::MAX
-                    && self.unchanged_part(leaf, l, c, q, n, old, &group);
+                    && self.unchanged_part(leaf, l, c, q, n, old, Some(&group))
+                    && {
+                        self.tally_kept(leaf, l, c, q, n, old, &group);
+                        true
+                    };
             if same {
                 kept.extend(group.iter().map(|&i| old[i as usize]));
             }

@@ -4,6 +4,7 @@
 
 mod cli;
 mod door;
+mod kept;
 mod moves;
 mod prime;
 mod restore;
