@@ -67,6 +67,76 @@ pub fn box_shaft_misses(a: Aabb, c: Aabb, x: Aabb) -> bool {
     false
 }
 
+/// True if [`box_shaft_misses`] holds for `a`, `c` and every box of `xs`: the same
+/// answer, the same arithmetic per box, with the shaft's lines set up once for
+/// all the boxes (an interactive move's rows test each shaft against the moved
+/// objects' boxes before and after).
+pub fn box_shaft_misses_all(a: Aabb, c: Aabb, xs: &[Aabb]) -> bool {
+    if xs.len() > 64 {
+        return xs.chunks(64).all(|xs| box_shaft_misses_all(a, c, xs));
+    }
+    let (lo, hi) = (a.0.min(c.0), a.1.max(c.1));
+    let eps = (hi - lo).length() * 1e-9;
+    // The boxes not proved missed yet (bit k: xs[k]).
+    let mut left = 0u64;
+    for (k, x) in xs.iter().enumerate() {
+        if !((x.0 - DVec3::splat(eps)).cmpgt(hi).any() || (x.1 + DVec3::splat(eps)).cmplt(lo).any())
+        {
+            left |= 1 << k;
+        }
+    }
+    if left == 0 {
+        return true;
+    }
+    for (i, j) in [(0usize, 1usize), (1, 2), (0, 2)] {
+        for (si, sj) in [(false, false), (true, false), (false, true), (true, true)] {
+            let corner = |b: Aabb| {
+                let pick = |k: usize, hi_side: bool| if hi_side { b.1[k] } else { b.0[k] };
+                (pick(i, si), pick(j, sj))
+            };
+            let (p, q) = (corner(a), corner(c));
+            // The line's normal, pointing away from the rectangles' far corners.
+            let (dx, dy) = (q.0 - p.0, q.1 - p.1);
+            let mut n = (dy, -dx);
+            let out = (if si { 1.0 } else { -1.0 }, if sj { 1.0 } else { -1.0 });
+            if n.0 * out.0 + n.1 * out.1 < 0.0 {
+                n = (-n.0, -n.1);
+            }
+            if n.0 == 0.0 && n.1 == 0.0 {
+                continue;
+            }
+            let d = n.0 * p.0 + n.1 * p.1;
+            let tol = eps * (n.0.abs() + n.1.abs());
+            // Largest and smallest of n · corner over a rectangle.
+            let extent = |b: Aabb, max: bool| {
+                let pick = |k: usize, w: f64| {
+                    if (w >= 0.0) == max {
+                        b.1[k] * w
+                    } else {
+                        b.0[k] * w
+                    }
+                };
+                pick(i, n.0) + pick(j, n.1)
+            };
+            if extent(a, true) > d + tol || extent(c, true) > d + tol {
+                continue; // not a side of the hull: some corner lies beyond
+            }
+            let mut rest = left;
+            while rest != 0 {
+                let k = rest.trailing_zeros();
+                rest &= rest - 1;
+                if extent(xs[k as usize], false) > d + tol {
+                    left &= !(1 << k);
+                }
+            }
+            if left == 0 {
+                return true;
+            }
+        }
+    }
+    false
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -117,6 +187,35 @@ mod tests {
         assert!(!some_segment_meets(a, c, off));
         // Outside the joint box.
         assert!(box_shaft_misses(a, c, b([6.0, 0.0, 0.0], [7.0, 1.0, 1.0])));
+    }
+
+    /// The shaft set up once for several boxes answers as each box alone: over
+    /// pairs of boxes and lists of boxes about them (in the joint box, beside it,
+    /// across the diagonal band), `box_shaft_misses_all` is `all` of
+    /// `box_shaft_misses`, and both answers occur.
+    #[test]
+    fn all_boxes_at_once_answer_as_each_box_alone() {
+        let mut h = 0x9e37_79b9_7f4a_7c15u64;
+        let mut r = || {
+            h ^= h << 13;
+            h ^= h >> 7;
+            h ^= h << 17;
+            (h >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut rbox = |scale: f64, size: f64| {
+            let lo = DVec3::new(r(), r(), r()) * scale;
+            (lo, lo + DVec3::new(r(), r(), r()) * size)
+        };
+        let (mut yes, mut no) = (0, 0);
+        for _ in 0..2000 {
+            let (a, c) = (rbox(4.0, 1.0), rbox(4.0, 1.0));
+            let n = 1 + (rbox(1.0, 1.0).0.x * 4.0) as usize;
+            let xs: Vec<Aabb> = (0..n).map(|_| rbox(4.0, 0.4)).collect();
+            let each = xs.iter().all(|&x| box_shaft_misses(a, c, x));
+            assert_eq!(box_shaft_misses_all(a, c, &xs), each, "{a:?} {c:?} {xs:?}");
+            if each { yes += 1 } else { no += 1 }
+        }
+        assert!(yes > 100 && no > 100, "{yes} {no}");
     }
 
     #[test]

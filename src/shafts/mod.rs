@@ -25,7 +25,7 @@ use glam::DVec3;
 use crate::geometry::SceneBvh;
 
 mod boxes;
-pub use boxes::box_shaft_misses;
+pub use boxes::{box_shaft_misses, box_shaft_misses_all};
 
 /// Most planes a shaft keeps (two quads: 8 edges × 4 corners candidates, few survive).
 const MAX_PLANES: usize = 16;

@@ -177,9 +177,7 @@ impl RowPatch {
 
     /// True if every segment between boxes `a` and `b` misses every moved box.
     fn clear(&self, a: (DVec3, DVec3), b: (DVec3, DVec3)) -> bool {
-        self.boxes
-            .iter()
-            .all(|&x| crate::shafts::box_shaft_misses(a, b, x))
+        crate::shafts::box_shaft_misses_all(a, b, &self.boxes)
     }
 
     /// The old entries of a link to source `s` (all under it), sorted by where
