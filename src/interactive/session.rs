@@ -224,28 +224,59 @@ impl<'a> Session<'a> {
 
     /// The stored answer now: the final gather reconstructed over every patch,
     /// with the scene held at the current poses.
+    ///
+    /// A scene with no emitter was never solved: its answer is zero everywhere, as
+    /// `rhier solve` writes it ([`Solution::zero`]).
     pub fn solution(&self) -> Solution {
+        let scene = self.stage.posed(&self.poses);
+        if !self.stage.scene.has_emitter() {
+            return Solution::zero(&scene);
+        }
         let mut s = self.solver.solution();
-        s.scene = self.stage.posed(&self.poses);
+        s.scene = scene;
         s
     }
 
     /// Applies one move (module docs) and returns its statistics.
     pub fn apply(&mut self, moves: &[ObjectMove]) -> Result<MoveStats> {
         self.moves += 1;
+        if !self.stage.scene.has_emitter() {
+            return Ok(self.dark_move(moves));
+        }
         self.step(moves, true)
+    }
+
+    /// A move in a scene with no emitter, whose answer is zero in every pose:
+    /// the objects are placed and nothing is computed (no links, rows or shafts;
+    /// [`Session::start`] did not solve such a scene either).
+    fn dark_move(&mut self, moves: &[ObjectMove]) -> MoveStats {
+        let start = Instant::now();
+        let mut world: Vec<Option<DAffine3>> = vec![None; self.poses.len()];
+        for m in moves {
+            world[m.object as usize] = Some(m.pose.to_affine());
+            self.poses[m.object as usize] = m.pose;
+        }
+        self.solver.place_objects(&world);
+        MoveStats {
+            r#move: self.moves,
+            links_total: self.solver.links.len() as u64,
+            leaves_total: self.solver.leaf_count() as u64,
+            total_s: start.elapsed().as_secs_f64(),
+            ..MoveStats::default()
+        }
     }
 
     /// Makes ready, before the first move, what the first move of the movable
     /// objects would otherwise make itself: a move of each to where it stands
     /// (module docs, "Priming"). Returns its statistics (move 0), or `None`
-    /// where there is nothing to prime (no movable object, or [`Update::Full`],
-    /// whose moves keep nothing between them). No link changes; the rows it
+    /// where there is nothing to prime (no movable object; [`Update::Full`],
+    /// whose moves keep nothing between them; or a scene with no emitter, whose
+    /// answer is zero in every pose and which [`Session::start`] did not solve). No link changes; the rows it
     /// computes again are drawn as a move draws them, so the light moves by the
     /// rows' noise (under 4e-4 at the points of `interactive::prime`'s test), and
     /// from the first move on the session is an unprimed one's within 1e-6.
     pub fn prime(&mut self) -> Result<Option<MoveStats>> {
-        if self.settings.update != Update::Local {
+        if self.settings.update != Update::Local || !self.stage.scene.has_emitter() {
             return Ok(None);
         }
         let here: Vec<ObjectMove> = (0..self.poses.len() as u32)

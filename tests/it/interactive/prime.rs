@@ -120,3 +120,38 @@ fn a_primed_session_keeps_the_solved_light_and_moves_as_an_unprimed_one() {
         &room(Tiling::UnequalTriangles(2), 0.6),
     );
 }
+
+/// A room with no emitter: its answer is zero in every pose and the session did
+/// not solve it, so there is nothing to prime, and a move computes nothing and
+/// keeps every point dark.
+#[test]
+fn a_room_with_no_emitter_has_nothing_to_prime() {
+    let mut scene = room(Tiling::Quads(2), 0.6);
+    for m in &mut scene.materials {
+        m.emission = [0.0; 3];
+    }
+    assert!(!scene.has_emitter());
+    let movable = ["crate".to_string()];
+    let stage = Stage::new(&scene, Some(&movable)).unwrap();
+    let mut s = Session::start(&stage, options(), Settings::default()).unwrap();
+    let b = probe(&s.solution(), &points(), 0.0).unwrap();
+    assert!(b.iter().flatten().all(|&x| x == 0.0), "a dark room lit");
+    assert!(s.prime().unwrap().is_none(), "a dark room was primed");
+    let m = s
+        .apply(&[ObjectMove {
+            object: 1,
+            pose: shift(0.1, 0.0, 0.0),
+        }])
+        .unwrap();
+    let b = probe(&s.solution(), &points(), 0.0).unwrap();
+    eprintln!(
+        "dark room, move 1: rows {}, shafts built {}",
+        m.rows_recomputed, m.shafts_built
+    );
+    assert_eq!(m.rows_recomputed, 0, "a move in a dark room computed rows");
+    assert_eq!(m.links_reevaluated, 0);
+    assert!(
+        b.iter().flatten().all(|&x| x == 0.0),
+        "a dark room lit after a move"
+    );
+}
