@@ -99,7 +99,7 @@ pub(super) struct KeptTally {
 /// by the rays a moving object blocked (`row_patch`), from the session's start.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct KeptByTrace {
-    /// Surface parts and surface sources kept ([`Solver::unchanged_part`]).
+    /// Surface parts and surface sources kept (`Solver::unchanged_part`).
     pub surface: u64,
     /// Of the parts kept in a cluster walk while [`Solver::check_kept_parts`]
     /// was on, how many were computed again to compare.
