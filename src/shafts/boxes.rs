@@ -21,56 +21,13 @@ pub type Aabb = (DVec3, DVec3);
 /// True if no point of box `x` lies on a segment between a point of box `a` and a
 /// point of box `c` (module docs); `false` does not prove that one does.
 pub fn box_shaft_misses(a: Aabb, c: Aabb, x: Aabb) -> bool {
-    let (lo, hi) = (a.0.min(c.0), a.1.max(c.1));
-    let eps = (hi - lo).length() * 1e-9;
-    if (x.0 - DVec3::splat(eps)).cmpgt(hi).any() || (x.1 + DVec3::splat(eps)).cmplt(lo).any() {
-        return true;
-    }
-    for (i, j) in [(0usize, 1usize), (1, 2), (0, 2)] {
-        for (si, sj) in [(false, false), (true, false), (false, true), (true, true)] {
-            let corner = |b: Aabb| {
-                let pick = |k: usize, hi_side: bool| if hi_side { b.1[k] } else { b.0[k] };
-                (pick(i, si), pick(j, sj))
-            };
-            let (p, q) = (corner(a), corner(c));
-            // The line's normal, pointing away from the rectangles' far corners.
-            let (dx, dy) = (q.0 - p.0, q.1 - p.1);
-            let mut n = (dy, -dx);
-            let out = (if si { 1.0 } else { -1.0 }, if sj { 1.0 } else { -1.0 });
-            if n.0 * out.0 + n.1 * out.1 < 0.0 {
-                n = (-n.0, -n.1);
-            }
-            if n.0 == 0.0 && n.1 == 0.0 {
-                continue;
-            }
-            let d = n.0 * p.0 + n.1 * p.1;
-            let tol = eps * (n.0.abs() + n.1.abs());
-            // Largest and smallest of n · corner over a rectangle.
-            let extent = |b: Aabb, max: bool| {
-                let pick = |k: usize, w: f64| {
-                    if (w >= 0.0) == max {
-                        b.1[k] * w
-                    } else {
-                        b.0[k] * w
-                    }
-                };
-                pick(i, n.0) + pick(j, n.1)
-            };
-            if extent(a, true) > d + tol || extent(c, true) > d + tol {
-                continue; // not a side of the hull: some corner lies beyond
-            }
-            if extent(x, false) > d + tol {
-                return true;
-            }
-        }
-    }
-    false
+    box_shaft_misses_all(a, c, std::slice::from_ref(&x))
 }
 
-/// True if [`box_shaft_misses`] holds for `a`, `c` and every box of `xs`: the same
-/// answer, the same arithmetic per box, with the shaft's lines set up once for
-/// all the boxes (an interactive move's rows test each shaft against the moved
-/// objects' boxes before and after).
+/// True if [`box_shaft_misses`] holds for `a`, `c` and every box of `xs`, the
+/// shaft's lines set up once for all the boxes (an interactive move's rows test
+/// each shaft against the moved objects' boxes before and after): a box is
+/// proved missed by the joint box or by one line, as the module docs say.
 pub fn box_shaft_misses_all(a: Aabb, c: Aabb, xs: &[Aabb]) -> bool {
     if xs.len() > 64 {
         return xs.chunks(64).all(|xs| box_shaft_misses_all(a, c, xs));
