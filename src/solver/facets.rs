@@ -115,9 +115,13 @@ type Acc = (
 /// at most [`MAX_OFFSETS`] are left.
 fn merge_offsets(offs: &mut Vec<(f64, f64)>) {
     offs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    // The same offset (the faces of a row of boxes in one plane) first.
+    // The same offset (the faces of a row of boxes in one plane) first, within
+    // rounding of the largest offset: relative, so a scene scaled by a power of
+    // two merges the same offsets (an absolute floor merged every offset of a
+    // scene 2^-30 across).
+    let tol = 1e-9 * offs.iter().fold(0.0f64, |m, o| m.max(o.0.abs()));
     offs.dedup_by(|b, a| {
-        let same = (b.0 - a.0).abs() <= 1e-9 * (1.0 + a.0.abs());
+        let same = (b.0 - a.0).abs() <= tol;
         if same {
             a.1 += b.1;
         }
