@@ -24,6 +24,12 @@
 //! the next box as visible as the lit tops the rays mostly went to. The facets
 //! hold where the patches stand at the start: a scene with motion does not use them.
 //!
+//! Every static scene builds them: the leaf rows take a far, small cluster whole by
+//! its facets even where a point lies in a facet's slab
+//! (`Solver::far_facet_factors`), each facet's patches at their own plane offsets
+//! ([`ClusterFacets::front_depth`]); `--cluster-facets` takes near ones too, where
+//! every facet tells, in the rows and the final gather.
+//!
 //! Each facet is a source of its own, gathered at its own radiosity: the area mean
 //! of the patch roots and sub-cluster facets it sums ([`ClusterFacets::pull`],
 //! run after the hierarchy's pull; [`ClusterFacets::push_down`] its transpose).
@@ -87,10 +93,55 @@ pub struct Facet {
 
 const _: () = assert!(std::mem::size_of::<Facet>() == 36);
 
+/// Most plane offsets a facet keeps ([`ClusterFacets::front_depth`]): beyond,
+/// the nearest two merge.
+const MAX_OFFSETS: usize = 8;
+
 /// A facet as [`ClusterFacets::build`] sums it: normal, area, area moment, the
-/// slab `[lo, hi]`, and its members `(child element, the child's facet index or
-/// `u32::MAX` for a patch root, area)`.
-type Acc = (DVec3, f64, DVec3, f64, f64, Vec<(u32, u32, f64)>);
+/// slab `[lo, hi]`, its members `(child element, the child's facet index or
+/// `u32::MAX` for a patch root, area)`, and its patches' plane offsets with their
+/// areas (at most [`MAX_OFFSETS`]).
+type Acc = (
+    DVec3,
+    f64,
+    DVec3,
+    f64,
+    f64,
+    Vec<(u32, u32, f64)>,
+    Vec<(f64, f64)>,
+);
+
+/// Merges the nearest two of `offs` (plane offset, area), area-weighted, until
+/// at most [`MAX_OFFSETS`] are left.
+fn merge_offsets(offs: &mut Vec<(f64, f64)>) {
+    offs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // The same offset (the faces of a row of boxes in one plane) first, within
+    // rounding of the largest offset: relative, so a scene scaled by a power of
+    // two merges the same offsets (an absolute floor merged every offset of a
+    // scene 2^-30 across).
+    let tol = 1e-9 * offs.iter().fold(0.0f64, |m, o| m.max(o.0.abs()));
+    offs.dedup_by(|b, a| {
+        let same = (b.0 - a.0).abs() <= tol;
+        if same {
+            a.1 += b.1;
+        }
+        same
+    });
+    while offs.len() > MAX_OFFSETS {
+        let i = (0..offs.len() - 1)
+            .min_by(|&i, &j| (offs[i + 1].0 - offs[i].0).total_cmp(&(offs[j + 1].0 - offs[j].0)))
+            .unwrap_or(0);
+        let (a, b) = (offs[i], offs[i + 1]);
+        let area = a.1 + b.1;
+        let o = if area > 0.0 {
+            (a.0 * a.1 + b.0 * b.1) / area
+        } else {
+            0.5 * (a.0 + b.0)
+        };
+        offs[i] = (o, area);
+        offs.remove(i + 1);
+    }
+}
 
 /// The facets of every cluster built at the start, as ranges of one array.
 #[derive(Debug, Default)]
@@ -107,6 +158,11 @@ pub struct ClusterFacets {
     members: Vec<(u32, f32)>,
     /// The cluster each facet belongs to.
     owner: Vec<u32>,
+    /// `offsets_start[f]..offsets_start[f + 1]` are facet `f`'s plane offsets
+    /// in `offsets`: `(n · p, area share)` of its patches, the nearest merged
+    /// beyond [`MAX_OFFSETS`] ([`ClusterFacets::front_depth`]). 8 bytes each.
+    offsets_start: Vec<u32>,
+    offsets: Vec<(f32, f32)>,
 }
 
 impl ClusterFacets {
@@ -135,7 +191,8 @@ impl ClusterFacets {
                         (a.min(d), b.max(d))
                     });
                 let me = vec![(e as u32, u32::MAX, g.area)];
-                lists[e] = Some(vec![(nrm, g.area, centroid * g.area, lo, hi, me)]);
+                let offs = vec![(nrm.dot(centroid), g.area)];
+                lists[e] = Some(vec![(nrm, g.area, centroid * g.area, lo, hi, me, offs)]);
                 continue;
             }
             let node = nodes[e];
@@ -147,7 +204,8 @@ impl ClusterFacets {
                     break;
                 };
                 let patch_root = geoms[ch as usize].patch != u32::MAX;
-                for (j, &(nrm, a, m, lo, hi, _)) in list.iter().enumerate() {
+                for (j, (nrm, a, m, lo, hi, _, offs)) in list.iter().enumerate() {
+                    let (nrm, a, m, lo, hi) = (*nrm, *a, *m, *lo, *hi);
                     let member = (ch, if patch_root { u32::MAX } else { j as u32 }, a);
                     match out.iter_mut().find(|f| f.0.dot(nrm) > 1.0 - SAME_NORMAL) {
                         Some(f) => {
@@ -156,8 +214,10 @@ impl ClusterFacets {
                             f.3 = f.3.min(lo);
                             f.4 = f.4.max(hi);
                             f.5.push(member);
+                            f.6.extend_from_slice(offs);
+                            merge_offsets(&mut f.6);
                         }
-                        None => out.push((nrm, a, m, lo, hi, vec![member])),
+                        None => out.push((nrm, a, m, lo, hi, vec![member], offs.clone())),
                     }
                 }
                 if out.len() > MAX_FACETS {
@@ -176,7 +236,7 @@ impl ClusterFacets {
             if geoms[e].patch != u32::MAX {
                 continue;
             }
-            for (nrm, a, m, lo, hi, _) in list.iter().flatten() {
+            for (nrm, a, m, lo, hi, _, _) in list.iter().flatten() {
                 let c = if *a > 0.0 { *m / *a } else { *m };
                 facets.push(Facet {
                     normal: nrm.as_vec3().to_array(),
@@ -191,11 +251,18 @@ impl ClusterFacets {
         let mut members_start = Vec::with_capacity(facets.len() + 1);
         let mut members = Vec::new();
         let mut owner = Vec::with_capacity(facets.len());
+        let mut offsets_start = Vec::with_capacity(facets.len() + 1);
+        let mut offsets = Vec::new();
         for (e, list) in lists.iter().enumerate() {
             if geoms[e].patch != u32::MAX {
                 continue;
             }
-            for (_, a, _, _, _, ms) in list.iter().flatten() {
+            for (_, a, _, _, _, ms, offs) in list.iter().flatten() {
+                offsets_start.push(offsets.len() as u32);
+                for &(o, ao) in offs {
+                    let w = if *a > 0.0 { ao / *a } else { 0.0 };
+                    offsets.push((o as f32, w as f32));
+                }
                 members_start.push(members.len() as u32);
                 owner.push(e as u32);
                 for &(ch, j, am) in ms {
@@ -210,12 +277,15 @@ impl ClusterFacets {
             }
         }
         members_start.push(members.len() as u32);
+        offsets_start.push(offsets.len() as u32);
         ClusterFacets {
             start,
             facets,
             members_start,
             members,
             owner,
+            offsets_start,
+            offsets,
         }
     }
 
@@ -306,6 +376,25 @@ impl ClusterFacets {
             }
             return oracle::patch_point(&geoms[pick as usize], h, level);
         }
+    }
+
+    /// The mean of `max(0, h − n · p)` over the points `p` of facet `f`'s patches,
+    /// `h` a point's plane offset `n · x`: each patch at its own offset (the
+    /// nearest merged beyond [`MAX_OFFSETS`]), weighted by area. `h − n · c` in
+    /// front of every patch, 0 behind; between, the part in front. Over the
+    /// facet's distance it is the mean cosine its patches turn toward the point
+    /// (`Solver::far_facet_factors`): the centroid's offset alone would count a
+    /// facet half in front as wholly in front or not at all.
+    pub fn front_depth(&self, f: u32, h: f64) -> f64 {
+        let f = f as usize;
+        let (o0, o1) = (
+            self.offsets_start[f] as usize,
+            self.offsets_start[f + 1] as usize,
+        );
+        self.offsets[o0..o1]
+            .iter()
+            .map(|&(o, w)| w as f64 * (h - o as f64).max(0.0))
+            .sum()
     }
 
     /// The facets of cluster `e` (empty: it has none).

@@ -554,7 +554,7 @@ impl Solver<'_> {
             if super::rows::box_behind(gs, &at, n) {
                 return;
             }
-            if self.facets.count() == 0 {
+            if !self.opts.cluster_facets || self.facets.count() == 0 {
                 // What the leaf rows take: the cluster estimate, or the parts of a
                 // cluster too near for it, each part by its own rays: a surface by
                 // stratified rays, as a surface source is, a sub-cluster by rays

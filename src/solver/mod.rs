@@ -817,7 +817,9 @@ impl<'a> Solver<'a> {
         if s.motion.moving_patch.iter().any(|&m| m) {
             s.motion.tree_moving = any_patch_under(&s.elems, |p| s.motion.moving_patch[p]);
         }
-        if s.opts.cluster_facets && !s.has_motion() {
+        // Built in every static scene: the leaf rows take far clusters whole by
+        // them (`Solver::far_facet_factors`), `--cluster-facets` near ones too.
+        if !s.has_motion() {
             s.facets = facets::ClusterFacets::build(&s.elems);
         }
         s.emits_under = any_patch_under(&s.elems, |p| s.patches.emits(p));
@@ -1649,9 +1651,7 @@ impl<'a> Solver<'a> {
         self.motion.moving_patch.iter_mut().for_each(|m| *m = false);
         self.motion.tree_moving.clear();
         self.motion.moving_now.clear();
-        if self.opts.cluster_facets {
-            self.facets = facets::ClusterFacets::build(&self.elems);
-        }
+        self.facets = facets::ClusterFacets::build(&self.elems);
     }
 
     /// Places the moving objects at time `t`: their patches, their elements (corners
@@ -1923,14 +1923,20 @@ impl<'a> Solver<'a> {
             if gs.patch == u32::MAX {
                 if t.f > 0.0 {
                     let vis = t.visibility as f64;
-                    self.cluster_parts(&q, n, s, &mut |e, k| {
-                        let be = source_value(b, fb, e);
-                        for (hi, ki) in h.iter_mut().zip(k).take(q.count) {
-                            for c in 0..3 {
-                                hi[c] += ki * vis * be[c] as f64;
+                    self.row_cluster_parts(
+                        &q,
+                        n,
+                        s,
+                        &mut |e, k| {
+                            let be = source_value(b, fb, e);
+                            for (hi, ki) in h.iter_mut().zip(k).take(q.count) {
+                                for c in 0..3 {
+                                    hi[c] += ki * vis * be[c] as f64;
+                                }
                             }
-                        }
-                    });
+                        },
+                        &mut |_| false,
+                    );
                 }
                 continue;
             } else {
@@ -3052,6 +3058,139 @@ mod tests {
         assert!(mean < 0.3, "mean {mean}");
         assert!(bias.abs() < 0.2, "signed mean {bias}");
         assert!(worst < 1.5, "worst {worst}");
+    }
+
+    /// `cube_grid` with each quad cut into two triangles.
+    fn cube_grid_triangles() -> Scene {
+        use crate::scene::Polygon;
+        let mut scene = cube_grid();
+        for o in &mut scene.objects {
+            o.polygons = (o.polygons.iter())
+                .flat_map(|p| {
+                    let v = &p.vertices;
+                    [[v[0], v[1], v[2]], [v[0], v[2], v[3]]].map(|t| Polygon {
+                        vertices: t.to_vec(),
+                        material: p.material,
+                    })
+                })
+                .collect();
+        }
+        scene
+    }
+
+    /// A leaf row's estimate of a far cluster of cubes taken whole by its facets
+    /// ([`Solver::far_facet_factors`], no bound on the factor) against the walk
+    /// that opens it ([`Solver::cluster_parts`], each face's exact factor), both
+    /// unoccluded, at points six radii out where some facet's slab holds the
+    /// point (the facets alone could not tell; [`cube_cluster_views`] and points
+    /// above the cluster, as the ceiling sees it). Returns `(points, mean
+    /// signed, mean absolute, worst)` relative differences, and the same three
+    /// for the offset at each facet's centroid alone.
+    // The probes' angles are measured ones, near π/2 and π/6 but not them.
+    #[allow(clippy::approx_constant)]
+    fn far_facets_against_opened(scene: &Scene) -> (usize, [f64; 3], [f64; 3]) {
+        let s = Solver::new(scene, SolveOptions::default()).unwrap();
+        let (mut used, mut est, mut cen) = (0, [0.0f64; 3], [0.0f64; 3]);
+        let (mut sum_k, mut sum_opened) = (0.0, 0.0);
+        for (e, _, (c, r), mut views) in cube_cluster_views(&s, 2) {
+            for j in 0..12 {
+                let elev: f64 = [1.2, 1.4, 1.5707][j % 3];
+                let azim = 0.5236 * (j / 3) as f64;
+                let dir = DVec3::new(elev.cos() * azim.cos(), elev.sin(), elev.cos() * azim.sin());
+                views.push((c + dir * r * 6.0, -dir));
+            }
+            for (x, n) in views {
+                let q = oracle::Samples {
+                    points: [x; 4],
+                    weights: [1.0, 0.0, 0.0, 0.0],
+                    count: 1,
+                };
+                let facets = s.facets.of(e);
+                if facets.iter().all(|f| facets::side(f, x, 1e-9).is_some()) {
+                    continue;
+                }
+                let Some((ks, count)) = s.far_facet_factors(&q, n, e, (c, r), f64::INFINITY) else {
+                    continue;
+                };
+                let k: f64 = ks[..count].iter().map(|f| f.1[0]).sum();
+                let mut opened = 0.0;
+                s.cluster_parts(&q, n, e, &mut |_, k| opened += k[0]);
+                // The centroid's offset alone: each facet wholly in front or not.
+                let centroid: f64 = (facets.iter())
+                    .map(|f| {
+                        let nf = DVec3::from_array(f.normal.map(f64::from));
+                        let w = x - DVec3::from_array(f.centroid.map(f64::from));
+                        let d2 = w.length_squared();
+                        let v = w / d2.sqrt();
+                        let cos = clipped_cosine(-n.dot(v), (r * r / d2).min(1.0));
+                        f.area as f64 * nf.dot(v).max(0.0) * cos / (std::f64::consts::PI * d2)
+                    })
+                    .sum();
+                if opened < 1e-6 {
+                    assert!(k < 1e-5, "{k} for {opened}");
+                    continue;
+                }
+                used += 1;
+                (sum_k, sum_opened) = (sum_k + k, sum_opened + opened);
+                for (acc, got) in [(&mut est, k), (&mut cen, centroid)] {
+                    let rel = got / opened - 1.0;
+                    acc[0] += rel;
+                    acc[1] += rel.abs();
+                    acc[2] = acc[2].max(rel.abs());
+                }
+            }
+        }
+        let mean = |a: [f64; 3]| [a[0] / used as f64, a[1] / used as f64, a[2]];
+        let (est, cen) = (mean(est), mean(cen));
+        eprintln!(
+            "{used} points: estimate signed {:+.4} mean {:.4} worst {:.4} (summed {:+.4}); \
+             centroid alone signed {:+.4} mean {:.4} worst {:.4}",
+            est[0],
+            est[1],
+            est[2],
+            sum_k / sum_opened - 1.0,
+            cen[0],
+            cen[1],
+            cen[2]
+        );
+        (used, est, cen)
+    }
+
+    /// A far cluster of cubes that a leaf's row takes whole by its facets gives
+    /// what opening it down to its faces gives, unoccluded, where the facets'
+    /// slabs hold the point: each patch at its own plane offset
+    /// ([`facets::ClusterFacets::front_depth`]) against each facet wholly in front
+    /// or not. Measured: 168 points, +0.7% on average (signed), 0.9% (absolute),
+    /// 3.1% at worst; the centroid alone −23.6%, 23.6%, 100%.
+    #[test]
+    fn a_far_cluster_of_boxes_taken_whole_by_its_facets_gives_what_its_faces_give() {
+        let (used, est, cen) = far_facets_against_opened(&cube_grid());
+        assert!(used >= 100, "{used} points");
+        assert!(est[0].abs() < 0.02, "signed {}", est[0]);
+        assert!(
+            est[1] < 0.02 && est[2] < 0.06,
+            "mean {} worst {}",
+            est[1],
+            est[2]
+        );
+        assert!(cen[1] > 5.0 * est[1], "the centroid alone is no worse");
+    }
+
+    /// [`a_far_cluster_of_boxes_taken_whole_by_its_facets_gives_what_its_faces_give`]
+    /// with each cube face cut into two triangles. Measured: 381 points, +1.0%,
+    /// 1.3%, 3.8% at worst; the centroid alone −27.6%, 27.7%, 100%.
+    #[test]
+    fn a_far_cluster_of_triangulated_boxes_taken_whole_by_its_facets_gives_what_its_faces_give() {
+        let (used, est, cen) = far_facets_against_opened(&cube_grid_triangles());
+        assert!(used >= 100, "{used} points");
+        assert!(est[0].abs() < 0.02, "signed {}", est[0]);
+        assert!(
+            est[1] < 0.03 && est[2] < 0.06,
+            "mean {} worst {}",
+            est[1],
+            est[2]
+        );
+        assert!(cen[1] > 5.0 * est[1], "the centroid alone is no worse");
     }
 
     /// After the first solve the cluster links are evaluated again by power

@@ -348,6 +348,14 @@ pub(super) fn box_behind(g: &Geom, q: &oracle::Samples, n: DVec3) -> bool {
         .all(|&x| n.dot(c - x) + reach <= 0.0)
 }
 
+/// A far cluster is taken whole by its facets in a leaf's row
+/// ([`Solver::far_facet_factors`]) only where their summed factor is at most this
+/// at each of the leaf's points; a larger one is opened, each face with its exact
+/// factor and rays. The final gather's bound for small far clusters
+/// (`gather::WHOLE_CLUSTER_MAX_FACTOR`): what the estimate errs is then a share of
+/// a small term.
+pub(super) const ROW_FAR_FACETS_MAX_FACTOR: f64 = 3e-3;
+
 impl Solver<'_> {
     /// Visits what a leaf gathers of cluster `s` from its quadrature points `q`
     /// (normal `n`), unoccluded, handing each part to `part` with its factor at
@@ -389,6 +397,35 @@ impl Solver<'_> {
         s: u32,
         part: &mut impl FnMut(u32, [f64; 4]),
         reuse: &mut impl FnMut(u32) -> bool,
+    ) {
+        self.walk_cluster(q, n, s, part, reuse, false);
+    }
+
+    /// The leaf rows' walk: [`Solver::cluster_parts_reusing`], but a far
+    /// cluster of several orientations is taken whole by its facets where
+    /// [`Solver::far_facet_factors`] allows ([`ROW_FAR_FACETS_MAX_FACTOR`]), not
+    /// opened down to every face.
+    pub(super) fn row_cluster_parts(
+        &self,
+        q: &oracle::Samples,
+        n: DVec3,
+        s: u32,
+        part: &mut impl FnMut(u32, [f64; 4]),
+        reuse: &mut impl FnMut(u32) -> bool,
+    ) {
+        self.walk_cluster(q, n, s, part, reuse, true);
+    }
+
+    /// [`Solver::cluster_parts_reusing`]; `far_facets`: as
+    /// [`Solver::row_cluster_parts`].
+    fn walk_cluster(
+        &self,
+        q: &oracle::Samples,
+        n: DVec3,
+        s: u32,
+        part: &mut impl FnMut(u32, [f64; 4]),
+        reuse: &mut impl FnMut(u32) -> bool,
+        far_facets: bool,
     ) {
         let elems = &self.elems;
         let gs = &elems.geoms.as_slice()[s as usize];
@@ -450,7 +487,12 @@ impl Solver<'_> {
         }
         let node = elems.nodes.as_slice()[s as usize];
         if sides[..q.count].contains(&0) && node.child_count > 0 {
-            if let Some((ks, count)) = self.facet_factors(q, n, s, c, r) {
+            let facets = self.facet_factors(q, n, s, c, r).or_else(|| {
+                far_facets
+                    .then(|| self.far_facet_factors(q, n, s, (c, r), ROW_FAR_FACETS_MAX_FACTOR))
+                    .flatten()
+            });
+            if let Some((ks, count)) = facets {
                 for &(f, k) in &ks[..count] {
                     if k.iter().any(|&ki| ki > 0.0) {
                         part(FACET_BIT | f, k);
@@ -460,7 +502,7 @@ impl Solver<'_> {
             }
             for ch in node.first_child..node.first_child + node.child_count {
                 if !reuse(ch) {
-                    self.cluster_parts_reusing(q, n, ch, part, reuse);
+                    self.walk_cluster(q, n, ch, part, reuse, far_facets);
                 }
             }
             return;
@@ -576,6 +618,84 @@ impl Solver<'_> {
                 let projected = f.area as f64 * nf.dot(v).max(0.0);
                 let cos = clipped_cosine(-n.dot(v), (r * r / d2).min(1.0));
                 ks[j].1[i] = projected * cos / (std::f64::consts::PI * d2);
+            }
+        }
+        Some((ks, facets.len()))
+    }
+
+    /// The factors from the points `q` (normal `n`) to each facet of cluster `s`
+    /// (bounding sphere `c`, `r`) taken whole as a leaf's row takes a far cluster
+    /// ([`Solver::row_cluster_parts`]), if it is: a static scene, a cluster with
+    /// facets and no emitter under it, far for its size from every point
+    /// ([`SolveOptions::cluster_open_ratio`]), whose facets' summed factor is at
+    /// most `max_factor` at each. `None`: the walk opens it.
+    ///
+    /// Each facet gives `A_f D_f cos θ / (π d_f²)` from its centroid (`d_f` away),
+    /// `D_f / d_f` the mean cosine of its patches toward the point
+    /// ([`super::facets::ClusterFacets::front_depth`]): where the point is in front
+    /// of every patch it is [`Solver::facet_factors`]' exact `n_f · v`, where it is
+    /// in the facet's slab (a ceiling point over a cluster of boxes: some of the
+    /// boxes' `+x` sides face it, some turn away) the part in front, each patch at
+    /// its own plane offset. Everything it reads is geometry, so a row
+    /// takes a cluster whole or opens it the same way in every round, and the parts
+    /// kept from round to round equal those cast afresh
+    /// ([`Solver::drop_estimate_parts`]); each facet is seen by rays to its own
+    /// patches and gathered at its own radiosity (Sillion 1995 §4's vector area split
+    /// by orientation; Willmott, Heckbert & Garland 1999's face clusters keep the
+    /// orientations apart for the same reason).
+    ///
+    /// Why: a cluster of boxes has faces looking every way, so the walk opened a
+    /// leaf's cluster sources down to every face above the leaf's plane, each with
+    /// its own factor and rays, and the faces a leaf's row visited grew with the
+    /// scene (`gen_cubes` 10 → 20: 481 → 1 828 a leaf), the rows as `P^1.7`
+    /// (BENCHMARKS.md, "Scale"). Kept whole by the links' estimate instead (one
+    /// part at the cluster's mean, its light spread by the axes its power leaves
+    /// by), the whole/open choice hung on the radiosity and the dark box sides were
+    /// gathered at the mean with the lit tops (`gen_cubes 20`: 2.48% → 2.62%).
+    #[allow(clippy::type_complexity)]
+    pub(super) fn far_facet_factors(
+        &self,
+        q: &oracle::Samples,
+        n: DVec3,
+        s: u32,
+        (c, r): (DVec3, f64),
+        max_factor: f64,
+    ) -> Option<([(u32, [f64; 4]); MAX_FACETS], usize)> {
+        if self.has_motion() || self.emits_under.get(s as usize).copied().unwrap_or(true) {
+            return None;
+        }
+        let facets = self.facets.of(s);
+        if facets.is_empty() {
+            return None;
+        }
+        let first = self.facets.first(s);
+        let ratio = self.opts.cluster_open_ratio;
+        let mut ks: [(u32, [f64; 4]); MAX_FACETS] =
+            std::array::from_fn(|j| (first + j as u32, [0.0; 4]));
+        for (i, &x) in q.points.iter().enumerate().take(q.count) {
+            let d = (x - c).length();
+            if d.is_nan() || r >= ratio * d {
+                return None;
+            }
+            let mut sum = 0.0;
+            for (j, f) in facets.iter().enumerate() {
+                let nf = DVec3::from_array(f.normal.map(f64::from));
+                let cf = DVec3::from_array(f.centroid.map(f64::from));
+                let depth = self.facets.front_depth(first + j as u32, nf.dot(x));
+                if depth <= 0.0 {
+                    continue;
+                }
+                let w = x - cf;
+                let d2 = w.length_squared();
+                let v = w / d2.sqrt();
+                let projected = f.area as f64 * depth / d2.sqrt();
+                let cos = clipped_cosine(-n.dot(v), (r * r / d2).min(1.0));
+                let k = projected * cos / (std::f64::consts::PI * d2);
+                ks[j].1[i] = k;
+                sum += k;
+            }
+            if sum > max_factor {
+                return None;
             }
         }
         Some((ks, facets.len()))
@@ -743,7 +863,7 @@ impl Solver<'_> {
                 row.push((e, entry));
             }
         };
-        self.cluster_parts_reusing(q, n, s, &mut part, reuse);
+        self.row_cluster_parts(q, n, s, &mut part, reuse);
     }
 
     /// After [`Solver::reevaluate_cluster_sources`] has evaluated the cluster links
