@@ -592,19 +592,8 @@ impl Solver<'_> {
         if !self.opts.cluster_facets || self.has_motion() {
             return None;
         }
-        let facets = self.facets.of(s);
-        if facets.is_empty() {
-            return None;
-        }
-        let first = self.facets.first(s);
-        let ratio = self.opts.cluster_open_ratio;
-        let mut ks: [(u32, [f64; 4]); MAX_FACETS] =
-            std::array::from_fn(|j| (first + j as u32, [0.0; 4]));
+        let (facets, mut ks) = self.far_facets(q, s, (c, r))?;
         for (i, &x) in q.points.iter().enumerate().take(q.count) {
-            let d = (x - c).length();
-            if d.is_nan() || r >= ratio * d {
-                return None;
-            }
             // The offsets are kept in f32.
             let tol = 1e-6 * (self.patches.diameter + x.abs().max_element());
             for (j, f) in facets.iter().enumerate() {
@@ -664,24 +653,13 @@ impl Solver<'_> {
         if self.has_motion() || self.emits_under.get(s as usize).copied().unwrap_or(true) {
             return None;
         }
-        let facets = self.facets.of(s);
-        if facets.is_empty() {
-            return None;
-        }
-        let first = self.facets.first(s);
-        let ratio = self.opts.cluster_open_ratio;
-        let mut ks: [(u32, [f64; 4]); MAX_FACETS] =
-            std::array::from_fn(|j| (first + j as u32, [0.0; 4]));
+        let (facets, mut ks) = self.far_facets(q, s, (c, r))?;
         for (i, &x) in q.points.iter().enumerate().take(q.count) {
-            let d = (x - c).length();
-            if d.is_nan() || r >= ratio * d {
-                return None;
-            }
             let mut sum = 0.0;
             for (j, f) in facets.iter().enumerate() {
                 let nf = DVec3::from_array(f.normal.map(f64::from));
                 let cf = DVec3::from_array(f.centroid.map(f64::from));
-                let depth = self.facets.front_depth(first + j as u32, nf.dot(x));
+                let depth = self.facets.front_depth(ks[j].0, nf.dot(x));
                 if depth <= 0.0 {
                     continue;
                 }
@@ -693,12 +671,43 @@ impl Solver<'_> {
                 let k = projected * cos / (std::f64::consts::PI * d2);
                 ks[j].1[i] = k;
                 sum += k;
-            }
-            if sum > max_factor {
-                return None;
+                // Opened: the facets left cannot take the sum back under.
+                if sum > max_factor {
+                    return None;
+                }
             }
         }
         Some((ks, facets.len()))
+    }
+
+    /// What [`Solver::facet_factors`] and [`Solver::far_facet_factors`] start
+    /// from: cluster `s`'s facets and a factor array naming each, all zero;
+    /// `None` for a cluster with no facets or one not far for its size
+    /// (bounding sphere `c`, `r`) from every point of `q`
+    /// ([`SolveOptions::cluster_open_ratio`]).
+    #[allow(clippy::type_complexity)]
+    fn far_facets(
+        &self,
+        q: &oracle::Samples,
+        s: u32,
+        (c, r): (DVec3, f64),
+    ) -> Option<(&[super::facets::Facet], [(u32, [f64; 4]); MAX_FACETS])> {
+        let facets = self.facets.of(s);
+        if facets.is_empty() {
+            return None;
+        }
+        let ratio = self.opts.cluster_open_ratio;
+        for &x in q.points.iter().take(q.count) {
+            let d = (x - c).length();
+            if d.is_nan() || r >= ratio * d {
+                return None;
+            }
+        }
+        let first = self.facets.first(s);
+        Some((
+            facets,
+            std::array::from_fn(|j| (first + j as u32, [0.0; 4])),
+        ))
     }
 
     /// A leaf's row entries for the chain link `l` to cluster `s`: the parts of
