@@ -114,9 +114,11 @@ const CELL_OPEN_RATIO: f64 = 0.3;
 const PARTIAL_PART_MIN_FACTOR: f64 = 3e-3;
 
 /// A cluster with no emitter under it, far for its size, whose unoccluded
-/// estimate at a final-gather point ([`cluster_kernel`]) is at most this is kept
-/// whole there ([`Solver::whole_cluster`]), not walked down to every face
-/// ([`Solver::cluster_parts`]).
+/// factor at a final-gather point is at most this is kept whole there
+/// ([`Solver::whole_cluster_terms`]), not walked down to every face
+/// ([`Solver::cluster_parts`]): the summed factor of its facets
+/// ([`Solver::far_facet_factors`]) where it has facets (every static scene), the
+/// links' estimate ([`cluster_kernel`]) where it has none.
 ///
 /// Why: a cluster of boxes has faces looking every way, so its cone never
 /// tells which face a point sees and the walk opened it to every face, each
@@ -142,6 +144,22 @@ const SMALL_PART_MIN_RAYS: u32 = 2;
 fn small_part_rays(m: u32, k: f64) -> u32 {
     let scaled = (f64::from(m) * k / PARTIAL_PART_MIN_FACTOR).ceil();
     (scaled as u32).clamp(SMALL_PART_MIN_RAYS.min(m), m)
+}
+
+/// The rays a facet with factor `k` of a far cluster kept whole at a
+/// final-gather point is seen by ([`Solver::whole_by_facets`]): [`small_part_rays`]'
+/// rule, `m` times `k` over [`PARTIAL_PART_MIN_FACTOR`] rounded up, but one at
+/// least: the facets of a cluster then take about the rays the cluster would
+/// take at their summed factor, shared in proportion to their factors.
+///
+/// Why: with two rays at least a facet, as [`small_part_rays`] gives a part,
+/// the three or so facets a point sees of a box cluster took more rays than
+/// the cluster had: `tools/gen_cubes.py 10` solved in 4–5% more CPU seconds
+/// than with the links' estimate, 1.5–2% with one ray at least (three runs at
+/// once, `--threads 1`), the error off the emitters the same (1.69%).
+fn facet_rays(m: u32, k: f64) -> u32 {
+    let scaled = (f64::from(m) * k / PARTIAL_PART_MIN_FACTOR).ceil();
+    (scaled as u32).clamp(1, m.max(1))
 }
 
 /// The rays a non-emitting surface source with factor `k` at a final-gather
@@ -375,9 +393,10 @@ impl Solver<'_> {
     /// sub-cluster the pillar hid whole and to tiles 34–100% visible (its factors
     /// summed to 1.0216).
     ///
-    /// A cluster far for its size whose estimate at the point is small
-    /// ([`WHOLE_CLUSTER_MAX_FACTOR`]) is kept whole, not walked to its parts
-    /// ([`Solver::whole_cluster`]).
+    /// A cluster far for its size whose factor at the point is small
+    /// ([`WHOLE_CLUSTER_MAX_FACTOR`]) is kept whole, not walked to its parts: by
+    /// its facets, each by its own rays at its own radiosity, where it has them
+    /// ([`Solver::whole_cluster_terms`]).
     ///
     /// With `swept` (a static point and a static source in a time window), a term
     /// whose shaft from `x` meets a box swept by a moving object becomes a
@@ -555,31 +574,30 @@ impl Solver<'_> {
                 return;
             }
             if !self.opts.cluster_facets || self.facets.count() == 0 {
-                // What the leaf rows take: the cluster estimate, or the parts of a
-                // cluster too near for it, each part by its own rays: a surface by
+                // What the leaf rows take: a small far cluster whole by its facets
+                // ([`Solver::whole_cluster_terms`]), or the parts of a cluster
+                // too near or too large for that, each part by its own rays: a surface by
                 // stratified rays, as a surface source is, a sub-cluster by rays
                 // drawn by power ([`Solver::part_visibility`]); the cluster's
                 // fraction where those rays all fall on faces turned away.
-                if let Some(t) = self.whole_cluster(x, n, receiver_patch, s as u32, clear, limits) {
-                    if t > 0.0 {
-                        out.fixed.push((s as u32, t));
-                    }
+                if self.whole_cluster_terms(
+                    x,
+                    n,
+                    receiver_patch,
+                    s as u32,
+                    clear,
+                    limits,
+                    &mut out.fixed,
+                ) {
                     return;
                 }
                 let mut vis = None;
-                // Small clusters kept whole ([`Solver::whole_cluster`]), their terms
-                // apart while the walk holds `out`.
+                // Small clusters kept whole ([`Solver::whole_cluster_terms`]), their
+                // terms apart while the walk holds `out`.
                 let mut wholes: Vec<(u32, f64)> = Vec::new();
-                let mut whole =
-                    |e: u32| match self.whole_cluster(x, n, receiver_patch, e, clear, limits) {
-                        Some(t) => {
-                            if t > 0.0 {
-                                wholes.push((e, t));
-                            }
-                            true
-                        }
-                        None => false,
-                    };
+                let mut whole = |e: u32| {
+                    self.whole_cluster_terms(x, n, receiver_patch, e, clear, limits, &mut wholes)
+                };
                 self.cluster_parts_reusing(
                     &at,
                     n,
@@ -830,9 +848,133 @@ impl Solver<'_> {
         true
     }
 
+    /// The terms `factor · visibility` of cluster `e` kept whole at the final-gather
+    /// point `x` (normal `n`, on patch `receiver_patch`), pushed to `out`, if it is
+    /// (true; false: the caller opens it, and nothing is pushed): a cluster with
+    /// facets by them ([`Solver::whole_by_facets`], bound
+    /// [`WHOLE_CLUSTER_MAX_FACTOR`]), one without (a scene with motion, or more
+    /// than [`super::facets::MAX_FACETS`] normals under it) by the links' estimate
+    /// ([`Solver::whole_cluster`]).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn whole_cluster_terms(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        receiver_patch: u32,
+        e: u32,
+        clear: bool,
+        limits: &GatherLimits,
+        out: &mut Vec<(u32, f64)>,
+    ) -> bool {
+        let i = e as usize;
+        let g = &self.elems.geoms.as_slice()[i];
+        if g.patch != u32::MAX {
+            return false;
+        }
+        if self.has_motion() || self.facets.of(e).is_empty() {
+            return match self.whole_cluster(x, n, receiver_patch, e, clear, limits) {
+                Some(t) => {
+                    if t > 0.0 {
+                        out.push((e, t));
+                    }
+                    true
+                }
+                None => false,
+            };
+        }
+        let sphere = limits.sphere(i, g);
+        self.whole_by_facets(
+            x,
+            n,
+            receiver_patch,
+            e,
+            sphere,
+            clear,
+            WHOLE_CLUSTER_MAX_FACTOR,
+            out,
+        )
+    }
+
+    /// The terms of cluster `e` (bounding sphere `sphere`) taken whole by its
+    /// facets at the final-gather point `x` (normal `n`, on patch
+    /// `receiver_patch`), pushed to `out` as `(FACET_BIT | f, factor ·
+    /// visibility)`, if it is (true): as a leaf's row takes it
+    /// ([`Solver::far_facet_factors`]: a static scene, no emitter under it, far for
+    /// its size, its facets' summed factor at most `max_factor`), each facet seen
+    /// by rays to its own patches ([`Solver::part_visibility`], as many as
+    /// [`facet_rays`] gives its factor; none if `clear`) and gathered at its
+    /// own radiosity ([`Solver::add_term`]). False, with nothing pushed, where
+    /// [`Solver::far_facet_factors`] opens it, or where every ray to a facet in
+    /// front of the point, [`SolveOptions::cluster_rays`] of them, fell on its
+    /// patches turned away or below the point's horizon.
+    ///
+    /// Why: the links' estimate ([`Solver::whole_cluster_factor`]) takes a cluster
+    /// of faces looking several ways at its mean radiosity, its light spread by the
+    /// axes its power leaves by: it overcounts such a cluster (in the leaf rows
+    /// `gen_cubes 20` went 2.48% → 2.62% off the emitters with it, BENCHMARKS.md
+    /// "Scale") and gathers a box's dark sides at the mean with its lit top, and
+    /// one fraction by rays drawn by power took a side hidden behind the next box
+    /// as visible as the tops the rays mostly went to (Sillion 1995 §4's vector
+    /// area, split by orientation as [`super::facets`] splits it). On
+    /// `tools/gen_cubes.py 10` the ceiling's probes read −2.1% (bias against the
+    /// path tracer) by facets, −2.2% with every cluster opened to its faces and
+    /// −1.7% by the links' estimate, the walls −0.4%, −0.3% and −0.7%: the
+    /// facets give what the faces give, the estimate did not. It costs: on
+    /// `gen_cubes 20` 75.6 → 84.3 CPU s, 2.41% → 2.45% off the emitters (the
+    /// ceiling's bias +1.1% → −1.8%; BENCHMARKS.md "Scale").
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn whole_by_facets(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        receiver_patch: u32,
+        e: u32,
+        sphere: (DVec3, f64),
+        clear: bool,
+        max_factor: f64,
+        out: &mut Vec<(u32, f64)>,
+    ) -> bool {
+        let q = oracle::Samples {
+            points: [x; 4],
+            weights: [1.0, 0.0, 0.0, 0.0],
+            count: 1,
+        };
+        let Some((ks, count)) = self.far_facet_factors(&q, n, e, sphere, max_factor) else {
+            return false;
+        };
+        let at = out.len();
+        let all = self.opts.cluster_rays;
+        for &(f, k) in &ks[..count] {
+            let k = k[0];
+            if k <= 0.0 {
+                continue;
+            }
+            let part = FACET_BIT | f;
+            let v = if clear {
+                1.0
+            } else {
+                let m = facet_rays(all, k);
+                let (mut v, mut rays) = self.part_visibility(x, n, receiver_patch, part, m, 0);
+                if rays == 0 && m < all {
+                    (v, rays) = self.part_visibility(x, n, receiver_patch, part, all, 0);
+                }
+                if rays == 0 {
+                    out.truncate(at);
+                    return false;
+                }
+                v
+            };
+            if v > 0.0 {
+                out.push((part, k * v));
+            }
+        }
+        true
+    }
+
     /// The term `factor · visibility` of cluster `e` kept whole at the final-gather
-    /// point `x` (normal `n`, on patch `receiver_patch`), if it is: in a static
-    /// scene, a cluster with no emitter under it, far for its size
+    /// point `x` (normal `n`, on patch `receiver_patch`) by the links' estimate,
+    /// if it is (a cluster without facets, [`Solver::whole_cluster_terms`]): in a
+    /// static scene, a cluster with no emitter under it, far for its size
     /// ([`SolveOptions::cluster_open_ratio`]), whose unoccluded estimate is at most
     /// [`WHOLE_CLUSTER_MAX_FACTOR`]; its visibility by as many rays as
     /// [`small_part_rays`] gives that factor (none if `clear`). `None`: the caller

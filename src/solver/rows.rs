@@ -693,9 +693,10 @@ impl Solver<'_> {
                 let k = projected * cos / (std::f64::consts::PI * d2);
                 ks[j].1[i] = k;
                 sum += k;
-            }
-            if sum > max_factor {
-                return None;
+                // Opened: the facets left cannot take the sum back under.
+                if sum > max_factor {
+                    return None;
+                }
             }
         }
         Some((ks, facets.len()))
