@@ -618,6 +618,12 @@ struct LeafSystem {
     /// makes the rows, empty otherwise ([`Solver::row_sphere`]). 32 bytes per
     /// element for that time.
     row_spheres: Vec<(DVec3, f64)>,
+    /// In a static scene, whether each surface element's centroid lies inside a
+    /// solid ([`Solver::outside_solids`]) while [`Solver::compute_leaf_rows`]
+    /// makes the rows, empty otherwise: an opened source's child inside a solid
+    /// takes none of the source's light ([`Solver::push_opened`]). 1 byte per
+    /// element for that time.
+    row_inside: Vec<bool>,
     /// Interactive moves: each leaf's entries by chain link (sorted by link), as
     /// the session's start-up or the last move computed them, reused by the next
     /// move for links it did not touch and updated in place for those it did
