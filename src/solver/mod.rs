@@ -50,8 +50,6 @@ pub mod report;
 pub mod restore;
 mod row_check;
 mod row_patch;
-#[cfg(test)]
-mod row_trace;
 mod rows;
 pub mod spacetime;
 
