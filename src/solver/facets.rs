@@ -294,6 +294,13 @@ impl ClusterFacets {
         self.facets.len()
     }
 
+    /// Facet `f`'s members `(source, area share)` (scratch tracing).
+    #[cfg(test)]
+    pub fn members(&self, f: u32) -> &[(u32, f32)] {
+        let f = f as usize;
+        &self.members[self.members_start[f] as usize..self.members_start[f + 1] as usize]
+    }
+
     /// The cluster facet `f` belongs to.
     pub fn owner(&self, f: u32) -> u32 {
         self.owner[f as usize]

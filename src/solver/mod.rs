@@ -50,6 +50,8 @@ pub mod report;
 pub mod restore;
 mod row_check;
 mod row_patch;
+#[cfg(test)]
+mod row_trace;
 mod rows;
 pub mod spacetime;
 
