@@ -199,7 +199,11 @@ impl Solver<'_> {
                     let w = q.weights[p] / wsum / nr;
                     for j in 0..side * side {
                         let h = |k: u64| {
-                            oracle::unit(oracle::hash3(0x7ace ^ li as u64, (p * 100000 + j) as u64, k))
+                            oracle::unit(oracle::hash3(
+                                0x7ace ^ li as u64,
+                                (p * 100000 + j) as u64,
+                                k,
+                            ))
                         };
                         let u1 = ((j % side) as f64 + h(0)) / side as f64;
                         let u2 = ((j / side) as f64 + h(1)) / side as f64;
@@ -237,8 +241,7 @@ impl Solver<'_> {
                         if cover.is_empty() {
                             acc.ray[7] += w * bv;
                             acc.hits[7] += w;
-                            *acc.missing.entry(self.where_is(hit.patch, y)).or_default() +=
-                                w * bv;
+                            *acc.missing.entry(self.where_is(hit.patch, y)).or_default() += w * bv;
                             continue;
                         }
                         if cover.len() > 1 {
@@ -337,7 +340,11 @@ fn print_links(s: &Solver, a: &Acc) {
     for (src, r) in l.iter().take(14) {
         let g = &geoms[**src as usize];
         let k = g.n.clamp(3, 4) as usize;
-        let c = g.corners[..k].iter().map(|&c| DVec3::from_array(c)).sum::<DVec3>() / k as f64;
+        let c = g.corners[..k]
+            .iter()
+            .map(|&c| DVec3::from_array(c))
+            .sum::<DVec3>()
+            / k as f64;
         eprintln!(
             "  {:6} p{:4} n({:+.0},{:+.0},{:+.0}) c({:+.2},{:+.2},{:+.2}) A{:.4} {:3} {:5} {:.5} {:.5} {:.5} {:.3} {:.3} {:.3} {:+.3}",
             src,
@@ -387,7 +394,11 @@ fn print(name: &str, a: &Acc) {
             a.hits[k] / n,
             a.row[k] / n,
             a.ray[k] / n,
-            if k == 6 { 0.0 } else { 100.0 * (a.ray[k] - a.row[k]) / ray_tot },
+            if k == 6 {
+                0.0
+            } else {
+                100.0 * (a.ray[k] - a.row[k]) / ray_tot
+            },
             100.0 * a.dev[k] / ray_tot
         );
     }
@@ -401,8 +412,8 @@ fn print(name: &str, a: &Acc) {
 #[test]
 #[ignore = "scratch tracing of the Blender box's rows (issue 45 part 4)"]
 fn trace_blender_rows_by_entry_kind() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/blender/cornell-box.glb");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender/cornell-box.glb");
     let scene = crate::scene::load(&path).unwrap();
     let opts = SolveOptions {
         eps: 0.5,
@@ -439,9 +450,13 @@ fn trace_blender_rows_by_entry_kind() {
                     && e.iter().all(|&x| x <= 0.0)
                     && {
                         let k = g.n.clamp(3, 4) as usize;
-                        let m = g.corners[..k].iter().map(|&c| DVec3::from_array(c)).sum::<DVec3>()
+                        let m = g.corners[..k]
+                            .iter()
+                            .map(|&c| DVec3::from_array(c))
+                            .sum::<DVec3>()
                             / k as f64;
-                        s.outside_solids(m, gn) && !(off == -0.8625 && m.x.abs() < 0.51 && m.z.abs() < 0.51)
+                        s.outside_solids(m, gn)
+                            && !(off == -0.8625 && m.x.abs() < 0.51 && m.z.abs() < 0.51)
                     }
             })
             .collect();
@@ -471,7 +486,10 @@ fn trace_blender_rows_by_entry_kind() {
                     t4665[i] += c.get(src).copied().unwrap_or(0.0) / r[4].max(1e-30) / seeds as f64;
                 }
             }
-            eprintln!("  mean over {seeds} seeds, {m} rays/point: all surface links {all:.4}; top {:.3?}", t4665);
+            eprintln!(
+                "  mean over {seeds} seeds, {m} rays/point: all surface links {all:.4}; top {:.3?}",
+                t4665
+            );
         }
         s.opts.rays_per_point = m0;
         s.opts.seed = seed0;
@@ -485,10 +503,18 @@ fn trace_blender_rows_by_entry_kind() {
             }
         }
         let ray_tot: f64 = a.ray[..6].iter().sum::<f64>() + a.ray[7];
-        eprintln!("  opened sources' gap: link coefficients {:+.3}%, shares among children {:+.3}% of rays", 100.0 * lvl / ray_tot, 100.0 * dist / ray_tot);
+        eprintln!(
+            "  opened sources' gap: link coefficients {:+.3}%, shares among children {:+.3}% of rays",
+            100.0 * lvl / ray_tot,
+            100.0 * dist / ray_tot
+        );
         let hits: f64 = a.links.values().map(|r| r[1]).sum();
         let coef: f64 = a.links.values().map(|r| r[0]).sum();
         let un: f64 = a.links.values().map(|r| r[4]).sum();
-        eprintln!("  rows' vis (all surface links) {:.4}, rays' {:.4}", coef / un, hits / un);
+        eprintln!(
+            "  rows' vis (all surface links) {:.4}, rays' {:.4}",
+            coef / un,
+            hits / un
+        );
     }
 }
