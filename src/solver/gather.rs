@@ -93,6 +93,19 @@ impl Terms {
     }
 }
 
+#[cfg(test)]
+thread_local! {
+    /// SCRATCH tracing (issue 45 part 4): when set, [`Solver::gather_sum`] records
+    /// every term it gathers as `(link source, element, factor · visibility)`.
+    pub(super) static TRACE_TERMS: std::cell::RefCell<Option<Vec<(u32, u32, f64)>>> =
+        const { std::cell::RefCell::new(None) };
+    /// SCRATCH tracing: the last [`Solver::gather_point`]'s far sum `H` and its near
+    /// sources `(f, element, foot)`.
+    #[allow(clippy::type_complexity)]
+    pub(super) static TRACE_NEAR: std::cell::RefCell<Option<([f64; 3], Option<(f64, u32, DVec3)>)>> =
+        const { std::cell::RefCell::new(None) };
+}
+
 /// Second final gather ([`SolveOptions::source_field`]): a leaf source whose
 /// bounding sphere's radius exceeds this times its distance from the point is
 /// gathered cell by cell from the first reconstruction (each cell's exact factor
@@ -935,6 +948,10 @@ impl Solver<'_> {
         limits: &GatherLimits,
     ) -> ([f64; 3], bool, FreshTerms) {
         let (sum, valid, fresh) = self.gather_sum(leaf, x, known, key, admit, false, limits);
+        #[cfg(test)]
+        TRACE_NEAR.with(|t| {
+            *t.borrow_mut() = Some((sum.h, sum.near.map(|m| (m.f, m.elem, m.foot))));
+        });
         let p = self.elems.geoms.as_slice()[leaf.ix()].patch;
         (self.across_gap(p, &sum, key.0, limits), valid, fresh)
     }
@@ -1157,6 +1174,17 @@ impl Solver<'_> {
                 }
             }
             terms.gather(self, &mut sum);
+            #[cfg(test)]
+            TRACE_TERMS.with(|t| {
+                if let Some(v) = t.borrow_mut().as_mut() {
+                    for &(e, f) in &terms.fixed {
+                        v.push((s as u32, e, f64::from(f as f32)));
+                    }
+                    for &(m, vis) in &terms.masked {
+                        v.push((s as u32, m.elem, m.f as f64 * vis));
+                    }
+                }
+            });
             // Terms on elements of this frame's refinement are not kept: the
             // next frame drops those elements.
             if let Some(w) = keep.filter(|_| admit || cached.is_some()) {

@@ -518,3 +518,397 @@ fn trace_blender_rows_by_entry_kind() {
         );
     }
 }
+
+/// A patch's place: object name, normal axis, and whether its centroid lies on
+/// the room's side of the walls (the room's box, 2 mm slack).
+fn patch_class(s: &Solver, scene: &crate::scene::Scene, p: u32) -> String {
+    let n = s.patches.normals[p as usize];
+    let o = s.patches.objects[p as usize] as usize;
+    let name = scene.objects.get(o).map_or("?", |o| o.name.as_str());
+    let c = s.patches.polys[p as usize].centroid();
+    let axis = if n.x.abs() > 0.99 {
+        if n.x > 0.0 { "+x" } else { "-x" }
+    } else if n.y.abs() > 0.99 {
+        if n.y > 0.0 { "+y" } else { "-y" }
+    } else if n.z.abs() > 0.99 {
+        if n.z > 0.0 { "+z" } else { "-z" }
+    } else {
+        "oblique"
+    };
+    let room = c.x > -1.010 && c.x < 0.9945 && c.y > -0.8688 && c.y < 0.8645 && c.z > -0.8725;
+    format!("{name} {axis} {}", if room { "room" } else { "OUT" })
+}
+
+#[test]
+#[ignore = "scratch tracing of the Blender box's point 28 (issue 45 part 4)"]
+fn trace_blender_point28() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender/cornell-box.glb");
+    let scene = crate::scene::load(&path).unwrap();
+    let opts = SolveOptions {
+        eps: 0.5,
+        ..SolveOptions::default()
+    };
+    let mut s = Solver::new(&scene, opts).unwrap();
+    s.run(|_, _| {}).unwrap();
+    // Objects and their boxes.
+    let mut boxes: HashMap<u32, (DVec3, DVec3, usize)> = HashMap::new();
+    for p in 0..s.patches.len() {
+        let o = s.patches.objects[p];
+        let e = boxes
+            .entry(o)
+            .or_insert((DVec3::splat(1e9), DVec3::splat(-1e9), 0));
+        for &v in s.patches.polys[p].corners() {
+            e.0 = e.0.min(v);
+            e.1 = e.1.max(v);
+        }
+        e.2 += 1;
+    }
+    let mut bk: Vec<_> = boxes.into_iter().collect();
+    bk.sort_by_key(|b| b.0);
+    for (o, (lo, hi, k)) in bk {
+        let m = &scene.objects[o as usize];
+        eprintln!(
+            "object {o} {:?}: {k} patches, box {lo:.4} .. {hi:.4}",
+            m.name
+        );
+    }
+    let mut pts: Vec<(DVec3, DVec3)> = vec![
+        (DVec3::new(0.8, 0.8625, -0.8), DVec3::NEG_Y), // point 28
+        (DVec3::new(0.9, 0.8625, -0.8), DVec3::NEG_Y),
+        (DVec3::new(0.8, 0.8625, -0.6), DVec3::NEG_Y),
+        (DVec3::new(0.6, 0.8625, -0.8), DVec3::NEG_Y),
+        (DVec3::new(0.95, 0.8625, -0.85), DVec3::NEG_Y),
+        (DVec3::new(0.8, 0.8625, 0.0), DVec3::NEG_Y), // point 24
+        (DVec3::new(0.9925, 0.8, -0.8), DVec3::NEG_X),
+        (DVec3::new(0.9925, 0.6, -0.6), DVec3::NEG_X),
+        (DVec3::new(0.9925, 0.8, -0.4), DVec3::NEG_X),
+        (DVec3::new(0.9925, 0.4, -0.8), DVec3::NEG_X),
+        (DVec3::new(0.9925, 0.7, 0.8), DVec3::NEG_X), // point 14
+        (DVec3::new(0.8, 0.8, -0.8705), DVec3::Z),
+        (DVec3::new(0.6, 0.5, -0.8705), DVec3::Z),
+    ];
+    if let Some(k) = std::env::var("TRACE_POINTS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        pts.truncate(k);
+    }
+    let paths: u32 = std::env::var("TRACE_PATHS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4000);
+    let reference = crate::reference::radiosity_at(&scene, &pts, paths, 13);
+    let sol = s.solution();
+    let probes: Vec<crate::playback::probe::ProbePoint> = pts
+        .iter()
+        .map(|&(p, n)| crate::playback::probe::ProbePoint { p, n })
+        .collect();
+    let pb = crate::playback::probe::probe(&sol, &probes, 0.0).unwrap();
+    let limits = s.gather_limits(s.rms_radiosity(), true);
+    let geoms = s.elems.geoms.as_slice();
+    let nodes = s.elems.nodes.as_slice();
+    let brad = s.elems.radiosities.as_slice();
+    let mut root = vec![u32::MAX; s.patches.len()];
+    for (e, (g, node)) in geoms.iter().zip(nodes).enumerate() {
+        let top = node.parent == u32::MAX || geoms[node.parent as usize].patch == u32::MAX;
+        if g.patch != u32::MAX && top {
+            root[g.patch as usize] = e as u32;
+        }
+    }
+    let diam = s.patches.diameter;
+    for (i, &(x, n)) in pts.iter().enumerate() {
+        let r = &reference[i];
+        eprintln!(
+            "\n#### point {i} {x:.4} n {n}: probe {:.4?} reference {:.4?} ±{:.4?}",
+            pb[i], r.b, r.std_error
+        );
+        let cand: Vec<ElementId> = s
+            .sys
+            .leaves
+            .iter()
+            .copied()
+            .filter(|l| {
+                let g = &geoms[l.ix()];
+                let gn = DVec3::from_array(g.normal);
+                gn.dot(n) > 0.999
+                    && (x - DVec3::from_array(g.corners[0])).dot(gn).abs() < 2e-3
+                    && oracle::poly(g).contains(
+                        gn,
+                        x - (x - DVec3::from_array(g.corners[0])).dot(gn) * gn,
+                        1e-6,
+                    )
+            })
+            .collect();
+        let Some(&leaf) = cand.first() else {
+            eprintln!("  no leaf holds it");
+            continue;
+        };
+        let g = &geoms[leaf.ix()];
+        eprintln!(
+            "  {} leaves hold it; leaf {} patch {} ({}) area {:.5} B_leaf {:.4?}",
+            cand.len(),
+            leaf.0,
+            g.patch,
+            patch_class(&s, &scene, g.patch),
+            g.area,
+            brad[leaf.ix()]
+        );
+        let xg = x - (x - DVec3::from_array(g.corners[0])).dot(n) * n;
+        // The leaf's chain links and what its kept row says of each.
+        let row = s.sys.row_cache.get(&leaf.0);
+        eprintln!(
+            "  small leaf: row kept {} (area {:.5} < power area {:.5}: {})",
+            row.is_some(),
+            g.area,
+            s.power_area,
+            g.area < s.power_area
+        );
+        for l in s.chain_links(leaf) {
+            let src = s.links.ends.as_slice()[l as usize].source as usize;
+            let tr = s.links.transports.as_slice()[l as usize];
+            let gs = &geoms[src];
+            let cls = if gs.patch == u32::MAX {
+                "cluster".to_string()
+            } else {
+                patch_class(&s, &scene, gs.patch)
+            };
+            let lv = row.and_then(|r| s.leaf_visibility(r, l, src));
+            let rv = row.and_then(|r| {
+                r.binary_search_by_key(&l, |k| k.link)
+                    .ok()
+                    .map(|i| r[i].vis)
+            });
+            eprintln!(
+                "    link {l} recv {} src {src} {cls:28} A {:.4} f {:.4} vis {:.3} clear {} row vis {rv:?} -> cheap {lv:?}",
+                s.links.ends.as_slice()[l as usize].receiver,
+                gs.area,
+                tr.f,
+                tr.visibility,
+                tr.shaft_clear(),
+            );
+        }
+        // The stored cells of the patch that hold the point.
+        {
+            let pc = s.patches.polys[g.patch as usize].corners();
+            let mut vv = [DVec3::ZERO; 4];
+            for (k, c) in pc.iter().take(4).enumerate() {
+                vv[k] = *c;
+            }
+            let wp = crate::playback::frame::WorldPatch {
+                corners: pc.len().min(4) as u32,
+                material: 0,
+                v: vv,
+                normal: s.patches.normals[g.patch as usize],
+            };
+            let (u, v) = crate::playback::probe::patch_params(&wp, xg);
+            for c in sol.leaves.iter().filter(|c| c.patch == g.patch) {
+                let (mut u0, mut u1, mut v0, mut v1) = (9.0f32, -9.0f32, 9.0f32, -9.0f32);
+                for k in 0..c.corners as usize {
+                    u0 = u0.min(c.uv[k][0]);
+                    u1 = u1.max(c.uv[k][0]);
+                    v0 = v0.min(c.uv[k][1]);
+                    v1 = v1.max(c.uv[k][1]);
+                }
+                if (u as f32) >= u0 && (u as f32) <= u1 && (v as f32) >= v0 && (v as f32) <= v1 {
+                    eprintln!(
+                        "    stored cell uv {:?} b {:?} (point uv {u:.4},{v:.4})",
+                        c.uv, c.b
+                    );
+                }
+            }
+        }
+        // The green wall's room-side sources of the leaf's chain, one by one.
+        for l in s.chain_links(leaf) {
+            let src = s.links.ends.as_slice()[l as usize].source as usize;
+            let gs = &geoms[src];
+            if gs.patch == u32::MAX
+                || !patch_class(&s, &scene, gs.patch).starts_with("GreenWall -x room")
+            {
+                continue;
+            }
+            let ps = oracle::poly(gs);
+            {
+                let r = oracle::PointRays {
+                    x: xg,
+                    n,
+                    gs,
+                    pols: &ps,
+                    ns: DVec3::from_array(gs.normal),
+                    m: s.opts.corner_rays,
+                    key: 12345,
+                    skip: [g.patch, gs.patch],
+                };
+                let v = oracle::visible_fraction(&s.bvh, &r);
+                eprintln!("    rays to {src}: {} rays, visible {v:.3}", r.m);
+                for j in 0..r.m.min(8) {
+                    let h = oracle::hash3(12345, j as u64, 0x9e37);
+                    let side = (r.m as f64).sqrt().ceil() as u32;
+                    let su =
+                        ((j % side) as f64 + (h & 0xffff_ffff) as f64 / 4294967296.0) / side as f64;
+                    let sv = ((j / side) as f64 + (h >> 32) as f64 / 4294967296.0) / side as f64;
+                    let y = oracle::point_in(gs, &ps, su, sv.min(1.0));
+                    let hit = s.bvh.intersect(xg, y - xg, 1e-10, 1.0 - 1e-9);
+                    let hit2 = s.bvh.intersect(xg, y - xg, 1e-3, 1.0 - 1e-9);
+                    let occ = s.bvh.occluded_between(
+                        xg,
+                        y,
+                        [g.patch, gs.patch],
+                        crate::geometry::Parts::All,
+                        &mut Default::default(),
+                    );
+                    eprintln!(
+                        "      occluded_between {occ}; hit from 1e-3: {:?}",
+                        hit2.map(|h| (h.patch, patch_class(&s, &scene, h.patch), h.t))
+                    );
+                    eprintln!(
+                        "      ray {j} to {y:.4}: hit {:?}",
+                        hit.map(|h| (h.patch, patch_class(&s, &scene, h.patch), h.t))
+                    );
+                }
+            }
+            let mut t = gather::Terms::default();
+            s.point_terms(xg, n, g.patch, src, true, false, 0, None, &limits, &mut t);
+            let node = nodes[src];
+            eprintln!(
+                "    green src {src}: corners {:.4?} children {} F(x) {:.5} exact {:.5}; point_terms fixed {} Σf {:.5}",
+                ps.corners(),
+                node.child_count,
+                point_to_polygon(xg, n, &ps),
+                crate::geometry::point_to_polygon_exact(xg, n, &ps),
+                t.fixed.len(),
+                t.fixed.iter().map(|x| x.1).sum::<f64>()
+            );
+        }
+        for (dx, dz) in [
+            (0.0, 0.0),
+            (0.01, 0.0),
+            (-0.01, 0.0),
+            (0.0, 0.01),
+            (0.0, -0.01),
+            (0.003, 0.007),
+        ] {
+            let off = if n.y.abs() > 0.5 {
+                DVec3::new(dx, 0.0, dz)
+            } else if n.x.abs() > 0.5 {
+                DVec3::new(0.0, dx, dz)
+            } else {
+                DVec3::new(dx, dz, 0.0)
+            };
+            let (bo, vo, _) = s.gather_point(
+                leaf,
+                xg + off,
+                None,
+                ((g.patch, 999, 1 + i as u32), ANY_LEAF),
+                false,
+                &limits,
+            );
+            eprintln!("    gather at x+{off:.3}: {bo:.4?} valid {vo}");
+        }
+        gather::TRACE_TERMS.with(|t| *t.borrow_mut() = Some(Vec::new()));
+        let (bx, valid, _) = s.gather_point(
+            leaf,
+            xg,
+            None,
+            ((g.patch, 4242, 77 + i as u32), ANY_LEAF),
+            false,
+            &limits,
+        );
+        let terms = gather::TRACE_TERMS
+            .with(|t| t.borrow_mut().take())
+            .unwrap_or_default();
+        let near = gather::TRACE_NEAR.with(|t| t.borrow_mut().take());
+        eprintln!("  gather at x: {bx:.4?} valid {valid}; far H and near {near:.4?}");
+        // By class.
+        let mut by: HashMap<String, ([f64; 3], f64, usize)> = HashMap::new();
+        let mut rows: Vec<(u32, u32, f64, [f64; 3], String)> = Vec::new();
+        for &(src, e, f) in &terms {
+            let (b, cls) = if e & FACET_BIT != 0 {
+                let fi = e & !FACET_BIT;
+                (s.facet_b[fi as usize].map(f64::from), "facet".to_string())
+            } else {
+                let ge = &geoms[e as usize];
+                let b = brad[e as usize].map(f64::from);
+                if ge.patch == u32::MAX {
+                    (b, "cluster".to_string())
+                } else {
+                    (b, patch_class(&s, &scene, ge.patch))
+                }
+            };
+            let a = by.entry(cls.clone()).or_default();
+            for k in 0..3 {
+                a.0[k] += f * b[k];
+            }
+            a.1 += f;
+            a.2 += 1;
+            rows.push((src, e, f, b, cls));
+        }
+        let mut byv: Vec<_> = by.into_iter().collect();
+        byv.sort_by(|a, b| (b.1).0[1].total_cmp(&(a.1).0[1]));
+        eprintln!("  final gather by source class: Σf·B (rgb), Σf, terms");
+        for (c, (h, f, k)) in &byv {
+            eprintln!("    {c:40} {h:.4?} f {f:.4} ({k})");
+        }
+        rows.sort_by(|a, b| (b.2 * b.3[1]).total_cmp(&(a.2 * a.3[1])));
+        for (src, e, f, b, cls) in rows.iter().take(12) {
+            let ge = if e & FACET_BIT != 0 {
+                None
+            } else {
+                Some(&geoms[*e as usize])
+            };
+            let c = ge
+                .map(|ge| oracle::poly(ge).centroid())
+                .unwrap_or(DVec3::NAN);
+            eprintln!(
+                "     link {src:6} elem {e:6} {cls:32} c {c:.3} A {:.4} f {f:.5} B {b:.3?} fB_g {:.4}",
+                ge.map_or(0.0, |g| g.area),
+                f * b[1]
+            );
+        }
+        // Cosine rays over the leaf field.
+        let side = 256usize;
+        let mut rb: HashMap<String, ([f64; 3], f64)> = HashMap::new();
+        let mut tot = [0.0; 3];
+        let w = 1.0 / (side * side) as f64;
+        for j in 0..side * side {
+            let h = |k: u64| oracle::unit(oracle::hash3(0x28 ^ i as u64, j as u64, k));
+            let u1 = ((j % side) as f64 + h(0)) / side as f64;
+            let u2 = ((j / side) as f64 + h(1)) / side as f64;
+            let dir = cosine_direction(n, u1, u2);
+            let hit = s.bvh.intersect_front_first(xg, dir * diam * 2.0, 1e-6, 1.0);
+            let Some(hit) = hit else {
+                rb.entry("miss".into()).or_default().1 += w;
+                continue;
+            };
+            let back = s.patches.normals[hit.patch as usize].dot(dir) >= 0.0;
+            let cls = format!(
+                "{}{}",
+                patch_class(&s, &scene, hit.patch),
+                if back { " BACKFACE" } else { "" }
+            );
+            let top = root[hit.patch as usize];
+            let b = if back || top == u32::MAX {
+                [0.0; 3]
+            } else {
+                let y = xg + dir * diam * 2.0 * hit.t;
+                brad[s.leaf_at(ElementId(top), y).ix()].map(f64::from)
+            };
+            let a = rb.entry(cls).or_default();
+            for k in 0..3 {
+                a.0[k] += w * b[k];
+                tot[k] += w * b[k];
+            }
+            a.1 += w;
+        }
+        let rho = s.patches.rhos[g.patch as usize];
+        eprintln!(
+            "  cosine rays over the leaf field: H {tot:.4?} -> B {:.4?}",
+            [rho[0] * tot[0], rho[1] * tot[1], rho[2] * tot[2]]
+        );
+        let mut rv: Vec<_> = rb.into_iter().collect();
+        rv.sort_by(|a, b| (b.1).0[1].total_cmp(&(a.1).0[1]));
+        for (c, (h, f)) in &rv {
+            eprintln!("    {c:40} {h:.4?} frac {f:.4}");
+        }
+    }
+}
