@@ -373,6 +373,47 @@ pub struct SceneBvh {
     /// Each patch's back-to-back twin (the same corners in reverse order: a
     /// two-sided polygon's other side), `u32::MAX` for none ([`twin_patches`]).
     twins: Vec<u32>,
+    /// Each patch's plane at the build's time: unit normal and offset `n · v₀`
+    /// ([`SceneBvh::occluded_between`] trims a segment's ends off them).
+    planes: Vec<(DVec3, f64)>,
+    /// [`PLANE_GAP`] times the scene's diameter.
+    plane_gap: f64,
+}
+
+/// Height above the plane of the surface a segment starts or ends on, relative to
+/// the scene's diameter, under which nothing blocks the segment
+/// ([`SceneBvh::occluded_between`]): a straight segment leaving a plane never comes
+/// back to it, so a face hit within this of that plane is a piece of the surface
+/// itself or of its other side, a hair off its plane.
+///
+/// Why: contact meshing splits a two-sided slab's room side and its back-to-back
+/// side into pieces that are no longer twins bit for bit ([`twin_patches`]), and
+/// the back side's piece under a point, 3·10⁻⁸ m off the room side's plane, lay
+/// beyond [`SURFACE_TRIM`] of the segment: on Blender's Cornell box
+/// (`tests/data/blender/cornell-box.glb`) every ray from the final gather's
+/// points by the ceiling's corner to the green wall, the floor and the red wall
+/// met the ceiling's own back side, and those points gathered 0.20 of green
+/// instead of 0.47 (issue 45, part 4). Far below any gap a scene means: Suzanne's
+/// lip, 0.14 mm (6·10⁻⁵ of that scene) over a leaf, still blocks.
+pub const PLANE_GAP: f64 = 1e-6;
+
+/// Each patch's unit normal and plane offset; `moving(p)`: none (a NaN offset
+/// no point lies within), as [`SceneBvh::place`] moves them.
+fn patch_planes(patches: &Patches, moving: impl Fn(usize) -> bool) -> Vec<(DVec3, f64)> {
+    (0..patches.len())
+        .map(|p| {
+            if moving(p) {
+                return (DVec3::ZERO, f64::NAN);
+            }
+            let n = patches.normals[p];
+            let v0 = patches.polys[p]
+                .corners()
+                .first()
+                .copied()
+                .unwrap_or(DVec3::ZERO);
+            (n, n.dot(v0))
+        })
+        .collect()
 }
 
 /// Each patch's back-to-back twin among `patches`: the patch with the same corners
@@ -451,6 +492,13 @@ impl SceneBvh {
             parts,
             rays: Rays::Obvhs,
             twins: twin_patches(patches),
+            planes: patch_planes(patches, |p| {
+                scene
+                    .objects
+                    .get(patches.objects[p] as usize)
+                    .is_some_and(|o| o.is_moving())
+            }),
+            plane_gap: PLANE_GAP * patches.diameter,
         }
         .with_env_rays()
     }
@@ -470,6 +518,8 @@ impl SceneBvh {
                 .collect(),
             rays: Rays::Obvhs,
             twins: twin_patches(patches),
+            planes: patch_planes(patches, |_| false),
+            plane_gap: PLANE_GAP * patches.diameter,
         }
         .with_env_rays()
     }
@@ -599,14 +649,17 @@ impl SceneBvh {
         last: &mut LastHit,
     ) -> bool {
         let skip = [skip[0], skip[1], u32::MAX, u32::MAX];
-        self.occluded_trimmed(a, b, skip, SEGMENT_TRIM, which, last)
+        self.occluded_trimmed(a, b, skip, (SEGMENT_TRIM, SEGMENT_TRIM), which, last)
     }
 
     /// [`SceneBvh::occluded_cached`] for a segment between two surface points on
     /// the patches `skip`: those patches' twins are skipped too, and the ends are
     /// trimmed by [`SURFACE_TRIM`] only, so that a surface nearer to an end than
     /// [`SEGMENT_TRIM`] of the length (a fold of a mesh lying over the point)
-    /// still blocks.
+    /// still blocks; an end that lies in the plane of a patch of `skip` is trimmed
+    /// up to where the segment has risen [`PLANE_GAP`] of the scene above that
+    /// plane (at most half the segment), so that the surface's own other side, cut
+    /// into other pieces than it ([`twin_patches`] finds no twin), does not block.
     pub fn occluded_between(
         &self,
         a: DVec3,
@@ -616,23 +669,40 @@ impl SceneBvh {
         last: &mut LastHit,
     ) -> bool {
         let twin = |p: u32| self.twins.get(p as usize).copied().unwrap_or(u32::MAX);
+        let d = b - a;
+        // The trim of end `x` off the planes of `skip` that hold it.
+        let trim = |x: DVec3| {
+            skip.iter()
+                .filter_map(|&p| self.planes.get(p as usize))
+                .filter(|(n, off)| (n.dot(x) - off).abs() <= self.plane_gap)
+                .map(|(n, _)| {
+                    let h = n.dot(d).abs();
+                    if h > 0.0 {
+                        (self.plane_gap / h).min(0.5)
+                    } else {
+                        0.5
+                    }
+                })
+                .fold(SURFACE_TRIM, f64::max)
+        };
+        let trims = (trim(a), trim(b));
         let skip = [skip[0], skip[1], twin(skip[0]), twin(skip[1])];
-        self.occluded_trimmed(a, b, skip, SURFACE_TRIM, which, last)
+        self.occluded_trimmed(a, b, skip, trims, which, last)
     }
 
     /// Whether a triangle not of the patches `skip` blocks the segment `a b` with
-    /// both ends trimmed by `trim` of its length.
+    /// its ends trimmed by `trims` (at `a`, at `b`) of its length.
     fn occluded_trimmed(
         &self,
         a: DVec3,
         b: DVec3,
         skip: [u32; 4],
-        trim: f64,
+        trims: (f64, f64),
         which: Parts,
         last: &mut LastHit,
     ) -> bool {
         let d = b - a;
-        let (s0, s1) = (trim, 1.0 - trim);
+        let (s0, s1) = (trims.0, 1.0 - trims.1);
         // Cast from `2 NODE_EPSILON` behind `a` ([`SceneBvh::closest_hit`]), so
         // that no node is dropped near the trim: the f64 test decides there.
         let back = 2.0 * NODE_EPSILON;

@@ -494,3 +494,93 @@ fn the_4_wide_traversal_answers_every_occlusion_query_as_the_cwbvh() {
         }
     }
 }
+
+/// A surface's back side cut into other pieces than its front, a hair in front of
+/// it, as contact meshing leaves a two-sided slab's two sides (issue 45, part 4:
+/// on Blender's Cornell box the ceiling's back side, 3·10⁻⁸ m off the room side's
+/// plane and no twin of it bit for bit, blocked every ray from the final gather's
+/// points by the ceiling's corner to the green wall, the floor and the red wall):
+/// a segment from the front to the floor facing it is not blocked by it; a real
+/// occluder 1 mm under the front still blocks. Before (`SURFACE_TRIM` only): all
+/// 64 segments blocked.
+#[test]
+fn a_surfaces_own_back_side_cut_otherwise_does_not_block_it() {
+    use rhier::geometry::{LastHit, Parts};
+    use rhier::scene::{MaterialId, Polygon};
+    let quad = |v: [DVec3; 4]| Polygon {
+        vertices: v.to_vec(),
+        material: MaterialId(0),
+    };
+    let (lo, hi) = (0.0, 2.0);
+    // The ceiling at y = 2, facing down.
+    let ceiling = quad([
+        DVec3::new(lo, 2.0, lo),
+        DVec3::new(hi, 2.0, lo),
+        DVec3::new(hi, 2.0, hi),
+        DVec3::new(lo, 2.0, hi),
+    ]);
+    // Its back side, facing up, in two halves 3e-8 under it.
+    let y = 2.0 - 3e-8;
+    let back = |x0: f64, x1: f64| {
+        quad([
+            DVec3::new(x0, y, lo),
+            DVec3::new(x0, y, hi),
+            DVec3::new(x1, y, hi),
+            DVec3::new(x1, y, lo),
+        ])
+    };
+    // The floor at y = 0, facing up.
+    let floor = quad([
+        DVec3::new(lo, 0.0, lo),
+        DVec3::new(lo, 0.0, hi),
+        DVec3::new(hi, 0.0, hi),
+        DVec3::new(hi, 0.0, lo),
+    ]);
+    let scene = crate::common::shapes::uniform_scene(
+        vec![ceiling, back(lo, 1.0), back(1.0, hi), floor],
+        0.5,
+        0.0,
+    );
+    let patches = Patches::at_time(&scene, 0.0);
+    let bvh = SceneBvh::build(&scene, &patches, 0.0);
+    assert_eq!(rhier::geometry::twin_patches(&patches)[0], u32::MAX);
+    let mut last = LastHit::default();
+    let mut blocked = 0;
+    for k in 0..64u64 {
+        let x = patches.point(0, u(hash3(k, 1, 31)), u(hash3(k, 2, 31)));
+        let f = patches.point(3, u(hash3(k, 3, 31)), u(hash3(k, 4, 31)));
+        blocked += usize::from(bvh.occluded_between(x, f, [0, 3], Parts::All, &mut last));
+    }
+    assert_eq!(
+        blocked, 0,
+        "{blocked} of 64 segments blocked by the back side"
+    );
+    // A real occluder 1 mm under the ceiling blocks: a small plate under the point.
+    let plate = quad([
+        DVec3::new(0.9, 2.0 - 1e-3, 0.9),
+        DVec3::new(1.1, 2.0 - 1e-3, 0.9),
+        DVec3::new(1.1, 2.0 - 1e-3, 1.1),
+        DVec3::new(0.9, 2.0 - 1e-3, 1.1),
+    ]);
+    let scene = crate::common::shapes::uniform_scene(
+        vec![
+            patches_poly(&scene, 0),
+            patches_poly(&scene, 1),
+            patches_poly(&scene, 2),
+            patches_poly(&scene, 3),
+            plate,
+        ],
+        0.5,
+        0.0,
+    );
+    let patches = Patches::at_time(&scene, 0.0);
+    let bvh = SceneBvh::build(&scene, &patches, 0.0);
+    let x = DVec3::new(1.0, 2.0, 1.0);
+    let f = DVec3::new(1.0, 0.0, 1.0);
+    assert!(bvh.occluded_between(x, f, [0, 3], Parts::All, &mut LastHit::default()));
+}
+
+/// Polygon `i` of `scene`'s only object.
+fn patches_poly(scene: &rhier::scene::Scene, i: usize) -> rhier::scene::Polygon {
+    scene.objects[0].polygons[i].clone()
+}
