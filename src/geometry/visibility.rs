@@ -464,9 +464,15 @@ impl SceneBvh {
         let mut st = Tris::default();
         let mut moving: Vec<Tris> = vec![Tris::default(); scene.objects.len()];
         let unit = unit_scale(patches.diameter);
+        let is_moving = |p: usize| {
+            scene
+                .objects
+                .get(patches.objects[p] as usize)
+                .is_some_and(|o| o.is_moving())
+        };
         for i in 0..patches.len() {
             let obj = patches.objects[i] as usize;
-            if scene.objects.get(obj).is_some_and(|o| o.is_moving()) {
+            if is_moving(i) {
                 let g = &patches.geometry[i];
                 push_triangles(
                     &g.vertices[..g.corners as usize],
@@ -492,12 +498,7 @@ impl SceneBvh {
             parts,
             rays: Rays::Obvhs,
             twins: twin_patches(patches),
-            planes: patch_planes(patches, |p| {
-                scene
-                    .objects
-                    .get(patches.objects[p] as usize)
-                    .is_some_and(|o| o.is_moving())
-            }),
+            planes: patch_planes(patches, is_moving),
             plane_gap: PLANE_GAP * patches.diameter,
         }
         .with_env_rays()
