@@ -1,11 +1,14 @@
 //! Occlusion rays through Embree 3 (Wald et al., "Embree: a kernel framework for
 //! efficient CPU ray tracing", 2014): the second visibility backend of
-//! [`super::SceneBvh`], compiled in by the cargo feature `embree` and chosen at run
-//! time by [`super::Rays::ENV`].
+//! [`super::SceneBvh`], in every build, chosen at run time by [`super::Rays::ENV`].
 //!
-//! A hand-written FFI over the dozen calls of Debian's `libembree-dev` 3.13 that an
-//! occlusion query needs (`rtcore.h`), so that no unmaintained binding crate is
-//! pulled in. Embree only finds the candidates: each triangle is given to it dilated
+//! A hand-written FFI over the dozen calls of Debian's Embree 3.13 that an occlusion
+//! query needs (`rtcore.h`), so that no unmaintained binding crate is pulled in.
+//! The library is not linked: it is opened at run time ([`LIBRARIES`], with
+//! `dlopen` through `libloading`) the first time Embree is asked for, so that a
+//! machine without it builds and runs rhier on obvhs, and one with it (Debian:
+//! `apt-get install libembree3-3`, or `libembree-dev`) runs the same binary on
+//! Embree. Embree only finds the candidates: each triangle is given to it dilated
 //! in its plane by the part's f32 round-off ([`EmbreeScene::new`]), and a filter
 //! called on every candidate hit decides in f64, on the triangle's f64 corners, as
 //! the obvhs backend does ([`super::SceneBvh::occluded_cached`]). The answers are
@@ -79,17 +82,56 @@ struct FilterArgs {
 /// `RTCFilterFunctionN`.
 type FilterFn = unsafe extern "C" fn(args: *const FilterArgs);
 
-#[link(name = "embree3")]
-unsafe extern "C" {
-    fn rtcNewDevice(config: *const c_char) -> RtcDevice;
-    fn rtcGetDeviceError(device: RtcDevice) -> c_int;
-    fn rtcNewScene(device: RtcDevice) -> RtcScene;
-    fn rtcSetSceneFlags(scene: RtcScene, flags: c_int);
-    fn rtcSetSceneBuildQuality(scene: RtcScene, quality: c_int);
-    fn rtcCommitScene(scene: RtcScene);
-    fn rtcReleaseScene(scene: RtcScene);
-    fn rtcNewGeometry(device: RtcDevice, kind: c_int) -> RtcGeometry;
-    fn rtcSetNewGeometryBuffer(
+/// The shared objects tried in turn: Debian's runtime package `libembree3-3` has
+/// the first, `libembree-dev` adds the second.
+pub const LIBRARIES: [&str; 2] = ["libembree3.so.3", "libembree3.so"];
+
+/// How to get Embree when [`LIBRARIES`] cannot be opened.
+const INSTALL: &str = "Debian: apt-get install libembree3-3, or libembree-dev";
+
+/// Declares [`Api`], the table of Embree's entry points (each field the C function
+/// of its name, with `rtcore.h`'s signature), and [`Api::load`], which looks each up.
+macro_rules! embree_api {
+    ($($name:ident: fn($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)?;)*) => {
+        /// Embree's entry points, from the library [`Api::lib`] keeps open.
+        #[allow(non_snake_case)]
+        struct Api {
+            $($name: unsafe extern "C" fn($($arg: $ty),*) $(-> $ret)?,)*
+            /// The opened library, never closed while the pointers are used (the
+            /// table lives in a `static`).
+            #[allow(dead_code)]
+            lib: libloading::Library,
+        }
+
+        impl Api {
+            /// The table of `lib`'s entry points; errors with the first one missing.
+            fn load(lib: libloading::Library) -> Result<Api, libloading::Error> {
+                // SAFETY: each symbol is looked up with the type `rtcore.h` 3.13
+                // declares for it (above); the pointers are copied out of `lib`,
+                // which the table then owns, so they never outlive the library.
+                unsafe {
+                    Ok(Api {
+                        $($name: *lib.get::<unsafe extern "C" fn($($ty),*) $(-> $ret)?>(
+                            concat!(stringify!($name), "\0").as_bytes(),
+                        )?,)*
+                        lib,
+                    })
+                }
+            }
+        }
+    };
+}
+
+embree_api! {
+    rtcNewDevice: fn(config: *const c_char) -> RtcDevice;
+    rtcGetDeviceError: fn(device: RtcDevice) -> c_int;
+    rtcNewScene: fn(device: RtcDevice) -> RtcScene;
+    rtcSetSceneFlags: fn(scene: RtcScene, flags: c_int);
+    rtcSetSceneBuildQuality: fn(scene: RtcScene, quality: c_int);
+    rtcCommitScene: fn(scene: RtcScene);
+    rtcReleaseScene: fn(scene: RtcScene);
+    rtcNewGeometry: fn(device: RtcDevice, kind: c_int) -> RtcGeometry;
+    rtcSetNewGeometryBuffer: fn(
         geometry: RtcGeometry,
         kind: c_int,
         slot: c_uint,
@@ -97,11 +139,49 @@ unsafe extern "C" {
         byte_stride: usize,
         item_count: usize,
     ) -> *mut c_void;
-    fn rtcSetGeometryOccludedFilterFunction(geometry: RtcGeometry, filter: Option<FilterFn>);
-    fn rtcCommitGeometry(geometry: RtcGeometry);
-    fn rtcAttachGeometry(scene: RtcScene, geometry: RtcGeometry) -> c_uint;
-    fn rtcReleaseGeometry(geometry: RtcGeometry);
-    fn rtcOccluded1(scene: RtcScene, context: *mut RtcIntersectContext, ray: *mut RtcRay);
+    rtcSetGeometryOccludedFilterFunction: fn(geometry: RtcGeometry, filter: Option<FilterFn>);
+    rtcCommitGeometry: fn(geometry: RtcGeometry);
+    rtcAttachGeometry: fn(scene: RtcScene, geometry: RtcGeometry) -> c_uint;
+    rtcReleaseGeometry: fn(geometry: RtcGeometry);
+    rtcOccluded1: fn(scene: RtcScene, context: *mut RtcIntersectContext, ray: *mut RtcRay);
+}
+
+/// Opens the first of `names` that loads and looks up Embree's entry points in
+/// it; the error names every library tried, why each failed and how to install
+/// Embree.
+fn open(names: &[&str]) -> Result<Api, String> {
+    let mut why = Vec::with_capacity(names.len());
+    for name in names {
+        // SAFETY: opening a library runs its initialisers; Embree's only set up
+        // its own state (no other library given here is loaded by rhier).
+        match unsafe { libloading::Library::new(name) } {
+            Ok(lib) => match Api::load(lib) {
+                Ok(api) => return Ok(api),
+                Err(e) => why.push(format!("{name}: {e}")),
+            },
+            Err(e) => why.push(format!("{name}: {e}")),
+        }
+    }
+    Err(format!(
+        "cannot load Embree 3 ({}); install it ({INSTALL})",
+        why.join("; ")
+    ))
+}
+
+/// Embree's entry points, the library opened on first use ([`LIBRARIES`]) and
+/// kept open; or why it could not be.
+fn api() -> Result<&'static Api, String> {
+    static API: OnceLock<Result<Api, String>> = OnceLock::new();
+    API.get_or_init(|| open(&LIBRARIES))
+        .as_ref()
+        .map_err(Clone::clone)
+}
+
+/// Checks that Embree can be loaded (the library opened, every entry point found),
+/// loading it if it is not yet; the error names the libraries tried and how to
+/// install Embree.
+pub fn load() -> Result<(), String> {
+    api().map(|_| ())
 }
 
 /// The process's Embree device, made on first use and never released (it owns
@@ -115,31 +195,35 @@ unsafe impl Send for Device {}
 // SAFETY: as for `Send`.
 unsafe impl Sync for Device {}
 
-/// The shared device, or why Embree could not make one.
-fn device() -> Result<RtcDevice, String> {
+/// Embree's entry points and the shared device, or why Embree could not be loaded
+/// or could not make its device.
+fn device() -> Result<(&'static Api, RtcDevice), String> {
     static DEVICE: OnceLock<Result<Device, String>> = OnceLock::new();
+    let api = api()?;
     DEVICE
         .get_or_init(|| {
             // SAFETY: a null configuration string asks for the defaults; the call
             // has no other precondition.
-            let d = unsafe { rtcNewDevice(std::ptr::null()) };
+            let d = unsafe { (api.rtcNewDevice)(std::ptr::null()) };
             if d.is_null() {
                 // SAFETY: `rtcGetDeviceError(NULL)` reports the error of the
                 // failed `rtcNewDevice` (Embree docs, rtcGetDeviceError).
-                let e = unsafe { rtcGetDeviceError(std::ptr::null_mut()) };
+                let e = unsafe { (api.rtcGetDeviceError)(std::ptr::null_mut()) };
                 Err(format!("Embree: rtcNewDevice failed (RTCError {e})"))
             } else {
                 Ok(Device(d))
             }
         })
         .as_ref()
-        .map(|d| d.0)
+        .map(|d| (api, d.0))
         .map_err(Clone::clone)
 }
 
 /// One part's triangles in an Embree scene (one triangle-mesh geometry whose
 /// primitive `i` is the part's triangle `i`).
 pub struct EmbreeScene {
+    /// The entry points of the library the scene was made by.
+    api: &'static Api,
     scene: RtcScene,
 }
 
@@ -154,7 +238,7 @@ unsafe impl Sync for EmbreeScene {}
 impl Drop for EmbreeScene {
     fn drop(&mut self) {
         // SAFETY: `scene` came from `rtcNewScene` and this is its only owner.
-        unsafe { rtcReleaseScene(self.scene) };
+        unsafe { (self.api.rtcReleaseScene)(self.scene) };
     }
 }
 
@@ -202,26 +286,26 @@ impl EmbreeScene {
     /// reach) covers above `θ ≈ 1°`. A corner's shift is capped at `100 pad`
     /// (angles under ~1°, slivers). Errors if Embree cannot make its device.
     pub fn new(tris: &[[DVec3; 3]], pad: f64) -> Result<EmbreeScene, String> {
-        let device = device()?;
+        let (api, device) = device()?;
         let n = tris.len();
         // SAFETY: `device` is live (never released).
-        let scene = unsafe { rtcNewScene(device) };
+        let scene = unsafe { (api.rtcNewScene)(device) };
         if scene.is_null() {
             return Err("Embree: rtcNewScene failed".into());
         }
-        let out = EmbreeScene { scene };
+        let out = EmbreeScene { api, scene };
         // SAFETY: `scene` is live and owned here.
         unsafe {
-            rtcSetSceneFlags(scene, SCENE_FLAG_NONE);
-            rtcSetSceneBuildQuality(scene, BUILD_QUALITY_MEDIUM);
+            (api.rtcSetSceneFlags)(scene, SCENE_FLAG_NONE);
+            (api.rtcSetSceneBuildQuality)(scene, BUILD_QUALITY_MEDIUM);
         }
         if n == 0 {
             // SAFETY: as above; an empty scene commits to one that no ray hits.
-            unsafe { rtcCommitScene(scene) };
+            unsafe { (api.rtcCommitScene)(scene) };
             return Ok(out);
         }
         // SAFETY: `device` is live.
-        let geom = unsafe { rtcNewGeometry(device, GEOMETRY_TYPE_TRIANGLE) };
+        let geom = unsafe { (api.rtcNewGeometry)(device, GEOMETRY_TYPE_TRIANGLE) };
         if geom.is_null() {
             return Err("Embree: rtcNewGeometry failed".into());
         }
@@ -230,15 +314,15 @@ impl EmbreeScene {
         // 16-byte loads) and `n` uint3 triangles, written below before the commit.
         let (vb, ib) = unsafe {
             (
-                rtcSetNewGeometryBuffer(geom, BUFFER_TYPE_VERTEX, 0, FORMAT_FLOAT3, 12, 3 * n)
+                (api.rtcSetNewGeometryBuffer)(geom, BUFFER_TYPE_VERTEX, 0, FORMAT_FLOAT3, 12, 3 * n)
                     as *mut [f32; 3],
-                rtcSetNewGeometryBuffer(geom, BUFFER_TYPE_INDEX, 0, FORMAT_UINT3, 12, n)
+                (api.rtcSetNewGeometryBuffer)(geom, BUFFER_TYPE_INDEX, 0, FORMAT_UINT3, 12, n)
                     as *mut [u32; 3],
             )
         };
         if vb.is_null() || ib.is_null() {
             // SAFETY: `geom` is owned here and attached nowhere.
-            unsafe { rtcReleaseGeometry(geom) };
+            unsafe { (api.rtcReleaseGeometry)(geom) };
             return Err("Embree: rtcSetNewGeometryBuffer failed".into());
         }
         // SAFETY: the buffers hold `3 n` and `n` items (above), are aligned for f32
@@ -261,11 +345,11 @@ impl EmbreeScene {
         // function with Embree's filter signature; attaching hands the scene a
         // reference, so releasing ours leaves the geometry to the scene.
         unsafe {
-            rtcSetGeometryOccludedFilterFunction(geom, Some(occlusion_filter));
-            rtcCommitGeometry(geom);
-            rtcAttachGeometry(scene, geom);
-            rtcReleaseGeometry(geom);
-            rtcCommitScene(scene);
+            (api.rtcSetGeometryOccludedFilterFunction)(geom, Some(occlusion_filter));
+            (api.rtcCommitGeometry)(geom);
+            (api.rtcAttachGeometry)(scene, geom);
+            (api.rtcReleaseGeometry)(geom);
+            (api.rtcCommitScene)(scene);
         }
         Ok(out)
     }
@@ -306,7 +390,7 @@ impl EmbreeScene {
         // first field of `query`, which outlives the call and is what the filter
         // casts it back to; `ray` is a valid, aligned `RTCRay`.
         unsafe {
-            rtcOccluded1(
+            (self.api.rtcOccluded1)(
                 self.scene,
                 &mut query as *mut QueryContext as *mut RtcIntersectContext,
                 &mut ray,
@@ -341,4 +425,37 @@ fn dilate(t: &[DVec3; 3], pad: f64) -> [DVec3; 3] {
         };
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A library that cannot be opened is an error naming every library tried, why
+    /// it failed and how to install Embree, not a crash.
+    #[test]
+    fn a_missing_library_is_an_error_naming_it() {
+        let names = ["libembree3-absent.so.3", "libembree3-absent.so"];
+        let e = match open(&names) {
+            Ok(_) => panic!("opened {names:?}"),
+            Err(e) => e,
+        };
+        for name in names {
+            assert!(e.contains(&format!("{name}: ")), "{e}");
+        }
+        assert!(e.contains("cannot open shared object file"), "{e}");
+        assert!(e.contains("apt-get install libembree3-3"), "{e}");
+    }
+
+    /// A library without Embree's entry points is refused with the first one missing.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    #[test]
+    fn a_library_without_embree_is_an_error_naming_the_symbol() {
+        let e = match open(&["libm.so.6"]) {
+            Ok(_) => panic!("libm.so.6 taken for Embree"),
+            Err(e) => e,
+        };
+        assert!(e.starts_with("cannot load Embree 3 (libm.so.6: "), "{e}");
+        assert!(e.contains("rtcNewDevice"), "{e}");
+    }
 }

@@ -10,15 +10,15 @@
 //!   world space for all static objects, one in object space per moving object placed
 //!   by its motion at time `t`. This module is the only user of obvhs. Occlusion rays
 //!   go through a 4-wide BVH collapsed from obvhs' PLOC tree (`wide`); obvhs' CWBVH
-//!   or, with the cargo feature `embree`, Embree 3 may find their candidates instead
-//!   ([`Rays`], chosen by `RHIER_RAYS`), with the same f64 decisions.
+//!   or Embree 3 (its library opened at run time, `embree`) may find their
+//!   candidates instead ([`Rays`], chosen by `RHIER_RAYS`), with the same f64
+//!   decisions.
 //!
 //! Geometry is `f64` everywhere except inside the BVHs (`f32`, as obvhs stores it);
 //! ray end points are offset relative to the segment length, so results do not depend
 //! on the scene's scale.
 
 mod contact;
-#[cfg(feature = "embree")]
 mod embree;
 mod formfactor;
 mod nearest;

@@ -21,10 +21,10 @@
 //! boxes cost more to decode than a ray's f64 tests, keeps closest hits and box
 //! queries, and may find the occlusion candidates instead (`RHIER_RAYS=cwbvh`).
 //!
-//! Occlusion rays have a third backend, Embree 3 ([`Rays`], the cargo feature
-//! `embree`, `RHIER_RAYS=embree`): it finds the candidates in place of the BVHs and
-//! the same f64 test decides ([`super::embree`]); closest hits and box queries stay
-//! on obvhs.
+//! Occlusion rays have a third backend, Embree 3 ([`Rays`], `RHIER_RAYS=embree`,
+//! its library opened at run time): it finds the candidates in place of the BVHs
+//! and the same f64 test decides ([`super::embree`]); closest hits and box queries
+//! stay on obvhs.
 //!
 //! What it does not do: it never decides what a segment's end points may hit. Callers
 //! pass segments between two surface points; the ends are trimmed by a fraction of the
@@ -55,31 +55,30 @@ pub enum Rays {
     Obvhs,
     /// obvhs' CWBVH traversal (the default before issue 48's rays; kept to compare).
     Cwbvh,
-    /// Embree 3 (`libembree3`), when rhier is built with the cargo feature `embree`.
+    /// Embree 3 (`libembree3.so.3`, opened when first asked for; Debian:
+    /// `apt-get install libembree3-3`, or `libembree-dev`).
     Embree,
 }
 
 impl Rays {
     /// The environment variable that chooses the backend of [`SceneBvh::build`]
     /// (as `RHIER_STORAGE` chooses the pools'): unset, empty or `obvhs` for the
-    /// default, `cwbvh` for obvhs' CWBVH traversal, `embree` for Embree (only in a
-    /// build with the feature `embree`). CI runs the visibility tests and a set of
+    /// default, `cwbvh` for obvhs' CWBVH traversal, `embree` for Embree (where its
+    /// library can be opened). CI runs the visibility tests and a set of
     /// known-answer solves on obvhs and Embree.
     pub const ENV: &'static str = "RHIER_RAYS";
 
-    /// The backend [`Rays::ENV`] names; refuses `embree` in a build without the
-    /// feature.
+    /// The backend [`Rays::ENV`] names; refuses `embree` where Embree's library
+    /// cannot be loaded, naming it and how to install it.
     pub fn from_env() -> Result<Rays> {
         let value = std::env::var_os(Self::ENV).unwrap_or_default();
         match value.to_str() {
             Some("" | "obvhs") => Ok(Rays::Obvhs),
             Some("cwbvh") => Ok(Rays::Cwbvh),
-            Some("embree") if cfg!(feature = "embree") => Ok(Rays::Embree),
-            Some("embree") => Err(Error::Usage(format!(
-                "{}=embree: this rhier was built without Embree \
-                 (cargo build --release --features embree)",
-                Self::ENV
-            ))),
+            Some("embree") => match super::embree::load() {
+                Ok(()) => Ok(Rays::Embree),
+                Err(e) => Err(Error::Usage(format!("{}=embree: {e}", Self::ENV))),
+            },
             _ => Err(Error::Usage(format!(
                 "{}: expected obvhs, cwbvh or embree, found {:?}",
                 Self::ENV,
@@ -211,7 +210,6 @@ struct Part {
     world_box: (DVec3, DVec3),
     /// The part's triangles in Embree (primitive `i` is `tris[i]`), when
     /// [`Rays::Embree`] casts the occlusion rays.
-    #[cfg(feature = "embree")]
     embree: Option<super::embree::EmbreeScene>,
 }
 
@@ -253,7 +251,6 @@ impl Part {
             object,
             unit,
             world_box: (DVec3::ZERO, DVec3::ZERO),
-            #[cfg(feature = "embree")]
             embree: None,
         };
         part.update_box();
@@ -526,10 +523,17 @@ impl SceneBvh {
     }
 
     /// `self` casting its occlusion rays with the backend [`Rays::ENV`] names (a
-    /// bad value is refused by `SolveOptions::validate`; here it, or an Embree that
-    /// cannot start, leaves obvhs with a warning on stderr).
+    /// bad value, or an Embree that cannot be loaded, is refused by
+    /// `SolveOptions::validate`; here, for the commands that do not solve, it, or
+    /// an Embree that cannot start, leaves obvhs with a warning on stderr).
     fn with_env_rays(mut self) -> SceneBvh {
-        let rays = Rays::from_env().unwrap_or_default();
+        let rays = match Rays::from_env() {
+            Ok(rays) => rays,
+            Err(e) => {
+                eprintln!("warning: {e}; casting rays with obvhs");
+                Rays::Obvhs
+            }
+        };
         if rays != Rays::Obvhs
             && let Err(e) = self.set_rays(rays)
         {
@@ -539,15 +543,14 @@ impl SceneBvh {
     }
 
     /// Casts the occlusion rays with `rays` from now on (building Embree's scenes
-    /// for [`Rays::Embree`]). Errors if this build has no Embree or Embree cannot
-    /// start; `self` is then unchanged.
+    /// for [`Rays::Embree`]). Errors if Embree's library cannot be loaded (the
+    /// error names it and how to install it) or Embree cannot start; `self` is then
+    /// unchanged.
     pub fn set_rays(&mut self, rays: Rays) -> Result<()> {
         match rays {
             Rays::Obvhs | Rays::Cwbvh => {
-                #[cfg(feature = "embree")]
                 self.parts.iter_mut().for_each(|p| p.embree = None);
             }
-            #[cfg(feature = "embree")]
             Rays::Embree => {
                 let scenes = self
                     .parts
@@ -561,13 +564,6 @@ impl SceneBvh {
                 for (p, e) in self.parts.iter_mut().zip(scenes) {
                     p.embree = Some(e);
                 }
-            }
-            #[cfg(not(feature = "embree"))]
-            Rays::Embree => {
-                return Err(Error::Usage(
-                    "this rhier was built without Embree (cargo build --release --features embree)"
-                        .into(),
-                ));
             }
         }
         self.rays = rays;
@@ -750,10 +746,8 @@ impl SceneBvh {
                 hit
             };
             // (Only Embree breaks out of the block early.)
-            #[cfg_attr(not(feature = "embree"), allow(unused_labels))]
             let hit =
                 'found: {
-                    #[cfg(feature = "embree")]
                     if let Some(scene) = &part.embree {
                         // Embree's f32 range is wider by `EMBREE_SLACK` so that it
                         // holds every hit the test takes.
@@ -1015,12 +1009,10 @@ fn part_reach(tris: &[[DVec3; 3]]) -> f64 {
 /// `tan θ`; 10⁻⁵ keeps every hit of the f64 test a candidate down to `θ ≈ 1°`
 /// while adding candidates only in a band of 10⁻⁵ of the scene round each
 /// triangle (10⁻⁴ cost 6% more CPU on `gen_cubes 10`).
-#[cfg(feature = "embree")]
 const EMBREE_PAD: f64 = 1e-5;
 
 /// How much wider (in the segment's parameter) Embree's f32 range is than the f64
 /// test's: the crossing's parameter strays like its place (see [`EMBREE_PAD`]).
-#[cfg(feature = "embree")]
 const EMBREE_SLACK: f64 = 1e-4;
 
 /// How much wider (in the segment's parameter) the f32 range of a [`Bvh4`]

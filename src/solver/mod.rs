@@ -439,7 +439,7 @@ impl SolveOptions {
     /// (`max_rounds = 0`). Settings are named by the `rhier solve` flag that sets
     /// them (`--eps` for [`Self::eps`]); those without a flag by their field. A
     /// value of [`Storage::ENV`] or [`crate::geometry::Rays::ENV`] that names no
-    /// backend (or Embree in a build without it) is refused too.
+    /// backend (or Embree where its library cannot be loaded) is refused too.
     pub fn validate(&self) -> Result<()> {
         Storage::from_env()?;
         crate::geometry::Rays::from_env()?;

@@ -584,9 +584,9 @@ pub struct ResourceArgs {
     ///
     /// The occlusion rays are cast through a 4-wide BVH built by obvhs;
     /// `RHIER_RAYS=cwbvh` casts them through obvhs' CWBVH (the default before), and
-    /// in a build with `--features embree` (Debian's `libembree-dev`)
-    /// `RHIER_RAYS=embree` with Embree 3, all with the same f64 decisions (`obvhs`,
-    /// unset: the default).
+    /// `RHIER_RAYS=embree` through Embree 3, its library opened at run time
+    /// (Debian: `apt-get install libembree3-3`, or `libembree-dev`), all with the
+    /// same f64 decisions (`obvhs`, unset: the default).
     #[arg(long)]
     pub threads: Option<usize>,
 }
