@@ -302,3 +302,88 @@ fn the_footprints_of_a_pillar_without_ends_are_dropped_from_floor_and_ceiling() 
     }
     assert_eq!(stats.pieces_hidden, 2, "{stats:?}");
 }
+
+/// A round leg (an 8-sided prism, 3 cm in radius) standing on a one-quad 4 × 4 m
+/// floor: its 8 base edges cut the floor near the leg only
+/// (`geometry::contact::cut_by_lines`). Cut along their whole lines, they crossed
+/// the whole floor, into slivers metres from the leg: the 49 room polygons of
+/// `tools/gen_furnished.py --detail 0.15 --static` became 8 684 patches that way
+/// (h48furn). The floor keeps its area less the leg's footprint, the footprint is
+/// dropped, and few pieces lie wholly farther than 10 cm from the leg. (Eight
+/// sides, not more: a 12-sided footprint is a 12-cornered piece, and `Poly` holds
+/// 8, so 1.5e-4 m² of floor went with it, whole lines or not.)
+#[test]
+fn a_round_leg_cuts_the_floor_near_itself_only() {
+    use rhier::scene::{MaterialId, Polygon};
+    let m = MaterialId(0);
+    let floor = Polygon {
+        vertices: vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, 4.0),
+            DVec3::new(4.0, 0.0, 4.0),
+            DVec3::new(4.0, 0.0, 0.0),
+        ],
+        material: m,
+    };
+    let (c, r, h, k) = (DVec3::new(1.3, 0.0, 2.1), 0.03, 0.7, 8);
+    let rim = |i: usize, y: f64| {
+        let a = std::f64::consts::TAU * i as f64 / k as f64;
+        c + DVec3::new(r * a.cos(), y, -r * a.sin())
+    };
+    let mut polygons = vec![floor];
+    for i in 0..k {
+        let j = (i + 1) % k;
+        // Counter-clockwise seen from outside.
+        polygons.push(Polygon {
+            vertices: vec![rim(i, 0.0), rim(j, 0.0), rim(j, h), rim(i, h)],
+            material: m,
+        });
+        let top = c + DVec3::Y * h;
+        polygons.push(Polygon {
+            vertices: vec![top, rim(i, h), rim(j, h)],
+            material: m,
+        });
+    }
+    let scene = rhier::scene::Scene {
+        materials: vec![Material::diffuse("white", [0.5; 3])],
+        objects: vec![Object::still("floor and leg", polygons)],
+        ..Default::default()
+    };
+    let before = Patches::at_time(&scene, 0.0);
+    assert!(before.normals[0].y > 0.99, "the floor faces up");
+    assert!(
+        before.normals[1].dot(rim(0, 0.0) - c) > 0.0,
+        "the leg faces out"
+    );
+    let (after, stats) = split_at_contacts(&scene, &before, 0.0);
+    let floor: Vec<usize> = (0..after.len())
+        .filter(|&i| after.normals[i].y > 0.99 && after.polys[i].v[0].y.abs() < 1e-12)
+        .collect();
+    let area: f64 = floor.iter().map(|&i| after.areas[i]).sum();
+    let footprint = 0.5 * k as f64 * r * r * (std::f64::consts::TAU / k as f64).sin();
+    let far = |i: usize| {
+        after.polys[i]
+            .corners()
+            .iter()
+            .all(|v| (*v - c).length() > 0.1)
+    };
+    let far_pieces = floor.iter().filter(|&&i| far(i)).count();
+    let smallest = floor
+        .iter()
+        .map(|&i| after.areas[i])
+        .fold(f64::INFINITY, f64::min);
+    eprintln!(
+        "{stats:?}, {} floor pieces, {far_pieces} far, smallest {smallest:e}, area {area}",
+        floor.len()
+    );
+    assert!(
+        (area - (16.0 - footprint)).abs() < 1e-9,
+        "floor area {area}"
+    );
+    assert_eq!(stats.pieces_hidden, 1, "{stats:?}");
+    // 24 pieces (those of more than 4 corners fanned), 2 of them the large ones
+    // wholly away from the leg: the first cut crosses the whole quad, as the
+    // first cut of a convex piece must.
+    assert_eq!(floor.len(), 24, "floor pieces");
+    assert_eq!(far_pieces, 2, "pieces wholly away from the leg");
+}

@@ -23,16 +23,23 @@
 //! f64), contact meshing (a cut through a tile's corner kept it alone or twice, a
 //! quad with a repeated corner in metres and a triangle in millimetres; the cuts
 //! came in the f32 BVH's order), occlusion (a hit within the f32 round-off of the
-//! segment's trim, by a box's corner; now decided in f64) and the probe's leaf (a
+//! segment's trim, by a box's corner; now decided in f64), the probe's leaf (a
 //! point on the edge of two leaves, the middle of a patch, took one leaf or the
-//! other). Before, the Cornell box at ×1000 differed by up to 2.8% (420 of 950
-//! points over 1e-3) and the boxes at 790 and 812 of their points; now no point
-//! differs by more than 1e-4: the Cornell box by at most 1.3e-8, the boxes by
-//! 1.3e-5 at ×0.001 and 1.9e-5 at ×1000. The boxes had read up to 1e-3 apart at
-//! ×1000 at the small box's foot until the BVH's boxes were padded beyond f32
-//! round-off (`geometry::visibility`, `padded_boxes`): a gather point 10⁻⁴ m
-//! beside the box cast a ray that crosses the box's side 6·10⁻⁸ m from its edge,
-//! and the f32 traversal found that side at one scale only.
+//! other) and a cluster's emission (a cluster whose patches all face one way
+//! radiated the `f32` rounding of its power, ~1e-8, every way at some scales, so a
+//! link to what it turns its back on had a factor of 1e-10 or 0, and a leaf row
+//! walked into the cluster's parts or dropped the link: `oracle::COHERENT_REST`).
+//! Before, the Cornell box at ×1000 differed by up to 2.8% (420 of 950 points
+//! over 1e-3) and the boxes at 790 and 812 of their points; now no point differs
+//! by more than 1e-4: the Cornell box by at most 6.4e-8, the boxes by 1.0e-7 at
+//! ×0.001 and ×1000 (6.7e-8 with contact segments cutting their whole lines;
+//! before the emission's fix 1.3e-5 and 1.9e-5 so, and 6.7e-4 cutting only near
+//! themselves: the ceiling over the lamp, 4 points over the bar). The boxes had
+//! read up to 1e-3 apart at ×1000 at the small box's foot until the BVH's boxes
+//! were padded beyond f32 round-off (`geometry::visibility`, `padded_boxes`): a
+//! gather point 10⁻⁴ m beside the box cast a ray that crosses the box's side
+//! 6·10⁻⁸ m from its edge, and the f32 traversal found that side at one scale
+//! only.
 
 use glam::DVec3;
 use rhier::geometry::Patches;
