@@ -764,13 +764,25 @@ fn evaluate_surfaces(
     let funocc: f64 = (0..q.count).map(|i| q.weights[i] * fq[i]).sum();
     let skip = [gr.patch, gs.patch];
     let shaft = Shaft::new(polr.corners(), nr, pols.corners(), ns);
-    if funocc <= 0.0 || shaft.is_clear(bvh, skip) {
+    // Only the shaft proves a link clear, also where the factor is 0 at the
+    // receiver's quadrature points: a source turned away from them may still face
+    // part of the receiver (its corners and centre, `spread` above), and the rows
+    // and the final gather take a clear link's factor at every point of the
+    // receiver's leaves without a ray. Flagged clear at a zero factor, the strip of
+    // Blender's back wall 0.1 mm behind the green wall's slab
+    // (`tests/data/blender/cornell-box.glb`) took the lamp's top and the ceiling's
+    // back side through the ceiling's slab: its rows summed to 1.12–1.15 against the
+    // slab 0.1 mm in front (ρ 0.999), the leaf system's GMRES stalled at a residual
+    // of 2.7e-3 after 2 000 products and, with the rows weighted by their cells'
+    // factors, 1 500 leaves went to −400 in green (issue 45, part 4).
+    let clear = shaft.is_clear(bvh, skip);
+    if funocc <= 0.0 || clear {
         return LinkEval {
             transport: Transport {
                 f: funocc as f32,
                 spread: (fmax - fmin.min(fmax)) as f32,
                 visibility: 1.0,
-                flags: [LinkState::Active as u8, 1, 0, 0],
+                flags: [LinkState::Active as u8, clear as u8, 0, 0],
             },
             rays: 0,
             empty: false,
@@ -1264,6 +1276,81 @@ mod tests {
         );
         let total = over_sphere(|v| cluster_emission(&g, &em, b, v, false));
         assert!((total / std::f64::consts::PI - 1.0).abs() < 1e-3, "{total}");
+    }
+
+    /// A link whose factor is 0 at the receiver's quadrature points is flagged
+    /// clear only where its shaft is: a wall 2 m high (`z = 0`, facing `+z`) and
+    /// an emitter facing up at `y = 0.7`, above the wall's Gauss points (`y =
+    /// ±0.58`) but below its top, with and without a plate 0.15 m in front of the
+    /// wall's top that hides the emitter from it. Flagged clear at a zero factor
+    /// (before), the wall's leaves above `y = 0.7` took the emitter through the
+    /// plate ([`evaluate_surfaces`]).
+    #[test]
+    fn a_link_with_no_factor_at_its_points_is_clear_only_where_its_shaft_is() {
+        use crate::geometry::{Patches, SceneBvh};
+        use crate::scene::{Material, MaterialId, Object, Polygon, Scene};
+        let quad = |v: [[f64; 3]; 4]| Polygon {
+            vertices: v.iter().map(|a| DVec3::from_array(*a)).collect(),
+            material: MaterialId(0),
+        };
+        let wall = quad([
+            [0.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ]);
+        let lamp = quad([
+            [0.0, 0.7, 0.3],
+            [0.0, 0.7, 1.3],
+            [1.0, 0.7, 1.3],
+            [1.0, 0.7, 0.3],
+        ]);
+        let plate = quad([
+            [-1.0, 0.5, 0.15],
+            [2.0, 0.5, 0.15],
+            [2.0, 1.2, 0.15],
+            [-1.0, 1.2, 0.15],
+        ]);
+        let set = EvalSettings {
+            rays_per_point: 4,
+            cluster_rays: 4,
+            seed: 1,
+            sources_by_power: true,
+        };
+        for (hidden, polygons) in [
+            (true, vec![wall.clone(), lamp.clone(), plate]),
+            (false, vec![wall, lamp]),
+        ] {
+            let scene = Scene {
+                materials: vec![Material {
+                    name: "m".into(),
+                    rho: [0.5; 3],
+                    emission: [1.0; 3],
+                }],
+                objects: vec![Object::still("o", polygons)],
+                ..Scene::default()
+            };
+            let patches = Patches::at_time(&scene, 0.0);
+            let bvh = SceneBvh::build_static(&patches);
+            let elem = |p: usize| {
+                let c = patches.polys[p].corners();
+                let mut g = geom(c);
+                g.normal = patches.polys[p].normal().to_array();
+                g.area = patches.polys[p].area();
+                g.patch = p as u32;
+                g
+            };
+            let (gr, gs) = (elem(0), elem(1));
+            let q = samples(&gr);
+            assert!(q.points[..q.count].iter().all(|x| x.y < 0.7));
+            let ev = evaluate_surfaces(&gr, &gs, &bvh, [0, 1], &set);
+            assert_eq!(ev.transport.f, 0.0, "hidden {hidden}");
+            assert!(
+                ev.transport.spread > 0.0,
+                "hidden {hidden}: the wall's top sees the lamp"
+            );
+            assert_eq!(ev.transport.shaft_clear(), !hidden, "hidden {hidden}");
+        }
     }
 
     /// A cluster of faces that all face one way (a box's `−z` side in two tiles)

@@ -41,7 +41,9 @@ pub struct Transport {
     pub f: f32,
     /// Spread of the point form factor over the receiver (the oracle's `ΔK`).
     pub spread: f32,
-    /// Estimated visible fraction (1 = shaft proved it clear).
+    /// Estimated visible fraction: 1 where a shaft proved it clear, and where the
+    /// unoccluded factor at the receiver's quadrature points is 0 (no rays cast;
+    /// byte 1 of `flags` then says whether the shaft is clear).
     pub visibility: f32,
     /// [`LinkState`] in byte 0; visibility class in byte 1 (0 rays, 1 shaft-clear);
     /// time class in byte 2 (0 constant in the current window, 1 varying).
