@@ -740,13 +740,14 @@ fn evaluate_surfaces(
     let funocc: f64 = (0..q.count).map(|i| q.weights[i] * fq[i]).sum();
     let skip = [gr.patch, gs.patch];
     let shaft = Shaft::new(polr.corners(), nr, pols.corners(), ns);
-    if funocc <= 0.0 || shaft.is_clear(bvh, skip) {
+    let clear = std::env::var_os("RHIER_OLD_CLEAR").is_some() && funocc <= 0.0 || shaft.is_clear(bvh, skip);
+    if funocc <= 0.0 || clear {
         return LinkEval {
             transport: Transport {
                 f: funocc as f32,
                 spread: (fmax - fmin.min(fmax)) as f32,
                 visibility: 1.0,
-                flags: [LinkState::Active as u8, 1, 0, 0],
+                flags: [LinkState::Active as u8, clear as u8, 0, 0],
             },
             rays: 0,
             empty: false,

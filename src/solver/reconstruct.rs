@@ -546,6 +546,19 @@ impl Solver<'_> {
                 }
             }
             let mut b = [[0.0f32; 3]; 4];
+            if std::env::var_os("RHIER_SCRATCH").is_some() {
+                let lb = self.elems.radiosities.as_slice()[c.leaf.ix()];
+                for i in 0..c.n as usize {
+                    for k in 0..3 {
+                        if vals[i][k] < 0.0 {
+                            eprintln!(
+                                "SCRATCH negative corner: leaf {} patch {} channel {k} value {:.4} leaf mean {:?}",
+                                c.leaf.0, c.patch, vals[i][k], lb
+                            );
+                        }
+                    }
+                }
+            }
             for i in 0..c.n as usize {
                 b[i] = [
                     vals[i][0].max(0.0) as f32,

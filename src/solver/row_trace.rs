@@ -912,3 +912,34 @@ fn trace_blender_point28() {
         }
     }
 }
+
+#[test]
+#[ignore = "scratch: rays out of the crevice behind the green slab"]
+fn scratch_crevice_rays() {
+    use crate::geometry::{LastHit, Parts};
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender/cornell-box.glb");
+    let scene = crate::scene::load(&path).unwrap();
+    let solver = Solver::new(&scene, SolveOptions::default()).unwrap();
+    let patches = &solver.patches;
+    let bvh = &solver.bvh;
+    eprintln!("diameter {}", patches.diameter);
+    for p in [79usize, 2314, 21] {
+        let c = patches.polys[p].corners();
+        eprintln!("patch {p} object {} normal {:.4} corners {c:?}", patches.objects[p], patches.polys[p].normal());
+    }
+    let tw = crate::geometry::twin_patches(patches);
+    eprintln!("twins 79 {} 2314 {} 21 {}", tw[79], tw[2314], tw[21]);
+    let z = patches.polys[2314].corners()[0].z;
+    for (a, b) in [
+        (DVec3::new(1.0, 0.95, z), DVec3::new(0.96, 0.8625, -0.84)),
+        (DVec3::new(1.0, 0.95, z), DVec3::new(0.5, 0.8625, -0.5)),
+        (DVec3::new(1.0, 0.5, z), DVec3::new(0.5, 0.8625, -0.5)),
+        (DVec3::new(1.05, 0.5, z), DVec3::new(0.0, -0.8668, 0.0)),
+    ] {
+        let occ = bvh.occluded_between(a, b, [2314, 21], Parts::All, &mut LastHit::default());
+        let occ2 = bvh.occluded_by(a, b, [2314, 21], Parts::All);
+        let hit = bvh.intersect(a, b - a, 1e-9, 1.0).map(|h| (h.patch, h.t));
+        eprintln!("{a:.5} -> {b:.4}: occluded_between {occ}, occluded_by {occ2}, hit {hit:?}");
+    }
+}

@@ -774,6 +774,12 @@ impl Solver<'_> {
         }
         let geoms = self.elems.geoms.as_slice();
         let patch = geoms[leaf.ix()].patch;
+        let sg = &geoms[leaf.ix()];
+        let scratch_leaf = std::env::var_os("RHIER_SCRATCH").is_some()
+            && sg.patch == 2314
+            && (sg.corners[0][0] - 1.0089).abs() < 1e-3
+            && (sg.corners[0][1] - 0.75).abs() < 1e-3
+            && (sg.corners[2][1] - 1.0).abs() < 1e-3;
         let mut next_known = 0;
         let mut part = |e: u32, k: [f64; 4]| {
             if let Some(p) = known.get(next_known).filter(|p| p.elem == e) {
@@ -809,6 +815,12 @@ impl Solver<'_> {
                     None => (coef, v),
                 };
                 self.push_opened(q, n, e, coef, v, row, None, None);
+                if scratch_leaf && coef > 1e-4 {
+                    eprintln!(
+                        "SCRATCH part link {l} (vis {vis:.3}) surface e {e} coef {coef:.5} v {v:.3} k {k:?} points {:?}",
+                        &q.points[..q.count]
+                    );
+                }
                 self.keep_move_trace(leaf, l, e, traced, &row[at..]);
                 return;
             }
@@ -868,6 +880,9 @@ impl Solver<'_> {
                 }
                 None => coef * v,
             };
+            if scratch_leaf && entry > 1e-4 {
+                eprintln!("SCRATCH part link {l} (vis {vis:.3}) cluster/facet e {e} coef {coef:.5} v {v:.3} seen {seen:?}");
+            }
             if v > 0.0 {
                 row.push((e, entry));
             }
@@ -1700,10 +1715,49 @@ impl Solver<'_> {
                 before: factors_before,
                 used: Vec::with_capacity(factors_before.map_or(0, |b| b.elems.len())),
             });
+        let scratch_leaf = std::env::var_os("RHIER_SCRATCH").is_some()
+            && g.patch == 2314
+            && (g.corners[0][0] - 1.0089).abs() < 1e-3
+            && (g.corners[0][1] - 0.75).abs() < 1e-3
+            && (g.corners[2][1] - 1.0).abs() < 1e-3;
+        let mut prev = (0usize, u32::MAX);
+        let show = |from: usize, link: u32, row: &[(u32, f64)]| {
+            for &(e, c) in &row[from..] {
+                if c > 1e-3 {
+                    let ge = &geoms[e as usize];
+                    eprintln!(
+                        "SCRATCH from link {link}: entry {e} coef {c:.5} patch {} box {:.4}..{:.4}",
+                        ge.patch,
+                        DVec3::from(ge.corners[0]),
+                        DVec3::from(ge.corners[2])
+                    );
+                }
+            }
+        };
         for l in self.chain_links(leaf) {
+            if scratch_leaf {
+                show(prev.0, prev.1, &out.row);
+                prev = (out.row.len(), l);
+            }
             let t = &tr[l as usize];
             let s = ends[l as usize].source;
             let gs = &geoms[s as usize];
+            if scratch_leaf {
+                let r = ends[l as usize].receiver;
+                let gr = &geoms[r as usize];
+                eprintln!(
+                    "SCRATCH link {l}: receiver {r} (patch {} box {:.4}..{:.4}) source {s} (patch {} box {:.4}..{:.4}) f {:.5} vis {:.4} clear {}",
+                    gr.patch,
+                    DVec3::from(gr.corners[0]),
+                    DVec3::from(gr.corners[2]),
+                    gs.patch,
+                    DVec3::from(gs.corners[0]),
+                    DVec3::from(gs.corners[2]),
+                    t.f,
+                    t.visibility,
+                    t.shaft_clear()
+                );
+            }
             // An interactive move keeps every entry of the links it left, surface
             // sources' opened entries as well as clusters': a recomputed row pays
             // only for the links the move touched.
@@ -1871,6 +1925,9 @@ impl Solver<'_> {
             if keep_clusters {
                 out.move_clusters.push((l, out.row[at..].into()));
             }
+        }
+        if scratch_leaf {
+            show(prev.0, prev.1, &out.row);
         }
         out.kept.sort_unstable_by_key(|x| x.link);
         // Stable: a link's parts stay in the order its row took them.
@@ -2494,6 +2551,114 @@ impl Solver<'_> {
             40,
             2000,
         );
+        if std::env::var_os("RHIER_SCRATCH").is_some() {
+            let mut neg = [0usize; 3];
+            let mut most = [0.0f64; 3];
+            for li in 0..nl {
+                for k in 0..3 {
+                    if x[li * 3 + k] < 0.0 {
+                        neg[k] += 1;
+                        most[k] = most[k].min(x[li * 3 + k]);
+                    }
+                }
+            }
+            let rs = self.row_sums();
+            let top = rs.iter().map(|r| r.1).fold(0.0, f64::max);
+            let over = rs.iter().filter(|r| r.1 > 1.0).count();
+            let over2 = rs.iter().filter(|r| r.1 > 1.02).count();
+            let mut order: Vec<usize> = (0..rs.len()).collect();
+            order.sort_by(|&a, &b| rs[b].1.total_cmp(&rs[a].1));
+            for &li in order.iter().take(12) {
+                let g = &self.elems.geoms.as_slice()[self.sys.leaves[li].ix()];
+                let p = g.patch as usize;
+                let c = self.patches.polys[p].corners();
+                let mid = c.iter().copied().sum::<glam::DVec3>() / c.len() as f64;
+                eprintln!(
+                    "SCRATCH row {li}: sum {:.5}, area {:.3e}, patch {p} object {} normal {:.3} centre {mid:.4}, rho {:?}, x {:?}",
+                    rs[li].1,
+                    g.area,
+                    self.patches.objects[p],
+                    self.patches.polys[p].normal(),
+                    self.patches.rhos[p],
+                    &x[li * 3..li * 3 + 3]
+                );
+            }
+            let picks: Vec<usize> = order
+                .iter()
+                .copied()
+                .filter(|&li| {
+                    let p = self.elems.geoms.as_slice()[self.sys.leaves[li].ix()].patch;
+                    (p == 2314 || p == 79) && rs[li].1 > 1.05
+                })
+                .take(2)
+                .chain(order.first().copied())
+                .collect();
+            for &li in &picks {
+                let g = &self.elems.geoms.as_slice()[self.sys.leaves[li].ix()];
+                eprintln!(
+                    "SCRATCH entries of row {li} (sum {:.5}), leaf box {:.4}..{:.4} area {:.3e} patch {}",
+                    rs[li].1,
+                    glam::DVec3::from(g.corners[0]),
+                    glam::DVec3::from(g.corners[2]),
+                    g.area,
+                    g.patch
+                );
+                let (r0, r1) = (
+                    self.sys.row_start[li] as usize,
+                    self.sys.row_start[li + 1] as usize,
+                );
+                let mut ent: Vec<(u32, f64)> = (r0..r1)
+                    .map(|k| (self.sys.row_sources[k], self.sys.row_coefs[k]))
+                    .collect();
+                ent.sort_by(|a, b| b.1.total_cmp(&a.1));
+                for (src, coef) in ent.iter().take(25) {
+                    let g = &self.elems.geoms.as_slice()[*src as usize];
+                    let p = g.patch as usize;
+                    let (lo, hi) = (glam::DVec3::from(g.corners[0]), glam::DVec3::from(g.corners[2]));
+                    eprintln!(
+                        "SCRATCH   entry src {src} coef {coef:.5} patch {p} area {:.3e} box {lo:.3}..{hi:.3} {}",
+                        g.area,
+                        if p < self.patches.len() {
+                            format!("object {} normal {:.3}", self.patches.objects[p], self.patches.polys[p].normal())
+                        } else {
+                            "cluster".to_string()
+                        }
+                    );
+                }
+                eprintln!("SCRATCH   {} entries", ent.len());
+            }
+            let mut negs: Vec<usize> = (0..nl).filter(|&li| x[li * 3 + 1] < 0.0).collect();
+            negs.sort_by(|&a, &b| x[a * 3 + 1].total_cmp(&x[b * 3 + 1]));
+            let mut objs = std::collections::BTreeMap::new();
+            for &li in &negs {
+                let g = &self.elems.geoms.as_slice()[self.sys.leaves[li].ix()];
+                *objs.entry(self.patches.objects[g.patch as usize]).or_insert(0usize) += 1;
+            }
+            eprintln!("SCRATCH green negatives by object: {objs:?}");
+            for &li in negs.iter().take(6) {
+                let g = &self.elems.geoms.as_slice()[self.sys.leaves[li].ix()];
+                let p = g.patch as usize;
+                let c = self.patches.polys[p].corners();
+                let mid = c.iter().copied().sum::<glam::DVec3>() / c.len() as f64;
+                eprintln!(
+                    "SCRATCH negative {li}: x {:?}, row sum {:.5}, patch {p} object {} normal {:.3} centre {mid:.4}",
+                    &x[li * 3..li * 3 + 3],
+                    rs[li].1,
+                    self.patches.objects[p],
+                    self.patches.polys[p].normal()
+                );
+            }
+            let mut hist = [0usize; 6];
+            for r in &rs {
+                let k = if r.1 <= 1.0 { 0 } else if r.1 <= 1.001 { 1 } else if r.1 <= 1.01 { 2 } else if r.1 <= 1.05 { 3 } else if r.1 <= 1.2 { 4 } else { 5 };
+                hist[k] += 1;
+            }
+            eprintln!("SCRATCH row sums <=1, <=1.001, <=1.01, <=1.05, <=1.2, more: {hist:?}");
+            eprintln!(
+                "SCRATCH solve_leaves: {nl} leaves, residual {:.3e}, applications {}, negatives {neg:?} most {most:?}, rows > 1: {over}, > 1.02: {over2}, largest {top:.5}",
+                outcome.residual, outcome.applications
+            );
+        }
         for (li, &l) in self.sys.leaves.iter().enumerate() {
             let out = &mut self.elems.radiosities.as_mut_slice()[l.ix()];
             for k in 0..3 {
