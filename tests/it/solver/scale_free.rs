@@ -164,3 +164,54 @@ fn same_answer_in_millimetres_and_kilometres() {
         }
     }
 }
+
+/// Scratch (h48flip): the leaves of the touching boxes whose corner radiosity
+/// differs most between ×1 and ×1000 (same leaves in the same order).
+#[test]
+#[ignore = "scratch diagnosis"]
+fn scratch_touching_boxes_leaves_at_two_scales() {
+    let scene = shapes::touching_boxes();
+    let (a, _) = solve(&scene, SolveOptions::default()).unwrap();
+    let (b, _) = solve(&scaled(&scene, 1000.0), SolveOptions::default()).unwrap();
+    assert_eq!(a.leaves.len(), b.leaves.len());
+    let rms = (a
+        .leaves
+        .iter()
+        .flat_map(|l| l.b.iter().flatten())
+        .map(|&x| (x as f64).powi(2))
+        .sum::<f64>()
+        / (a.leaves.len() * 12) as f64)
+        .sqrt();
+    let mut d: Vec<(f64, usize, usize, usize)> = Vec::new();
+    for (i, (x, y)) in a.leaves.iter().zip(&b.leaves).enumerate() {
+        assert_eq!(x.patch, y.patch);
+        for c in 0..x.corners as usize {
+            for ch in 0..3 {
+                let (p, q) = (x.b[c][ch] as f64, y.b[c][ch] as f64);
+                let rel = (p - q).abs() / p.abs().max(0.01 * rms);
+                if rel > 1e-5 {
+                    d.push((rel, i, c, ch));
+                }
+            }
+        }
+    }
+    d.sort_by(|u, v| v.0.total_cmp(&u.0));
+    eprintln!(
+        "{} leaf corner channels over 1e-5 (of {} leaves)",
+        d.len(),
+        a.leaves.len()
+    );
+    let mut by_patch = std::collections::BTreeMap::new();
+    for &(_, i, _, _) in &d {
+        *by_patch.entry(a.leaves[i].patch).or_insert(0) += 1;
+    }
+    eprintln!("by patch: {by_patch:?}");
+    for &(rel, i, c, ch) in d.iter().take(15) {
+        let l = &a.leaves[i];
+        let p = &a.patches[l.patch as usize];
+        eprintln!(
+            "leaf {i} patch {} corner {c} ch {ch}: {:.4} vs {:.4} ({rel:.2e}); uv {:?}; patch {:?}",
+            l.patch, l.b[c][ch], b.leaves[i].b[c][ch], l.uv[c], p
+        );
+    }
+}
