@@ -267,7 +267,9 @@ pub fn cluster_emission(g: &Geom, em: &Emission, b: f64, v: DVec3, axes: bool) -
     let len = n.length().min(p);
     let coherent = (n.dot(v).max(0.0) / p).min(1.0);
     let rest = 1.0 - len / p;
-    if rest <= 0.0 {
+    // A cluster whose patches all face one way has no rest: what is left is the
+    // rounding of the `f32` sums (see [`COHERENT_REST`]).
+    if rest <= COHERENT_REST {
         return coherent;
     }
     if !axes {
@@ -297,6 +299,23 @@ pub fn cluster_emission(g: &Geom, em: &Emission, b: f64, v: DVec3, axes: bool) -
         .sum();
     coherent + rest * dir / rsum
 }
+
+/// The largest rest `1 − |N|/P` of a cluster's power ([`cluster_emission`]) that
+/// is taken as none: the patches all face one way, and `|N|` (summed and stored
+/// in `f32`, [`Emission`]) misses `P` (the cluster's area times its radiosity, in
+/// `f64`) by their rounding, a few `10⁻⁸` either way.
+///
+/// Why: counted, that rounding radiated `rest / 4` (~`10⁻⁸`) in every direction,
+/// so a link from such a cluster to a surface it turns its back on got a factor
+/// of ~`10⁻¹⁰` where it should get 0, and rays, at one scale of the scene and not
+/// at another. The leaf rows drop a link to a surface whose factor is 0 and walk
+/// into the cluster's parts otherwise ([`crate::solver`]'s `push_cluster`): in
+/// the touching boxes of `tests/it/solver/scale_free.rs`, a cluster of the big
+/// box's `−z` faces had `rest` 4.4·10⁻⁸ in metres and ≤ 0 ×1000, and a wall leaf
+/// below the box's top took 5·10⁻⁴ of its row from the cluster's parts at one
+/// scale only; with the contact meshing of its commit the ceiling above the lamp
+/// read 6.7·10⁻⁴ apart between the scales (the bar there is 10⁻⁴).
+pub const COHERENT_REST: f64 = 1e-6;
 
 /// Isotropic-cluster coefficient at a receiving point/element (see module docs).
 /// `cr`, `cs` are the cosine factors (1/4 for a cluster side).
@@ -1240,5 +1259,35 @@ mod tests {
         );
         let total = over_sphere(|v| cluster_emission(&g, &em, b, v, false));
         assert!((total / std::f64::consts::PI - 1.0).abs() < 1e-3, "{total}");
+    }
+
+    /// A cluster of faces that all face one way (a box's `−z` side in two tiles)
+    /// radiates nothing behind it, exactly, in metres, millimetres or kilometres:
+    /// its stored normal power `|N|` (`f32`) and its power `P` (area times the
+    /// pool's `f32` radiosity) differ by their rounding, which left a rest of a few
+    /// `10⁻⁸` radiated every way at some scales ([`COHERENT_REST`]). In front it
+    /// radiates `cos θ`.
+    #[test]
+    fn a_cluster_facing_one_way_radiates_nothing_behind_it_at_any_scale() {
+        let n = [0.0, 0.0, -1.0];
+        let behind = DVec3::new(-0.96, 0.26, 0.08).normalize();
+        let front = DVec3::new(0.3, 0.2, -0.9).normalize();
+        let mut rounded_low = 0;
+        for s in [1.0, 1000.0, 1e-3, 1024.0] {
+            for b in [0.171_209_69, 0.224_096_82, 0.3, 0.55] {
+                let faces = [(n, 0.12 * s * s, b), (n, 0.1 * s * s, 0.8 * b)];
+                let (g, em, b) = cluster_of(&faces);
+                // As the solver reads it: the pool's radiosity is `f32`.
+                let b = b as f32 as f64;
+                let len = DVec3::from_array(em.normal.map(f64::from)).length();
+                rounded_low += usize::from(len < g.area * b * (1.0 - 1e-9));
+                assert_eq!(cluster_emission(&g, &em, b, behind, true), 0.0, "×{s} B {b}");
+                assert_eq!(cluster_emission(&g, &em, b, behind, false), 0.0, "×{s} B {b}");
+                let c = cluster_emission(&g, &em, b, front, true);
+                assert!((c - front.z.abs()).abs() < 1e-6, "×{s} B {b}: {c}");
+            }
+        }
+        // The case the rest came from: `|N|` rounded below `P` somewhere.
+        assert!(rounded_low > 0);
     }
 }

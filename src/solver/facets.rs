@@ -420,3 +420,21 @@ pub fn side(f: &Facet, x: DVec3, tol: f64) -> Option<bool> {
         None
     }
 }
+
+impl ClusterFacets {
+    /// SCRATCH (h48flip2, diagnosis only): facet `f`, its owner, offsets and members.
+    pub fn scratch_describe(&self, f: u32) -> String {
+        let f = f as usize;
+        let m = &self.members[self.members_start[f] as usize..self.members_start[f + 1] as usize];
+        let o = &self.offsets[self.offsets_start[f] as usize..self.offsets_start[f + 1] as usize];
+        format!(
+            "facet {f} owner {} {:?} offsets {o:?} members {m:?}",
+            self.owner[f], self.facets[f]
+        )
+    }
+
+    /// SCRATCH: the owner of facet `f`.
+    pub fn scratch_owner(&self, f: u32) -> u32 {
+        self.owner[f as usize]
+    }
+}

@@ -2603,3 +2603,88 @@ pub(super) fn within_child_shares(
     }
     sum
 }
+
+impl Solver<'_> {
+    /// SCRATCH (h48flip2, diagnosis only): the leaf system as the last round left
+    /// it: per leaf, its element, row scale, gain, and row entries `(source, coef)`,
+    /// and its kept row coefficients `(link, coef, vis)`.
+    #[allow(clippy::type_complexity)]
+    pub fn scratch_rows(&self) -> Vec<(u32, f64, f64, Vec<(u32, f64)>, Vec<(u32, f32, f32)>)> {
+        let sys = &self.sys;
+        if sys.row_start.len() != sys.leaves.len() + 1 {
+            return Vec::new();
+        }
+        (0..sys.leaves.len())
+            .map(|i| {
+                let (a, b) = (sys.row_start[i] as usize, sys.row_start[i + 1] as usize);
+                let l = sys.leaves[i].0;
+                (
+                    l,
+                    sys.row_scale.get(i).copied().unwrap_or(1.0),
+                    sys.leaf_gain.get(i).copied().unwrap_or(1.0),
+                    sys.row_sources[a..b]
+                        .iter()
+                        .copied()
+                        .zip(sys.row_coefs[a..b].iter().copied())
+                        .collect(),
+                    sys.row_cache
+                        .get(&l)
+                        .map(|r| r.iter().map(|k| (k.link, k.coef, k.vis)).collect())
+                        .unwrap_or_default(),
+                )
+            })
+            .collect()
+    }
+}
+
+impl Solver<'_> {
+    /// SCRATCH (h48flip2, diagnosis only): how leaf `leaf`'s row takes facet or
+    /// cluster part `e`: the factors at its points and each ray's outcome.
+    pub fn scratch_row_part(&self, leaf: u32, e: u32) -> String {
+        use std::fmt::Write;
+        let mut out = String::new();
+        let g = &self.elems.geoms.as_slice()[leaf as usize];
+        let q = oracle::samples(g);
+        let n = DVec3::from_array(g.normal);
+        let _ = writeln!(out, "leaf {leaf} points {:?} weights {:?} n {n}", &q.points[..q.count], &q.weights[..q.count]);
+        if e & FACET_BIT != 0 {
+            let f = e & !FACET_BIT;
+            let _ = writeln!(out, "{}", self.facets.scratch_describe(f));
+            let owner = self.facets.scratch_owner(f);
+            let gs = &self.elems.geoms.as_slice()[owner as usize];
+            let (c, r) = oracle::sphere(gs);
+            let _ = writeln!(out, "owner {owner} sphere {c} {r} box {:?}", &gs.corners[..2]);
+            let ff = self.facet_factors(&q, n, owner, c, r);
+            let _ = writeln!(out, "facet_factors {:?}", ff.map(|(k, c)| k[..c].to_vec()));
+            let fff = self.far_facet_factors(&q, n, owner, (c, r), f64::INFINITY);
+            let _ = writeln!(out, "far_facet_factors {:?}", fff.map(|(k, c)| k[..c].to_vec()));
+        }
+        let patch = g.patch;
+        for m in [2u32, 16] {
+            for i in 0..q.count {
+                let x = q.points[i];
+                let h = self.part_ray_key(e, patch, i as u64);
+                let (v, rays) = self.part_visibility(x, n, patch, e, m, i as u64);
+                let _ = writeln!(out, " m {m} point {i}: vis {v} rays {rays}");
+                if e & FACET_BIT != 0 {
+                    for j in 0..m as u64 {
+                        let (y, ny, py) = self
+                            .facets
+                            .point_on(&self.elems, e & !FACET_BIT, oracle::hash3(h, j, 2));
+                        let k = crate::geometry::point_to_point_kernel(x, n, y, ny);
+                        let mut last = crate::geometry::LastHit::default();
+                        let occ = self.bvh.occluded_between(
+                            x,
+                            y,
+                            [patch, py],
+                            crate::geometry::Parts::All,
+                            &mut last,
+                        );
+                        let _ = writeln!(out, "   ray {j}: y {y} ny {ny} patch {py} k {k:.6e} occluded {occ} {last:?}");
+                    }
+                }
+            }
+        }
+        out
+    }
+}

@@ -215,3 +215,217 @@ fn scratch_touching_boxes_leaves_at_two_scales() {
         );
     }
 }
+
+/// Scratch (h48flip2): element radiosities (the solve's leaves) at x1 and x1000.
+#[test]
+#[ignore = "scratch diagnosis"]
+fn scratch_touching_boxes_elements_at_two_scales() {
+    let scene = shapes::touching_boxes();
+    let run = |sc: &Scene| {
+        let mut s = rhier::solver::Solver::new(sc, SolveOptions::default()).unwrap();
+        let rec = s.run(|_, _| {}).unwrap();
+        for r in &rec {
+            eprintln!("round {r:?}");
+        }
+        s.leaf_radiosities()
+    };
+    let a = run(&scene);
+    let b = run(&scaled(&scene, 1000.0));
+    assert_eq!(a.len(), b.len());
+    let rms = (a.iter().flat_map(|l| l.2).map(|x| (x as f64).powi(2)).sum::<f64>()
+        / (a.len() * 3) as f64)
+        .sqrt();
+    let mut d: Vec<(f64, usize)> = Vec::new();
+    for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+        assert_eq!(x.0, y.0);
+        let rel = (0..3)
+            .map(|c| (x.2[c] as f64 - y.2[c] as f64).abs() / (x.2[c] as f64).abs().max(0.01 * rms))
+            .fold(0.0, f64::max);
+        d.push((rel, i));
+    }
+    d.sort_by(|u, v| v.0.total_cmp(&u.0));
+    let over = |t: f64| d.iter().filter(|x| x.0 > t).count();
+    eprintln!(
+        "{} elements: over 1e-7 {}, 1e-6 {}, 1e-5 {}, 1e-4 {}",
+        a.len(),
+        over(1e-7),
+        over(1e-6),
+        over(1e-5),
+        over(1e-4)
+    );
+    for &(rel, i) in d.iter().take(40) {
+        eprintln!("elem#{i} patch {} uv0 {:?}: {:?} vs {:?} ({rel:.2e})", a[i].0, a[i].1, a[i].2, b[i].2);
+    }
+}
+
+/// Scratch (h48flip2): per round, element radiosities and link transports at x1
+/// and x1000.
+#[test]
+#[ignore = "scratch diagnosis"]
+fn scratch_touching_boxes_links_at_two_scales() {
+    use rhier::pools::links::Transport;
+    let scene = shapes::touching_boxes();
+    type Round = (Vec<[f32; 3]>, Vec<(u32, u32)>, Vec<Transport>, Vec<(u32, [[f32; 2]; 4], u32)>);
+    let run = |sc: &Scene| {
+        let mut s = rhier::solver::Solver::new(sc, SolveOptions::default()).unwrap();
+        let mut rounds: Vec<Round> = Vec::new();
+        s.run(|_, s| {
+            rounds.push((
+                s.elems.radiosities.as_slice().to_vec(),
+                s.links.ends.as_slice().iter().map(|e| (e.receiver, e.source)).collect(),
+                s.links.transports.as_slice().to_vec(),
+                s.elems.geoms.as_slice().iter().map(|g| (g.patch, g.uv, g.n)).collect(),
+            ));
+        })
+        .unwrap();
+        rounds
+    };
+    let ra = run(&scene);
+    let rb = run(&scaled(&scene, 1000.0));
+    for (r, (a, b)) in ra.iter().zip(&rb).enumerate() {
+        eprintln!("round {r}: elems {} {}, links {} {}", a.0.len(), b.0.len(), a.1.len(), b.1.len());
+        assert_eq!(a.1, b.1);
+        // Links: transports that differ.
+        let mut ld: Vec<(f64, usize)> = Vec::new();
+        for (i, (x, y)) in a.2.iter().zip(&b.2).enumerate() {
+            let rel = |p: f32, q: f32| ((p - q).abs() / p.abs().max(1e-12)) as f64;
+            let d = rel(x.f, y.f).max(rel(x.visibility, y.visibility));
+            if (x.f != 0.0 || y.f != 0.0) && (d > 1e-5 || x.flags != y.flags) {
+                ld.push((d, i));
+            }
+        }
+        ld.sort_by(|u, v| v.0.total_cmp(&u.0));
+        eprintln!("  {} links differ (f or vis > 1e-5 or flags)", ld.len());
+        for &(d, i) in ld.iter().take(30) {
+            let (rc, sc) = a.1[i];
+            eprintln!(
+                "  link {i} {rc}<-{sc} ({:?} <- {:?}): {:?} vs {:?} ({d:.2e})",
+                a.3[rc as usize], a.3[sc as usize], a.2[i], b.2[i]
+            );
+        }
+        let mut ed: Vec<(f64, usize)> = Vec::new();
+        for (i, (x, y)) in a.0.iter().zip(&b.0).enumerate() {
+            let d = (0..3)
+                .map(|c| ((x[c] - y[c]).abs() / x[c].abs().max(1e-3)) as f64)
+                .fold(0.0, f64::max);
+            ed.push((d, i));
+        }
+        ed.sort_by(|u, v| v.0.total_cmp(&u.0));
+        for &(d, i) in ed.iter().take(8) {
+            eprintln!("  elem {i} {:?}: {:?} vs {:?} ({d:.2e})", a.3[i], a.0[i], b.0[i]);
+        }
+    }
+}
+
+/// Scratch (h48flip2): per round, the leaf rows at x1 and x1000.
+#[test]
+#[ignore = "scratch diagnosis"]
+fn scratch_touching_boxes_rows_at_two_scales() {
+    let scene = shapes::touching_boxes();
+    let patches = Patches::at_time(&scene, 0.0);
+    #[allow(clippy::type_complexity)]
+    let run = |sc: &Scene| {
+        let mut s = rhier::solver::Solver::new(sc, SolveOptions::default()).unwrap();
+        let mut rounds = Vec::new();
+        s.run(|_, s| {
+            let g: Vec<(u32, [[f32; 2]; 4], u32, [[f64; 3]; 4])> = s
+                .elems
+                .geoms
+                .as_slice()
+                .iter()
+                .map(|g| (g.patch, g.uv, g.n, g.corners))
+                .collect();
+            let ends: Vec<(u32, u32)> = s.links.ends.as_slice().iter().map(|e| (e.receiver, e.source)).collect();
+            rounds.push((s.scratch_rows(), g, ends, s.elems.radiosities.as_slice().to_vec()));
+        })
+        .unwrap();
+        rounds
+    };
+    let ra = run(&scene);
+    let rb = run(&scaled(&scene, 1000.0));
+    for (r, (a, b)) in ra.iter().zip(&rb).enumerate() {
+        eprintln!("round {r}: {} leaves", a.0.len());
+        let mut diffs: Vec<(f64, String)> = Vec::new();
+        for (x, y) in a.0.iter().zip(&b.0) {
+            assert_eq!(x.0, y.0);
+            if (x.1 - y.1).abs() > 1e-7 * x.1.abs() || (x.2 - y.2).abs() > 1e-7 * x.2.abs() {
+                diffs.push(((x.1 - y.1).abs().max((x.2 - y.2).abs()), format!("leaf {} scale {} vs {}, gain {} vs {}", x.0, x.1, y.1, x.2, y.2)));
+            }
+            let sum: f64 = x.3.iter().map(|e| e.1.abs()).sum();
+            let ma: std::collections::BTreeMap<u32, f64> = x.3.iter().copied().collect();
+            let mb: std::collections::BTreeMap<u32, f64> = y.3.iter().copied().collect();
+            for k in ma.keys().chain(mb.keys()) {
+                let (p, q) = (ma.get(k).copied().unwrap_or(0.0), mb.get(k).copied().unwrap_or(0.0));
+                let d = (p - q).abs() / sum.max(1e-30);
+                if d > 1e-6 && p >= q {
+                    let lg = &a.1[x.0 as usize];
+                    let sg = &a.1[(*k & 0x7fff_ffff) as usize];
+                    diffs.push((d, format!(
+                        "leaf {} (patch {} uv {:?} corners {:?}) entry src {k} (patch {} uv {:?} corners {:?}): {p:.6e} vs {q:.6e} (of row sum {sum:.4}); B_src {:?}",
+                        x.0, lg.0, &lg.1[..lg.2 as usize], &lg.3[..lg.2.min(4) as usize], sg.0, &sg.1[..sg.2.min(4) as usize], &sg.3[..sg.2.min(4) as usize], a.3[(*k & 0x7fff_ffff) as usize]
+                    )));
+                }
+            }
+            let ka: std::collections::BTreeMap<u32, (f32, f32)> = x.4.iter().map(|e| (e.0, (e.1, e.2))).collect();
+            for &(l, c, v) in &y.4 {
+                if let Some(&(c0, v0)) = ka.get(&l)
+                    && ((c - c0).abs() > 1e-6 * c0.abs().max(1e-9) || v != v0)
+                {
+                    let (rc, sc) = a.2[l as usize];
+                    diffs.push(((c - c0).abs() as f64 / sum.max(1e-30), format!(
+                        "  kept leaf {} link {l} {rc}<-{sc} (src patch {} uv {:?}): coef {c0:.6e} vs {c:.6e}, vis {v0} vs {v}",
+                        x.0, a.1[sc as usize].0, &a.1[sc as usize].1[..a.1[sc as usize].2.min(4) as usize]
+                    )));
+                }
+            }
+        }
+        diffs.sort_by(|u, v| v.0.total_cmp(&u.0));
+        eprintln!("  {} differences", diffs.len());
+        for (d, s) in diffs.iter().take(40) {
+            eprintln!("  {d:.2e}: {s}");
+        }
+    }
+    for p in [11usize, 45, 122, 188, 94] {
+        eprintln!("patch {p}: {:?} n {:?}", &patches.polys[p].v[..patches.polys[p].n], patches.normals[p]);
+    }
+}
+
+/// Scratch (h48flip2): details of chosen row entries and link estimates at x1
+/// and x1000.
+#[test]
+#[ignore = "scratch diagnosis"]
+fn scratch_touching_boxes_details_at_two_scales() {
+    let scene = shapes::touching_boxes();
+    let run = |sc: &Scene| {
+        let mut s = rhier::solver::Solver::new(sc, SolveOptions::default()).unwrap();
+        let mut out = String::new();
+        let mut round = 0;
+        s.run(|_, s| {
+            if round == 1 {
+                out += &s.scratch_row_part(148, 0x8000_0000 | 218);
+                // Link estimates' cluster emission.
+                for (l, r, c) in [(2969usize, 427usize, 368usize), (3483, 424, 198), (2308, 422, 368)] {
+                    let ends = s.links.ends.as_slice()[l];
+                    let g = &s.elems.geoms.as_slice()[c];
+                    let em = &s.elems.directions.as_slice()[c];
+                    let b = s.elems.radiosities.as_slice()[c].iter().copied().fold(0.0f32, f32::max) as f64;
+                    let (cr, _) = rhier::oracle::sphere(&s.elems.geoms.as_slice()[r]);
+                    let (cs, _) = rhier::oracle::sphere(g);
+                    let u = (cs - cr).normalize();
+                    let p = g.area * b;
+                    let nl = glam::DVec3::new(em.normal[0] as f64, em.normal[1] as f64, em.normal[2] as f64).length();
+                    out += &format!(
+                        "link {l} ends {}<-{} f {:e}: cluster {c} box {:?} area {} b {b} em {:?} p {p:e} |N| {nl:e} rest {:e} u {u} emission {:e}\n",
+                        ends.receiver, ends.source, s.links.transports.as_slice()[l].f, &g.corners[..3], g.area, em, 1.0 - nl.min(p) / p,
+                        rhier::oracle::cluster_emission(g, em, b, -u, true)
+                    );
+                }
+            }
+            round += 1;
+        })
+        .unwrap();
+        out
+    };
+    eprintln!("=== x1\n{}", run(&scene));
+    eprintln!("=== x1000\n{}", run(&scaled(&scene, 1000.0)));
+}
