@@ -864,12 +864,37 @@ impl PointRays<'_> {
         ray_targets(self.gs, self.pols, self.m, self.key)
     }
 
+    /// The weight of ray `j` (target `y`): the exact factor of its cell of the
+    /// source where the source is a quad and the rays a square grid of at most 16
+    /// (deterministic weights: the weighted mean is linear in the rays' answers),
+    /// else the point-to-point kernel at the target (EXPERIMENT h45cell).
+    fn weight(&self, j: u32, y: DVec3) -> f64 {
+        let side = (self.m as f64).sqrt().round() as u32;
+        if self.gs.n == 4 && side * side == self.m && self.m <= 16 && cell_weights() {
+            let (u0, v0) = (
+                (j % side) as f64 / side as f64,
+                (j / side) as f64 / side as f64,
+            );
+            let d = 1.0 / side as f64;
+            let c = self.pols.corners();
+            let cell = Poly::new(&[
+                point_at(c, false, u0, v0),
+                point_at(c, false, u0 + d, v0),
+                point_at(c, false, u0 + d, v0 + d),
+                point_at(c, false, u0, v0 + d),
+            ]);
+            point_to_polygon(self.x, self.n, &cell)
+        } else {
+            point_to_point_kernel(self.x, self.n, y, self.ns)
+        }
+    }
+
     /// Kernel-weighted mean of `visible(j, y)` over the ray targets (the plain mean
     /// when every kernel weight is zero).
     fn weighted(&self, mut visible: impl FnMut(u32, DVec3) -> bool) -> f64 {
         let (mut wsum, mut vsum, mut plain) = (0.0, 0.0, 0.0);
         for (j, y) in self.targets() {
-            let k = point_to_point_kernel(self.x, self.n, y, self.ns);
+            let k = self.weight(j, y);
             let vis = if visible(j, y) { 1.0 } else { 0.0 };
             wsum += k;
             vsum += k * vis;
@@ -933,7 +958,7 @@ pub fn masked_rays(bvh: &SceneBvh, r: &PointRays, mask: Option<u64>, moving: boo
             Some(mask) => mask & bit != 0,
             None => !bvh.occluded_between(r.x, y, r.skip, Parts::Static, &mut last_static),
         };
-        let k = point_to_point_kernel(r.x, r.n, y, r.ns);
+        let k = r.weight(j, y);
         wsum += k;
         if !open {
             continue;
@@ -1390,4 +1415,10 @@ mod tests {
         // The case the rest came from: `|N|` rounded below `P` somewhere.
         assert!(rounded_low > 0);
     }
+}
+
+/// EXPERIMENT h45cell: `RHIER_CELL_WEIGHTS` set.
+fn cell_weights() -> bool {
+    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ON.get_or_init(|| std::env::var_os("RHIER_CELL_WEIGHTS").is_some())
 }
