@@ -14,10 +14,11 @@
 //! Why: the change between levels does not see a bias no refinement removes, and
 //! [`Solver::power_balance`] and [`Solver::row_excess_error`] see rows that sum
 //! above 1, never rows that gather too little in a scene light leaves. The
-//! Blender Cornell box (`tests/it/solver/exported.rs`) is 10.9% too dark off the
-//! lamp while its estimate read 4.5%: its room rows gather 1.35–3% less than rays
+//! Blender Cornell box (`tests/it/solver/exported.rs`) was 10.9% too dark off the
+//! lamp while its estimate read 4.5%: its room rows gathered 1.35–3% less than rays
 //! over the same field, and at `ρ = 0.999` a 2% loss a bounce comes out about 10%
-//! dark (issue 45, part 4).
+//! dark (issue 45, part 4; the leaves of its slabs' room sides averaged in the
+//! dark parts inside other slabs, until contact meshing cut where slabs cross).
 
 use super::*;
 

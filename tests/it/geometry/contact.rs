@@ -387,3 +387,66 @@ fn a_round_leg_cuts_the_floor_near_itself_only() {
     assert_eq!(floor.len(), 24, "floor pieces");
     assert_eq!(far_pieces, 2, "pieces wholly away from the leg");
 }
+
+/// A closed box sunk halfway into a one-quad floor (its sides cross the floor's
+/// plane; no edge of it lies there): the floor is cut along where the sides
+/// cross it and the piece inside the box is dropped, and each side is cut at the
+/// floor into the part in the room and the part under it. Before, only edges in
+/// a patch's plane cut it: the floor and the sides stayed whole (issue 45,
+/// part 4: Blender's slabs pass through each other so).
+#[test]
+fn a_box_sunk_into_the_floor_cuts_it_where_its_sides_cross() {
+    use crate::common::shapes::{self, Tiling};
+    use rhier::scene::{MaterialId, Polygon};
+    let m = MaterialId(0);
+    let floor = Polygon {
+        vertices: vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, 4.0),
+            DVec3::new(4.0, 0.0, 4.0),
+            DVec3::new(4.0, 0.0, 0.0),
+        ],
+        material: m,
+    };
+    let mut polygons = vec![floor];
+    polygons.extend(shapes::tiled_box(
+        DVec3::new(1.2, -0.5, 1.6),
+        DVec3::new(2.0, 0.5, 2.3),
+        Tiling::Quads(1),
+        false,
+        m,
+    ));
+    let scene = Scene {
+        materials: vec![Material::diffuse("white", [0.5; 3])],
+        objects: vec![Object::still("floor and box", polygons)],
+        ..Default::default()
+    };
+    let before = Patches::at_time(&scene, 0.0);
+    assert!(before.normals[0].y > 0.99, "the floor faces up");
+    let (after, stats) = split_at_contacts(&scene, &before, 0.0);
+    eprintln!("{stats:?}, {} patches", after.len());
+    let floor_area: f64 = (0..after.len())
+        .filter(|&i| after.normals[i].y > 0.99 && after.polys[i].v[0].y.abs() < 1e-12)
+        .map(|i| after.areas[i])
+        .sum();
+    assert!(
+        (floor_area - (16.0 - 0.8 * 0.7)).abs() < 1e-9,
+        "the floor keeps {floor_area} m²"
+    );
+    // Every side piece lies wholly above or wholly below the floor.
+    let sides: Vec<usize> = (0..after.len())
+        .filter(|&i| after.normals[i].y.abs() < 1e-9)
+        .collect();
+    for &i in &sides {
+        let ys = after.polys[i].corners().iter().map(|v| v.y);
+        let (lo, hi) = ys.fold((f64::MAX, f64::MIN), |(a, b), y| (a.min(y), b.max(y)));
+        assert!(lo >= -1e-12 || hi <= 1e-12, "a side piece spans {lo}..{hi}");
+    }
+    let above: f64 = sides
+        .iter()
+        .filter(|&&i| after.polys[i].corners().iter().all(|v| v.y >= -1e-12))
+        .map(|&i| after.areas[i])
+        .sum();
+    assert!((above - 0.5 * 2.0 * (0.8 + 0.7)).abs() < 1e-9, "{above}");
+    assert_eq!(stats.pieces_hidden, 1, "{stats:?}");
+}

@@ -248,3 +248,75 @@ fn the_order_of_the_polygons_changes_nothing() {
         assert!((a[i] - b[i]).abs() / a[i] < 0.01 && (a[i] - c[i]).abs() / a[i] < 0.01);
     }
 }
+
+/// Solids that pass through the room's surfaces, as exported scenes' do: a
+/// closed box sunk 0.4 m into the floor and another pushed through a wall, in a
+/// room of one material (`E = 1`, reflectance `ρ`). Inside the room every
+/// surface reads `E/(1 − ρ)`; checked at points 2 cm from where the boxes cross
+/// the floor and the wall, and far from them, within 1%.
+///
+/// Contact meshing cut a patch only along edges lying in its plane, never along
+/// a face crossing it: the floor tile kept the part of it inside the sunk box
+/// (which gathers nothing) and the box's sides their parts under the floor, and
+/// their leaves averaged the two (Blender's Cornell box, whose slabs pass
+/// through each other at every corner, read 11% dark; issue 45, part 4).
+/// Measured (2026-12-02): before, the points at the crossings read 6.1–6.5% low
+/// at `ρ = 0.5` (24% at 0.9), the others within 0.4%; with the crossings cut,
+/// every point within 0.30% at 0.5 and 0.67% at 0.8. At 0.9 every point reads
+/// 0.5–1.1% high, far from the boxes as near them: the boxes' parts outside the
+/// room see nothing, so the scene is open and the rows' last fraction of a
+/// percent is not balanced away (`Solver::is_closed`).
+#[test]
+fn solids_through_the_floor_and_a_wall_reach_e_over_one_minus_rho() {
+    let mut polys = shapes::tiled_box(
+        DVec3::ZERO,
+        DVec3::new(6.0, 3.0, 6.0),
+        Tiling::Quads(6),
+        true,
+        M,
+    );
+    // Sunk into the floor, and through the wall x = 6; both face out.
+    polys.extend(shapes::tiled_box(
+        DVec3::new(2.3, -0.4, 2.2),
+        DVec3::new(3.4, 0.7, 3.3),
+        Tiling::Quads(2),
+        false,
+        M,
+    ));
+    polys.extend(shapes::tiled_box(
+        DVec3::new(5.6, 1.0, 1.0),
+        DVec3::new(6.5, 1.8, 2.0),
+        Tiling::Quads(2),
+        false,
+        M,
+    ));
+    let points = [
+        (DVec3::new(2.28, 0.0, 2.75), DVec3::Y),
+        (DVec3::new(2.8, 0.0, 3.32), DVec3::Y),
+        (DVec3::new(2.3, 0.02, 2.75), -DVec3::X),
+        (DVec3::new(2.8, 0.02, 3.3), DVec3::Z),
+        (DVec3::new(2.8, 0.7, 2.7), DVec3::Y),
+        (DVec3::new(6.0, 1.4, 0.98), -DVec3::X),
+        (DVec3::new(6.0, 0.98, 1.5), -DVec3::X),
+        (DVec3::new(5.98, 1.8, 1.5), DVec3::Y),
+        (DVec3::new(5.98, 1.0, 1.5), -DVec3::Y),
+        (DVec3::new(1.0, 0.0, 1.0), DVec3::Y),
+        (DVec3::new(3.0, 3.0, 3.0), -DVec3::Y),
+    ]
+    .map(|(p, n)| ProbePoint { p, n });
+    let mut failed = Vec::new();
+    for rho in [0.5, 0.8] {
+        let scene = shapes::uniform_scene(polys.clone(), rho, 1.0);
+        let (sol, _) = solve(&scene, SolveOptions::default()).expect("solve");
+        let exact = 1.0 / (1.0 - rho);
+        let b = probe(&sol, &points, 0.0).expect("probe");
+        for (p, v) in points.iter().zip(&b) {
+            let err = (v[0] - exact).abs() / exact;
+            eprintln!("through rho {rho}: {:?} {:.4} ({err:.2e})", p.p, v[0]);
+            if err >= 0.01 {
+                failed.push(format!("rho {rho}: {:?} reads {} for {exact}", p.p, v[0]));
+            }
+        }
+    }
+    assert!(failed.is_empty(), "{failed:#?}");
+}
