@@ -542,7 +542,7 @@ fn reaches_inside(c: &[DVec3], s: &[f64], along: DVec3, reach: &[(f64, f64)], to
 /// (box sides 2.4% → 6.9%). Past half its length a box's edge reaches the next
 /// box's across the gap, and the floors of `gen_cubes` 20, 65 and 129 are cut as
 /// by whole lines (3 295, 34 075, 133 659 patches); the furnished room of
-/// `tools/gen_furnished.py --detail 0.15 --static` has 4 239 patches (12 696 by
+/// `tools/gen_furnished.py --detail 0.15 --static` has 4 219 patches (12 696 by
 /// whole lines, 2 766 by the segments alone).
 const CUT_REACH: f64 = 0.5;
 
