@@ -287,30 +287,6 @@ fn bundles(c: &mut Criterion) {
             total as f64 / best / 1e6
         );
         g.bench_function(format!("{rays_by:?}"), |b| b.iter(|| cast(&bvh)));
-        if rays_by == Rays::Embree {
-            let cast_many = |bvh: &SceneBvh| {
-                let mut blocked = 0usize;
-                for b in &rays {
-                    let mut last = LastHit::default();
-                    blocked += bvh
-                        .occluded_between_many(b, Parts::All, &mut last)
-                        .count_ones() as usize;
-                }
-                blocked
-            };
-            let blocked = cast_many(&bvh);
-            let best = (0..5)
-                .map(|_| {
-                    let t = Instant::now();
-                    std::hint::black_box(cast_many(&bvh));
-                    t.elapsed().as_secs_f64()
-                })
-                .fold(f64::INFINITY, f64::min);
-            println!(
-                "bundles: {rays_by:?} packets: {blocked} of {total} rays blocked, {:.3} M rays/s (best of 5)",
-                total as f64 / best / 1e6
-            );
-        }
     }
     g.finish();
 }

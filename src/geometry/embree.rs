@@ -68,51 +68,6 @@ struct RtcRay {
     flags: c_uint,
 }
 
-/// `struct RTCRay4`, `RTCRay8` and `RTCRay16` (`rtcore_ray.h`): the fields of
-/// [`RtcRay`], each an array of `N` (structure of arrays), aligned for Embree's
-/// widest loads (64 bytes; Embree asks 16, 32 and 64). `48 N` bytes.
-#[repr(C, align(64))]
-struct RtcRayN<const N: usize> {
-    org_x: [f32; N],
-    org_y: [f32; N],
-    org_z: [f32; N],
-    tnear: [f32; N],
-    dir_x: [f32; N],
-    dir_y: [f32; N],
-    dir_z: [f32; N],
-    time: [f32; N],
-    tfar: [f32; N],
-    mask: [c_uint; N],
-    id: [c_uint; N],
-    flags: [c_uint; N],
-}
-
-/// The valid mask of a packet query: `-1` for a lane to cast, `0` for one left
-/// out; aligned as the packet. `4 N` bytes (64-byte aligned).
-#[repr(C, align(64))]
-struct ValidN<const N: usize>([c_int; N]);
-
-/// The index of `RTCRayN`'s `id` field in 32-bit words of width `n`
-/// (`RTCRayN_id`: `org_x .. flags`, each `n` words; `id` the 11th).
-const RAY_ID_WORD: usize = 10;
-
-/// Most segments [`EmbreeScene::occluded_packet`] casts at once (`rtcOccluded16`).
-pub const PACKET: usize = 16;
-
-/// One segment of a packet query ([`EmbreeScene::occluded_packet`]): `o + t·d`,
-/// `t ∈ [tnear, tfar]`, part space. 64 bytes.
-#[derive(Clone, Copy, Debug)]
-pub struct PacketRay {
-    /// Origin.
-    pub o: DVec3,
-    /// Direction (the segment's end minus its start, or a multiple).
-    pub d: DVec3,
-    /// Range of the parameter.
-    pub tnear: f64,
-    /// Range of the parameter.
-    pub tfar: f64,
-}
-
 /// `struct RTCFilterFunctionNArguments` (`rtcore_common.h`).
 #[repr(C)]
 struct FilterArgs {
@@ -189,24 +144,6 @@ embree_api! {
     rtcAttachGeometry: fn(scene: RtcScene, geometry: RtcGeometry) -> c_uint;
     rtcReleaseGeometry: fn(geometry: RtcGeometry);
     rtcOccluded1: fn(scene: RtcScene, context: *mut RtcIntersectContext, ray: *mut RtcRay);
-    rtcOccluded4: fn(
-        valid: *const c_int,
-        scene: RtcScene,
-        context: *mut RtcIntersectContext,
-        ray: *mut c_void,
-    );
-    rtcOccluded8: fn(
-        valid: *const c_int,
-        scene: RtcScene,
-        context: *mut RtcIntersectContext,
-        ray: *mut c_void,
-    );
-    rtcOccluded16: fn(
-        valid: *const c_int,
-        scene: RtcScene,
-        context: *mut RtcIntersectContext,
-        ray: *mut c_void,
-    );
 }
 
 /// Opens the first of `names` that loads and looks up Embree's entry points in
@@ -311,9 +248,8 @@ impl Drop for EmbreeScene {
 #[repr(C)]
 struct QueryContext<'a> {
     ctx: RtcIntersectContext,
-    /// Decides a candidate triangle for a ray: `accept(ray id, triangle)`, true if
-    /// it blocks the ray (the id is the ray's place in its packet; 0 for one ray).
-    accept: &'a mut dyn FnMut(u32, u32) -> bool,
+    /// Decides a candidate triangle: true if it blocks the ray.
+    accept: &'a mut dyn FnMut(u32) -> bool,
 }
 
 /// The occlusion filter: asks the query's `accept` about every candidate hit and
@@ -332,16 +268,9 @@ unsafe extern "C" fn occlusion_filter(args: *const FilterArgs) {
             continue;
         }
         // SAFETY: `hit` is an `RTCHitN` of width `n` in SoA layout: `Ng_x, Ng_y,
-        // Ng_z, u, v, primID, ...`, each `n` 32-bit values (RTCHitN_primID), and
-        // `ray` an `RTCRayN` of width `n` whose `id` is its 11th field
-        // (RTCRayN_id; [`RtcRay`] for `n = 1`).
-        let (prim, id) = unsafe {
-            (
-                *(args.hit as *const c_uint).add(5 * n + i),
-                *(args.ray as *const c_uint).add(RAY_ID_WORD * n + i),
-            )
-        };
-        if !(query.accept)(id, prim) {
+        // Ng_z, u, v, primID, ...`, each `n` 32-bit values (RTCHitN_primID).
+        let prim = unsafe { *(args.hit as *const c_uint).add(5 * n + i) };
+        if !(query.accept)(prim) {
             *valid = 0;
         }
     }
@@ -455,7 +384,7 @@ impl EmbreeScene {
                 filter: None,
                 inst_id: [INVALID_GEOMETRY_ID],
             },
-            accept: &mut |_, prim| accept(prim),
+            accept,
         };
         // SAFETY: `scene` is committed and live for `&self`; the context is the
         // first field of `query`, which outlives the call and is what the filter
@@ -469,104 +398,6 @@ impl EmbreeScene {
         };
         // Embree sets `tfar` to -inf on an occluded ray.
         ray.tfar == f32::NEG_INFINITY
-    }
-
-    /// [`EmbreeScene::occluded`] of up to [`PACKET`] segments at once, in one
-    /// packet query (`rtcOccluded4`, `8` or `16`, the narrowest that holds them):
-    /// bit `j` of the answer is set if a triangle `i` that ray `j` crosses has
-    /// `accept(j, i)`. Each ray is the one [`EmbreeScene::occluded`] would cast
-    /// (the same f32 segment) and `accept` decides its candidates, asked in no set
-    /// order, at most until one is accepted for that ray; the answers are then those
-    /// of [`EmbreeScene::occluded`] ray by ray, up to the round-off of Embree's
-    /// packet and single-ray triangle tests, which the dilation covers as it does
-    /// between Embree and the f64 test ([`EmbreeScene::new`]).
-    ///
-    /// Why: the solver casts its rays in bundles of 4–64 from one point to one
-    /// source; one by one (`rtcOccluded1`) Embree took as long per ray as the
-    /// 4-wide BVH (`geometry::wide`), ~135 ns, on `gen_cubes 20`.
-    pub fn occluded_packet(
-        &self,
-        rays: &[PacketRay],
-        accept: &mut dyn FnMut(u32, u32) -> bool,
-    ) -> u32 {
-        debug_assert!(rays.len() <= PACKET);
-        match rays.len() {
-            0 => 0,
-            1..=4 => self.cast::<4>(rays, accept),
-            5..=8 => self.cast::<8>(rays, accept),
-            _ => self.cast::<PACKET>(&rays[..rays.len().min(PACKET)], accept),
-        }
-    }
-
-    /// One packet query of width `N` (4, 8 or 16) with `rays` in its first lanes.
-    fn cast<const N: usize>(
-        &self,
-        rays: &[PacketRay],
-        accept: &mut dyn FnMut(u32, u32) -> bool,
-    ) -> u32 {
-        let mut valid = ValidN([0; N]);
-        let mut p = RtcRayN::<N> {
-            org_x: [0.0; N],
-            org_y: [0.0; N],
-            org_z: [0.0; N],
-            tnear: [0.0; N],
-            dir_x: [0.0; N],
-            dir_y: [0.0; N],
-            dir_z: [1.0; N],
-            time: [0.0; N],
-            tfar: [0.0; N],
-            mask: [u32::MAX; N],
-            id: [0; N],
-            flags: [0; N],
-        };
-        for (j, r) in rays.iter().enumerate().take(N) {
-            valid.0[j] = -1;
-            p.org_x[j] = r.o.x as f32;
-            p.org_y[j] = r.o.y as f32;
-            p.org_z[j] = r.o.z as f32;
-            p.tnear[j] = r.tnear as f32;
-            p.dir_x[j] = r.d.x as f32;
-            p.dir_y[j] = r.d.y as f32;
-            p.dir_z[j] = r.d.z as f32;
-            p.tfar[j] = r.tfar as f32;
-            p.id[j] = j as u32;
-        }
-        let mut query = QueryContext {
-            ctx: RtcIntersectContext {
-                // `RTC_INTERSECT_CONTEXT_FLAG_COHERENT`: the solver's bundles leave
-                // one point for one source.
-                flags: 1,
-                filter: None,
-                inst_id: [INVALID_GEOMETRY_ID],
-            },
-            accept,
-        };
-        let f = match N {
-            4 => self.api.rtcOccluded4,
-            8 => self.api.rtcOccluded8,
-            _ => self.api.rtcOccluded16,
-        };
-        // SAFETY: `scene` is committed and live for `&self`; `valid` and `p` are
-        // the `int[N]` mask and the `RTCRayN` of width `N` that `rtcOccludedN`
-        // takes for `N` = 4, 8, 16 (layout above, aligned beyond Embree's needs);
-        // the context is the first field of `query`, which outlives the call and
-        // is what the filter casts it back to.
-        unsafe {
-            f(
-                valid.0.as_ptr(),
-                self.scene,
-                &mut query as *mut QueryContext as *mut RtcIntersectContext,
-                &mut p as *mut RtcRayN<N> as *mut c_void,
-            )
-        };
-        let mut blocked = 0u32;
-        for j in 0..rays.len().min(N) {
-            // Embree sets `tfar` to -inf on an occluded ray.
-            if p.tfar[j] == f32::NEG_INFINITY {
-                blocked |= 1 << j;
-            }
-        }
-        blocked
     }
 }
 

@@ -665,14 +665,6 @@ impl SceneBvh {
         which: Parts,
         last: &mut LastHit,
     ) -> bool {
-        let (skip, trims) = self.between(a, b, skip);
-        self.occluded_trimmed(a, b, skip, trims, which, last)
-    }
-
-    /// What [`SceneBvh::occluded_between`] skips and trims of the segment `a b`
-    /// between points on the patches `skip`: those patches and their twins, and
-    /// the trims at `a` and at `b` (its doc).
-    fn between(&self, a: DVec3, b: DVec3, skip: [u32; 2]) -> ([u32; 4], (f64, f64)) {
         let twin = |p: u32| self.twins.get(p as usize).copied().unwrap_or(u32::MAX);
         let d = b - a;
         // The trim of end `x` off the planes of `skip` that hold it.
@@ -692,167 +684,7 @@ impl SceneBvh {
         };
         let trims = (trim(a), trim(b));
         let skip = [skip[0], skip[1], twin(skip[0]), twin(skip[1])];
-        (skip, trims)
-    }
-
-    /// [`SceneBvh::occluded_between`] of the segments `segs` (`a`, `b`, the
-    /// patches `skip` of its ends; at most 64): bit `j` of the answer is set if
-    /// segment `j` is blocked, as [`SceneBvh::occluded_between`] with `last` would
-    /// answer it.
-    ///
-    /// On obvhs (and the CWBVH) the segments are cast one after the other in their
-    /// order through [`SceneBvh::occluded_between`] with `last`: the very calls of a
-    /// loop over them. On Embree each segment first tests `last`'s triangle (as
-    /// [`SceneBvh::occluded_between`] does), and those it leaves are cast in packets
-    /// of up to 16 (`rtcOccluded4/8/16`, `geometry::embree::PACKET`), each candidate
-    /// decided by the same f64 test for its own segment; `last` keeps a triangle that
-    /// blocked one of them.
-    ///
-    /// Why: the solver's rays come in bundles from one point (or one cluster) to
-    /// one source, and Embree cast one by one took as long per ray as the 4-wide
-    /// BVH (BENCHMARKS.md, "Occlusion rays").
-    pub fn occluded_between_many(
-        &self,
-        segs: &[(DVec3, DVec3, [u32; 2])],
-        which: Parts,
-        last: &mut LastHit,
-    ) -> u64 {
-        debug_assert!(segs.len() <= 64);
-        let mut blocked = 0u64;
-        if self.rays != Rays::Embree {
-            for (j, &(a, b, skip)) in segs.iter().enumerate().take(64) {
-                if self.occluded_between(a, b, skip, which, last) {
-                    blocked |= 1 << j;
-                }
-            }
-            return blocked;
-        }
-        use super::embree::{PACKET, PacketRay};
-        let back = 2.0 * NODE_EPSILON;
-        for (c, chunk) in segs.chunks(PACKET).enumerate().take(64 / PACKET) {
-            let base = c * PACKET;
-            // Each segment as `occluded_trimmed` casts it: world origin and
-            // direction, the f64 range, what it skips.
-            let mut seg = [(DVec3::ZERO, DVec3::ZERO, 0.0, 0.0, [u32::MAX; 4]); PACKET];
-            // The segments' starts and f64 ranges before the shift back (what a
-            // moving part's box is tested against).
-            let mut start = [(DVec3::ZERO, 0.0, 0.0); PACKET];
-            let mut open = 0u32;
-            for (j, &(a, b, skip)) in chunk.iter().enumerate() {
-                let (skip, trims) = self.between(a, b, skip);
-                let d = b - a;
-                let (s0, s1) = (trims.0, 1.0 - trims.1);
-                seg[j] = (a - d * back, d, s0 + back, s1 + back, skip);
-                start[j] = (a, s0, s1);
-                let (o, _, t0, t1, _) = seg[j];
-                if self.cache_blocks(o, d, t0, t1, &skip, which, last) {
-                    blocked |= 1 << (base + j);
-                } else {
-                    open |= 1 << j;
-                }
-            }
-            for (ix, part) in self.parts.iter().enumerate() {
-                if open == 0 {
-                    break;
-                }
-                if !which.admits(part) {
-                    continue;
-                }
-                let Some(scene) = &part.embree else {
-                    continue;
-                };
-                let moving = part.object != u32::MAX;
-                // The packet's lanes: the open segments that may meet the part.
-                let mut lane_seg = [0usize; PACKET];
-                let mut local = [(DVec3::ZERO, DVec3::ZERO); PACKET];
-                let mut rays = [PacketRay {
-                    o: DVec3::ZERO,
-                    d: DVec3::Z,
-                    tnear: 0.0,
-                    tfar: 0.0,
-                }; PACKET];
-                let mut n = 0;
-                for (j, &(o, d, t0, t1, _)) in seg.iter().enumerate().take(chunk.len()) {
-                    let (a, s0, s1) = start[j];
-                    if open & (1 << j) == 0 || (moving && part.misses_box(a, d, s0, s1)) {
-                        continue;
-                    }
-                    let (lo, ld) = part.local(o, d);
-                    lane_seg[n] = j;
-                    local[n] = (lo, ld);
-                    // Embree's f32 range is wider by `EMBREE_SLACK`, as in
-                    // `occluded_trimmed`.
-                    rays[n] = PacketRay {
-                        o: lo,
-                        d: ld,
-                        tnear: t0 - EMBREE_SLACK,
-                        tfar: t1 + EMBREE_SLACK,
-                    };
-                    n += 1;
-                }
-                let mut blocker = u32::MAX;
-                let hit = scene.occluded_packet(&rays[..n], &mut |lane, id| {
-                    let Some(&j) = lane_seg.get(lane as usize) else {
-                        return false;
-                    };
-                    let (_, _, t0, t1, skip) = seg[j];
-                    let id = id as usize;
-                    if part.tri_patch.get(id).is_none_or(|p| skip.contains(p)) {
-                        return false;
-                    }
-                    let (lo, ld) = local[lane as usize];
-                    let hit = part.hit64(id, lo, ld, t0, t1).is_finite();
-                    if hit {
-                        blocker = id as u32;
-                    }
-                    hit
-                });
-                if hit != 0 {
-                    *last = LastHit {
-                        part: ix as u32,
-                        tri: blocker,
-                    };
-                }
-                for (lane, &j) in lane_seg.iter().enumerate().take(n) {
-                    if hit & (1 << lane) != 0 {
-                        blocked |= 1 << (base + j);
-                        open &= !(1 << j);
-                    }
-                }
-            }
-        }
-        blocked
-    }
-
-    /// True if `last`'s triangle, if `which` admits its part and `skip` does not
-    /// hold its patch, blocks the segment `o + s·d`, `s ∈ [t0, t1]` (world space),
-    /// in f32 and in f64 (the shadow cache of [`SceneBvh::occluded_trimmed`]).
-    #[allow(clippy::too_many_arguments)]
-    fn cache_blocks(
-        &self,
-        o: DVec3,
-        d: DVec3,
-        t0: f64,
-        t1: f64,
-        skip: &[u32; 4],
-        which: Parts,
-        last: &LastHit,
-    ) -> bool {
-        let Some(part) = self.parts.get(last.part as usize) else {
-            return false;
-        };
-        let Some(tri) = part.tris.get(last.tri as usize) else {
-            return false;
-        };
-        if !which.admits(part) || skip.contains(&part.tri_patch[last.tri as usize]) {
-            return false;
-        }
-        // Blocked only where the f32 test also hits: the f32 node boxes can hide
-        // from the traversal a grazing hit only the f64 test makes, and then the
-        // traversal, not the cache, must decide.
-        let ray = part.local_ray(o, d, t0, t1);
-        let (lo, ld) = part.local(o, d);
-        tri.intersect(&ray) < ray.tmax && part.hit64(last.tri as usize, lo, ld, t0, t1).is_finite()
+        self.occluded_trimmed(a, b, skip, trims, which, last)
     }
 
     /// Whether a triangle not of the patches `skip` blocks the segment `a b` with
@@ -873,8 +705,23 @@ impl SceneBvh {
         let back = 2.0 * NODE_EPSILON;
         let o = a - d * back;
         let (t0, t1) = (s0 + back, s1 + back);
-        if self.cache_blocks(o, d, t0, t1, &skip, which, last) {
-            return true;
+        if let Some(part) = self.parts.get(last.part as usize)
+            && which.admits(part)
+            && let Some(tri) = part.tris.get(last.tri as usize)
+        {
+            let p = part.tri_patch[last.tri as usize];
+            if !skip.contains(&p) {
+                // Blocked only where the f32 test also hits: the f32 node boxes
+                // can hide from the traversal a grazing hit only the f64 test
+                // makes, and then the traversal, not the cache, must decide.
+                let ray = part.local_ray(o, d, t0, t1);
+                let (lo, ld) = part.local(o, d);
+                if tri.intersect(&ray) < ray.tmax
+                    && part.hit64(last.tri as usize, lo, ld, t0, t1).is_finite()
+                {
+                    return true;
+                }
+            }
         }
         for (ix, part) in self.parts.iter().enumerate() {
             if !which.admits(part) {

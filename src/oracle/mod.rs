@@ -659,19 +659,6 @@ pub(crate) fn kernel_weighted_visibility(
 ) -> (f64, u32) {
     let (mut wsum, mut vsum, mut rays) = (0.0, 0.0, 0);
     let mut last = LastHit::default();
-    // The pairs that face each other, 64 at a time, cast as one bundle
-    // (`SceneBvh::occluded_between_many`); summed in their order.
-    let mut segs = [(DVec3::ZERO, DVec3::ZERO, [0u32; 2]); 64];
-    let mut ks = [0.0f64; 64];
-    let mut n = 0;
-    let mut flush = |segs: &[(DVec3, DVec3, [u32; 2])], ks: &[f64], last: &mut LastHit| {
-        let blocked = bvh.occluded_between_many(segs, Parts::All, last);
-        for (i, &k) in ks.iter().enumerate() {
-            if blocked & (1 << i) == 0 {
-                vsum += k;
-            }
-        }
-    };
     for j in 0..m.max(1) as u64 {
         let ((x, nx, px), (y, ny, py)) = ends(j);
         let k = point_to_point_kernel(x, nx, y, ny);
@@ -680,15 +667,10 @@ pub(crate) fn kernel_weighted_visibility(
         }
         rays += 1;
         wsum += k;
-        segs[n] = (x, y, [px, py]);
-        ks[n] = k;
-        n += 1;
-        if n == segs.len() {
-            flush(&segs, &ks, &mut last);
-            n = 0;
+        if !bvh.occluded_between(x, y, [px, py], Parts::All, &mut last) {
+            vsum += k;
         }
     }
-    flush(&segs[..n], &ks[..n], &mut last);
     (if wsum > 0.0 { vsum / wsum } else { 0.0 }, rays)
 }
 
@@ -904,36 +886,7 @@ impl PointRays<'_> {
 /// Kernel-weighted fraction of the source of `r` visible from its point.
 pub fn visible_fraction(bvh: &SceneBvh, r: &PointRays) -> f64 {
     let mut last = LastHit::default();
-    if r.m > 64 {
-        return r.weighted(|_, y| !bvh.occluded_between(r.x, y, r.skip, Parts::All, &mut last));
-    }
-    let blocked = blocked_rays(bvh, r, u64::MAX, Parts::All, &mut last);
-    r.weighted(|j, _| blocked & (1 << j) == 0)
-}
-
-/// The rays of `r` (at most 64) that `cast` holds (bit `j` for ray `j`) and
-/// `which` blocks, one bit each: cast in their order as one bundle
-/// ([`SceneBvh::occluded_between_many`]: one after the other through `last` on
-/// obvhs, in packets on Embree).
-fn blocked_rays(bvh: &SceneBvh, r: &PointRays, cast: u64, which: Parts, last: &mut LastHit) -> u64 {
-    let mut segs = [(DVec3::ZERO, DVec3::ZERO, [0u32; 2]); 64];
-    let mut ray = [0u32; 64];
-    let mut n = 0;
-    for (j, y) in r.capped().targets() {
-        if cast & (1 << j) != 0 {
-            segs[n] = (r.x, y, r.skip);
-            ray[n] = j;
-            n += 1;
-        }
-    }
-    let hit = bvh.occluded_between_many(&segs[..n], which, last);
-    let mut blocked = 0u64;
-    for (i, &j) in ray.iter().enumerate().take(n) {
-        if hit & (1 << i) != 0 {
-            blocked |= 1 << j;
-        }
-    }
-    blocked
+    r.weighted(|_, y| !bvh.occluded_between(r.x, y, r.skip, Parts::All, &mut last))
 }
 
 /// The rays of [`visible_fraction`] that nothing static blocks, as a bit mask (ray
@@ -941,9 +894,14 @@ fn blocked_rays(bvh: &SceneBvh, r: &PointRays, cast: u64, which: Parts, last: &m
 /// The solver makes its masks with the one-pass [`masked_rays`]; this and
 /// [`visible_fraction_masked`] are the plain definitions its test holds it to.
 pub fn static_clear_mask(bvh: &SceneBvh, r: &PointRays) -> u64 {
-    let r = r.capped();
-    let all = if r.m >= 64 { u64::MAX } else { (1 << r.m) - 1 };
-    all & !blocked_rays(bvh, &r, all, Parts::Static, &mut LastHit::default())
+    let mut mask = 0u64;
+    let mut last = LastHit::default();
+    for (j, y) in r.capped().targets() {
+        if !bvh.occluded_between(r.x, y, r.skip, Parts::Static, &mut last) {
+            mask |= 1 << j;
+        }
+    }
+    mask
 }
 
 /// [`visible_fraction`] from a [`static_clear_mask`]: only the rays the static part
@@ -967,30 +925,24 @@ pub fn masked_rays(bvh: &SceneBvh, r: &PointRays, mask: Option<u64>, moving: boo
     let r = r.capped();
     let (mut wsum, mut vs, mut vn, mut ps, mut pn) = (0.0, 0.0, 0.0, 0.0, 0.0);
     let (mut clear, mut blocked) = (0u64, 0u64);
-    // One shadow cache for each part the rays are cast at, so casting the static
-    // bundle, then the moving one, answers as casting each ray at both in turn.
-    let all = if r.m >= 64 { u64::MAX } else { (1 << r.m) - 1 };
-    let open = match mask {
-        Some(mask) => mask,
-        None => all & !blocked_rays(bvh, &r, all, Parts::Static, &mut LastHit::default()),
-    };
-    let moved = if moving {
-        blocked_rays(bvh, &r, open, Parts::Moving, &mut LastHit::default())
-    } else {
-        0
-    };
+    // One shadow cache for each part the rays are cast at.
+    let (mut last_static, mut last_moving) = (LastHit::default(), LastHit::default());
     for (j, y) in r.targets() {
         let bit = 1u64 << j;
+        let open = match mask {
+            Some(mask) => mask & bit != 0,
+            None => !bvh.occluded_between(r.x, y, r.skip, Parts::Static, &mut last_static),
+        };
         let k = point_to_point_kernel(r.x, r.n, y, r.ns);
         wsum += k;
-        if open & bit == 0 {
+        if !open {
             continue;
         }
         clear |= bit;
         // The same sums, in the same order, as `PointRays::weighted`'s.
         vs += k;
         ps += 1.0;
-        if moved & bit != 0 {
+        if moving && bvh.occluded_between(r.x, y, r.skip, Parts::Moving, &mut last_moving) {
             blocked |= bit;
         } else {
             vn += k;
@@ -1040,13 +992,15 @@ pub fn visible_fraction_moving(bvh: &SceneBvh, r: &PointRays, mask: u64, vis_sta
 /// may come out as they did at the move that last computed it,
 /// `Solver::unchanged_part`).
 pub fn moving_blocked(bvh: &SceneBvh, r: &PointRays, mask: u64) -> u64 {
-    blocked_rays(
-        bvh,
-        &r.capped(),
-        mask,
-        Parts::Moving,
-        &mut LastHit::default(),
-    )
+    let r = r.capped();
+    let mut blocked = 0u64;
+    let mut last = LastHit::default();
+    for (j, y) in r.targets() {
+        if mask & (1 << j) != 0 && bvh.occluded_between(r.x, y, r.skip, Parts::Moving, &mut last) {
+            blocked |= 1 << j;
+        }
+    }
+    blocked
 }
 
 /// The `m` jittered stratified target points on `gs` for the rays of sample `key`:

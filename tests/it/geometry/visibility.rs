@@ -274,8 +274,6 @@ fn occlusion_answers(bvh: &SceneBvh, patches: &Patches, n: u64, all: bool) -> (V
         let x = patches.point(i, u(hash3(k, 3, 5)), u(hash3(k, 4, 5)));
         let skip = [i as u32, j as u32];
         for which in [Parts::All, Parts::Static, Parts::Moving] {
-            let mut bundle = Vec::new();
-            let mut single = Vec::new();
             for r in 0..8u64 {
                 let y = patches.point(j, u(hash3(k, r, 6)), u(hash3(k, r, 7)));
                 // Under 1° to its end patches: the segment may lie in their
@@ -288,19 +286,8 @@ fn occlusion_answers(bvh: &SceneBvh, patches: &Patches, n: u64, all: bool) -> (V
                 if !all && sin < 1f64.to_radians().sin() * e.length() {
                     continue;
                 }
-                let b = bvh.occluded_between(x, y, skip, which, &mut last);
-                out.push(b);
-                single.push(b);
+                out.push(bvh.occluded_between(x, y, skip, which, &mut last));
                 out.push(bvh.occluded_by(x, y, skip, which));
-                bundle.push((x, y, skip));
-            }
-            // The same segments as one bundle (`SceneBvh::occluded_between_many`:
-            // on Embree, one packet): each answered as one by one.
-            let mask = bvh.occluded_between_many(&bundle, which, &mut LastHit::default());
-            for (s, &b) in single.iter().enumerate() {
-                let m = mask >> s & 1 == 1;
-                assert_eq!(m, b, "bundle's segment {s} of {bundle:?}");
-                out.push(m);
             }
         }
     }
