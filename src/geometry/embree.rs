@@ -16,7 +16,12 @@
 //! under ~1° (see [`EmbreeScene::new`]).
 //!
 //! What it does not do: closest hits and box queries (the path tracer's bounces,
-//! the shafts' culling) stay on obvhs.
+//! the shafts' culling) stay on obvhs. Nor is it faster than the default in a
+//! solve: every occlusion query goes through it, one ray per `rtcOccluded1`, but
+//! the solver's rays are short segments between surfaces in scenes whose BVH sits
+//! in the L2 cache, and Embree casts them at about the 4-wide BVH's cost per ray
+//! (~120–135 ns on `gen_cubes 20`); packets of a bundle's rays
+//! (`rtcOccluded4/8/16`) were slower still (BENCHMARKS.md, "Occlusion rays").
 
 use std::ffi::{c_char, c_int, c_uint, c_void};
 use std::sync::OnceLock;
