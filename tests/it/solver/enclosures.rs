@@ -263,9 +263,9 @@ fn the_order_of_the_polygons_changes_nothing() {
 /// Measured (2026-12-02): before, the points at the crossings read 6.1–6.5% low
 /// at `ρ = 0.5` (24% at 0.9), the others within 0.4%; with the crossings cut,
 /// every point within 0.30% at 0.5 and 0.67% at 0.8. At 0.9 every point reads
-/// 0.5–1.1% high, far from the boxes as near them: the boxes' parts outside the
-/// room see nothing, so the scene is open and the rows' last fraction of a
-/// percent is not balanced away (`Solver::is_closed`).
+/// 0.5–1.1% high, far from the boxes as near them, so the test stops at 0.8 (not
+/// traced; likely the rows' last fraction of a percent left unbalanced, the
+/// boxes' parts outside the room making the scene open, `Solver::is_closed`).
 #[test]
 fn solids_through_the_floor_and_a_wall_reach_e_over_one_minus_rho() {
     let mut polys = shapes::tiled_box(
