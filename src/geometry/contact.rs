@@ -69,7 +69,7 @@
 use glam::DVec3;
 
 use super::patches::Patches;
-use super::polygon::Poly;
+use super::polygon::{Poly, clip_to_half_space};
 use super::visibility::SceneBvh;
 use crate::scene::Scene;
 
@@ -358,24 +358,17 @@ fn crossing_segment(
     let onto = |x: DVec3| x - n * (n.dot(x) - d);
     let (p, q) = (onto(p), onto(q));
     let dir = q - p;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    let mut t = [0.0, 1.0];
     let c = poly.corners();
     for e in 0..c.len() {
         let (a, b) = (c[e], c[(e + 1) % c.len()]);
         // Inward in the plane for corners counter-clockwise about `n`.
         let m = n.cross(b - a);
-        let (num, den) = (m.dot(p - a), m.dot(dir));
-        if den.abs() <= f64::EPSILON * m.length() * dir.length() {
-            if num < 0.0 {
-                return None;
-            }
-        } else if den > 0.0 {
-            t0 = t0.max(-num / den);
-        } else {
-            t1 = t1.min(-num / den);
+        if !clip_to_half_space(&mut t, m.dot(p - a), m.dot(dir)) {
+            return None;
         }
     }
-    ((t1 - t0) * dir.length() > tol).then(|| (p + dir * t0, p + dir * t1))
+    ((t[1] - t[0]) * dir.length() > tol).then(|| (p + dir * t[0], p + dir * t[1]))
 }
 
 /// True if `other` has the corners of `poly` (within `tol`): its back-to-back twin,

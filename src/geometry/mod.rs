@@ -34,7 +34,7 @@ pub use formfactor::{
 };
 pub use nearest::{closest_point_on_polygon, nearest_facing, on_emitters};
 pub use patches::{PatchGeometry, PatchId, Patches, param_point};
-pub use polygon::{MAX_CORNERS, Poly, centroid_of};
+pub use polygon::{MAX_CORNERS, Poly, centroid_of, clip_to_half_space};
 pub use visibility::{
     FRONT_FIRST_TIE, Hit, LastHit, PLANE_GAP, Parts, Rays, SEGMENT_TRIM, SURFACE_TRIM, SceneBvh,
     twin_patches,

@@ -165,6 +165,26 @@ pub fn centroid_of(c: &[DVec3]) -> DVec3 {
     }
 }
 
+/// Narrows the parameter range `t = [t0, t1]` of a segment `p + t d` to where
+/// `at + t slope >= 0` (one half-space of Cyrus & Beck's clipping: `at` the
+/// constraint's value at `p`, `slope` its change along `d`). Returns false where
+/// the segment runs parallel to the boundary on its outside; an empty range
+/// otherwise shows as `t0 > t1`.
+#[inline]
+pub fn clip_to_half_space(t: &mut [f64; 2], at: f64, slope: f64) -> bool {
+    if slope == 0.0 {
+        // Parallel: all or nothing (a NaN `at` excludes nothing).
+        return at.partial_cmp(&0.0) != Some(std::cmp::Ordering::Less);
+    }
+    let cut = -at / slope;
+    if slope > 0.0 {
+        t[0] = t[0].max(cut);
+    } else {
+        t[1] = t[1].min(cut);
+    }
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -22,7 +22,7 @@
 
 use glam::DVec3;
 
-use crate::geometry::SceneBvh;
+use crate::geometry::{SceneBvh, clip_to_half_space};
 
 mod boxes;
 pub use boxes::{box_shaft_misses, box_shaft_misses_all};
@@ -385,20 +385,14 @@ pub fn segment_crosses_box(
 ) -> bool {
     let (lo, hi) = (lo + DVec3::splat(margin), hi - DVec3::splat(margin));
     let d = q - p;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    let mut t = [0.0, 1.0];
     // In front of each end plane by `margin`: n·p + t n·d >= e + margin.
     for (n, e) in ends {
-        let (at, slope) = (n.dot(p) - e - margin, n.dot(d));
-        if slope == 0.0 {
-            if at < 0.0 {
-                return false;
-            }
-        } else if slope > 0.0 {
-            t0 = t0.max(-at / slope);
-        } else {
-            t1 = t1.min(-at / slope);
+        if !clip_to_half_space(&mut t, n.dot(p) - e - margin, n.dot(d)) {
+            return false;
         }
     }
+    let [mut t0, mut t1] = t;
     if t0 > t1 {
         return false;
     }
