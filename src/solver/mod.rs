@@ -55,7 +55,7 @@ pub mod spacetime;
 
 use facets::{FACET_BIT, MAX_FACETS, source_slot, source_value};
 pub use reconstruct::Reconstruction;
-pub use row_check::RowCheck;
+pub use row_check::{GatherCheck, RowCheck};
 pub use row_patch::KeptByTrace;
 use rows::{ClusterPart, KeptCoef, OpenedFactors, RowEntries};
 use spacetime::SpaceTimeState;
@@ -864,8 +864,10 @@ impl<'a> Solver<'a> {
     /// [`Solver::solution`] adds the reconstruction's interpolation error, and a
     /// round's estimate is at least the power the leaf system makes or loses
     /// (`with_power_error`); the last round's, at least the light rows summing
-    /// above 1 make ([`Solver::row_excess_error`]) and what rows short of rays
-    /// over the solved field lose ([`Solver::row_ray_check`]). BENCHMARKS.md,
+    /// above 1 make ([`Solver::row_excess_error`]), and at least what rows short
+    /// of rays over the solved field lose ([`Solver::row_ray_check`]) and the
+    /// final gather's gap against rays over that field ([`Solver::gather_ray_check`])
+    /// make together, in quadrature. BENCHMARKS.md,
     /// "The estimated error against the true error".
     pub fn run(
         &mut self,
@@ -1063,11 +1065,15 @@ impl<'a> Solver<'a> {
                 last.estimated_error = excess;
                 self.estimate = excess;
             }
-            if let Some(check) = self.row_ray_check()
-                && check.error > last.estimated_error
-            {
-                last.estimated_error = check.error;
-                self.estimate = check.error;
+            // The rows' bias (amplified by the bounces) and the final gather's
+            // gap against rays over the same field (where the answer is) are
+            // errors of their own: they add in quadrature.
+            let rows = self.row_ray_check().map_or(0.0, |c| c.error);
+            let gather = self.gather_ray_check().map_or(0.0, |g| g.error);
+            let rays = rows.hypot(gather);
+            if rays > last.estimated_error {
+                last.estimated_error = rays;
+                self.estimate = rays;
             }
         }
         if let Some(last) = records.last() {

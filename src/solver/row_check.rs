@@ -19,10 +19,25 @@
 //! over the same field, and at `ρ = 0.999` a 2% loss a bounce comes out about 10%
 //! dark (issue 45, part 4; the leaves of its slabs' room sides averaged in the
 //! dark parts inside other slabs, until contact meshing cut where slabs cross).
+//!
+//! The rows are drawn until the amplified noise is under a quarter of what the
+//! solve promises (within 5% of the solve's rays), and one standard error is
+//! taken off (`E[δ̂²] = δ² + σ²`): with the crossings cut, the Blender box's
+//! gaps were 0.3–0.6% at a gain of 3.9, 2 σ of 1 500 rows' noise hid them,
+//! and its estimate read 0.84% for 3.4% off the lamp at eps 0.5 (issue 45
+//! part 4, against 100,000 paths).
+//!
+//! The second check, [`Solver::gather_ray_check`], compares the final gather
+//! (the answer) at the error estimate's sample points with rays over the same
+//! leaf field: what the final gather misses where it is, which the rows do not
+//! show (the answer does not gather with the rows). Both are Monte Carlo
+//! measurements over the solve's own field (Kajiya 1986, eq. 1: one bounce of
+//! the rendering equation, cosine-sampled and by next-event estimation toward
+//! the emitters), not bounds; [`Solver::run`] adds them in quadrature.
 
 use super::*;
 
-/// Rows drawn ([`Solver::row_ray_check`]): one in [`CHECK_ROWS_PER`] leaves,
+/// Rows drawn first ([`Solver::row_ray_check`]): one in [`CHECK_ROWS_PER`] leaves,
 /// at least this many (the Cornell box at eps 0.1 draws these: 1–2% of the
 /// solve), at most [`CHECK_ROWS_MAX`]. On the Blender box, 128 left the gaps'
 /// noise (1.4% in red, 2.3% in blue) above the signal they amplify.
@@ -30,7 +45,7 @@ const CHECK_ROWS: usize = 128;
 /// Leaves a drawn row ([`CHECK_ROWS`]): the check's cost follows the leaf
 /// system's, a small share of it.
 const CHECK_ROWS_PER: usize = 8;
-/// Most rows drawn ([`CHECK_ROWS`]).
+/// Most rows drawn first ([`CHECK_ROWS`]).
 const CHECK_ROWS_MAX: usize = 4096;
 /// Cosine-weighted rays a drawn row casts for its reflected light (a jittered
 /// 8 × 8 grid of directions, each from its own point on the leaf).
@@ -40,8 +55,27 @@ const CHECK_LIGHT_RAYS: usize = 32;
 /// The share of a shadow ray's length short of the emitter's point that it
 /// does not test (a blocker closer to the point is the emitter's own surface).
 const LIGHT_TRIM: f64 = 1e-5;
-/// Standard errors of sampling noise taken off the measured gaps.
-const NOISE_SIGMAS: f64 = 2.0;
+/// Standard errors of sampling noise taken off the measured gaps: one, since a
+/// gap `δ̂` measured with noise `σ` has `E[δ̂²] = δ² + σ²`, so `δ̂² − σ²` is the
+/// unbiased estimate of `δ²`. Two (before 2026-12-02) took `4 σ²` off: on the
+/// Blender box at eps 0.5 it left 0.84% of an amplified gap of 2.2% (gaps
+/// 0.56/0.63% ± 0.27/0.28% at a gain of 3.9, 1 520 rows).
+const NOISE_SIGMAS: f64 = 1.0;
+/// The amplified noise the check draws more rows to get under
+/// ([`Solver::row_ray_check`]), as a share of what the solve promises
+/// ([`SolveOptions::promised_error`]).
+const NOISE_PER_PROMISE: f64 = 0.25;
+/// The share of the solve's rays the check may cast when it draws more rows
+/// than [`CHECK_ROWS_MAX`] (each row casts `CHECK_RAYS + CHECK_LIGHT_RAYS`).
+const CHECK_RAY_SHARE: f64 = 0.05;
+/// Most rows the check draws in its last pass, whatever the solve cast.
+const CHECK_ROWS_CAP: usize = 65_536;
+/// Points of the final gather's check ([`Solver::gather_ray_check`]): the error
+/// estimate's default samples.
+const GATHER_POINTS: usize = 128;
+/// Each of the gather check's two ray estimates at a point casts this squared
+/// cosine rays (2 × 1 024 a point).
+const GATHER_SIDE: usize = 32;
 
 /// What [`Solver::row_ray_check`] measured.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -62,10 +96,13 @@ pub struct RowCheck {
     /// The error term: the amplified mean gap, sampling noise taken off, as a
     /// relative RMS over the channels.
     pub error: f64,
+    /// The amplified noise, `NOISE_SIGMAS G σ` combined over the channels as
+    /// `error` is: what was taken off.
+    pub noise: f64,
 }
 
 impl Solver<'_> {
-    /// Checks a seeded sample of leaf rows (one in 8, 128 to 4096) against
+    /// Checks a seeded sample of leaf rows (below) against
     /// `CHECK_RAYS` (64) cosine rays and `CHECK_LIGHT_RAYS` (32) rays at the emitters
     /// each (module doc): the error the rows' gaps put into the answer
     /// ([`RowCheck::error`]; `None` without a leaf system, light or reflection).
@@ -94,8 +131,13 @@ impl Solver<'_> {
     /// lamp). The larger is taken: on the Cornell box with a white of 0.95 and
     /// every row 3% short, `(G − 1) δ` read 2.5% for a measured 4.3% off the
     /// lamp, `G δ` 4.8% (test below). The term is
-    /// `sqrt(max(0, (G_k δ_k)² − (2 G_k σ_k)²))` per channel, combined over the
-    /// channels by their weight `Σ A B²`.
+    /// `sqrt(max(0, (G_k δ_k)² − (G_k σ_k)²))` per channel, combined over the
+    /// channels by their weight `Σ A B²` (`NOISE_SIGMAS`).
+    ///
+    /// Rows: one in 8 leaves (128 to 4 096) first, then four times as many a
+    /// pass while the amplified noise `G σ` (combined as the term is) is above
+    /// a quarter of [`SolveOptions::promised_error`], within 5% of the solve's
+    /// rays and 65 536 rows. On the Blender box at eps 0.5, 6 080 rows (0.8 s).
     pub fn row_ray_check(&self) -> Option<RowCheck> {
         let nl = self.sys.leaves.len();
         if nl == 0 || self.sys.row_start.len() != nl + 1 {
@@ -199,22 +241,105 @@ impl Solver<'_> {
         if total_w.is_nan() || total_w <= 0.0 {
             return None;
         }
-        let rows = (nl / CHECK_ROWS_PER).clamp(CHECK_ROWS, CHECK_ROWS_MAX);
-        let draws: Vec<usize> = {
-            let mut out = Vec::with_capacity(rows);
-            let (mut acc, mut li) = (0.0, 0);
-            for s in 0..rows {
-                let r = oracle::unit(oracle::hash3(self.opts.seed ^ 0x0c4e_c4ed, s as u64, 0));
-                let target = (s as f64 + r) / rows as f64 * total_w;
-                while li + 1 < nl && (acc + w[li] < target || w[li] <= 0.0) {
-                    acc += w[li];
-                    li += 1;
+        let field = self.ray_field(plain);
+        let side = (CHECK_RAYS as f64).sqrt().round().max(1.0) as usize;
+        let seed = self.opts.seed ^ 0x0007_e57a;
+        // One measurement with `rows` draws, stratified over the draw weights.
+        let measure = |rows: usize| -> RowCheck {
+            let draws = stratified_draws(&w, total_w, rows, self.opts.seed);
+            // Each pass its own rays.
+            let seed = seed ^ (rows as u64).rotate_left(40);
+            // Per draw: `A ρ Δ / w` per channel.
+            let per: Vec<[f64; 3]> = draws
+                .par_iter()
+                .enumerate()
+                .map(|(s, &li)| {
+                    let leaf = self.sys.leaves[li];
+                    let g = &geoms[leaf.ix()];
+                    let n = DVec3::from_array(g.normal);
+                    let rho = self.patches.rhos[g.patch as usize];
+                    let mut x_out = [0.0; 3];
+                    if w[li] <= 0.0 {
+                        return x_out;
+                    }
+                    let r = |j: usize, k: u64| {
+                        oracle::unit(oracle::hash3(seed, s as u64, j as u64 * 8 + k))
+                    };
+                    let h = self.rays_at(
+                        &field,
+                        (g.patch, n),
+                        |u, v| leaf_point(g, u, v),
+                        r,
+                        (side, CHECK_LIGHT_RAYS),
+                    );
+                    for k in 0..3 {
+                        x_out[k] = g.area * rho[k] * (h[k] - h_row[li][k]) / w[li];
+                    }
+                    x_out
+                })
+                .collect();
+            let m = per.len() as f64;
+            let mut out = RowCheck {
+                rows: per.len(),
+                rays: (per.len() * (CHECK_RAYS + CHECK_LIGHT_RAYS)) as u64,
+                ..RowCheck::default()
+            };
+            let (mut num, mut noise2, mut den) = (0.0, 0.0, 0.0);
+            for k in 0..3 {
+                let mean = per.iter().map(|p| p[k]).sum::<f64>() / m;
+                let var =
+                    per.iter().map(|p| (p[k] - mean).powi(2)).sum::<f64>() / (m - 1.0).max(1.0);
+                // The estimate of `Σ A ρ Δ` over all leaves.
+                let missed = total_w * mean;
+                if first[k] <= 0.0 || gathered[k] <= 0.0 || weight_b2[k] <= 0.0 {
+                    continue;
                 }
-                out.push(li);
+                out.gap[k] = missed / gathered[k];
+                out.gap_noise[k] = total_w * (var / m).sqrt() / gathered[k];
+                out.gain[k] = gathered[k] / first[k];
+                // The leaf field's reflected light is short by `G δ`; so is the
+                // answer where its light is mostly reflected (doc above).
+                let amp = out.gain[k];
+                let (amplified, noise) = (amp * out.gap[k], NOISE_SIGMAS * amp * out.gap_noise[k]);
+                let e2 = (amplified * amplified - noise * noise).max(0.0);
+                num += weight_b2[k] * e2;
+                noise2 += weight_b2[k] * noise * noise;
+                den += weight_b2[k];
+            }
+            if den > 0.0 {
+                out.error = (num / den).sqrt();
+                out.noise = (noise2 / den).sqrt();
             }
             out
         };
-        // Each patch's root element, to find the leaf a ray meets.
+        // More rows (four times as many a pass) while the amplified noise is above
+        // `NOISE_PER_PROMISE` of what the solve promises, within the rows the cost
+        // allows: a gap of a fraction of a percent at a gain of 4 is the whole
+        // error of the Blender box, and 2 σ of 1 500 rows' noise hid it.
+        let budget = ((self.rays as f64 * CHECK_RAY_SHARE) as usize
+            / (CHECK_RAYS + CHECK_LIGHT_RAYS))
+            .clamp(CHECK_ROWS_MAX, CHECK_ROWS_CAP);
+        let target = NOISE_PER_PROMISE * self.opts.promised_error();
+        let mut rows = (nl / CHECK_ROWS_PER).clamp(CHECK_ROWS, CHECK_ROWS_MAX);
+        let mut out = measure(rows);
+        let mut rays = out.rays;
+        while out.noise > target && rows * 4 <= budget {
+            rows *= 4;
+            out = measure(rows);
+            rays += out.rays;
+        }
+        out.rays = rays;
+        Some(out)
+    }
+}
+
+impl Solver<'_> {
+    /// What the rays of both checks need: the solved leaf field, each patch's
+    /// root element (to find the leaf a ray meets) and the emitting leaves with
+    /// their power (max channel), to draw points on for the direct light.
+    fn ray_field(&self, plain: Vec<[f64; 3]>) -> RayField {
+        let geoms = self.elems.geoms.as_slice();
+        let nodes = self.elems.nodes.as_slice();
         let mut root = vec![u32::MAX; self.patches.len()];
         for (e, (g, node)) in geoms.iter().zip(nodes).enumerate() {
             let top = node.parent == u32::MAX || geoms[node.parent as usize].patch == u32::MAX;
@@ -222,8 +347,6 @@ impl Solver<'_> {
                 root[g.patch as usize] = e as u32;
             }
         }
-        // The emitting leaves, drawn by their power (max channel) for the direct
-        // light; the cosine rays then bring only the reflected field `B − E`.
         let lights: Vec<(ElementId, f64)> = self
             .sys
             .leaves
@@ -235,136 +358,246 @@ impl Solver<'_> {
                 (p > 0.0).then_some((l, p))
             })
             .collect();
-        let light_total: f64 = lights.iter().map(|l| l.1).sum();
+        let light_total = lights.iter().map(|l| l.1).sum();
+        RayField {
+            plain,
+            root,
+            lights,
+            light_total,
+        }
+    }
+
+    /// The irradiance `H` rays bring over `field` to points drawn by `point`
+    /// (a point and its weight from two uniforms) on a surface of patch `patch`
+    /// facing `n`: `side²` cosine rays in a jittered grid of directions, each from
+    /// its own point, bring `B − E` of the leaf they meet (nothing from a back
+    /// face or from nowhere); `light_rays` rays at points on the emitting leaves,
+    /// drawn by power and stratified, bring `E K / pdf` where nothing blocks
+    /// them. With `light_rays` 0 the cosine rays bring `B`, emission included.
+    /// `r(j, k)` is the `k`-th uniform of ray `j`.
+    fn rays_at(
+        &self,
+        field: &RayField,
+        (patch, n): (u32, DVec3),
+        point: impl Fn(f64, f64) -> (DVec3, f64),
+        r: impl Fn(usize, u64) -> f64,
+        (side, light_rays): (usize, usize),
+    ) -> [f64; 3] {
+        let geoms = self.elems.geoms.as_slice();
         let diam = self.patches.diameter;
-        let side = (CHECK_RAYS as f64).sqrt().round().max(1.0) as usize;
-        let seed = self.opts.seed ^ 0x0007_e57a;
-        // Per draw: `A ρ Δ / w` per channel.
-        let per: Vec<[f64; 3]> = draws
-            .par_iter()
-            .enumerate()
-            .map(|(s, &li)| {
-                let leaf = self.sys.leaves[li];
-                let g = &geoms[leaf.ix()];
-                let n = DVec3::from_array(g.normal);
-                let rho = self.patches.rhos[g.patch as usize];
-                let mut x_out = [0.0; 3];
-                if w[li] <= 0.0 {
-                    return x_out;
+        let (mut refl, mut wr) = ([0.0; 3], 0.0);
+        for j in 0..side * side {
+            let (x, jac) = point(r(j, 0), r(j, 1));
+            let u1 = ((j % side) as f64 + r(j, 2)) / side as f64;
+            let u2 = ((j / side) as f64 + r(j, 3)) / side as f64;
+            let dir = cosine_direction(n, u1, u2);
+            let v = self
+                .bvh
+                .intersect_front_first(x, dir * diam * 2.0, 1e-6, 1.0)
+                .filter(|hit| {
+                    hit.patch != patch && self.patches.normals[hit.patch as usize].dot(dir) < 0.0
+                })
+                .and_then(|hit| {
+                    let top = *field.root.get(hit.patch as usize)?;
+                    (top != u32::MAX).then(|| {
+                        let y = x + dir * diam * 2.0 * hit.t;
+                        let at = self.leaf_at(ElementId(top), y);
+                        // With no rays at the emitters, the cosine rays bring
+                        // the emission too.
+                        let e = if light_rays > 0 {
+                            self.patches.emissions[hit.patch as usize]
+                        } else {
+                            [0.0; 3]
+                        };
+                        std::array::from_fn(|k| field.plain[at.ix()][k] - e[k])
+                    })
+                })
+                .unwrap_or([0.0; 3]);
+            wr += jac;
+            for k in 0..3 {
+                refl[k] += jac * v[k];
+            }
+        }
+        let (mut direct, mut wd) = ([0.0; 3], 0.0);
+        if field.light_total > 0.0 {
+            let (mut acc, mut at) = (0.0, 0);
+            for j in 0..light_rays {
+                let jj = j + side * side;
+                let (x, jac) = point(r(jj, 0), r(jj, 1));
+                wd += jac;
+                let target = (j as f64 + r(jj, 2)) / light_rays as f64 * field.light_total;
+                while at + 1 < field.lights.len() && acc + field.lights[at].1 < target {
+                    acc += field.lights[at].1;
+                    at += 1;
                 }
-                let r = |j: usize, k: u64| {
-                    oracle::unit(oracle::hash3(seed, s as u64, j as u64 * 8 + k))
-                };
-                // Reflected light: cosine rays in a jittered grid of directions.
-                let (mut refl, mut wr) = ([0.0; 3], 0.0);
-                for j in 0..side * side {
-                    let (x, jac) = leaf_point(g, r(j, 0), r(j, 1));
-                    let u1 = ((j % side) as f64 + r(j, 2)) / side as f64;
-                    let u2 = ((j / side) as f64 + r(j, 3)) / side as f64;
-                    let dir = cosine_direction(n, u1, u2);
-                    let v = self
-                        .bvh
-                        .intersect_front_first(x, dir * diam * 2.0, 1e-6, 1.0)
-                        .filter(|hit| {
-                            hit.patch != g.patch
-                                && self.patches.normals[hit.patch as usize].dot(dir) < 0.0
-                        })
-                        .and_then(|hit| {
-                            let top = *root.get(hit.patch as usize)?;
-                            (top != u32::MAX).then(|| {
-                                let y = x + dir * diam * 2.0 * hit.t;
-                                let at = self.leaf_at(ElementId(top), y);
-                                let e = self.patches.emissions[hit.patch as usize];
-                                std::array::from_fn(|k| plain[at.ix()][k] - e[k])
-                            })
-                        })
-                        .unwrap_or([0.0; 3]);
-                    wr += jac;
-                    for k in 0..3 {
-                        refl[k] += jac * v[k];
-                    }
+                let (l, pw) = field.lights[at];
+                let gl = &geoms[l.ix()];
+                let (y, jac_y) = leaf_point(gl, r(jj, 3), r(jj, 4));
+                let d = y - x;
+                let r2 = d.length_squared();
+                let nl = DVec3::from_array(gl.normal);
+                let (cx, cy) = (n.dot(d), -nl.dot(d));
+                if r2 <= 0.0 || cx <= 0.0 || cy <= 0.0 || gl.patch == patch {
+                    continue;
                 }
-                // Direct light: points on the emitters by their power, stratified.
-                let (mut direct, mut wd) = ([0.0; 3], 0.0);
-                if light_total > 0.0 {
-                    let (mut acc, mut at) = (0.0, 0);
-                    for j in 0..CHECK_LIGHT_RAYS {
-                        let jj = j + side * side;
-                        let (x, jac) = leaf_point(g, r(jj, 0), r(jj, 1));
-                        wd += jac;
-                        let target = (j as f64 + r(jj, 2)) / CHECK_LIGHT_RAYS as f64 * light_total;
-                        while at + 1 < lights.len() && acc + lights[at].1 < target {
-                            acc += lights[at].1;
-                            at += 1;
-                        }
-                        let (l, pw) = lights[at];
-                        let gl = &geoms[l.ix()];
-                        let (y, jac_y) = leaf_point(gl, r(jj, 3), r(jj, 4));
-                        let d = y - x;
-                        let r2 = d.length_squared();
-                        let nl = DVec3::from_array(gl.normal);
-                        let (cx, cy) = (n.dot(d), -nl.dot(d));
-                        if r2 <= 0.0 || cx <= 0.0 || cy <= 0.0 || gl.patch == g.patch {
-                            continue;
-                        }
-                        // Cast as the cosine rays are (a ray a few millimetres long
-                        // met the twin its point lies on).
-                        let reach = r2.sqrt() / (diam * 2.0);
-                        if self
-                            .bvh
-                            .intersect_front_first(x, d / reach, 1e-6, reach * (1.0 - LIGHT_TRIM))
-                            .is_some()
-                        {
-                            continue;
-                        }
-                        // `E K / pdf`, `pdf = (P_l / P) / (jac_y A_l)` over the area.
-                        let k_xy = cx * cy / (std::f64::consts::PI * r2 * r2);
-                        let scale = k_xy * jac_y * gl.area * light_total / pw;
-                        let e = self.patches.emissions[gl.patch as usize];
-                        for k in 0..3 {
-                            direct[k] += jac * scale * e[k];
-                        }
-                    }
+                // Cast as the cosine rays are (a ray a few millimetres long met
+                // the twin its point lies on).
+                let reach = r2.sqrt() / (diam * 2.0);
+                if self
+                    .bvh
+                    .intersect_front_first(x, d / reach, 1e-6, reach * (1.0 - LIGHT_TRIM))
+                    .is_some()
+                {
+                    continue;
                 }
+                // `E K / pdf`, `pdf = (P_l / P) / (jac_y A_l)` over the area.
+                let k_xy = cx * cy / (std::f64::consts::PI * r2 * r2);
+                let scale = k_xy * jac_y * gl.area * field.light_total / pw;
+                let e = self.patches.emissions[gl.patch as usize];
                 for k in 0..3 {
-                    let mut h = if wr > 0.0 { refl[k] / wr } else { 0.0 };
-                    if wd > 0.0 {
-                        h += direct[k] / wd;
-                    }
-                    x_out[k] = g.area * rho[k] * (h - h_row[li][k]) / w[li];
+                    direct[k] += jac * scale * e[k];
                 }
-                x_out
+            }
+        }
+        std::array::from_fn(|k| {
+            let mut h = if wr > 0.0 { refl[k] / wr } else { 0.0 };
+            if wd > 0.0 {
+                h += direct[k] / wd;
+            }
+            h
+        })
+    }
+
+    /// Checks the final gather, the answer, against rays over the solved leaf
+    /// field at `GATHER_POINTS` (128) points spread over the surfaces by area (the
+    /// error estimate's samples, those off the emitters): the error a final
+    /// gather that misses part of the field it gathers (a link's visibility,
+    /// a cluster estimate, a source too close for its quadrature) leaves in the
+    /// answer where it is, which no bounce amplifies and the rows' check does
+    /// not see (the rows are not what the answer gathers with). `None` without
+    /// a leaf system or samples.
+    ///
+    /// At each point `x` the final gather's reflected radiosity `v = ρ H_fg`
+    /// is compared with two independent ray estimates `a` and `b` of `ρ H`,
+    /// `GATHER_SIDE²` (1 024) cosine rays each that bring the emission of what
+    /// they meet too (`Solver::rays_at`). Rays at points on the emitters read
+    /// the ceiling 0.1 mm over the Blender box's lamp 86% short: the kernel's
+    /// peak under the lamp's top is too narrow for them. `(a − v)(b − v)` has
+    /// the expectation `(ρ H − v)²` whatever the rays' noise, since the two
+    /// are independent. The term is `sqrt(max(0, Σ (a − v)(b − v)) / Σ v²)`
+    /// over the points and channels: the relative RMS of the final gather's
+    /// gap, as the change between levels is taken.
+    ///
+    /// On the Blender box one bounce of rays over the answer moved it 1.7–1.9%
+    /// RMS at the test's points, up to 8% on the ceiling by the opening, where
+    /// the answer was 9% dark (issue 45 part 4); this check reads 0.75%, 0.73%
+    /// and 0.71% at eps 0.5, 0.25 and 0.1 (0.14–0.5 s).
+    pub fn gather_ray_check(&self) -> Option<GatherCheck> {
+        if self.sys.leaves.is_empty() || self.sys.row_start.len() != self.sys.leaves.len() + 1 {
+            return None;
+        }
+        let samples: Vec<ErrorSample> = self
+            .error_samples(GATHER_POINTS)
+            .into_iter()
+            .filter(|smp| {
+                self.patches.emissions[smp.patch as usize]
+                    .iter()
+                    .all(|&e| e <= 0.0)
             })
             .collect();
-        let m = per.len() as f64;
-        let mut out = RowCheck {
-            rows: per.len(),
-            rays: (per.len() * (CHECK_RAYS + CHECK_LIGHT_RAYS)) as u64,
-            ..RowCheck::default()
-        };
-        let (mut num, mut den) = (0.0, 0.0);
-        for k in 0..3 {
-            let mean = per.iter().map(|p| p[k]).sum::<f64>() / m;
-            let var = per.iter().map(|p| (p[k] - mean).powi(2)).sum::<f64>() / (m - 1.0).max(1.0);
-            // The estimate of `Σ A ρ Δ` over all leaves.
-            let missed = total_w * mean;
-            if first[k] <= 0.0 || gathered[k] <= 0.0 || weight_b2[k] <= 0.0 {
-                continue;
-            }
-            out.gap[k] = missed / gathered[k];
-            out.gap_noise[k] = total_w * (var / m).sqrt() / gathered[k];
-            out.gain[k] = gathered[k] / first[k];
-            // The leaf field's reflected light is short by `G δ`; so is the
-            // answer where its light is mostly reflected (doc above).
-            let amp = out.gain[k];
-            let (amplified, noise) = (amp * out.gap[k], NOISE_SIGMAS * amp * out.gap_noise[k]);
-            let e2 = (amplified * amplified - noise * noise).max(0.0);
-            num += weight_b2[k] * e2;
-            den += weight_b2[k];
+        let values = self.sample_values(&samples);
+        let plain: Vec<[f64; 3]> = self
+            .elems
+            .radiosities
+            .as_slice()
+            .iter()
+            .map(|v| v.map(f64::from))
+            .collect();
+        let field = self.ray_field(plain);
+        let seed = self.opts.seed ^ 0x9a7e_c4ec;
+        let per: Vec<Option<(f64, f64)>> = samples
+            .par_iter()
+            .zip(&values)
+            .enumerate()
+            .map(|(i, (smp, v))| {
+                let v = (*v)?;
+                let n = self.patches.normals[smp.patch as usize];
+                let rho = self.patches.rhos[smp.patch as usize];
+                let half = |h: u64| {
+                    let r = |j: usize, k: u64| {
+                        oracle::unit(oracle::hash3(seed ^ h, i as u64, j as u64 * 8 + k))
+                    };
+                    self.rays_at(
+                        &field,
+                        (smp.patch, n),
+                        |_, _| (smp.x, 1.0),
+                        r,
+                        (GATHER_SIDE, 0),
+                    )
+                };
+                let (a, b) = (half(1), half(2));
+                let (mut prod, mut v2) = (0.0, 0.0);
+                for k in 0..3 {
+                    prod += (rho[k] * a[k] - v[k]) * (rho[k] * b[k] - v[k]);
+                    v2 += v[k] * v[k];
+                }
+                Some((prod, v2))
+            })
+            .collect();
+        let (mut prod, mut v2, mut points) = (0.0, 0.0, 0);
+        for (p, q) in per.into_iter().flatten() {
+            prod += p;
+            v2 += q;
+            points += 1;
         }
-        out.error = if den > 0.0 { (num / den).sqrt() } else { 0.0 };
-        Some(out)
+        if points == 0 || v2 <= 0.0 {
+            return None;
+        }
+        Some(GatherCheck {
+            points,
+            rays: (points * 2 * GATHER_SIDE * GATHER_SIDE) as u64,
+            error: (prod.max(0.0) / v2).sqrt(),
+        })
     }
+}
+
+/// What [`Solver::rays_at`] casts over: the solved leaf field, each patch's root
+/// element (`u32::MAX`: none) and the emitting leaves with their power and its
+/// total. Transient, built once per check.
+struct RayField {
+    plain: Vec<[f64; 3]>,
+    root: Vec<u32>,
+    lights: Vec<(ElementId, f64)>,
+    light_total: f64,
+}
+
+/// What [`Solver::gather_ray_check`] measured. 24 bytes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GatherCheck {
+    /// Points compared (off the emitters, held by a leaf).
+    pub points: usize,
+    /// Rays cast.
+    pub rays: u64,
+    /// The relative RMS gap of the final gather against rays over the same field.
+    pub error: f64,
+}
+
+/// `rows` draws of indices into `w` in proportion to `w` (total `total`),
+/// stratified: draw `s` falls in the `s`-th of `rows` equal slices of the total,
+/// at a seeded jitter within it. Entries of weight 0 are never drawn.
+fn stratified_draws(w: &[f64], total: f64, rows: usize, seed: u64) -> Vec<usize> {
+    let mut out = Vec::with_capacity(rows);
+    let (mut acc, mut li) = (0.0, 0);
+    for s in 0..rows {
+        let r = oracle::unit(oracle::hash3(seed ^ 0x0c4e_c4ed, s as u64, rows as u64));
+        let target = (s as f64 + r) / rows as f64 * total;
+        while li + 1 < w.len() && (acc + w[li] < target || w[li] <= 0.0) {
+            acc += w[li];
+            li += 1;
+        }
+        out.push(li);
+    }
+    out
 }
 
 /// A point of surface element `g` at the unit-square parameters `(s, t)`, uniform
@@ -477,7 +710,7 @@ mod tests {
     /// What [`rows_short_of_their_rays_raise_the_estimate_by_the_light_they_lose`]
     /// measures on `scene`: the check as solved, then with every leaf row × 0.97
     /// the error measured off the lamp, the check, and the row excess term.
-    fn short_rows(scene: &Scene, opts: SolveOptions) -> (f64, f64, RowCheck, f64) {
+    fn short_rows(scene: &Scene, opts: SolveOptions, scale: f64) -> (f64, f64, RowCheck, f64) {
         let mut s = Solver::new(scene, opts).unwrap();
         s.run(|_, _| {}).unwrap();
         let pts = grid(&s.patches);
@@ -485,7 +718,7 @@ mod tests {
         let right = answer(&s, &pts);
         let as_solved = s.row_ray_check().unwrap();
         for c in s.sys.row_coefs.iter_mut() {
-            *c *= 0.97;
+            *c *= scale;
         }
         s.solve_leaves().unwrap();
         let short = answer(&s, &pts);
@@ -551,7 +784,7 @@ mod tests {
     #[test]
     fn rows_short_of_their_rays_raise_the_estimate_by_the_light_they_lose() {
         let (scene, opts) = solved_box();
-        assert_short_rows_seen("box", short_rows(&scene, opts));
+        assert_short_rows_seen("box", short_rows(&scene, opts, 0.97));
     }
 
     /// The tessellated twin of
@@ -562,6 +795,35 @@ mod tests {
     #[test]
     fn rows_short_of_their_rays_raise_the_estimate_on_unequal_triangles() {
         let (scene, opts) = solved_box();
-        assert_short_rows_seen("triangles", short_rows(&unequal_triangles(scene), opts));
+        assert_short_rows_seen(
+            "triangles",
+            short_rows(&unequal_triangles(scene), opts, 0.97),
+        );
+    }
+
+    /// A gap a fraction of a percent wide at a high gain, as on the Blender box
+    /// (gaps of 0.3–0.6% at a gain of 3.9 left its answer 2.7–3.4% dark): the
+    /// Cornell box with the Blender box's white (0.999) and every leaf row
+    /// × 0.996. The answer moves by `G` times the 0.4%; the check must read
+    /// between 0.7 and 2 times it (it draws rows until the amplified noise is
+    /// under a quarter of what the solve promises, and takes one `σ` off).
+    /// Measured (2026-12-02): 0.65% moved, the check 0.76% (gap 0.39 ± 0.18%
+    /// at a gain of 2.4); with 2 σ taken off the same gaps read 0.36%, and the
+    /// Blender box's check read 0.84% of the 2.2% its gaps amplify to.
+    #[test]
+    fn a_small_row_gap_at_a_high_gain_raises_the_estimate() {
+        let (mut scene, opts) = solved_box();
+        for m in &mut scene.materials {
+            if m.name == "white" {
+                m.rho = [0.999; 3];
+            }
+        }
+        let (as_solved, measured, check, _) = short_rows(&scene, opts, 0.996);
+        assert!(measured > 0.005, "rows x0.996 moved the answer {measured}");
+        assert!(
+            check.error > measured * 0.7 && check.error < measured * 2.0,
+            "check {check:?} for a measured {measured}"
+        );
+        assert!(as_solved < measured / 3.0, "as solved {as_solved}");
     }
 }
