@@ -166,6 +166,11 @@ pub struct ClusterFacets {
 }
 
 impl ClusterFacets {
+    /// SCRATCH: the cluster facet `f` belongs to.
+    pub fn owner_of(&self, f: u32) -> u32 {
+        self.owner[f as usize]
+    }
+
     /// The facets of the clusters (and patch roots) of `elems` as they stand.
     pub fn build(elems: &ElementPool) -> Self {
         let geoms = elems.geoms.as_slice();

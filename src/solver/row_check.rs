@@ -367,6 +367,284 @@ impl Solver<'_> {
     }
 }
 
+/// SCRATCH (issue 45 part 4, not for merge): every checked leaf's row against
+/// `side²` cosine rays and `lights` rays at the emitters, broken down by the
+/// receiver's object and the source's object (clusters spanning objects and
+/// facets in their own buckets). Per (receiver object, source object): the
+/// summed `A ρ H` per channel of the rows and of the rays, and the summed
+/// `A × factor` of the rows and the rays' `A × share of hits`.
+#[allow(clippy::type_complexity)]
+impl Solver<'_> {
+    /// See above. Keys: (receiver object, source object); `u32::MAX - 1` a
+    /// cluster spanning objects, `u32::MAX - 2` a facet, `u32::MAX - 3` nothing hit.
+    pub fn scratch_rows_by_object(
+        &self,
+        side: usize,
+        lights_n: usize,
+        keep: &(dyn Fn(DVec3, DVec3) -> bool + Sync),
+    ) -> std::collections::BTreeMap<(u32, u32), ([f64; 3], [f64; 3], f64, f64)> {
+        const MIXED: u32 = u32::MAX - 1;
+        const FACET: u32 = u32::MAX - 2;
+        const NONE: u32 = u32::MAX - 3;
+        let nl = self.sys.leaves.len();
+        let geoms = self.elems.geoms.as_slice();
+        let plain: Vec<[f64; 3]> = self
+            .elems
+            .radiosities
+            .as_slice()
+            .iter()
+            .map(|v| v.map(f64::from))
+            .collect();
+        let (b, fb) = self.gained(plain.clone());
+        // Object of each element.
+        let ne = geoms.len();
+        let mut obj = vec![u32::MAX; ne];
+        fn walk(s: &Solver<'_>, e: u32, obj: &mut Vec<u32>) -> u32 {
+            if obj[e as usize] != u32::MAX {
+                return obj[e as usize];
+            }
+            let g = &s.elems.geoms.as_slice()[e as usize];
+            let o = if g.patch != u32::MAX {
+                s.patches.objects[g.patch as usize]
+            } else {
+                let mut o = u32::MAX;
+                for c in s.elems.children(ElementId(e)) {
+                    let co = walk(s, c, obj);
+                    o = if o == u32::MAX || o == co { co } else { u32::MAX - 1 };
+                }
+                o
+            };
+            obj[e as usize] = o;
+            o
+        }
+        for e in 0..ne as u32 {
+            walk(self, e, &mut obj);
+        }
+        let mut root = vec![u32::MAX; self.patches.len()];
+        let nodes = self.elems.nodes.as_slice();
+        for (e, (g, node)) in geoms.iter().zip(nodes).enumerate() {
+            let top = node.parent == u32::MAX || geoms[node.parent as usize].patch == u32::MAX;
+            if g.patch != u32::MAX && top {
+                root[g.patch as usize] = e as u32;
+            }
+        }
+        let lights: Vec<(ElementId, f64)> = self
+            .sys
+            .leaves
+            .iter()
+            .filter_map(|&l| {
+                let g = &geoms[l.ix()];
+                let e = self.patches.emissions[g.patch as usize];
+                let p = g.area * e.iter().copied().fold(0.0, f64::max);
+                (p > 0.0).then_some((l, p))
+            })
+            .collect();
+        let light_total: f64 = lights.iter().map(|l| l.1).sum();
+        let diam = self.patches.diameter;
+        let seed = self.opts.seed ^ 0x5c4a_7c11;
+        let per: Vec<Vec<((u32, u32), ([f64; 3], [f64; 3], f64, f64))>> = (0..nl)
+            .into_par_iter()
+            .map(|li| {
+                let leaf = self.sys.leaves[li];
+                let g = &geoms[leaf.ix()];
+                let e = self.patches.emissions[g.patch as usize];
+                let n = DVec3::from_array(g.normal);
+                let k4 = g.n.clamp(3, 4) as usize;
+                let c = g.corners[..k4]
+                    .iter()
+                    .map(|&c| DVec3::from_array(c))
+                    .sum::<DVec3>()
+                    / k4 as f64;
+                if e.iter().any(|&x| x > 0.0) || !self.outside_solids(c, n) || !keep(c, n) {
+                    return Vec::new();
+                }
+                let ro = obj[leaf.ix()];
+                let rho = self.patches.rhos[g.patch as usize];
+                let mut m: std::collections::BTreeMap<(u32, u32), ([f64; 3], [f64; 3], f64, f64)> =
+                    Default::default();
+                // Rows.
+                let (r0, r1) = (
+                    self.sys.row_start[li] as usize,
+                    self.sys.row_start[li + 1] as usize,
+                );
+                let rs = self.sys.row_scale.get(li).copied().unwrap_or(1.0);
+                for (s, cf) in self.sys.row_sources[r0..r1]
+                    .iter()
+                    .zip(&self.sys.row_coefs[r0..r1])
+                {
+                    let so = if s & FACET_BIT != 0 {
+                        let o = obj[self.facets.owner_of(s & !FACET_BIT) as usize];
+                        if o < 1000 { o + 3000 } else { FACET }
+                    } else {
+                        let kind = if geoms[*s as usize].patch == u32::MAX {
+                            2
+                        } else if self.elems.children(ElementId(*s)).is_empty() {
+                            0
+                        } else {
+                            1
+                        };
+                        let o = obj[*s as usize];
+                        if o < 1000 { o + 1000 * kind } else { o }
+                    };
+                    let bs = source_value(&b, &fb, *s);
+                    let ent = m.entry((ro, so)).or_default();
+                    for k in 0..3 {
+                        ent.0[k] += g.area * rho[k] * rs * cf * bs[k];
+                    }
+                    ent.2 += g.area * rs * cf;
+                }
+                if std::env::var("SCRATCH_LEAF").ok().and_then(|v| v.parse::<usize>().ok()) == Some(li) {
+                    for l in self.chain_links(leaf) {
+                        let src = self.links.ends.as_slice()[l as usize].source;
+                        let gsrc = &geoms[src as usize];
+                        eprintln!(
+                            "LINK {l} recv {} src {src} patch {} obj {} n {:?} corners {:.3?} flags clear {}",
+                            self.links.ends.as_slice()[l as usize].receiver,
+                            gsrc.patch, obj[src as usize], gsrc.normal, &gsrc.corners[..gsrc.n.clamp(2, 4) as usize],
+                            self.links.transports.as_slice()[l as usize].shaft_clear()
+                        );
+                    }
+                    for (s, cf) in self.sys.row_sources[r0..r1].iter().zip(&self.sys.row_coefs[r0..r1]) {
+                        if *s & FACET_BIT == 0 {
+                            let gsrc = &geoms[*s as usize];
+                            eprintln!(
+                                "ENTRY src {s} obj {} coef {cf:.5} b {:.4?} corners {:.3?}",
+                                obj[*s as usize], plain[*s as usize], &gsrc.corners[..gsrc.n.clamp(2, 4) as usize]
+                            );
+                        }
+                    }
+                }
+                let r = |j: usize, k: u64| {
+                    oracle::unit(oracle::hash3(seed, li as u64, j as u64 * 8 + k))
+                };
+                let mut wr = 0.0;
+                let mut hits: Vec<(u32, [f64; 3], f64)> = Vec::new();
+                for j in 0..side * side {
+                    let (x, jac) = leaf_point(g, r(j, 0), r(j, 1));
+                    let u1 = ((j % side) as f64 + r(j, 2)) / side as f64;
+                    let u2 = ((j / side) as f64 + r(j, 3)) / side as f64;
+                    let dir = cosine_direction(n, u1, u2);
+                    wr += jac;
+                    let hit = self
+                        .bvh
+                        .intersect_front_first(x, dir * diam * 2.0, 1e-6, 1.0)
+                        .filter(|hit| {
+                            hit.patch != g.patch
+                                && self.patches.normals[hit.patch as usize].dot(dir) < 0.0
+                        });
+                    match hit {
+                        Some(hit) => {
+                            let top = root[hit.patch as usize];
+                            let y = x + dir * diam * 2.0 * hit.t;
+                            let at = self.leaf_at(ElementId(top), y);
+                            let e = self.patches.emissions[hit.patch as usize];
+                            let v = std::array::from_fn(|k| plain[at.ix()][k] - e[k]);
+                            hits.push((self.patches.objects[hit.patch as usize], v, jac));
+                        }
+                        None => hits.push((NONE, [0.0; 3], jac)),
+                    }
+                }
+                for (o, v, jac) in hits {
+                    let ent = m.entry((ro, o)).or_default();
+                    for k in 0..3 {
+                        ent.1[k] += g.area * rho[k] * jac * v[k] / wr;
+                    }
+                    ent.3 += g.area * jac / wr;
+                }
+                // Direct light.
+                if light_total > 0.0 {
+                    let (mut acc, mut at) = (0.0, 0);
+                    let mut wd = 0.0;
+                    let mut direct: Vec<(u32, [f64; 3], f64)> = Vec::new();
+                    for j in 0..lights_n {
+                        let jj = j + side * side;
+                        let (x, jac) = leaf_point(g, r(jj, 0), r(jj, 1));
+                        wd += jac;
+                        let target = (j as f64 + r(jj, 2)) / lights_n as f64 * light_total;
+                        while at + 1 < lights.len() && acc + lights[at].1 < target {
+                            acc += lights[at].1;
+                            at += 1;
+                        }
+                        let (l, pw) = lights[at];
+                        let gl = &geoms[l.ix()];
+                        let (y, jac_y) = leaf_point(gl, r(jj, 3), r(jj, 4));
+                        let d = y - x;
+                        let r2 = d.length_squared();
+                        let nl2 = DVec3::from_array(gl.normal);
+                        let (cx, cy) = (n.dot(d), -nl2.dot(d));
+                        if r2 <= 0.0 || cx <= 0.0 || cy <= 0.0 || gl.patch == g.patch {
+                            continue;
+                        }
+                        let reach = r2.sqrt() / (diam * 2.0);
+                        if self
+                            .bvh
+                            .intersect_front_first(x, d / reach, 1e-6, reach * (1.0 - LIGHT_TRIM))
+                            .is_some()
+                        {
+                            continue;
+                        }
+                        let k_xy = cx * cy / (std::f64::consts::PI * r2 * r2);
+                        let scale = k_xy * jac_y * gl.area * light_total / pw;
+                        let e = self.patches.emissions[gl.patch as usize];
+                        direct.push((
+                            self.patches.objects[gl.patch as usize],
+                            std::array::from_fn(|k| jac * scale * e[k]),
+                            0.0,
+                        ));
+                    }
+                    if wd > 0.0 {
+                        for (o, v, _) in direct {
+                            let ent = m.entry((ro, o)).or_default();
+                            for k in 0..3 {
+                                ent.1[k] += g.area * rho[k] * v[k] / wd;
+                            }
+                        }
+                    }
+                }
+                if let Ok(pair) = std::env::var("SCRATCH_PAIR") {
+                    let v: Vec<u32> = pair.split(',').filter_map(|x| x.parse().ok()).collect();
+                    if v.len() == 2 && ro == v[0] {
+                        let (mut rw, mut ry, mut fr, mut fy) = ([0.0; 3], [0.0; 3], [0.0; 4], 0.0);
+                        for (&(_, so), x) in &m {
+                            let (base, kind) =
+                                if so >= u32::MAX - 3 { (so, 0) } else { (so % 1000, (so / 1000) as usize) };
+                            if base == v[1] {
+                                for k in 0..3 {
+                                    rw[k] += x.0[k];
+                                    ry[k] += x.1[k];
+                                }
+                                fr[kind] += x.2;
+                                fy += x.3;
+                            }
+                        }
+                        let d: f64 = (0..3).map(|k| ry[k] - rw[k]).sum();
+                        eprintln!(
+                            "LEAF {li} d {d:.5} at {:.3} {:.3} {:.3} n {:?} area {:.4} rows {:.4?} rays {:.4?} factor {:.4?} rays {:.4}",
+                            c.x, c.y, c.z, g.normal, g.area, rw, ry, fr, fy
+                        );
+                    }
+                }
+                m.into_iter().collect()
+            })
+            .collect();
+        let mut out: std::collections::BTreeMap<(u32, u32), ([f64; 3], [f64; 3], f64, f64)> =
+            Default::default();
+        for v in per {
+            for (key, x) in v {
+                let ent = out.entry(key).or_default();
+                for k in 0..3 {
+                    ent.0[k] += x.0[k];
+                    ent.1[k] += x.1[k];
+                }
+                ent.2 += x.2;
+                ent.3 += x.3;
+            }
+        }
+        let _ = MIXED;
+        out
+    }
+}
+
 /// A point of surface element `g` at the unit-square parameters `(s, t)`, uniform
 /// over its area when weighted by the returned factor (a quad's bilinear
 /// Jacobian over its area; 1 on a triangle, folded into it).

@@ -342,3 +342,96 @@ const BLENDER_PATHS: u32 = 4_000;
 /// Its bars: relative RMS off the lamp and the worst point.
 const BLENDER_RMS: f64 = 0.05;
 const BLENDER_WORST: f64 = 0.10;
+
+/// SCRATCH (issue 45 part 4, not for merge): the Blender box's rows against
+/// rays, by receiver and source object.
+#[test]
+#[ignore = "scratch"]
+fn scratch_blender_rows_by_object() {
+    let scene = blender_box();
+    let opts = SolveOptions {
+        eps: BLENDER_EPS,
+        ..SolveOptions::default()
+    };
+    let mut s = rhier::solver::Solver::new(&scene, opts).expect("solver");
+    s.run(|_, _| {}).expect("run");
+    let side: usize = std::env::var("SIDE").ok().and_then(|v| v.parse().ok()).unwrap_or(16);
+    let mut front = f64::INFINITY;
+    for o in &scene.objects {
+        if ["Floor", "Ceiling", "RedWall", "GreenWall"].contains(&o.name.as_str()) {
+            let z = o.polygons.iter().flat_map(|p| p.vertices.iter()).map(|v| v.z).fold(f64::MIN, f64::max);
+            front = front.min(z);
+        }
+    }
+    eprintln!("front {front}");
+    for (i, o) in scene.objects.iter().enumerate() {
+        eprintln!("object {i} {}", o.name);
+    }
+    let room = std::env::var("ROOM").is_ok();
+    let keep = move |c: DVec3, n: DVec3| {
+        if !room {
+            return true;
+        }
+        let q = c + n * 0.01;
+        let inb = |p: DVec3, t: f64| {
+            p.x > -1.008 - t && p.x < 0.9925 + t && p.y > -0.8668 - t && p.y < 0.8625 + t && p.z > -0.8705 - t && p.z < front + t
+        };
+        inb(c, 1e-3) && inb(q, -1e-3)
+    };
+    let m = s.scratch_rows_by_object(side, 64, &keep);
+    let name = |o: u32| match o {
+        x if x == u32::MAX - 1 => "mixed".to_string(),
+        x if x == u32::MAX - 2 => "facet?".to_string(),
+        x if x == u32::MAX - 3 => "nothing".to_string(),
+        x => scene.objects[x as usize].name.clone(),
+    };
+    // (receiver, source base) -> rows by kind [leaf, inner, cluster, facet], rays, factors.
+    type Acc = ([[f64; 3]; 4], [f64; 3], [f64; 4], f64);
+    let mut g: std::collections::BTreeMap<(u32, u32), Acc> = Default::default();
+    for (&(r, so), v) in &m {
+        let (base, kind) = if so >= u32::MAX - 3 { (so, 0) } else { (so % 1000, (so / 1000) as usize) };
+        let e = g.entry((r, base)).or_insert(([[0.0; 3]; 4], [0.0; 3], [0.0; 4], 0.0));
+        for k in 0..3 {
+            e.0[kind][k] += v.0[k];
+            e.1[k] += v.1[k];
+        }
+        e.2[kind] += v.2;
+        e.3 += v.3;
+    }
+    let mut last = u32::MAX;
+    for (&(r, s), v) in &g {
+        if r != last {
+            eprintln!("receiver {}", name(r));
+            last = r;
+        }
+        let rows: [f64; 3] = std::array::from_fn(|k| (0..4).map(|i| v.0[i][k]).sum());
+        let f: f64 = v.2.iter().sum();
+        eprintln!(
+            "  {:>10} rows {:7.4} {:7.4} {:7.4} rays {:7.4} {:7.4} {:7.4} ratio {:6.3} {:6.3} {:6.3} | factor {:.4} (leaf {:.4} inner {:.4} cl {:.4} facet {:.4}) rays {:.4}",
+            name(s), rows[0], rows[1], rows[2], v.1[0], v.1[1], v.1[2],
+            rows[0] / v.1[0], rows[1] / v.1[1], rows[2] / v.1[2],
+            f, v.2[0], v.2[1], v.2[2], v.2[3], v.3
+        );
+    }
+}
+
+/// SCRATCH: the Blender box's patches after contact meshing.
+#[test]
+#[ignore = "scratch"]
+fn scratch_blender_patches() {
+    let scene = blender_box();
+    let patches = rhier::geometry::Patches::at_time(&scene, 0.0);
+    let (kept, stats) = rhier::geometry::split_at_contacts(&scene, &patches, 0.0);
+    eprintln!("{stats:?} {} -> {}", patches.len(), kept.len());
+    for i in 0..kept.len() {
+        let o = kept.objects[i];
+        let p = &kept.polys[i];
+        eprintln!(
+            "PATCH {i} {} n {:.3?} area {:.4} v {:.4?}",
+            scene.objects[o as usize].name,
+            kept.normals[i].to_array(),
+            kept.areas[i],
+            p.corners().iter().map(|v| v.to_array()).collect::<Vec<_>>()
+        );
+    }
+}
