@@ -81,7 +81,10 @@ fn points() -> Vec<(DVec3, DVec3)> {
 
 /// The solver's error against the path tracer at [`points`], off the lamp, with
 /// `opts`.
-fn blender_error(opts: SolveOptions, paths: u32) -> PointError {
+fn blender_error(mut opts: SolveOptions, paths: u32) -> PointError {
+    if let Some(e) = std::env::var("SCRATCH_EPS").ok().and_then(|v| v.parse().ok()) {
+        opts.eps = e;
+    }
     let scene = blender_box();
     let pts = points();
     let reference: Vec<[f64; 3]> = rhier::reference::radiosity_at(&scene, &pts, paths, 13)
