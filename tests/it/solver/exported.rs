@@ -349,3 +349,202 @@ const BLENDER_PATHS: u32 = 4_000;
 /// Its bars: relative RMS off the lamp and the worst point.
 const BLENDER_RMS: f64 = 0.05;
 const BLENDER_WORST: f64 = 0.10;
+
+/// SCRATCH (h45est, not for merge): the estimate's terms on the Blender box.
+#[test]
+#[ignore = "scratch"]
+fn scratch_blender_estimate_terms() {
+    let scene = blender_box();
+    let pts = points();
+    let eps: f64 = std::env::var("SCRATCH_EPS").ok().and_then(|v| v.parse().ok()).unwrap_or(0.5);
+    let paths: u32 = std::env::var("SCRATCH_PATHS").ok().and_then(|v| v.parse().ok()).unwrap_or(BLENDER_PATHS);
+    let cache = format!("/tmp/h45est_ref_{paths}.txt");
+    let reference: Vec<rhier::reference::Estimate> = match std::fs::read_to_string(&cache) {
+        Ok(t) => t
+            .lines()
+            .map(|l| {
+                let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+                rhier::reference::Estimate { b: [v[0], v[1], v[2]], std_error: [v[3], v[4], v[5]] }
+            })
+            .collect(),
+        Err(_) => {
+            let r = rhier::reference::radiosity_at(&scene, &pts, paths, 13);
+            let t: String = r
+                .iter()
+                .map(|e| format!("{} {} {} {} {} {}\n", e.b[0], e.b[1], e.b[2], e.std_error[0], e.std_error[1], e.std_error[2]))
+                .collect();
+            std::fs::write(&cache, t).unwrap();
+            r
+        }
+    };
+    let rb: Vec<[f64; 3]> = reference.iter().map(|e| e.b).collect();
+    let patches = rhier::geometry::Patches::at_time(&scene, 0.0);
+    let on_lamp = rhier::geometry::on_emitters(&patches, &pts);
+    let (mut n2, mut d2) = (0.0, 0.0);
+    for (i, e) in reference.iter().enumerate() {
+        if !on_lamp[i] {
+            for k in 0..3 {
+                n2 += e.std_error[k].powi(2);
+                d2 += e.b[k].powi(2);
+            }
+        }
+    }
+    eprintln!("reference noise (rel RMS std error off lamp) {:.4}", (n2 / d2).sqrt());
+    let opts = SolveOptions { eps, ..SolveOptions::default() };
+    let t0 = std::time::Instant::now();
+    let mut s = rhier::solver::Solver::new(&scene, opts).expect("solver");
+    let records = s.run(|_, _| {}).expect("run");
+    eprintln!("solve {:.1} s", t0.elapsed().as_secs_f64());
+    for r in &records {
+        eprintln!("round {} leaves {} est {:.4} residual {:.2e}", r.round, r.leaves, r.estimated_error, r.residual);
+    }
+    let t1 = std::time::Instant::now();
+    let check = s.row_ray_check();
+    eprintln!("check {:.3} s: {check:?}", t1.elapsed().as_secs_f64());
+    let t1 = std::time::Instant::now();
+    let gather = s.gather_ray_check();
+    eprintln!("gather check {:.3} s: {gather:?}", t1.elapsed().as_secs_f64());
+    eprintln!("excess {:.4} balance {:.4}", s.row_excess_error(), s.power_balance());
+    let sol = s.solution();
+    eprintln!("solution estimate {:.4}", sol.stats.estimated_error);
+    let probes: Vec<ProbePoint> = pts.iter().map(|&(p, n)| ProbePoint { p, n }).collect();
+    let b = probe(&sol, &probes, 0.0).expect("probe");
+    let err = PointError::measure(&b, &rb, &on_lamp);
+    for (i, ((p, _), (x, r))) in pts.iter().zip(b.iter().zip(&rb)).enumerate() {
+        eprintln!("{i:2} {p}: {x:.4?} reference {r:.4?} ratio {:.3?}", std::array::from_fn::<f64, 3, _>(|k| x[k] / r[k]));
+    }
+    eprintln!("eps {eps}: {}", err.text());
+    let t2 = std::time::Instant::now();
+    let rays: usize = std::env::var("SCRATCH_RAYS").ok().and_then(|v| v.parse().ok()).unwrap_or(4096);
+    let one = scratch_one_bounce(&scene, &sol, &pts, rays);
+    eprintln!("one bounce {:.1} s", t2.elapsed().as_secs_f64());
+    for (i, (o, (x, r))) in one.iter().zip(b.iter().zip(&rb)).enumerate() {
+        eprintln!("{i:2} one bounce / answer {:.3?} / reference {:.3?}", std::array::from_fn::<f64, 3, _>(|k| o[k] / x[k]), std::array::from_fn::<f64, 3, _>(|k| o[k] / r[k]));
+    }
+    eprintln!("one bounce vs answer {} ; vs reference {}", PointError::measure(&one, &b, &on_lamp).text(), PointError::measure(&one, &rb, &on_lamp).text());
+}
+
+/// SCRATCH: one bounce over the answer at `pts`: `E + ρ (direct + mean over
+/// cosine rays of (B − E) of the answer where they land)`, `rays` of each.
+fn scratch_one_bounce(
+    scene: &Scene,
+    sol: &rhier::solution::Solution,
+    pts: &[(DVec3, DVec3)],
+    rays: usize,
+) -> Vec<[f64; 3]> {
+    use rhier::geometry::{Patches, SceneBvh, cosine_direction, nearest_facing};
+    let patches = Patches::at_time(scene, 0.0);
+    let bvh = SceneBvh::build(scene, &patches, 0.0);
+    let diam = patches.diameter;
+    let em: Vec<usize> = (0..patches.len())
+        .filter(|&i| patches.emissions[i].iter().any(|&e| e > 0.0))
+        .collect();
+    let em_area: f64 = em.iter().map(|&i| patches.areas[i]).sum();
+    let u = |a: u64, b: u64, c: u64| {
+        let mut h = a.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ b.wrapping_mul(0xc2b2_ae3d_27d4_eb4f) ^ c.wrapping_mul(0x1656_67b1_9e37_79f9);
+        h ^= h >> 33;
+        h = h.wrapping_mul(0xff51_afd7_ed55_8ccd);
+        h ^= h >> 33;
+        (h >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut out = Vec::new();
+    for (pi, &(p, n)) in pts.iter().enumerate() {
+        let (patch, x) = nearest_facing(&patches.polys, &patches.normals, p, n).expect("facing");
+        let nx = patches.normals[patch];
+        let mut probes = Vec::new();
+        let mut e_hit = Vec::new();
+        for j in 0..rays {
+            let side = (rays as f64).sqrt() as usize;
+            let (a, b) = (j % side, j / side);
+            let dir = cosine_direction(nx, (a as f64 + u(pi as u64, j as u64, 1)) / side as f64, (b as f64 + u(pi as u64, j as u64, 2)) / side as f64);
+            if let Some(hit) = bvh.intersect_front_first(x, dir * diam * 2.0, 1e-6, 1.0) {
+                let hp = hit.patch as usize;
+                if patches.normals[hp].dot(dir) < 0.0 {
+                    probes.push(ProbePoint { p: x + dir * diam * 2.0 * hit.t, n: patches.normals[hp] });
+                    e_hit.push(patches.emissions[hp]);
+                }
+            }
+        }
+        let b = probe(sol, &probes, 0.0).expect("probe");
+        let mut h = [0.0; 3];
+        for (v, e) in b.iter().zip(&e_hit) {
+            for k in 0..3 {
+                h[k] += (v[k] - e[k]) / rays as f64;
+            }
+        }
+        // Direct: uniform points over the emitters by area, triangle-split quads.
+        let mut d = [0.0; 3];
+        for j in 0..rays {
+            let mut pick = u(pi as u64, j as u64, 3) * em_area;
+            let mut ep = em[em.len() - 1];
+            for &i in &em {
+                if pick < patches.areas[i] {
+                    ep = i;
+                    break;
+                }
+                pick -= patches.areas[i];
+            }
+            let c = patches.polys[ep].corners();
+            let (s, t) = (u(pi as u64, j as u64, 4).sqrt(), u(pi as u64, j as u64, 5));
+            let (a0, a1) = if c.len() == 4 {
+                let a0 = 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length();
+                let a1 = 0.5 * (c[2] - c[0]).cross(c[3] - c[0]).length();
+                (a0, a1)
+            } else {
+                (1.0, 0.0)
+            };
+            let y = if u(pi as u64, j as u64, 6) * (a0 + a1) < a0 {
+                c[0] * (1.0 - s) + c[1] * (s * (1.0 - t)) + c[2] * (s * t)
+            } else {
+                c[0] * (1.0 - s) + c[2] * (s * (1.0 - t)) + c[3] * (s * t)
+            };
+            let dd = y - x;
+            let r2 = dd.length_squared();
+            let (cx, cy) = (nx.dot(dd), -patches.normals[ep].dot(dd));
+            if ep != patch && r2 > 0.0 && cx > 0.0 && cy > 0.0 && !bvh.occluded(x, y) {
+                let g = cx * cy / (r2 * r2) / std::f64::consts::PI * em_area / rays as f64;
+                for k in 0..3 {
+                    d[k] += patches.emissions[ep][k] * g;
+                }
+            }
+        }
+        let rho = patches.rhos[patch];
+        let e = patches.emissions[patch];
+        out.push(std::array::from_fn(|k| e[k] + rho[k] * (h[k] + d[k])));
+    }
+    out
+}
+
+/// SCRATCH (h45est, not for merge): the rays' checks on the Cornell boxes.
+#[test]
+#[ignore = "scratch"]
+fn scratch_cornell_checks() {
+    for blocks in [false, true] {
+        for eps in [0.5, 0.25, 0.1] {
+            let scene = rhier::scene::cornell_box(blocks);
+            let opts = SolveOptions { eps, ..SolveOptions::default() };
+            let t0 = std::time::Instant::now();
+            let mut s = rhier::solver::Solver::new(&scene, opts).expect("solver");
+            let records = s.run(|_, _| {}).expect("run");
+            let solve = t0.elapsed().as_secs_f64();
+            let t1 = std::time::Instant::now();
+            let rows = s.row_ray_check();
+            let t_rows = t1.elapsed().as_secs_f64();
+            let t2 = std::time::Instant::now();
+            let gather = s.gather_ray_check();
+            let t_gather = t2.elapsed().as_secs_f64();
+            let before = records.iter().rev().nth(0).map_or(f64::NAN, |r| r.estimated_error);
+            eprintln!(
+                "blocks {blocks} eps {eps}: solve {solve:.2} s, estimate {before:.4}, solution {:.4}; rows {:.4} (noise {:.4}, {} rows, {t_rows:.3} s, gap {:.4?} ± {:.4?} gain {:.2?}); gather {:.4} ({t_gather:.3} s)",
+                s.solution().stats.estimated_error,
+                rows.map_or(f64::NAN, |c| c.error),
+                rows.map_or(f64::NAN, |c| c.noise),
+                rows.map_or(0, |c| c.rows),
+                rows.map_or([0.0; 3], |c| c.gap),
+                rows.map_or([0.0; 3], |c| c.gap_noise),
+                rows.map_or([0.0; 3], |c| c.gain),
+                gather.map_or(f64::NAN, |g| g.error)
+            );
+        }
+    }
+}
