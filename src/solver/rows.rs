@@ -2337,12 +2337,11 @@ impl Solver<'_> {
     /// closed scene; above 1, the factors make light (`Solver::run`'s error
     /// estimate counts it, `with_power_error`).
     pub fn power_balance(&self) -> f64 {
-        if self.sys.row_start.len() != self.sys.leaves.len() + 1 {
+        if !self.has_leaf_rows() {
             return f64::NAN;
         }
         let geoms = self.elems.geoms.as_slice();
-        let rad = self.elems.radiosities.as_slice();
-        let (b, fb) = self.gained(rad.iter().map(|v| v.map(f64::from)).collect());
+        let (b, fb) = self.gained(self.plain_radiosities());
         let (mut absorbed, mut emitted) = (0.0, 0.0);
         for (li, &leaf) in self.sys.leaves.iter().enumerate() {
             let g = &geoms[leaf.ix()];
@@ -2362,6 +2361,23 @@ impl Solver<'_> {
         } else {
             f64::NAN
         }
+    }
+
+    /// Every element's radiosity as the pool holds it, in `f64`: the solved field
+    /// the row checks and the row excess read.
+    pub(super) fn plain_radiosities(&self) -> Vec<[f64; 3]> {
+        self.elems
+            .radiosities
+            .as_slice()
+            .iter()
+            .map(|v| v.map(f64::from))
+            .collect()
+    }
+
+    /// Whether the leaf system holds a row for every leaf (the rows are made and
+    /// not released).
+    pub(super) fn has_leaf_rows(&self) -> bool {
+        self.sys.row_start.len() == self.sys.leaves.len() + 1
     }
 
     /// A field over the elements (`b`, the leaves' values) as the leaf system
@@ -2418,12 +2434,11 @@ impl Solver<'_> {
     /// over 1.01, the largest 1.52, 12% too bright on the walls), and the change
     /// between levels does not see a bias no refinement removes.
     pub fn row_excess_error(&self) -> f64 {
-        if self.sys.row_start.len() != self.sys.leaves.len() + 1 {
+        if !self.has_leaf_rows() {
             return f64::NAN;
         }
         let geoms = self.elems.geoms.as_slice();
-        let rad = self.elems.radiosities.as_slice();
-        let plain: Vec<[f64; 3]> = rad.iter().map(|v| v.map(f64::from)).collect();
+        let plain = self.plain_radiosities();
         // The sources as the leaf system pulls them, and the gains alone pulled the
         // same way for the rows' sums (a balanced system's rows sum to 1 with them).
         let (b, fb) = self.gained(plain.clone());
