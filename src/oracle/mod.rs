@@ -889,6 +889,21 @@ pub fn visible_fraction(bvh: &SceneBvh, r: &PointRays) -> f64 {
     r.weighted(|_, y| !bvh.occluded_between(r.x, y, r.skip, Parts::All, &mut last))
 }
 
+/// [`visible_fraction`] with the rays that got through, one bit each (ray `j` →
+/// bit `j`; rays past the 64th set none).
+pub fn visible_rays(bvh: &SceneBvh, r: &PointRays) -> (f64, u64) {
+    let mut last = LastHit::default();
+    let mut bits = 0u64;
+    let v = r.weighted(|j, y| {
+        let clear = !bvh.occluded_between(r.x, y, r.skip, Parts::All, &mut last);
+        if clear && j < 64 {
+            bits |= 1 << j;
+        }
+        clear
+    });
+    (v, bits)
+}
+
 /// The rays of [`visible_fraction`] that nothing static blocks, as a bit mask (ray
 /// `j` → bit `j`; at most 64 rays).
 /// The solver makes its masks with the one-pass [`masked_rays`]; this and
@@ -1012,6 +1027,14 @@ pub fn moving_blocked(bvh: &SceneBvh, r: &PointRays, mask: u64) -> u64 {
 /// source (8 rays, a 3 × 3 grid, missed a corner ninth; an emitter's 32, a
 /// 6 × 6 grid, the last sixth but a third of a row).
 fn ray_targets(gs: &Geom, pols: &Poly, m: u32, key: u64) -> impl Iterator<Item = (u32, DVec3)> {
+    ray_params(m, key).map(move |(j, su, sv)| (j, point_in(gs, pols, su, sv)))
+}
+
+/// The unit-square parameters `(j, s, t)` of [`ray_targets`]' points (the source's
+/// [`point_in`] takes them to its surface): where each ray lands on the source,
+/// which the leaf rows share among the source's children
+/// (`Solver::push_opened`).
+pub fn ray_params(m: u32, key: u64) -> impl Iterator<Item = (u32, f64, f64)> {
     let side = (m as f64).sqrt().ceil() as u32;
     let square = side * side == m;
     (0..m).map(move |j| {
@@ -1032,7 +1055,7 @@ fn ray_targets(gs: &Geom, pols: &Poly, m: u32, key: u64) -> impl Iterator<Item =
                 ((r * side) as f64 + jv * k as f64) / m as f64,
             )
         };
-        (j, point_in(gs, pols, su, sv.min(1.0)))
+        (j, su, sv.min(1.0))
     })
 }
 

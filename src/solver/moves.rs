@@ -451,6 +451,9 @@ impl<'a> Solver<'a> {
                         .row_cache
                         .insert(l.0, std::mem::take(&mut fresh_row.kept));
                     self.sys
+                        .row_rays
+                        .insert(l.0, std::mem::take(&mut fresh_row.kept_rays));
+                    self.sys
                         .move_cluster_cache
                         .insert(l.0, std::mem::take(&mut fresh_row.move_clusters));
                     self.sys.row_sources.extend(row.iter().map(|e| e.0));

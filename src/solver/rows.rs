@@ -5,7 +5,9 @@
 //! A row entry's coefficient is the link's transfer from the source seen from the
 //! leaf's quadrature points, its visibility from rays keyed by the place of both
 //! ends under the shared part (so the same entry casts the same rays at every frame,
-//! `Solver::row_ray_key`). In a space-time window what holds is kept
+//! `Solver::row_ray_key`). A source opened into its children hands each child the
+//! visible fraction of the entry's rays that land on it ([`EntryRay`], kept from
+//! round to round as [`KeptRays`]). In a space-time window what holds is kept
 //! (paper 001 §5.2's shortcuts applied to the rows, [`super::spacetime`]): the rows of
 //! constant links, the opened entries of static sources, the hidden coefficients of
 //! varying links between static ends while no moving object's box meets their shaft,
@@ -15,6 +17,7 @@
 
 use super::row_patch::RowPatch;
 use super::*;
+use crate::geometry::point_to_point_kernel;
 
 /// Row entries `(source element, coefficient)`, as a leaf's row holds them.
 pub(super) type RowEntries = Box<[(u32, f64)]>;
@@ -29,6 +32,101 @@ pub(super) struct RowRayIds {
     link: u64,
     /// The source's [`Solver::ray_id`] (rays at its corners and finer points).
     source: u64,
+}
+
+/// One visibility ray of a leaf row's entry for a surface source, as the source's
+/// children take it ([`Solver::push_opened`]): where it lands on the source, in the
+/// source's unit-square parameters ([`oracle::ray_params`], before a triangle's
+/// fold), and its weight in the entry as [`Solver::hidden_row_coef`] integrates
+/// it (`w_q F(x_q → s) k_j / Σ_i k_i` at its point `x_q`, `k` the point-to-point
+/// kernel), negated where the ray was blocked. 12 bytes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct EntryRay {
+    st: [f32; 2],
+    w: f32,
+}
+
+const _: () = assert!(std::mem::size_of::<EntryRay>() == 12);
+
+/// A leaf's [`EntryRay`]s by chain link and source element (the link's source,
+/// or a surface part of its cluster source, [`ClusterPart`]), for the entries
+/// partly hidden from it, kept from round to round beside its [`KeptCoef`]s and
+/// cluster parts. 24 bytes.
+#[derive(Clone, Debug)]
+pub(super) struct KeptRays {
+    pub(super) link: u32,
+    elem: u32,
+    rays: Box<[EntryRay]>,
+}
+
+/// The rays `kept` (sorted by link and element) holds for the entry of element
+/// `e` in chain link `l`.
+fn kept_rays_of(kept: &[KeptRays], l: u32, e: u32) -> Option<&KeptRays> {
+    let i = kept
+        .binary_search_by_key(&(l, e), |x| (x.link, x.elem))
+        .ok()?;
+    Some(&kept[i])
+}
+
+const _: () = assert!(std::mem::size_of::<KeptRays>() == 24);
+
+/// The kernel-weighted visible fraction of `rays` ([`EntryRay`]), `None` if they
+/// weigh nothing.
+fn rays_visibility(rays: &[EntryRay]) -> Option<f64> {
+    let (mut seen, mut all) = (0.0f64, 0.0f64);
+    for r in rays {
+        let w = f64::from(r.w.abs());
+        all += w;
+        if r.w.is_sign_positive() {
+            seen += w;
+        }
+    }
+    (all > 0.0).then(|| seen / all)
+}
+
+/// The rays of `rays` that land on child `j` of their source, in the child's own
+/// unit-square parameters: a quad's children are its parametric quarters and a
+/// triangle's its three corner triangles and the middle one, in the order
+/// [`super::hierarchy::child_domains`] makes them, and [`oracle::point_at`] maps
+/// a child's parameters to the point the parent's map to.
+fn child_rays(rays: &[EntryRay], triangle: bool, j: usize, out: &mut Vec<EntryRay>) {
+    out.clear();
+    for r in rays {
+        let [mut s, mut t] = r.st;
+        let st = if triangle {
+            if s + t > 1.0 {
+                (s, t) = (1.0 - s, 1.0 - t);
+            }
+            let k = if 1.0 - s - t > 0.5 {
+                0
+            } else if s > 0.5 {
+                1
+            } else if t > 0.5 {
+                2
+            } else {
+                3
+            };
+            (k == j).then(|| match k {
+                0 => [2.0 * s, 2.0 * t],
+                1 => [2.0 * s - 1.0, 2.0 * t],
+                2 => [2.0 * s, 2.0 * t - 1.0],
+                _ => [1.0 - 2.0 * s, 1.0 - 2.0 * t],
+            })
+        } else {
+            let (hs, ht) = (s >= 0.5, t >= 0.5);
+            let k = match (hs, ht) {
+                (false, false) => 0,
+                (true, false) => 1,
+                (true, true) => 2,
+                (false, true) => 3,
+            };
+            let half = |x: f32, hi: bool| if hi { 2.0 * x - 1.0 } else { 2.0 * x };
+            (k == j).then(|| [half(s, hs), half(t, ht)])
+        };
+        if let Some(st) = st {
+            out.push(EntryRay { st, w: r.w });
+        }
+    }
 }
 
 /// How the rays of a row entry at a leaf's quadrature points treat static
@@ -87,6 +185,8 @@ pub(super) struct LeafRow {
     fresh: Vec<((u32, u32), (f32, f32))>,
     /// A static solve's coefficients by link, for the next round.
     pub(super) kept: Vec<KeptCoef>,
+    /// The rays of its partly hidden ones, for the next round.
+    pub(super) kept_rays: Vec<KeptRays>,
     /// A static solve's cluster parts by link, for the next round.
     clusters: Vec<ClusterPart>,
     /// A static solve's factors of the children its sources opened into, for the
@@ -104,6 +204,10 @@ pub(super) struct LeafRow {
     timed: Vec<TimedEntry>,
     /// How many of them it took between the solved frames around.
     between: u64,
+    /// The rays of the partly hidden entries of `fresh` and `hidden`, keyed alike.
+    fresh_rays: Vec<((u32, u32), Box<[EntryRay]>)>,
+    /// The rays of the partly hidden entries of `passed`, keyed alike.
+    passed_rays: Vec<((u32, u32), Box<[EntryRay]>)>,
     /// Coefficients for the frame's next pass (`Solver::pass_rows`).
     passed: Vec<((u32, u32), (f64, f64))>,
     /// The rays a moving object blocked in the entry [`Solver::fresh_row_coef`]
@@ -165,6 +269,10 @@ struct RowInputs<'r> {
     cache: Option<&'r KeyMap<(f32, f32)>>,
     opened: Option<&'r KeyMap<RowEntries>>,
     hidden: Option<&'r KeyMap<(f64, f64)>>,
+    /// The rays of the partly hidden entries of `cache` and `hidden`.
+    entry_rays: Option<&'r KeyMap<Box<[EntryRay]>>>,
+    /// The rays of the partly hidden entries of `passed`, sorted by key.
+    pass_rays: &'r [((u32, u32), Box<[EntryRay]>)],
     masks: Option<&'r KeyMap<u64>>,
     rays_per_point: u32,
     factors: Option<(&'r KeyMap<f64>, usize)>,
@@ -739,7 +847,7 @@ impl Solver<'_> {
         kept: Option<&mut Vec<ClusterPart>>,
         reuse: &mut impl FnMut(u32) -> bool,
     ) {
-        self.push_cluster_known(leaf, l, q, n, s, row, kept, reuse, &[]);
+        self.push_cluster_known(leaf, l, q, n, s, row, kept, reuse, &[], None, &[]);
     }
 
     /// [`Solver::push_cluster`], taking the parts of `known` (the parts an earlier
@@ -748,6 +856,9 @@ impl Solver<'_> {
     /// of casting their rays again; the others are cast. The walk into the
     /// cluster depends on the geometry only, so it meets the known parts in the
     /// same order, and the row equals the row cast afresh entry by entry.
+    /// `rays_before` holds the rays of the known surface parts partly hidden
+    /// ([`KeptRays`]); with `kept_rays` (a static solve) the rays of the surface
+    /// parts taken are kept for the next round.
     #[allow(clippy::too_many_arguments)]
     fn push_cluster_known(
         &self,
@@ -760,6 +871,8 @@ impl Solver<'_> {
         mut kept: Option<&mut Vec<ClusterPart>>,
         reuse: &mut impl FnMut(u32) -> bool,
         known: &[ClusterPart],
+        mut kept_rays: Option<&mut Vec<KeptRays>>,
+        rays_before: &[KeptRays],
     ) {
         let t = &self.links.transports.as_slice()[l as usize];
         let mut vis = t.visibility as f64;
@@ -778,9 +891,13 @@ impl Solver<'_> {
         let mut part = |e: u32, k: [f64; 4]| {
             if let Some(p) = known.get(next_known).filter(|p| p.elem == e) {
                 next_known += 1;
-                self.push_part(q, n, p, row);
+                let rays = kept_rays_of(rays_before, l, e);
+                self.push_part(q, n, p, rays.map_or(&[][..], |r| &r.rays), row);
                 if let Some(k) = kept.as_deref_mut() {
                     k.push(*p);
+                }
+                if let Some(k) = kept_rays.as_deref_mut() {
+                    k.extend(rays.cloned());
                 }
                 return;
             }
@@ -791,7 +908,9 @@ impl Solver<'_> {
             let facet = e & FACET_BIT != 0;
             if !facet && geoms[e as usize].patch != u32::MAX {
                 let how = self.move_row_masks(leaf, l, e, q);
-                let ((coef, v), made, traced) = self.hidden_row_coef(leaf, l, e, q, n, how);
+                let mut rays = Vec::new();
+                let ((coef, v), made, traced) =
+                    self.hidden_row_coef(leaf, l, e, q, n, how, Some(&mut rays));
                 self.keep_move_mask(leaf, l, e, how, made);
                 let at = row.len();
                 // Rounded once, so a reused part equals the first.
@@ -808,7 +927,14 @@ impl Solver<'_> {
                     }
                     None => (coef, v),
                 };
-                self.push_opened(q, n, e, coef, v, row, None, None);
+                self.push_opened(q, n, e, coef, v, &rays, row, None, None);
+                if let Some(k) = kept_rays.as_deref_mut().filter(|_| !rays.is_empty()) {
+                    k.push(KeptRays {
+                        link: l,
+                        elem: e,
+                        rays: rays.into(),
+                    });
+                }
                 self.keep_move_trace(leaf, l, e, traced, &row[at..]);
                 return;
             }
@@ -939,13 +1065,31 @@ impl Solver<'_> {
 
     /// The row entries of kept cluster part `p` ([`ClusterPart`]): a surface part
     /// opened at its coefficient and visibility, a cluster part at its entry.
-    fn push_part(&self, q: &oracle::Samples, n: DVec3, p: &ClusterPart, row: &mut Vec<(u32, f64)>) {
+    /// `rays`: a partly hidden surface part's ([`KeptRays`]).
+    fn push_part(
+        &self,
+        q: &oracle::Samples,
+        n: DVec3,
+        p: &ClusterPart,
+        rays: &[EntryRay],
+        row: &mut Vec<(u32, f64)>,
+    ) {
         if p.vis < 0.0 {
             if p.coef > 0.0 {
                 row.push((p.elem, p.coef as f64));
             }
         } else {
-            self.push_opened(q, n, p.elem, p.coef as f64, p.vis as f64, row, None, None);
+            self.push_opened(
+                q,
+                n,
+                p.elem,
+                p.coef as f64,
+                p.vis as f64,
+                rays,
+                row,
+                None,
+                None,
+            );
         }
     }
 
@@ -954,7 +1098,10 @@ impl Solver<'_> {
     /// none for `l` (a link new since, or one whose parts all gave nothing: those
     /// are cast again, which finds nothing again), [`KeptParts::Walk`] with the
     /// parts to take as kept where some hang on an estimate that changed
-    /// ([`Solver::drop_estimate_parts`]; nothing is pushed then).
+    /// ([`Solver::drop_estimate_parts`]; nothing is pushed then). The rays of its
+    /// partly hidden surface parts are taken from `rays_before` and kept in
+    /// `kept_rays` ([`KeptRays`]).
+    #[allow(clippy::too_many_arguments)]
     fn push_kept_cluster<'p>(
         &self,
         q: &oracle::Samples,
@@ -963,6 +1110,8 @@ impl Solver<'_> {
         parts: &'p [ClusterPart],
         row: &mut Vec<(u32, f64)>,
         kept: &mut Vec<ClusterPart>,
+        rays_before: &[KeptRays],
+        kept_rays: &mut Vec<KeptRays>,
     ) -> KeptParts<'p> {
         let from = parts.partition_point(|p| p.link < l);
         let to = from + parts[from..].partition_point(|p| p.link == l);
@@ -973,7 +1122,9 @@ impl Solver<'_> {
             return KeptParts::Walk(&parts[from + 1..to]);
         }
         for p in &parts[from..to] {
-            self.push_part(q, n, p, row);
+            let rays = kept_rays_of(rays_before, l, p.elem);
+            self.push_part(q, n, p, rays.map_or(&[][..], |r| &r.rays), row);
+            kept_rays.extend(rays.cloned());
         }
         kept.extend_from_slice(&parts[from..to]);
         KeptParts::Used
@@ -1004,6 +1155,10 @@ impl Solver<'_> {
     /// [`move_mask::CORNERS_SEEN`] if the corners were looked at; 0 (nothing to
     /// keep) where a point's rays were cast without a mask (the finer rule, corners
     /// that do not fit in one) and for the other `masks`.
+    ///
+    /// With `rays`, the rays of the entry as its source's children take them
+    /// ([`EntryRay`]), where it is partly hidden (left empty where every ray or
+    /// none got through).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn hidden_row_coef(
         &self,
@@ -1013,6 +1168,7 @@ impl Solver<'_> {
         q: &oracle::Samples,
         n: DVec3,
         masks: RowMasks,
+        mut rays: Option<&mut Vec<EntryRay>>,
     ) -> ((f64, f64), u64, u64) {
         let gs = &self.elems.geoms.as_slice()[s as usize];
         let g = &self.elems.geoms.as_slice()[leaf.ix()];
@@ -1069,21 +1225,56 @@ impl Solver<'_> {
                 _ => {
                     traced.set(None);
                     r.m = m_all;
-                    return oracle::visible_fraction(&self.bvh, &r);
+                    let (v, bits) = oracle::visible_rays(&self.bvh, &r);
+                    return (v, r, (m_all <= 64).then_some(bits));
                 }
             };
-            let rays = oracle::masked_rays(&self.bvh, &r, mask, true);
+            let found = oracle::masked_rays(&self.bvh, &r, mask, true);
             if mask.is_none() {
-                made.set(made.get() | rays.mask << (i as u32 * m));
+                made.set(made.get() | found.mask << (i as u32 * m));
             }
             if let Some(t) = traced.get() {
-                traced.set(Some(t | rays.blocked << (i as u32 * m)));
+                traced.set(Some(t | found.blocked << (i as u32 * m)));
             }
-            rays.vis_now
+            r.m = r.m.min(64);
+            (found.vis_now, r, Some(found.mask & !found.blocked))
         };
-        let integrate = |pts: &mut dyn Iterator<Item = (DVec3, f64, u64)>| {
+        // Each ray's share of the entry, where its source's children are to take
+        // their own visibility ([`EntryRay`]): `w F(x → s)` shared by the rays'
+        // kernel weights as `PointRays::weighted` shares it.
+        let record = |r: &oracle::PointRays, wf: f64, bits: u64, out: &mut Vec<EntryRay>| {
+            let at = out.len();
+            let mut ksum = 0.0;
+            for (j, su, sv) in oracle::ray_params(r.m, r.key) {
+                let y = oracle::point_in(gs, &ps, su, sv);
+                let k = point_to_point_kernel(r.x, r.n, y, ns);
+                ksum += k;
+                let w = if bits >> j & 1 == 1 { k } else { -k };
+                out.push(EntryRay {
+                    st: [su as f32, sv as f32],
+                    w: w as f32,
+                });
+            }
+            let scale = if ksum > 0.0 {
+                wf / ksum
+            } else {
+                // Every kernel weight zero: the plain mean, as `weighted` takes it.
+                for (j, e) in out[at..].iter_mut().enumerate() {
+                    e.w = if bits >> j & 1 == 1 { 1.0 } else { -1.0 };
+                }
+                wf / r.m as f64
+            };
+            for e in &mut out[at..] {
+                e.w = (f64::from(e.w) * scale) as f32;
+            }
+        };
+        let integrate = |pts: &mut dyn Iterator<Item = (DVec3, f64, u64)>,
+                         mut out: Option<&mut Vec<EntryRay>>| {
             let (mut f, mut unoccluded) = (0.0, 0.0);
             let (mut vmin, mut vmax) = (1.0f64, 0.0f64);
+            if let Some(o) = out.as_deref_mut() {
+                o.clear();
+            }
             for (x, w, i) in pts {
                 let fx = match fq.get(i as usize) {
                     Some(&f) if i < q.count as u64 => f,
@@ -1092,16 +1283,26 @@ impl Solver<'_> {
                 if fx <= 0.0 {
                     continue;
                 }
-                let v = vis_at(x, i);
+                let (v, r, bits) = vis_at(x, i);
+                match (out.as_deref_mut(), bits) {
+                    (Some(o), Some(bits)) => record(&r, w * fx, bits, o),
+                    // A point with more rays than a mask holds: no child takes
+                    // its own visibility.
+                    _ => out = None,
+                }
                 unoccluded += w * fx;
                 f += w * fx * v;
                 vmin = vmin.min(v);
                 vmax = vmax.max(v);
             }
-            (f, unoccluded, vmin, vmax)
+            (f, unoccluded, vmin, vmax, out.is_some())
         };
-        let (mut f, mut unoccluded, vmin, vmax) =
-            integrate(&mut (0..q.count).map(|i| (q.points[i], q.weights[i], i as u64)));
+        let mut found_rays = Vec::new();
+        let want = rays.is_some();
+        let (mut f, mut unoccluded, vmin, vmax, mut complete) = integrate(
+            &mut (0..q.count).map(|i| (q.points[i], q.weights[i], i as u64)),
+            Some(&mut found_rays).filter(|_| want),
+        );
         if matches!(masks, RowMasks::Move(_)) {
             // Every quadrature point whose rays count was cast (the others face
             // away from the source at every move: both ends stand still).
@@ -1116,16 +1317,18 @@ impl Solver<'_> {
             let common = vmax;
             let disagree = corners.corners().iter().enumerate().any(|(i, &c)| {
                 let x = c + CORNER_INSET * (centre - c);
-                point_to_polygon(x, n, &ps) > 0.0 && (vis_at(x, 4 + i as u64) - common).abs() > 0.5
+                point_to_polygon(x, n, &ps) > 0.0
+                    && (vis_at(x, 4 + i as u64).0 - common).abs() > 0.5
             });
             if disagree {
                 traced.set(None);
                 let fine = oracle::fine_samples(g);
-                (f, unoccluded, _, _) = integrate(
+                (f, unoccluded, _, _, complete) = integrate(
                     &mut fine
                         .iter()
                         .enumerate()
                         .map(|(i, &(x, w))| (x, w, 8 + i as u64)),
+                    Some(&mut found_rays).filter(|_| want),
                 );
             }
         }
@@ -1134,6 +1337,12 @@ impl Solver<'_> {
         } else {
             0.0
         };
+        if let Some(out) = rays.as_deref_mut() {
+            out.clear();
+            if want && complete && vis > 0.0 && vis < 1.0 {
+                out.extend_from_slice(&found_rays);
+            }
+        }
         let traced = traced.get().map_or(0, |t| t | 1 << move_mask::SEEN);
         ((f, vis), made.get(), traced)
     }
@@ -1265,6 +1474,14 @@ impl Solver<'_> {
     /// taken from it, and the new ones handed back in it. `kept`, for a leaf of a
     /// static solve, the factors its row took in the round before
     /// ([`OpenedFactors`]), likewise.
+    ///
+    /// `rays`, where the entry is partly hidden, are its rays ([`EntryRay`]): each
+    /// child takes the visible fraction of the rays that land on it, the entry's
+    /// `vis` where none does. Why: the children sharing the link's fraction gather
+    /// the mean of their radiosities times the mean of their visibilities, where
+    /// what hides a part of the source may be what shades it (the floor under a
+    /// head hung below a ceiling lamp, seen from the ceiling), and the mean of the
+    /// products is then the larger.
     #[allow(clippy::too_many_arguments)]
     fn push_opened(
         &self,
@@ -1273,6 +1490,7 @@ impl Solver<'_> {
         s: u32,
         coef: f64,
         vis: f64,
+        rays: &[EntryRay],
         row: &mut Vec<(u32, f64)>,
         mut memo: Option<&mut FactorMemo>,
         mut kept: Option<&mut OpenedMemo>,
@@ -1288,6 +1506,17 @@ impl Solver<'_> {
             row.push((s, coef));
             return;
         }
+        // Each child's rays and visible fraction.
+        let triangle = gs.n == 3;
+        let mut on_child = Vec::new();
+        let child_vis = |j: usize, on_child: &mut Vec<EntryRay>| {
+            if rays.is_empty() {
+                on_child.clear();
+                return vis;
+            }
+            child_rays(rays, triangle, j, on_child);
+            rays_visibility(on_child).unwrap_or(vis)
+        };
         // Opened for its spread: shares by the kernel taken linear across the
         // source, no polygon factor per child.
         // The children's area centroids, as [`oracle::sphere`] takes them.
@@ -1314,12 +1543,19 @@ impl Solver<'_> {
             if sum > 0.0 && shares.iter().take(k).all(|&x| x >= 0.0) {
                 for (j, share) in shares.iter().enumerate().take(k) {
                     let ch = node.first_child + j as u32;
+                    let v = child_vis(j, &mut on_child);
+                    let c = if rays.is_empty() || v == vis {
+                        coef * share / sum
+                    } else {
+                        coef / vis * v * share / sum
+                    };
                     self.push_opened(
                         q,
                         n,
                         ch,
-                        coef * share / sum,
-                        vis,
+                        c,
+                        v,
+                        &on_child,
                         row,
                         memo.as_deref_mut(),
                         kept.as_deref_mut(),
@@ -1355,12 +1591,14 @@ impl Solver<'_> {
                     None => factor(),
                 },
             };
+            let v = child_vis((ch - node.first_child) as usize, &mut on_child);
             self.push_opened(
                 q,
                 n,
                 ch,
-                f * vis,
-                vis,
+                f * v,
+                v,
+                &on_child,
                 row,
                 memo.as_deref_mut(),
                 kept.as_deref_mut(),
@@ -1504,6 +1742,7 @@ impl Solver<'_> {
         let cache = self.st.window.as_ref().map(|w| &w.rows);
         let opened = self.st.window.as_ref().map(|w| &w.opened);
         let hidden = self.st.window.as_ref().map(|w| &w.hidden);
+        let entry_rays = self.st.window.as_ref().map(|w| &w.entry_rays);
         let masks = self.st.window.as_ref().map(|w| &w.masks);
         let rays_per_point = self.opts.rays_per_point;
         let factors = self
@@ -1526,6 +1765,7 @@ impl Solver<'_> {
         // between the solved frames around it where they hold.
         let timed = self.st.window.as_ref().is_some_and(|w| w.in_frame);
         let passed = Some(&self.st.pass_rows).filter(|_| timed);
+        let pass_rays = &self.st.pass_rays[..];
         let radiosities = self.elems.radiosities.as_slice();
         let inputs = RowInputs {
             geoms,
@@ -1534,6 +1774,8 @@ impl Solver<'_> {
             cache,
             opened,
             hidden,
+            entry_rays,
+            pass_rays,
             masks,
             rays_per_point,
             factors,
@@ -1565,6 +1807,7 @@ impl Solver<'_> {
             ..Default::default()
         };
         let mut row_cache = FastMap::default();
+        let mut row_rays = FastMap::default();
         let mut cluster_cache = FastMap::default();
         let mut opened_factors = FastMap::default();
         for chunk in self.sys.leaves.chunks(ROW_CHUNK) {
@@ -1579,12 +1822,18 @@ impl Solver<'_> {
                 parts_before.remove(&leaf.0);
                 factors_before.remove(&leaf.0);
                 self.sys.row_cache.remove(&leaf.0);
+                self.sys.row_rays.remove(&leaf.0);
                 rows.push(&mut out.row);
                 if keep_rows {
                     // Held to the next round: without the growth's spare room.
                     let mut kept = std::mem::take(&mut out.kept);
                     kept.shrink_to_fit();
                     row_cache.insert(leaf.0, kept);
+                    let mut kept_rays = std::mem::take(&mut out.kept_rays);
+                    if !kept_rays.is_empty() {
+                        kept_rays.shrink_to_fit();
+                        row_rays.insert(leaf.0, kept_rays);
+                    }
                     let mut clusters = std::mem::take(&mut out.clusters);
                     clusters.shrink_to_fit();
                     if !clusters.is_empty() {
@@ -1602,6 +1851,7 @@ impl Solver<'_> {
         }
         self.sys.row_spheres = Vec::new();
         self.sys.row_cache = row_cache;
+        self.sys.row_rays = row_rays;
         self.sys.cluster_cache = cluster_cache;
         self.sys.opened_factors = opened_factors;
         self.store_leaf_rows(rows);
@@ -1623,6 +1873,8 @@ impl Solver<'_> {
             cache: None,
             opened: None,
             hidden: None,
+            entry_rays: None,
+            pass_rays: &[],
             masks: None,
             rays_per_point: self.opts.rays_per_point,
             factors: None,
@@ -1676,6 +1928,13 @@ impl Solver<'_> {
         let leaf_ray = self.ray_id(leaf.0);
         let rho_leaf = self.rho_of(leaf);
         let before = self.sys.row_cache.get(&leaf.0).filter(|_| keep_rows);
+        let rays_before = self
+            .sys
+            .row_rays
+            .get(&leaf.0)
+            .filter(|_| keep_rows)
+            .map_or(&[][..], Vec::as_slice);
+        let mut fresh_rays = Vec::new();
         // A static solve reuses its cluster parts from round to round; an
         // interactive move (`keep_clusters`) the entries of the links it left.
         let clusters_before = parts_before.filter(|_| keep_rows && !keep_clusters);
@@ -1712,6 +1971,7 @@ impl Solver<'_> {
             // Those it evaluated again are updated in place where they can be
             // (`super::row_patch`).
             let stale = patch.is_some_and(|p| p.is_stale(l, leaf_near));
+            let kept_rays = |l: u32| kept_rays_of(rays_before, l, s);
             let kept_coef = || {
                 before
                     .filter(|_| gs.patch != u32::MAX)
@@ -1730,6 +1990,7 @@ impl Solver<'_> {
                 if patched {
                     out.move_clusters.push((l, out.row[at..].into()));
                     out.kept.extend(kept_coef());
+                    out.kept_rays.extend(kept_rays(l).cloned());
                     continue;
                 }
             } else if let Some((p, c)) = patch.zip(moved_before) {
@@ -1744,7 +2005,16 @@ impl Solver<'_> {
             let at = out.row.len();
             if gs.patch == u32::MAX {
                 let reused = clusters_before.map_or(KeptParts::None, |parts| {
-                    self.push_kept_cluster(&q, n, l, parts, &mut out.row, &mut out.clusters)
+                    self.push_kept_cluster(
+                        &q,
+                        n,
+                        l,
+                        parts,
+                        &mut out.row,
+                        &mut out.clusters,
+                        rays_before,
+                        &mut out.kept_rays,
+                    )
                 });
                 let known = match reused {
                     KeptParts::Used => None,
@@ -1752,7 +2022,9 @@ impl Solver<'_> {
                     KeptParts::Walk(known) => Some(known),
                 };
                 if let Some(known) = known {
-                    let kept = Some(&mut out.clusters).filter(|_| keep_rows && !keep_clusters);
+                    let keep = keep_rows && !keep_clusters;
+                    let kept = Some(&mut out.clusters).filter(|_| keep);
+                    let kept_rays = Some(&mut out.kept_rays).filter(|_| keep);
                     self.push_cluster_known(
                         leaf,
                         l,
@@ -1763,6 +2035,8 @@ impl Solver<'_> {
                         kept,
                         &mut |_| false,
                         known,
+                        kept_rays,
+                        rays_before,
                     );
                 }
                 if keep_clusters {
@@ -1774,16 +2048,19 @@ impl Solver<'_> {
                 before.and_then(|p| p.binary_search_by_key(&l, |x| x.link).ok().map(|i| p[i]))
             {
                 out.kept.push(k);
+                let rays = kept_rays(l).filter(|_| !stale);
                 self.push_opened(
                     &q,
                     n,
                     s,
                     k.coef as f64,
                     k.vis as f64,
+                    rays.map_or(&[][..], |r| &r.rays),
                     &mut out.row,
                     memo.as_mut(),
                     opened_memo.as_mut(),
                 );
+                out.kept_rays.extend(rays.cloned());
                 if keep_clusters {
                     out.move_clusters.push((l, out.row[at..].into()));
                 }
@@ -1803,12 +2080,14 @@ impl Solver<'_> {
                     continue;
                 }
                 let at = out.row.len();
+                let rays = inputs.entry_rays.and_then(|m| m.get(&key));
                 self.push_opened(
                     &q,
                     n,
                     s,
                     c as f64,
                     v as f64,
+                    rays.map_or(&[][..], |r| &r[..]),
                     &mut out.row,
                     memo.as_mut(),
                     opened_memo.as_mut(),
@@ -1836,9 +2115,13 @@ impl Solver<'_> {
                 cacheable,
                 tkey,
                 &mut out,
+                &mut fresh_rays,
             );
             if cache.is_some() && cacheable {
                 out.fresh.push((key, (coef as f32, vis as f32)));
+                if !fresh_rays.is_empty() {
+                    out.fresh_rays.push((key, fresh_rays.as_slice().into()));
+                }
             }
             if let Some(k) = tkey {
                 out.timed.push((k, (coef as f32, vis as f32)));
@@ -1855,6 +2138,13 @@ impl Solver<'_> {
                     coef: coef as f32,
                     vis: vis as f32,
                 });
+                if !fresh_rays.is_empty() {
+                    out.kept_rays.push(KeptRays {
+                        link: l,
+                        elem: s,
+                        rays: fresh_rays.as_slice().into(),
+                    });
+                }
             }
             self.push_opened(
                 &q,
@@ -1862,6 +2152,7 @@ impl Solver<'_> {
                 s,
                 coef,
                 vis,
+                &fresh_rays,
                 &mut out.row,
                 memo.as_mut(),
                 opened_memo.as_mut(),
@@ -1873,6 +2164,7 @@ impl Solver<'_> {
             }
         }
         out.kept.sort_unstable_by_key(|x| x.link);
+        out.kept_rays.sort_unstable_by_key(|x| (x.link, x.elem));
         // Stable: a link's parts stay in the order its row took them.
         out.clusters.sort_by_key(|x| x.link);
         out.move_clusters.sort_unstable_by_key(|x| x.0);
@@ -1901,11 +2193,15 @@ impl Solver<'_> {
         cacheable: bool,
         tkey: Option<(u64, u64)>,
         out: &mut LeafRow,
+        rays: &mut Vec<EntryRay>,
     ) -> (f64, f64) {
+        rays.clear();
         let RowInputs {
             geoms,
             tr,
             hidden,
+            entry_rays,
+            pass_rays,
             masks,
             rays_per_point,
             timed,
@@ -1932,6 +2228,9 @@ impl Solver<'_> {
             out.between += 1;
             cv
         } else if let Some(cv) = earlier {
+            if let Ok(i) = pass_rays.binary_search_by_key(&(leaf.0, l), |e| e.0) {
+                rays.extend_from_slice(&pass_rays[i].1);
+            }
             cv
         } else if t.shaft_clear() {
             let ps = oracle::poly(gs);
@@ -1955,7 +2254,12 @@ impl Solver<'_> {
             // points holds over the window ([`Window::masks`]).
             let maskable = static_ends && !steady && rays_per_point * q.count as u32 <= 64;
             match hidden.filter(|_| steady).and_then(|h| h.get(&key)) {
-                Some(&cv) => cv,
+                Some(&cv) => {
+                    if let Some(r) = entry_rays.and_then(|m| m.get(&key)) {
+                        rays.extend_from_slice(r);
+                    }
+                    cv
+                }
                 None => {
                     let known = masks.filter(|_| maskable).and_then(|m| m.get(&key));
                     let how = match known {
@@ -1973,7 +2277,8 @@ impl Solver<'_> {
                     } else {
                         moved
                     };
-                    let (cv, made, trace) = self.hidden_row_coef(leaf, l, s, q, n, cast);
+                    let (cv, made, trace) =
+                        self.hidden_row_coef(leaf, l, s, q, n, cast, Some(&mut *rays));
                     out.trace = trace;
                     if matches!(how, RowMasks::Make) {
                         out.masks.push((key, made));
@@ -1981,9 +2286,15 @@ impl Solver<'_> {
                     self.keep_move_mask(leaf, l, s, moved, made);
                     if steady {
                         out.hidden.push((key, cv));
+                        if !rays.is_empty() {
+                            out.fresh_rays.push((key, rays.as_slice().into()));
+                        }
                     }
                     if timed && !cacheable && !steady {
                         out.passed.push(((leaf.0, l), cv));
+                        if !rays.is_empty() {
+                            out.passed_rays.push(((leaf.0, l), rays.as_slice().into()));
+                        }
                     }
                     cv
                 }
@@ -2016,6 +2327,8 @@ impl Solver<'_> {
                 between,
                 passed,
                 move_clusters,
+                fresh_rays,
+                passed_rays,
                 ..
             } = out;
             if !move_clusters.is_empty() {
@@ -2024,6 +2337,7 @@ impl Solver<'_> {
             self.st.frame_rows.0.extend(timed);
             self.st.rows_between += between;
             self.st.pass_rows.extend(passed);
+            self.st.pass_rays.extend(passed_rays);
             if let Some(w) = &mut self.st.window
                 && !(fresh.is_empty()
                     && fresh_opened.is_empty()
@@ -2039,6 +2353,7 @@ impl Solver<'_> {
                 if points.as_ref().is_none_or(PointCache::admits) {
                     w.rows.extend(fresh);
                     w.hidden.extend(fresh_hidden);
+                    w.entry_rays.extend(fresh_rays);
                     w.masks.extend(fresh_masks);
                     w.factors.extend(fresh_factors);
                     for (key, entries) in fresh_opened {
@@ -2053,6 +2368,8 @@ impl Solver<'_> {
         }
         self.st.pass_rows.sort_unstable_by_key(|e| e.0);
         self.st.pass_rows.shrink_to_fit();
+        self.st.pass_rays.sort_unstable_by_key(|e| e.0);
+        self.st.pass_rays.shrink_to_fit();
     }
 
     /// Applies `A = I − ρ·(rows ∘ pull)` to leaf radiosities `x` (3 per leaf), with

@@ -374,6 +374,9 @@ pub(in crate::solver) struct SpaceTimeState {
     /// coefficient bit for bit (LIGHT computed its rows 1.8 times a frame).
     /// Emptied when the frame's passes end. Sorted by key, 24 bytes an entry.
     pub(in crate::solver) pass_rows: Vec<((u32, u32), (f64, f64))>,
+    /// The rays of the partly hidden ones ([`crate::solver::EntryRay`]), keyed and
+    /// sorted alike.
+    pub(in crate::solver) pass_rays: Vec<((u32, u32), Box<[crate::solver::EntryRay]>)>,
 }
 
 impl SpaceTimeState {
@@ -390,6 +393,7 @@ impl SpaceTimeState {
             frame_rows: FrameRows::default(),
             rows_between: 0,
             pass_rows: Vec::new(),
+            pass_rays: Vec::new(),
         }
     }
 }

@@ -640,7 +640,7 @@ fn row_terms_kept_over_a_window_are_the_ones_computed_afresh() {
             let q = oracle::samples(g);
             let n = DVec3::from_array(g.normal);
             let coef = |how| {
-                let (cv, made, _) = s.hidden_row_coef(ElementId(leaf), l, src, &q, n, how);
+                let (cv, made, _) = s.hidden_row_coef(ElementId(leaf), l, src, &q, n, how, None);
                 (cv, made)
             };
             let (all, _) = coef(RowMasks::None);

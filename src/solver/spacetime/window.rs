@@ -80,6 +80,10 @@ pub(in crate::solver) struct Window {
     /// ([`Solver::clear_of_moving`]): at any such frame their rays meet static
     /// geometry only, with the same keys, so the value is the same bit for bit.
     pub(in crate::solver) hidden: FastMap<(u32, u32), (f64, f64)>,
+    /// The rays of the partly hidden entries of [`Window::rows`] and
+    /// [`Window::hidden`], keyed alike, for the children of the sources they open
+    /// ([`EntryRay`]): the same entry opens into the same entries at every frame.
+    pub(in crate::solver) entry_rays: FastMap<(u32, u32), Box<[EntryRay]>>,
     /// The static part of the rays at a static leaf's quadrature points for row
     /// entries of varying links between static ends, keyed as [`Window::hidden`],
     /// at frames with a moving object's box in the shaft between the ends (which
@@ -311,6 +315,7 @@ impl Solver<'_> {
     fn restore(&mut self, snap: &mut Snapshot) {
         // Element and link ids past the snapshot will be reused.
         self.sys.row_cache.clear();
+        self.sys.row_rays.clear();
         self.elems.truncate(snap.elems_len);
         self.links.truncate(snap.links_len);
         for l in snap.passivated.drain(..) {
@@ -330,6 +335,7 @@ impl Solver<'_> {
     /// over the window.
     fn reset_frame(&mut self) {
         self.st.pass_rows = Vec::new();
+        self.st.pass_rays = Vec::new();
         if let Some(mut w) = self.st.window.take() {
             if w.in_frame {
                 self.restore(&mut w.frame);
@@ -427,6 +433,7 @@ impl Solver<'_> {
         }
         // Only the passes share them; the frame's gathers need the memory.
         self.st.pass_rows = Vec::new();
+        self.st.pass_rays = Vec::new();
         // The window's reconstruction scale: the first solved frame's.
         if self.st.window.as_ref().is_some_and(|w| w.b_ref.is_none()) {
             let scale = self.rms_radiosity();
