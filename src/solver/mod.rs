@@ -601,6 +601,9 @@ struct LeafSystem {
     /// chain link (sorted by link), kept beside `row_cache` for the children of
     /// the sources they open ([`rows::EntryRay`]).
     row_rays: FastMap<u32, Vec<KeptRays>>,
+    /// Static solve: the rays of each leaf's partly hidden cluster surface parts,
+    /// kept beside `cluster_cache` (and as long).
+    part_rays: FastMap<u32, Vec<KeptRays>>,
     /// Static solve: each leaf's cluster parts by chain link (sorted by link),
     /// reused by the next round for cluster links that did not change: recasting
     /// them each round was a sixth of `gen_cubes 65`'s refinement rounds
@@ -1484,6 +1487,7 @@ impl<'a> Solver<'a> {
         }
         follow(&mut self.sys.row_cache, |k| &mut k.link, &retained);
         follow(&mut self.sys.row_rays, |k| &mut k.link, &retained);
+        follow(&mut self.sys.part_rays, |k| &mut k.link, &retained);
         follow(&mut self.sys.cluster_cache, |k| &mut k.link, &retained);
         follow(&mut self.sys.move_cluster_cache, |k| &mut k.0, &retained);
     }

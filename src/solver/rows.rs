@@ -48,6 +48,10 @@ pub(super) struct EntryRay {
 
 const _: () = assert!(std::mem::size_of::<EntryRay>() == 12);
 
+/// The [`EntryRay`]s of a row entry by the key of a window's caches
+/// ([`Solver::row_key`]) or of a frame's passes (`(leaf, link)`).
+pub(super) type KeyedRays = ((u32, u32), Box<[EntryRay]>);
+
 /// A leaf's [`EntryRay`]s by chain link and source element (the link's source,
 /// or a surface part of its cluster source, [`ClusterPart`]), for the entries
 /// partly hidden from it, kept from round to round beside its [`KeptCoef`]s and
@@ -106,7 +110,7 @@ fn child_rays(rays: &[EntryRay], triangle: bool, j: usize, out: &mut Vec<EntryRa
             } else {
                 3
             };
-            (k == j).then(|| match k {
+            (k == j).then_some(match k {
                 0 => [2.0 * s, 2.0 * t],
                 1 => [2.0 * s - 1.0, 2.0 * t],
                 2 => [2.0 * s, 2.0 * t - 1.0],
@@ -187,6 +191,8 @@ pub(super) struct LeafRow {
     pub(super) kept: Vec<KeptCoef>,
     /// The rays of its partly hidden ones, for the next round.
     pub(super) kept_rays: Vec<KeptRays>,
+    /// The rays of its partly hidden cluster surface parts, for the next round.
+    part_rays: Vec<KeptRays>,
     /// A static solve's cluster parts by link, for the next round.
     clusters: Vec<ClusterPart>,
     /// A static solve's factors of the children its sources opened into, for the
@@ -205,9 +211,9 @@ pub(super) struct LeafRow {
     /// How many of them it took between the solved frames around.
     between: u64,
     /// The rays of the partly hidden entries of `fresh` and `hidden`, keyed alike.
-    fresh_rays: Vec<((u32, u32), Box<[EntryRay]>)>,
+    fresh_rays: Vec<KeyedRays>,
     /// The rays of the partly hidden entries of `passed`, keyed alike.
-    passed_rays: Vec<((u32, u32), Box<[EntryRay]>)>,
+    passed_rays: Vec<KeyedRays>,
     /// Coefficients for the frame's next pass (`Solver::pass_rows`).
     passed: Vec<((u32, u32), (f64, f64))>,
     /// The rays a moving object blocked in the entry [`Solver::fresh_row_coef`]
@@ -272,7 +278,7 @@ struct RowInputs<'r> {
     /// The rays of the partly hidden entries of `cache` and `hidden`.
     entry_rays: Option<&'r KeyMap<Box<[EntryRay]>>>,
     /// The rays of the partly hidden entries of `passed`, sorted by key.
-    pass_rays: &'r [((u32, u32), Box<[EntryRay]>)],
+    pass_rays: &'r [KeyedRays],
     masks: Option<&'r KeyMap<u64>>,
     rays_per_point: u32,
     factors: Option<(&'r KeyMap<f64>, usize)>,
@@ -1168,7 +1174,7 @@ impl Solver<'_> {
         q: &oracle::Samples,
         n: DVec3,
         masks: RowMasks,
-        mut rays: Option<&mut Vec<EntryRay>>,
+        rays: Option<&mut Vec<EntryRay>>,
     ) -> ((f64, f64), u64, u64) {
         let gs = &self.elems.geoms.as_slice()[s as usize];
         let g = &self.elems.geoms.as_slice()[leaf.ix()];
@@ -1337,7 +1343,7 @@ impl Solver<'_> {
         } else {
             0.0
         };
-        if let Some(out) = rays.as_deref_mut() {
+        if let Some(out) = rays {
             out.clear();
             if want && complete && vis > 0.0 && vis < 1.0 {
                 out.extend_from_slice(&found_rays);
@@ -1808,6 +1814,8 @@ impl Solver<'_> {
         };
         let mut row_cache = FastMap::default();
         let mut row_rays = FastMap::default();
+        let mut part_rays = FastMap::default();
+        let mut part_rays_before = std::mem::take(&mut self.sys.part_rays);
         let mut cluster_cache = FastMap::default();
         let mut opened_factors = FastMap::default();
         for chunk in self.sys.leaves.chunks(ROW_CHUNK) {
@@ -1815,7 +1823,8 @@ impl Solver<'_> {
                 .par_iter()
                 .map(|&leaf| {
                     let parts = parts_before.get(&leaf.0).map(Vec::as_slice);
-                    self.leaf_row(&inputs, leaf, parts, factors_before.get(&leaf.0))
+                    let rays = part_rays_before.get(&leaf.0).map_or(&[][..], Vec::as_slice);
+                    self.leaf_row(&inputs, leaf, parts, rays, factors_before.get(&leaf.0))
                 })
                 .collect();
             for (&leaf, mut out) in chunk.iter().zip(made) {
@@ -1823,6 +1832,7 @@ impl Solver<'_> {
                 factors_before.remove(&leaf.0);
                 self.sys.row_cache.remove(&leaf.0);
                 self.sys.row_rays.remove(&leaf.0);
+                part_rays_before.remove(&leaf.0);
                 rows.push(&mut out.row);
                 if keep_rows {
                     // Held to the next round: without the growth's spare room.
@@ -1833,6 +1843,11 @@ impl Solver<'_> {
                     if !kept_rays.is_empty() {
                         kept_rays.shrink_to_fit();
                         row_rays.insert(leaf.0, kept_rays);
+                    }
+                    let mut kept_parts = std::mem::take(&mut out.part_rays);
+                    if !kept_parts.is_empty() {
+                        kept_parts.shrink_to_fit();
+                        part_rays.insert(leaf.0, kept_parts);
                     }
                     let mut clusters = std::mem::take(&mut out.clusters);
                     clusters.shrink_to_fit();
@@ -1852,6 +1867,7 @@ impl Solver<'_> {
         self.sys.row_spheres = Vec::new();
         self.sys.row_cache = row_cache;
         self.sys.row_rays = row_rays;
+        self.sys.part_rays = part_rays;
         self.sys.cluster_cache = cluster_cache;
         self.sys.opened_factors = opened_factors;
         self.store_leaf_rows(rows);
@@ -1887,19 +1903,21 @@ impl Solver<'_> {
         };
         leaves
             .par_iter()
-            .map(|&leaf| self.leaf_row(&inputs, leaf, None, None))
+            .map(|&leaf| self.leaf_row(&inputs, leaf, None, &[], None))
             .collect()
     }
 
     /// One leaf's row ([`Solver::compute_leaf_rows`]): each chain link's source
     /// opened at its coefficient over the leaf, from the caches where they hold
     /// (`parts_before`: the cluster parts an earlier round kept for the leaf;
-    /// `factors_before`: the factors of the children its sources opened into).
+    /// `factors_before`: the factors of the children its sources opened into;
+    /// `part_rays_before`: the rays of its kept cluster parts, [`KeptRays`]).
     fn leaf_row(
         &self,
         inputs: &RowInputs,
         leaf: ElementId,
         parts_before: Option<&[ClusterPart]>,
+        part_rays_before: &[KeptRays],
         factors_before: Option<&OpenedFactors>,
     ) -> LeafRow {
         let RowInputs {
@@ -2012,8 +2030,8 @@ impl Solver<'_> {
                         parts,
                         &mut out.row,
                         &mut out.clusters,
-                        rays_before,
-                        &mut out.kept_rays,
+                        part_rays_before,
+                        &mut out.part_rays,
                     )
                 });
                 let known = match reused {
@@ -2024,7 +2042,7 @@ impl Solver<'_> {
                 if let Some(known) = known {
                     let keep = keep_rows && !keep_clusters;
                     let kept = Some(&mut out.clusters).filter(|_| keep);
-                    let kept_rays = Some(&mut out.kept_rays).filter(|_| keep);
+                    let kept_rays = Some(&mut out.part_rays).filter(|_| keep);
                     self.push_cluster_known(
                         leaf,
                         l,
@@ -2036,7 +2054,7 @@ impl Solver<'_> {
                         &mut |_| false,
                         known,
                         kept_rays,
-                        rays_before,
+                        part_rays_before,
                     );
                 }
                 if keep_clusters {
@@ -2165,6 +2183,7 @@ impl Solver<'_> {
         }
         out.kept.sort_unstable_by_key(|x| x.link);
         out.kept_rays.sort_unstable_by_key(|x| (x.link, x.elem));
+        out.part_rays.sort_unstable_by_key(|x| (x.link, x.elem));
         // Stable: a link's parts stay in the order its row took them.
         out.clusters.sort_by_key(|x| x.link);
         out.move_clusters.sort_unstable_by_key(|x| x.0);

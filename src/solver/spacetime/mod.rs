@@ -376,7 +376,7 @@ pub(in crate::solver) struct SpaceTimeState {
     pub(in crate::solver) pass_rows: Vec<((u32, u32), (f64, f64))>,
     /// The rays of the partly hidden ones ([`crate::solver::EntryRay`]), keyed and
     /// sorted alike.
-    pub(in crate::solver) pass_rays: Vec<((u32, u32), Box<[crate::solver::EntryRay]>)>,
+    pub(in crate::solver) pass_rays: Vec<crate::solver::rows::KeyedRays>,
 }
 
 impl SpaceTimeState {
