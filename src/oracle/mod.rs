@@ -1030,9 +1030,9 @@ fn ray_targets(gs: &Geom, pols: &Poly, m: u32, key: u64) -> impl Iterator<Item =
     ray_params(m, key).map(move |(j, su, sv)| (j, point_in(gs, pols, su, sv)))
 }
 
-/// The unit-square parameters `(j, s, t)` of [`ray_targets`]' points (the source's
-/// [`point_in`] takes them to its surface): where each ray lands on the source,
-/// which the leaf rows share among the source's children
+/// The unit-square parameters `(j, s, t)` of the points `ray_targets` casts at
+/// (the source's [`point_in`] takes them to its surface): where each ray lands on
+/// the source, which the leaf rows share among the source's children
 /// (`Solver::push_opened`).
 pub fn ray_params(m: u32, key: u64) -> impl Iterator<Item = (u32, f64, f64)> {
     let side = (m as f64).sqrt().ceil() as u32;
