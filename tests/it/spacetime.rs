@@ -1149,12 +1149,15 @@ fn midpoints_skip_their_solve_where_the_moving_power_holds() {
             e_skipped * 100.0,
             apart * 100.0
         );
-        // Measured: skipped 2.20–2.48% where solved gives 2.20–2.47%, 0.02–0.08%
-        // apart. The fast block's midpoints skipped against solved (a tolerance of
-        // 10) are 0.32–1.51% apart, 2.38–2.89% from the fine solve against
-        // 2.35–2.37% (5.27% and 5.30% at 0.6 s).
+        // Measured: skipped 1.82–1.92% where solved gives 1.81–1.91%, 0.03–0.26%
+        // apart, the most at the skipped midpoint itself (t = 0.2: 0.247% before
+        // each child of an opened source took its own rays' visibility, 0.263%
+        // since; the two runs' errors from the fine solve stay within 0.011% of
+        // each other). The fast block's midpoints skipped against solved (a
+        // tolerance of 10) are 0.32–1.51% apart, 2.38–2.89% from the fine solve
+        // against 2.35–2.37% (5.27% and 5.30% at 0.6 s).
         assert!(e_skipped <= 1.05 * e_solved + 5e-4, "t = {t}");
-        assert!(apart < 0.0025, "t = {t}: {apart}");
+        assert!(apart < 0.003, "t = {t}: {apart}");
     }
 }
 
