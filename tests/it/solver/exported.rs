@@ -111,11 +111,13 @@ fn blender_error(opts: SolveOptions, paths: u32) -> (PointError, f64) {
 /// lamp (issue 45 part 4): within 5% off the lamp at the defaults, every point
 /// within 10%, and an estimate that reads at least a third of the error.
 ///
-/// Measured 2026-12-02 (main 44e6ab2, 100 000 paths, 59 s on the quiet 2-core
-/// machine): **3.36% off the lamp**, worst point 26 (the ceiling by the lamp's
-/// opening) 9.67%, estimate 2.37%. Against the 4 000 paths this test took before
-/// (3.5% of noise of their own) the same answer read 4.49%, worst point 17 (the
-/// red wall) 11.0%, and the test was ignored for that worst point.
+/// Measured 2026-12-02 (100 000 paths): **2.90% off the lamp**, worst point 26
+/// (the ceiling by the lamp's opening) 9.27%, estimate 1.85%, since each child
+/// of an opened source takes the visible fraction of the entry's own rays that
+/// land on it (h45child); before, 3.36%, worst 9.67%, estimate 2.37% (main
+/// 44e6ab2, 59 s on the quiet 2-core machine). Against the 4 000 paths this test
+/// took before (3.5% of noise of their own) the 44e6ab2 answer read 4.49%, worst
+/// point 17 (the red wall) 11.0%, and the test was ignored for that worst point.
 ///
 /// With the slabs cut where they pass through each other (contact meshing's
 /// crossing segments, 1374460). Uncut, the floor's and ceiling's room sides ran
@@ -130,9 +132,8 @@ fn blender_error(opts: SolveOptions, paths: u32) -> (PointError, f64) {
 /// Before the crossings were cut, the darkness was laid on the head (ρ 0.999
 /// in red and green): opened sources' children sharing the source's visible
 /// fraction (f771d3d, 8ea1afc) and cluster parts decided by their first rays
-/// (4d294fe) were tried and reverted. Each child's fraction from the entry's
-/// own rays (h45child, recorded by 6d50aba, not merged) reads 2.90% here, worst
-/// 9.27%.
+/// (4d294fe) were tried and reverted; each child's fraction from the entry's
+/// own rays (above) is what mended it.
 #[test]
 fn blender_cornell_box_agrees_with_the_path_tracer() {
     let (err, estimate) = blender_error(
