@@ -647,8 +647,11 @@ fn solve_says_why_it_stopped() {
             &["--time-budget", "1e-9"],
             "stopped: time budget spent (--time-budget)",
         ),
+        // At eps 0.1 the floor stops refinement and the ray checks read under the
+        // promise (eps/20). At eps 0.01 they read 0.28% against a promise of 0.05%:
+        // the solve halves eps, the floor's edge with it, until the round limit.
         (
-            &["--min-size", "0.2", "--eps", "0.01"],
+            &["--min-size", "0.2", "--eps", "0.1"],
             "stopped: no link left to refine: ",
         ),
     ];
