@@ -347,9 +347,9 @@ pub struct SolveOptions {
     /// down to surfaces, whose factors are exact; farther clusters take the cluster
     /// estimate, which overstates a flat source seen close (`Solver::cluster_parts`).
     pub cluster_open_ratio: f64,
-    /// Final gather: a non-emitting source that can hand a point less than this
-    /// times the RMS radiosity takes its link's visibility instead of rays (0: rays
-    /// always).
+    /// Final gather: non-emitting sources that can hand a point less than this
+    /// times the RMS radiosity in sum take their links' visibility instead of
+    /// rays (0: rays always; the others cast their own).
     pub faint_source: f64,
     /// After the last round (static scenes), a leaf below the power area whose
     /// reflected radiosity differs across its own quadrature points by more than

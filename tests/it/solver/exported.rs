@@ -109,10 +109,17 @@ fn blender_error(opts: SolveOptions, paths: u32) -> (PointError, f64) {
 
 /// The Blender Cornell box against the path tracer at the 29 points off the
 /// lamp (issue 45 part 4): within 5% off the lamp at the defaults, every point
-/// within 10%, and an estimate that reads at least a third of the error.
+/// within 7%, and an estimate that reads at least a third of the error.
 ///
-/// Measured 2026-12-02 (100 000 paths): **2.90% off the lamp**, worst point 26
-/// (the ceiling by the lamp's opening) 9.27%, estimate 1.85%, since each child
+/// Measured 2026-12-03 (100 000 paths): **2.78% off the lamp**, worst point 23
+/// (the ceiling by the red wall) 5.52%, since the final gather's faint sources
+/// take their links' visibility only while their bounds sum under
+/// `faint_source` at a point (`Solver::gather_sum`). Before, each source under
+/// the bound took it: point 26 (the ceiling by the open front, dim, lit by many
+/// small far sources) read 9.27% dark, 19% in blue, and the bar was 10%.
+///
+/// Measured 2026-12-02: 2.90% off the lamp, worst point 26 9.27%, estimate
+/// 1.85%, since each child
 /// of an opened source takes the visible fraction of the entry's own rays that
 /// land on it (h45child); before, 3.36%, worst 9.67%, estimate 2.37% (main
 /// 44e6ab2, 59 s on the quiet 2-core machine). Against the 4 000 paths this test
@@ -343,4 +350,4 @@ const BLENDER_EPS: f64 = 0.5;
 const BLENDER_PATHS: u32 = 100_000;
 /// Its bars: relative RMS off the lamp and the worst point.
 const BLENDER_RMS: f64 = 0.05;
-const BLENDER_WORST: f64 = 0.10;
+const BLENDER_WORST: f64 = 0.07;
