@@ -247,7 +247,11 @@ impl Part {
             .iter()
             .map(|&i| tris64[i as usize])
             .collect();
-        let wide = Bvh4::build(&padded_boxes(&tris64));
+        let wide = Bvh4::build(
+            &padded_boxes(&tris64),
+            &tris64,
+            part_reach(&tris64) * BOX_PAD,
+        );
         let planes64 = triangle_planes(&tris64);
         let reach = part_reach(&tris64);
         let mut part = Part {
