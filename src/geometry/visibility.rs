@@ -15,7 +15,9 @@
 //!
 //! Occlusion is decided in f64: an f32 BVH finds the candidate triangles, and each
 //! is tested on its f64 corners ([`SceneBvh::occluded_cached`]), so that the answer
-//! does not depend on how the scene's unit rounds to f32. The occlusion rays' BVH is
+//! does not depend on how the scene's unit rounds to f32; a candidate whose plane
+//! both ends of the segment lie clearly on one side of is skipped before that test,
+//! which it could not hit ([`PLANE_REJECT`]). The occlusion rays' BVH is
 //! a 4-wide one with plain f32 boxes over the same padded triangle boxes
 //! ([`super::wide::Bvh4`], from obvhs' PLOC tree); the CWBVH, whose byte-quantised
 //! boxes cost more to decode than a ray's f64 tests, keeps closest hits and box
@@ -196,6 +198,12 @@ struct Part {
     /// a block's face on the floor's plane was in front of a shaft's end in
     /// millimetres and behind it in metres (issue 45, part 3).
     tris64: Vec<[DVec3; 3]>,
+    /// Each triangle's plane for [`Part::hit64_planed`]: `n = (e₁ × e₂) / (|e₁|
+    /// |e₂|)` (the unit normal times the sine of the corner at `v₀`, 0 for a
+    /// degenerate triangle) and `w = n · v₀`, part space ([`triangle_planes`]).
+    planes64: Vec<(DVec3, f64)>,
+    /// [`part_reach`] of `tris64`: what [`PLANE_REJECT`] is relative to.
+    reach: f64,
     /// World → part space (identity for the static part).
     world_to_local: DAffine3,
     /// Part → world.
@@ -239,13 +247,21 @@ impl Part {
             .iter()
             .map(|&i| tris64[i as usize])
             .collect();
-        let wide = Bvh4::build(&padded_boxes(&tris64));
+        let wide = Bvh4::build(
+            &padded_boxes(&tris64),
+            &tris64,
+            part_reach(&tris64) * BOX_PAD,
+        );
+        let planes64 = triangle_planes(&tris64);
+        let reach = part_reach(&tris64);
         let mut part = Part {
             bvh,
             wide,
             tris,
             tri_patch,
             tris64,
+            planes64,
+            reach,
             world_to_local: local_to_world.inverse(),
             local_to_world,
             object,
@@ -341,6 +357,34 @@ impl Part {
         } else {
             f64::INFINITY
         }
+    }
+
+    /// The segment `o + s·d`, `s ∈ [tmin, tmax]` (part space, f64), as
+    /// [`Part::hit64_planed`] reads it.
+    fn segment64(&self, o: DVec3, d: DVec3, tmin: f64, tmax: f64) -> Segment64 {
+        Segment64 {
+            o,
+            d,
+            tmin,
+            tmax,
+            ends: [o + d * tmin, o + d * tmax],
+            reject: PLANE_REJECT * (self.reach + o.length() + d.length()),
+        }
+    }
+
+    /// [`Part::hit64`] on `seg`, but infinity at once when both ends of `seg`
+    /// lie on the same side of triangle `id`'s plane by more than `seg.reject`
+    /// (scaled: [`Part::planes64`]). Two dot products instead of the cross
+    /// products, divisions and dot products of the full test; the answer is
+    /// [`Part::hit64`]'s ([`PLANE_REJECT`] says why).
+    #[inline]
+    fn hit64_planed(&self, id: usize, seg: &Segment64) -> f64 {
+        let (n, w) = self.planes64[id];
+        let (h0, h1) = (n.dot(seg.ends[0]) - w, n.dot(seg.ends[1]) - w);
+        if (h0 > seg.reject && h1 > seg.reject) || (h0 < -seg.reject && h1 < -seg.reject) {
+            return f64::INFINITY;
+        }
+        self.hit64(id, seg.o, seg.d, seg.tmin, seg.tmax)
     }
 
     /// The segment `o + s·d` in part space.
@@ -716,8 +760,9 @@ impl SceneBvh {
                 // makes, and then the traversal, not the cache, must decide.
                 let ray = part.local_ray(o, d, t0, t1);
                 let (lo, ld) = part.local(o, d);
+                let seg = part.segment64(lo, ld, t0, t1);
                 if tri.intersect(&ray) < ray.tmax
-                    && part.hit64(last.tri as usize, lo, ld, t0, t1).is_finite()
+                    && part.hit64_planed(last.tri as usize, &seg).is_finite()
                 {
                     return true;
                 }
@@ -732,6 +777,7 @@ impl SceneBvh {
                 continue;
             }
             let (lo, ld) = part.local(o, d);
+            let seg = part.segment64(lo, ld, t0, t1);
             let mut blocker = u32::MAX;
             // Every backend's candidates are decided by the same f64 test on the
             // same segment; the first that blocks is remembered for the cache.
@@ -739,7 +785,7 @@ impl SceneBvh {
                 if skip.contains(&part.tri_patch[id]) {
                     return false;
                 }
-                let hit = part.hit64(id, lo, ld, t0, t1).is_finite();
+                let hit = part.hit64_planed(id, &seg).is_finite();
                 if hit {
                     blocker = id as u32;
                 }
@@ -938,6 +984,7 @@ impl SceneBvh {
                     + std::mem::size_of_val(p.tris.as_slice())
                     + std::mem::size_of_val(p.tri_patch.as_slice())
                     + std::mem::size_of_val(p.tris64.as_slice())
+                    + std::mem::size_of_val(p.planes64.as_slice())
                     + p.wide.resident_bytes()
             })
             .sum()
@@ -963,6 +1010,52 @@ fn unit_scale(diameter: f64) -> f64 {
 /// Part space (`unit` × world or object space) → world or object space.
 fn from_unit(unit: f64) -> DAffine3 {
     DAffine3::from_scale(DVec3::splat(1.0 / unit))
+}
+
+/// A segment `o + s·d`, `s ∈ [tmin, tmax]`, in a part's space (f64), with its two
+/// ends and the plane distance beyond which [`Part::hit64_planed`] rejects a
+/// triangle.
+struct Segment64 {
+    o: DVec3,
+    d: DVec3,
+    tmin: f64,
+    tmax: f64,
+    /// `o + tmin·d` and `o + tmax·d`.
+    ends: [DVec3; 2],
+    /// [`PLANE_REJECT`] of the part's reach plus the segment's size.
+    reject: f64,
+}
+
+/// How far (relative to the part's reach plus the segment's `|o| + |d|`) both
+/// ends of a segment must lie on one side of a triangle's scaled plane
+/// ([`Part::planes64`]) for [`Part::hit64_planed`] to skip the triangle.
+///
+/// Why it never changes an answer: [`Part::hit64`]'s `t` is the zero of the
+/// line `h(s) = (o + s·d − v₀) · (e₁ × e₂)` computed with round-off, which moves
+/// that line by at most a few ulps times `(|o − v₀| + s|d|) |e₁| |e₂|` over
+/// `[tmin, tmax]`. In units of `|e₁| |e₂|` (the scaled plane's), that is a few
+/// `10⁻¹⁶` of the part's reach plus the segment's size whatever the triangle's
+/// shape (a unit normal would need a margin growing as `1 / sin` of its
+/// corner), so a segment whose ends are both `10⁻⁹` of it on one side has no
+/// zero of the computed line in `[tmin, tmax]` either: `10⁶` times the round-off
+/// (test `plane_rejection_keeps_every_hit`).
+const PLANE_REJECT: f64 = 1e-9;
+
+/// Each triangle's scaled plane (`Part::planes64`): `n = (e₁ × e₂) / (|e₁| |e₂|)`,
+/// `w = n · v₀`; `n = 0` (never rejected) where `|e₁| |e₂|` is 0.
+fn triangle_planes(tris: &[[DVec3; 3]]) -> Vec<(DVec3, f64)> {
+    tris.iter()
+        .map(|&[v0, v1, v2]| {
+            let (e1, e2) = (v1 - v0, v2 - v0);
+            let s = e1.length() * e2.length();
+            let n = if s > 0.0 && s.is_finite() {
+                e1.cross(e2) / s
+            } else {
+                DVec3::ZERO
+            };
+            (n, n.dot(v0))
+        })
+        .collect()
 }
 
 /// Triangles of a part as they are gathered: f32 corners for the BVH, the patch of
@@ -1038,5 +1131,116 @@ fn push_triangles(v: &[DVec3], unit: f64, patch: u32, (tris, tp, t64): &mut Tris
         });
         t64.push([v[0] * unit, v[k] * unit, v[k + 1] * unit]);
         tp.push(patch);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::oracle::xorshift;
+
+    /// [`Part::hit64_planed`] answers as [`Part::hit64`], bit for bit, on random
+    /// segments against random and sliver triangles: segments anywhere, grazing a
+    /// triangle's plane, lying a hair off it on one side or across it, and ending
+    /// on it (inside the triangle, on its edges and just outside), at heights from
+    /// 10⁻³ down to 10⁻¹⁸ of the scene, across [`PLANE_REJECT`].
+    #[test]
+    fn plane_rejection_keeps_every_hit() {
+        let mut rnd = xorshift(0x005e_ed0f_9a1e_u64);
+        let mut r = move || 2.0 * rnd() - 1.0;
+        let mut tris = Tris::default();
+        for i in 0..200u32 {
+            let (a, b) = (DVec3::new(r(), r(), r()), DVec3::new(r(), r(), r()) * 0.5);
+            let c = if i % 4 == 0 {
+                // A sliver: the third corner a hair off the first edge.
+                a + b * (0.5 + 0.5 * r()) + DVec3::new(r(), r(), r()) * 10f64.powf(-4.0 + 5.0 * r())
+            } else {
+                a + DVec3::new(r(), r(), r()) * 0.5
+            };
+            push_triangles(&[a, a + b, c], 1.0, i, &mut tris);
+        }
+        let part = Part::build(tris, DAffine3::IDENTITY, u32::MAX, 1.0).expect("triangles");
+        let (mut hits, mut near_hits, mut rejected, mut near_rejected) = (0, 0, 0, 0);
+        for id in 0..part.tris64.len() {
+            let [v0, v1, v2] = part.tris64[id];
+            let n = (v1 - v0).cross(v2 - v0).normalize_or_zero();
+            // In-plane axes.
+            let (t1, t2) = n.any_orthonormal_pair();
+            for k in 0..400 {
+                // A point of the plane near the triangle (barycentric weights
+                // a little beyond [0, 1] now and then), and one right on an edge.
+                let (u, v) = (0.6 * r() + 0.4, 0.6 * r() + 0.4);
+                let on = if k % 5 == 0 {
+                    v0 + (v1 - v0) * (0.5 + 0.5 * r())
+                } else {
+                    v0 + (v1 - v0) * u * 0.6 + (v2 - v0) * v * 0.6
+                };
+                // A height from 10⁻³ down to 10⁻¹⁸, of the sign of `x`.
+                let tiny = |x: f64| x.signum() * 10f64.powf(-3.0 - 15.0 * (0.5 + 0.5 * x.abs()));
+                let (a, b) = match k % 4 {
+                    // Anywhere.
+                    0 => (DVec3::new(r(), r(), r()), DVec3::new(r(), r(), r())),
+                    // Grazing: through (or by) `on`, nearly along the plane.
+                    1 => {
+                        let along = t1 * r() + t2 * r();
+                        let off = n * tiny(r());
+                        (on - along + off, on + along + off + n * (r() * tiny(r())))
+                    }
+                    // Ending on the plane at `on`.
+                    2 => {
+                        let a = on + DVec3::new(r(), r(), r());
+                        if r() < 0.0 { (a, on) } else { (on, a) }
+                    }
+                    // Both ends a hair off the plane, on one side or across.
+                    _ => {
+                        let (h0, h1) = (n * tiny(r()), n * tiny(r()));
+                        (
+                            on + (t1 * r() + t2 * r()) * 0.5 + h0,
+                            on + (t1 * r() + t2 * r()) * 0.5 + h1,
+                        )
+                    }
+                };
+                let d = b - a;
+                let (tmin, tmax) = match k % 3 {
+                    0 => (0.0, 1.0),
+                    1 => (SURFACE_TRIM, 1.0 - SURFACE_TRIM),
+                    _ => (SEGMENT_TRIM + 2.0 * NODE_EPSILON, 1.0 + 2.0 * NODE_EPSILON),
+                };
+                let o = a - d * (tmin - SEGMENT_TRIM).max(0.0);
+                let seg = part.segment64(o, d, tmin, tmax);
+                let plain = part.hit64(id, o, d, tmin, tmax);
+                let planed = part.hit64_planed(id, &seg);
+                assert_eq!(
+                    plain.to_bits(),
+                    planed.to_bits(),
+                    "triangle {id} {:?}, segment {o} + s {d}, s in [{tmin}, {tmax}]",
+                    part.tris64[id]
+                );
+                let (pn, w) = part.planes64[id];
+                let (h0, h1) = (pn.dot(seg.ends[0]) - w, pn.dot(seg.ends[1]) - w);
+                let near = h0.abs().min(h1.abs()) < 1e-6;
+                if (h0 > seg.reject && h1 > seg.reject) || (h0 < -seg.reject && h1 < -seg.reject) {
+                    rejected += 1;
+                    near_rejected += usize::from(near);
+                }
+                if plain.is_finite() {
+                    hits += 1;
+                    near_hits += usize::from(near);
+                }
+            }
+        }
+        eprintln!(
+            "{hits} hits ({near_hits} with an end within 1e-6 of the plane), \
+             {rejected} rejected ({near_rejected} within 1e-6)"
+        );
+        // The rays exercise both sides of the rejection, close to the plane.
+        assert!(
+            hits > 1000 && near_hits > 500,
+            "{hits} hits, {near_hits} near"
+        );
+        assert!(
+            rejected > 1000 && near_rejected > 500,
+            "{rejected} rejected, {near_rejected} near"
+        );
     }
 }
