@@ -492,9 +492,11 @@ impl Solver<'_> {
     /// gap, as the change between levels is taken.
     ///
     /// On the Blender box one bounce of rays over the answer moved it 1.7–1.9%
-    /// RMS at the test's points, up to 8% on the ceiling by the opening, where
-    /// the answer was 9% dark (issue 45 part 4); this check reads 0.75%, 0.73%
-    /// and 0.71% at eps 0.5, 0.25 and 0.1 (0.14–0.5 s). Left out (`None`)
+    /// RMS at the test's points, up to 8% on the ceiling by the open front, where
+    /// the answer was 9% dark (issue 45 part 4; the faint sources' shortcut,
+    /// since bounded in sum: `Solver::gather_sum`); this check read 0.75%, 0.73%
+    /// and 0.71% at eps 0.5, 0.25 and 0.1 (0.14–0.5 s): 128 points rarely fall
+    /// where one point is wrong. Left out (`None`)
     /// where its rays exceed `CHECK_RAYS_PER_ENTRY` of the leaf system's
     /// entries (its 262 000 rays want 524 000 entries: the empty Cornell box
     /// has 323 000 at eps 0.1 and 843 000 at 0.02, the Blender box at eps 0.5
