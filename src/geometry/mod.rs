@@ -21,6 +21,7 @@
 mod contact;
 mod embree;
 mod formfactor;
+mod icosphere;
 mod nearest;
 mod patches;
 mod polygon;
@@ -32,6 +33,7 @@ pub use formfactor::{
     FAR_RATIO, TWIN_GAP, contour_integral as formfactor_contour, cosine_direction,
     point_to_point_kernel, point_to_polygon, point_to_polygon_exact,
 };
+pub use icosphere::icosphere;
 pub use nearest::{closest_point_on_polygon, nearest_facing, on_emitters};
 pub use patches::{PatchGeometry, PatchId, Patches, param_point};
 pub use polygon::{MAX_CORNERS, Poly, centroid_of, clip_to_half_space};

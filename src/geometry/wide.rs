@@ -502,64 +502,8 @@ fn slabs(node: &Node4, ray: &Ray4) -> ([f32; 4], u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::icosphere;
     use crate::oracle::xorshift;
-
-    /// An icosphere of radius `r` about `c`, `level` times subdivided.
-    fn icosphere(c: DVec3, r: f64, level: u32) -> Vec<[DVec3; 3]> {
-        let t = (1.0 + 5f64.sqrt()) / 2.0;
-        let v = [
-            (-1.0, t, 0.0),
-            (1.0, t, 0.0),
-            (-1.0, -t, 0.0),
-            (1.0, -t, 0.0),
-            (0.0, -1.0, t),
-            (0.0, 1.0, t),
-            (0.0, -1.0, -t),
-            (0.0, 1.0, -t),
-            (t, 0.0, -1.0),
-            (t, 0.0, 1.0),
-            (-t, 0.0, -1.0),
-            (-t, 0.0, 1.0),
-        ]
-        .map(|(a, b, c)| DVec3::new(a, b, c).normalize());
-        let f: [[usize; 3]; 20] = [
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        let mut tris: Vec<[DVec3; 3]> = f.iter().map(|t| t.map(|i| v[i])).collect();
-        for _ in 0..level {
-            tris = tris
-                .iter()
-                .flat_map(|&[a, b, c]| {
-                    let (ab, bc, ca) = (
-                        (a + b).normalize(),
-                        (b + c).normalize(),
-                        (c + a).normalize(),
-                    );
-                    [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
-                })
-                .collect();
-        }
-        tris.iter().map(|t| t.map(|p| c + r * p)).collect()
-    }
 
     /// A closed cylinder about the `y` axis through `c`: `k` quads around (two
     /// triangles each), `rings` along the height, and two caps of `k` triangles.

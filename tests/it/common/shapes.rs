@@ -122,62 +122,10 @@ pub fn tiled_box(
 /// into four `level` times (20 · 4^level triangles), vertices on the sphere,
 /// facing inwards (`inward`) or outwards.
 pub fn icosphere(c: DVec3, r: f64, level: u32, inward: bool, m: MaterialId) -> Vec<Polygon> {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let v = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .map(|(a, b, c)| DVec3::new(a, b, c).normalize());
-    let f: [[usize; 3]; 20] = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    // Counter-clockwise seen from outside.
-    let mut tris: Vec<[DVec3; 3]> = f.iter().map(|t| t.map(|i| v[i])).collect();
-    for _ in 0..level {
-        tris = tris
-            .iter()
-            .flat_map(|&[a, b, c]| {
-                let (ab, bc, ca) = (
-                    (a + b).normalize(),
-                    (b + c).normalize(),
-                    (c + a).normalize(),
-                );
-                [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
-            })
-            .collect();
-    }
-    tris.iter()
+    rhier::geometry::icosphere(c, r, level)
+        .into_iter()
         .map(|t| {
-            let mut vertices: Vec<DVec3> = t.iter().map(|&p| c + r * p).collect();
+            let mut vertices = t.to_vec();
             if inward {
                 vertices.reverse();
             }
