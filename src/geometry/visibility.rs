@@ -231,8 +231,11 @@ impl Part {
         if tris.is_empty() {
             return None;
         }
+        // Of the triangles' set: the same in the BVH's order below.
+        let reach = part_reach(&tris64);
+        let pad = reach * BOX_PAD;
         let bvh = build_cwbvh(
-            &padded_boxes(&tris64),
+            &padded_boxes(&tris64, pad),
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
@@ -247,13 +250,8 @@ impl Part {
             .iter()
             .map(|&i| tris64[i as usize])
             .collect();
-        let wide = Bvh4::build(
-            &padded_boxes(&tris64),
-            &tris64,
-            part_reach(&tris64) * BOX_PAD,
-        );
+        let wide = Bvh4::build(&padded_boxes(&tris64, pad), &tris64, pad);
         let planes64 = triangle_planes(&tris64);
-        let reach = part_reach(&tris64);
         let mut part = Part {
             bvh,
             wide,
@@ -1063,8 +1061,8 @@ fn triangle_planes(tris: &[[DVec3; 3]]) -> Vec<(DVec3, f64)> {
 type Tris = (Vec<Triangle>, Vec<u32>, Vec<[DVec3; 3]>);
 
 /// The BVH's boxes of the triangles `tris` (f64 corners, part space): each
-/// triangle's f64 box widened by [`BOX_PAD`] of the part's size plus its farthest
-/// coordinate, so that the f32 traversal (the ray and the node boxes rounded to
+/// triangle's f64 box widened by `pad`, [`BOX_PAD`] of the part's size plus its
+/// farthest coordinate ([`part_reach`]), so that the f32 traversal (the ray and the node boxes rounded to
 /// f32) reaches every triangle the f64 test hits ([`SceneBvh::occluded_cached`]).
 ///
 /// Why: boxes of the f32 triangles, exact to their corners, lost a hit that the
@@ -1074,8 +1072,7 @@ type Tris = (Vec<Triangle>, Vec<u32>, Vec<[DVec3; 3]>);
 /// ray to the ceiling that crosses the box's side 6·10⁻⁸ m from its vertical edge:
 /// the traversal missed that side in metres and millimetres and found it in
 /// kilometres, and the point read 0.34% apart between the scales.
-fn padded_boxes(tris: &[[DVec3; 3]]) -> Vec<Aabb> {
-    let pad = part_reach(tris) * BOX_PAD;
+pub(super) fn padded_boxes(tris: &[[DVec3; 3]], pad: f64) -> Vec<Aabb> {
     let f = |p: DVec3| Vec3A::new(p.x as f32, p.y as f32, p.z as f32);
     tris.iter()
         .map(|&[a, b, c]| Aabb::new(f(a.min(b).min(c) - pad), f(a.max(b).max(c) + pad)))
@@ -1084,7 +1081,7 @@ fn padded_boxes(tris: &[[DVec3; 3]]) -> Vec<Aabb> {
 
 /// The size of the triangles `tris` plus their farthest coordinate: what their
 /// f32 round-off scales with ([`padded_boxes`]).
-fn part_reach(tris: &[[DVec3; 3]]) -> f64 {
+pub(super) fn part_reach(tris: &[[DVec3; 3]]) -> f64 {
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for t in tris {
         for &v in t {
@@ -1116,7 +1113,7 @@ const WIDE_SLACK: f64 = 1e-6;
 /// Relative widening of the BVH's triangle boxes ([`padded_boxes`]): 16 f32 ulps
 /// of the part's size, as [`Part::update_box`] pads a part's world box. A ray's
 /// f32 round-off moves it by a few ulps of its coordinates and length.
-const BOX_PAD: f64 = 1e-6;
+pub(super) const BOX_PAD: f64 = 1e-6;
 
 fn push_triangles(v: &[DVec3], unit: f64, patch: u32, (tris, tp, t64): &mut Tris) {
     let f = |p: DVec3| {

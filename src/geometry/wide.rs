@@ -503,6 +503,7 @@ fn slabs(node: &Node4, ray: &Ray4) -> ([f32; 4], u32) {
 mod tests {
     use super::*;
     use crate::geometry::icosphere;
+    use crate::geometry::visibility::{BOX_PAD, padded_boxes, part_reach};
     use crate::oracle::xorshift;
 
     /// A closed cylinder about the `y` axis through `c`: `k` quads around (two
@@ -585,13 +586,9 @@ mod tests {
                 lo = lo.min(v);
                 hi = hi.max(v);
             }
-            let reach = (hi - lo).length() + lo.abs().max(hi.abs()).max_element();
-            let pad = reach * 1e-6;
-            let f = |p: DVec3| Vec3A::new(p.x as f32, p.y as f32, p.z as f32);
-            let boxes: Vec<Aabb> = tris
-                .iter()
-                .map(|&[a, b, c]| Aabb::new(f(a.min(b).min(c) - pad), f(a.max(b).max(c) + pad)))
-                .collect();
+            // The boxes and pad `visibility::Part` builds with.
+            let pad = part_reach(&tris) * BOX_PAD;
+            let boxes = padded_boxes(&tris, pad);
             let with = Bvh4::build_slabs(&boxes, &tris, pad, true);
             let without = Bvh4::build_slabs(&boxes, &tris, pad, false);
             assert_eq!(without.slab_count(), 0);
