@@ -23,7 +23,7 @@
 //! concave edge). With [`super::SolveOptions::near_field`] the gathers of a static
 //! solve note those terms ([`super::gather::NearTerms`]); once the cells have
 //! stopped, each is taken again at the kernel-weighted mean of the reconstruction's
-//! own field over its source, cell by cell with exact factors
+//! own field over its source, cell by cell with exact factors and a ray to each cell
 //! ([`Solver::mend_near_terms`]), where that can move the point by a share of the
 //! tolerance, and the cells whose mended values now bend split on (a point by a
 //! concave edge moves more than one a cell further: unsplit, the cell would
@@ -906,6 +906,7 @@ impl Solver<'_> {
                 }
                 FieldCell {
                     n,
+                    patch: c.patch,
                     pts: std::array::from_fn(|i| c.corner(i.min(n - 1), &self.patches)),
                     b: vals,
                 }
@@ -927,7 +928,8 @@ impl Solver<'_> {
     /// the mean of the field over the source weighted by the point's kernel, `Σ F_c
     /// B_c / Σ F_c` over the field's cells `c` of the leaves under the source (`B_c`
     /// a cell's mean), a cell still large seen from the point split further
-    /// ([`near_cell`]). A point moves by `ρ f v (Σ F_c B_c / Σ F_c − B_s)` per
+    /// ([`near_cell`]), each (sub-)cell counted only if a ray from the point
+    /// reaches its centre. A point moves by `ρ f v (Σ F_c B_c / Σ F_c − B_s)` per
     /// term; a term whose bound on that (the field's largest distance from `B_s`
     /// over the source) is under [`NEAR_FIELD_SHARE`] of the reconstruction
     /// tolerance `tol` is left alone.
@@ -977,6 +979,17 @@ impl Solver<'_> {
                 let x = x0 + CORNER_INSET * (c - x0);
                 let n = DVec3::from_array(geoms[leaf.ix()].normal);
                 let rho = patches.rhos[p];
+                // What the point sees of each cell: one ray to its centre.
+                let mut last = crate::geometry::LastHit::default();
+                let mut visible = |y: DVec3, q: u32| {
+                    !self.bvh.occluded_between(
+                        x,
+                        y,
+                        [patch, q],
+                        crate::geometry::Parts::All,
+                        &mut last,
+                    )
+                };
                 let mut d = [0.0f64; 3];
                 let mut moved = false;
                 for &(e, fv) in terms {
@@ -991,8 +1004,8 @@ impl Solver<'_> {
                             x,
                             n,
                             &f.cells[j as usize],
-                            NEAR_FIELD_RATIO,
-                            NEAR_SPLIT_DEPTH,
+                            (NEAR_FIELD_RATIO, NEAR_SPLIT_DEPTH),
+                            &mut visible,
                             &mut acc,
                         );
                     }
@@ -1205,6 +1218,8 @@ const NEAR_KERNEL_RATIO: f64 = 0.2;
 /// in space and their radiosities (bilinear between them; a triangle linear).
 struct FieldCell {
     n: usize,
+    /// Its patch, for the visibility rays of [`near_cell`].
+    patch: u32,
     pts: [DVec3; 4],
     b: [[f64; 3]; 4],
 }
@@ -1230,8 +1245,25 @@ struct NearField {
 /// Adds `(Σ F B̄, Σ F)` of the field cell `c` seen from the point `x` (normal `n`)
 /// to `acc`: its exact factor times its mean radiosity, split into four (its
 /// parametric midpoints; a triangle's edge midpoints) while its bounding radius
-/// exceeds `ratio` times its distance from the point, at most `depth` times.
-fn near_cell(x: DVec3, n: DVec3, c: &FieldCell, ratio: f64, depth: u32, acc: &mut ([f64; 3], f64)) {
+/// exceeds `ratio` times its distance from the point, at most `depth` times; a
+/// (sub-)cell whose centre `visible(centre, patch)` says the point does not see
+/// adds nothing.
+///
+/// Why the visibility: the factors are unoccluded, and a source's cells the
+/// point cannot see (a slab's face running on inside the slab it crosses, the
+/// values of its corners there extrapolated from the room side; a part behind
+/// another surface) took weight in the mean. On the Blender box (walls of slabs
+/// overlapping at the corners) the floor point by the red wall read 20% bright,
+/// 5.4% off the lamp against 2.8% without the near field; one ray per cell,
+/// 3.4% and 2.6%.
+fn near_cell(
+    x: DVec3,
+    n: DVec3,
+    c: &FieldCell,
+    (ratio, depth): (f64, u32),
+    visible: &mut dyn FnMut(DVec3, u32) -> bool,
+    acc: &mut ([f64; 3], f64),
+) {
     let k = c.n;
     let centre = c.pts[..k].iter().copied().sum::<DVec3>() / k as f64;
     let r = c.pts[..k]
@@ -1267,10 +1299,11 @@ fn near_cell(x: DVec3, n: DVec3, c: &FieldCell, ratio: f64, depth: u32, acc: &mu
         for kid in kids {
             let sub = FieldCell {
                 n: k,
+                patch: c.patch,
                 pts: kid.map(|v| v.0),
                 b: kid.map(|v| v.1),
             };
-            near_cell(x, n, &sub, ratio, depth - 1, acc);
+            near_cell(x, n, &sub, (ratio, depth - 1), visible, acc);
         }
         return;
     }
@@ -1289,7 +1322,7 @@ fn near_cell(x: DVec3, n: DVec3, c: &FieldCell, ratio: f64, depth: u32, acc: &mu
     } else {
         super::point_to_polygon(x, n, &poly)
     };
-    if f > 0.0 {
+    if f > 0.0 && visible(centre, c.patch) {
         let m = mean3(&c.b[..k]);
         for (a, m) in acc.0.iter_mut().zip(m) {
             *a += f * m;
