@@ -380,7 +380,8 @@ pub struct SolveOptions {
     /// radiosity varies across the part the point sees most (the Cornell ceiling
     /// by a wall; BENCHMARKS.md, "Static solver: error against run time").
     pub source_field: bool,
-    /// Static solves: the reconstruction mends the final-gather terms of sources
+    /// Static solves (and space-time windows of one instant): the reconstruction
+    /// mends the final-gather terms of sources
     /// that look large from a point (a block's side seen from the floor beside it,
     /// the wall from the ceiling by it) with its own field over the source, cell
     /// by cell, instead of the source's constant radiosity, where that moves the

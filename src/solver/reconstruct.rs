@@ -384,11 +384,12 @@ impl Solver<'_> {
         let tol = self.opts.recon_tol * b_ref;
         let tol_moving = self.opts.recon_tol_moving.map_or(tol, |t| t * b_ref);
         let mut limits = self.gather_limits(b_ref, true);
-        // The near field: static solves, not the second gather of
-        // `source_field` (which sees every leaf by the first one's field).
+        // The near field: static solves and windows of one instant (solved as
+        // the static solve is), not the second gather of `source_field` (which
+        // sees every leaf by the first one's field).
         if self.opts.near_field
             && between.is_none()
-            && self.st.window.is_none()
+            && (self.st.window.is_none() || !self.window_spans_time())
             && !self.has_motion()
             && shapes.cells.is_empty()
             && shapes.quadrants.is_empty()
