@@ -294,6 +294,57 @@ impl Bvh4 {
         }
     }
 
+    /// Calls `f(triangle)` for the triangles under every child whose box (part
+    /// space) lies outside none of the half-spaces of `cull`, depth first, until
+    /// `f` returns true; returns whether it did. A leaf's box is one triangle's
+    /// padded box, so with the half-spaces of a convex volume (a shaft's
+    /// [`crate::shafts::Shaft::box_tests`]) `f` gets every triangle that meets
+    /// the volume (and some more). The slabs are not used.
+    pub fn any_in(&self, cull: &Cull4, mut f: impl FnMut(u32) -> bool) -> bool {
+        if self.root == EMPTY {
+            return false;
+        }
+        self.any_in_from(self.root, cull, &mut f)
+    }
+
+    /// [`Bvh4::any_in`] under the reference `start` (a stack of its own; a
+    /// child that would overflow it is walked by a nested call).
+    fn any_in_from(&self, start: u32, cull: &Cull4, f: &mut impl FnMut(u32) -> bool) -> bool {
+        let mut stack = [0u32; 64];
+        let mut top = 0usize;
+        let mut cur = start;
+        loop {
+            if cur & LEAF != 0 {
+                let (first, count) = self.leaves[(cur & !(LEAF | SLAB)) as usize];
+                for &id in &self.prims[first as usize..(first + count) as usize] {
+                    if f(id) {
+                        return true;
+                    }
+                }
+            } else {
+                let node = &self.nodes[(cur & !SLAB) as usize];
+                let out = cull.outside(node);
+                for c in 0..4 {
+                    let child = node.child[c];
+                    if child == EMPTY || out[c] {
+                        continue;
+                    }
+                    if top < stack.len() {
+                        stack[top] = child;
+                        top += 1;
+                    } else if self.any_in_from(child, cull, f) {
+                        return true;
+                    }
+                }
+            }
+            if top == 0 {
+                return false;
+            }
+            top -= 1;
+            cur = stack[top];
+        }
+    }
+
     /// [`Bvh4::any_hit`] from the node or leaf `start` (recursive; the stack's
     /// overflow only).
     fn any_hit_from(&self, start: u32, ray: &Ray4, f: &mut dyn FnMut(u32) -> bool) -> bool {
@@ -329,6 +380,79 @@ impl Bvh4 {
             + std::mem::size_of_val(self.slabs.as_slice())
             + std::mem::size_of_val(self.leaves.as_slice())
             + std::mem::size_of_val(self.prims.as_slice())
+    }
+}
+
+/// Most half-spaces a [`Cull4`] holds (a shaft's: 6 for its box, 2 ends, 16 hull
+/// planes).
+const CULL_PLANES: usize = 24;
+
+/// Half-spaces that [`Bvh4::any_in`] tests a node's four child boxes against at
+/// once, in `f32`: a box is out where `m · c ≥ t` at its corner `c` lowest along
+/// `m` for one of them. Made from `f64` tests by [`Cull4::push`], each `t` raised
+/// by a bound on the `f32` round-off, so a box out here is out of the `f64` test
+/// too. 392 bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct Cull4 {
+    /// Per half-space: `m` and `t`.
+    m: [[f32; 3]; CULL_PLANES],
+    t: [f32; CULL_PLANES],
+    /// Per half-space: per axis, the row of a node's boxes holding the lowest
+    /// side along `m` (`axis`, or `3 + axis` where `m` is negative there).
+    rows: [[u8; 3]; CULL_PLANES],
+    count: usize,
+    /// Bound on the absolute coordinates of the boxes tested.
+    extent: f64,
+}
+
+impl Cull4 {
+    /// No half-space yet, for boxes of coordinates up to `extent` in absolute value.
+    pub fn new(extent: f64) -> Cull4 {
+        Cull4 {
+            m: [[0.0; 3]; CULL_PLANES],
+            t: [0.0; CULL_PLANES],
+            rows: [[0; 3]; CULL_PLANES],
+            count: 0,
+            extent,
+        }
+    }
+
+    /// Adds the `f64` test "out where `m · c ≥ t`" (ignored when full or not
+    /// finite: fewer tests only cull less). `f32` rounding of `m`, of the box
+    /// sides (stored rounded outwards by their padding, read as they are) and of
+    /// the dot product is at most a few `1e-7` of `|m|₁ · extent + |t|`; `t` is
+    /// raised by `1e-5` of it.
+    pub fn push(&mut self, m: DVec3, t: f64) {
+        if self.count == CULL_PLANES || !m.is_finite() || !t.is_finite() {
+            return;
+        }
+        let slack = 1e-5 * (m.abs().element_sum() * self.extent + t.abs());
+        let k = self.count;
+        self.m[k] = [m.x as f32, m.y as f32, m.z as f32];
+        self.t[k] = (t + slack) as f32;
+        self.rows[k] = [0, 1, 2].map(|a| if m[a] >= 0.0 { a as u8 } else { 3 + a as u8 });
+        self.count += 1;
+    }
+
+    /// Which of the node's four children lie out of one of the half-spaces.
+    #[inline]
+    fn outside(&self, node: &Node4) -> [bool; 4] {
+        let mut out = [false; 4];
+        for k in 0..self.count {
+            let (m, r) = (self.m[k], self.rows[k]);
+            let (bx, by, bz) = (
+                &node.b[r[0] as usize],
+                &node.b[r[1] as usize],
+                &node.b[r[2] as usize],
+            );
+            for c in 0..4 {
+                out[c] |= m[0] * bx[c] + m[1] * by[c] + m[2] * bz[c] >= self.t[k];
+            }
+            if out == [true; 4] {
+                break;
+            }
+        }
+        out
     }
 }
 

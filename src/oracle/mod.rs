@@ -883,10 +883,40 @@ impl PointRays<'_> {
     }
 }
 
-/// Kernel-weighted fraction of the source of `r` visible from its point.
+/// Kernel-weighted fraction of the source of `r` visible from its point: the
+/// rays cast 64 at a time as fans ([`SceneBvh::occluded_fan`], the same answer
+/// ray by ray as [`SceneBvh::occluded_between`]), summed as
+/// [`PointRays::weighted`] sums them.
 pub fn visible_fraction(bvh: &SceneBvh, r: &PointRays) -> f64 {
-    let mut last = LastHit::default();
-    r.weighted(|_, y| !bvh.occluded_between(r.x, y, r.skip, Parts::All, &mut last))
+    let (mut wsum, mut vsum, mut plain) = (0.0, 0.0, 0.0);
+    let mut targets = r.targets();
+    let mut ends = [DVec3::ZERO; 64];
+    loop {
+        let mut k = 0;
+        for (slot, (_, y)) in ends.iter_mut().zip(targets.by_ref()) {
+            *slot = y;
+            k += 1;
+        }
+        if k == 0 {
+            break;
+        }
+        let blocked = bvh.occluded_fan(r.x, &ends[..k], r.pols.corners(), r.skip, Parts::All);
+        for (j, &y) in ends[..k].iter().enumerate() {
+            let kw = point_to_point_kernel(r.x, r.n, y, r.ns);
+            let vis = if blocked & (1 << j) == 0 { 1.0 } else { 0.0 };
+            wsum += kw;
+            vsum += kw * vis;
+            plain += vis;
+        }
+        if k < ends.len() {
+            break;
+        }
+    }
+    if wsum > 0.0 {
+        vsum / wsum
+    } else {
+        plain / r.m as f64
+    }
 }
 
 /// [`visible_fraction`] with the rays that got through, one bit each (ray `j` →

@@ -68,6 +68,54 @@ impl Shaft {
         s
     }
 
+    /// The shaft of every segment from the point `a` to the convex polygon `b`
+    /// (3 or 4 corners in order): the box of both, the hull planes through an
+    /// edge of `b` and `a`, and `b`'s own plane as its far end where `b` is flat
+    /// within the tolerance and `a` lies well in front of it. No plane at `a`'s
+    /// end: a point sees its segments in every direction (a source partly behind
+    /// the point's plane has targets there too).
+    ///
+    /// As [`Shaft::new`]'s ends do, the far end culls what lies behind `b`'s plane
+    /// or in it within the tolerance (a coplanar neighbour of a source element);
+    /// it is kept only where `a` is more than [`POINT_END_MARGIN`] tolerances in
+    /// front of that plane: a point nearly in it sees `b` edge-on, its segments
+    /// running within the tolerance of the plane their whole length.
+    pub fn from_point(a: DVec3, b: &[DVec3]) -> Shaft {
+        let (lo, hi) = bounds(&[a], b);
+        let eps = (hi - lo).length() * 1e-9;
+        let k = b.len();
+        let nb = if k == 3 {
+            (b[1] - b[0]).cross(b[2] - b[0])
+        } else {
+            (b[2] - b[0]).cross(b[k - 1] - b[1])
+        }
+        .normalize_or_zero();
+        let d = b.iter().map(|&c| nb.dot(c)).sum::<f64>() / k as f64;
+        let flat = nb != DVec3::ZERO && b.iter().all(|&c| (nb.dot(c) - d).abs() <= eps);
+        let side = nb.dot(a) - d;
+        let far = if !flat || side.abs() <= POINT_END_MARGIN * eps {
+            NO_END
+        } else if side > 0.0 {
+            (nb, d)
+        } else {
+            (-nb, -d)
+        };
+        let mut s = Shaft {
+            lo,
+            hi,
+            planes: [(DVec3::ZERO, 0.0); MAX_PLANES],
+            count: 0,
+            ends: [NO_END, far],
+            eps,
+        };
+        hull_planes(&[a], b, eps, |plane| {
+            s.planes[s.count] = plane;
+            s.count += 1;
+            true
+        });
+        s
+    }
+
     /// True if no point of the box `[lo, hi]` can lie on a segment between the two
     /// polygons (the box is outside the shaft's box, behind an end, or outside a hull
     /// plane). Conservative: `false` does not prove an overlap.
@@ -77,6 +125,29 @@ impl Shaft {
             || self.planes[..self.count]
                 .iter()
                 .any(|&(n, d)| box_outside(n, d, eps, lo, hi))
+    }
+
+    /// Hands `f` each test of [`Shaft::misses_box`] as a half-space `(m, t)`: a box
+    /// lies outside the shaft by that test where `m · c ≥ t` at its corner `c`
+    /// lowest along `m` (the box's reach on each axis, the ends, the hull
+    /// planes, each with its tolerance folded into `t`; an end that culls
+    /// nothing is left out). For a caller that tests boxes some other way (four
+    /// at a time in `f32`: `geometry::wide::Bvh4::any_in`).
+    pub fn box_tests(&self, mut f: impl FnMut(DVec3, f64)) {
+        let eps = self.eps;
+        for k in 0..3 {
+            let e = DVec3::AXES[k];
+            f(e, self.hi[k] + eps);
+            f(-e, -(self.lo[k] - eps));
+        }
+        for &(n, d) in &self.ends {
+            if d.is_finite() {
+                f(-n, -(d + eps));
+            }
+        }
+        for &(n, d) in &self.planes[..self.count] {
+            f(n, d - eps);
+        }
     }
 
     /// True if the triangle `t` cannot meet any segment between the two polygons.
@@ -155,6 +226,14 @@ impl Shaft {
         })
     }
 }
+
+/// An end plane that culls nothing ([`Shaft::from_point`]'s near end): every
+/// point is in front of it.
+const NO_END: (DVec3, f64) = (DVec3::ZERO, f64::NEG_INFINITY);
+
+/// How many tolerances in front of a polygon's plane a point must lie for
+/// [`Shaft::from_point`] to keep that plane as the shaft's far end.
+const POINT_END_MARGIN: f64 = 4.0;
 
 /// The planes of a shaft's two ends `(n, d)`, front `n · p > d`: polygon `a` with
 /// unit normal `na`, and `b` with `nb`.
