@@ -386,7 +386,8 @@ pub struct SolveOptions {
     /// the wall from the ceiling by it) with its own field over the source, cell
     /// by cell, instead of the source's constant radiosity, where that moves the
     /// point by more than a share of the reconstruction tolerance
-    /// (`src/solver/reconstruct.rs`, "Near field"). On by default.
+    /// (`src/solver/reconstruct.rs`, "Near field"). Off by default (`--near-field`
+    /// says why: the answer depends more on how a wall is tiled).
     pub near_field: bool,
     /// Keep the passive (refined) links of a static solve in the pool, for a caller
     /// that writes every link (`--keep-links`). False, the default: each round
@@ -431,7 +432,7 @@ impl Default for SolveOptions {
             leaf_shapes: 0.0,
             near_gap: 0.0,
             source_field: false,
-            near_field: true,
+            near_field: false,
             keep_passive: false,
             cluster_facets: false,
             row_open_ratio: 0.25,

@@ -813,19 +813,12 @@ mod tests {
     /// A gap a fraction of a percent wide at a high gain, as on the Blender box
     /// (gaps of 0.3–0.6% at a gain of 3.9 left its answer 2.7–3.4% dark): the
     /// Cornell box with the Blender box's white (0.999) and every leaf row
-    /// × 0.996. The answer moves by up to `G` times the 0.4%; the check must
-    /// read between 0.7 and 2 times it (it draws rows until the amplified noise
-    /// is under a quarter of what the solve promises, and takes one `σ` off).
+    /// × 0.996. The answer moves by `G` times the 0.4%; the check must read
+    /// between 0.7 and 2 times it (it draws rows until the amplified noise is
+    /// under a quarter of what the solve promises, and takes one `σ` off).
     /// Measured (2026-12-02): 0.65% moved, the check 0.76% (gap 0.39 ± 0.18%
     /// at a gain of 2.4); with 2 σ taken off the same gaps read 0.36%, and the
     /// Blender box's check read 0.84% of the 2.2% its gaps amplify to.
-    ///
-    /// With the near field (`SolveOptions::near_field`) the answer moves
-    /// 0.49%, the check still 0.76% (1.55 times): the near terms (a wall seen
-    /// from the floor by it) take the reconstruction's gathered field, one
-    /// exact bounce over the short leaf system, which is short by `(G − 1) δ`
-    /// where the leaves are short by `G δ`. So the answer moves by less, and
-    /// its floor here, the gap's move to be seen at all, is 0.4% (it was 0.5%).
     #[test]
     fn a_small_row_gap_at_a_high_gain_raises_the_estimate() {
         let (mut scene, opts) = solved_box();
@@ -835,7 +828,7 @@ mod tests {
             }
         }
         let (as_solved, measured, check, _) = short_rows(&scene, opts, 0.996);
-        assert!(measured > 0.004, "rows x0.996 moved the answer {measured}");
+        assert!(measured > 0.005, "rows x0.996 moved the answer {measured}");
         assert!(
             check.error > measured * 0.7 && check.error < measured * 2.0,
             "check {check:?} for a measured {measured}"

@@ -387,7 +387,7 @@ fn leaves_seen_by_their_shape_mend_shadowed_slots() {
     assert!(rms < 0.85 * rms0, "relative RMS {rms0} -> {rms}");
 }
 
-/// The near field (`SolveOptions::near_field`, on by default) must take the slots
+/// The near field (`SolveOptions::near_field`, `--near-field`) must take the slots
 /// of [`SlotCorner`] towards the path tracer (60 points, 20 000 paths each): a
 /// slot's floor sees the box sides beside it large, and gathered them at their
 /// mean, several times what the sides have at their foot; mended from the
@@ -396,11 +396,11 @@ fn leaves_seen_by_their_shape_mend_shadowed_slots() {
 #[test]
 fn near_field_mends_shadowed_slots() {
     let corner = SlotCorner::new();
-    let (bias0, rms0, leaves0) = corner.error(SolveOptions {
-        near_field: false,
+    let (bias0, rms0, leaves0) = corner.error(SolveOptions::default());
+    let (bias, rms, leaves) = corner.error(SolveOptions {
+        near_field: true,
         ..SolveOptions::default()
     });
-    let (bias, rms, leaves) = corner.error(SolveOptions::default());
     eprintln!(
         "{} slot points: bias {:+.1}% -> {:+.1}%, relative RMS {:.1}% -> {:.1}%, leaves {leaves0} -> {leaves}",
         corner.probes.len(),
