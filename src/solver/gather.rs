@@ -52,6 +52,11 @@ pub(super) struct GatherLimits {
     spheres: Vec<(DVec3, f64)>,
     /// [`SolveOptions::near_gap`].
     near_gap: f64,
+    /// [`SolveOptions::near_field`]: a term whose non-emitting surface source's
+    /// bounding sphere has a radius above this times its distance from the point
+    /// is noted apart for the reconstruction to mend ([`NearTerms`]); 0: none
+    /// (every gather but a static reconstruction's).
+    pub(super) near_field: f64,
     /// Sources seen by their quadrants ([`super::reconstruct::FieldShapes`]).
     pub(super) shapes: super::reconstruct::FieldShapes,
 }
@@ -221,8 +226,15 @@ struct NearSources {
     foot: DVec3,
 }
 
+/// The terms of one final-gather point whose source looks large from it
+/// ([`GatherLimits::near_field`]): `(source element, factor · visibility)`, each
+/// also in the point's sum at the source's constant radiosity. The reconstruction
+/// mends them from its own field over the source ([`super::reconstruct`], "Near
+/// field").
+pub(super) type NearTerms = Vec<(u32, f64)>;
+
 /// What a point gathers: `Σ factor · visibility · B_s` over its sources but the near
-/// ones, and the near ones apart. 136 bytes.
+/// ones, and the near ones apart.
 struct PointGather<'a> {
     patches: &'a Patches,
     x: DVec3,
@@ -232,17 +244,30 @@ struct PointGather<'a> {
     h: [f64; 3],
     /// The near sources apart ([`NearSources`]).
     near: Option<NearSources>,
+    /// Every element's bounding sphere ([`GatherLimits::spheres`]) and
+    /// [`GatherLimits::near_field`]: the terms to note in `field`.
+    spheres: &'a [(DVec3, f64)],
+    near_field: f64,
+    /// The terms noted for the near field ([`NearTerms`]).
+    field: NearTerms,
 }
 
 impl<'a> PointGather<'a> {
-    fn new(patches: &'a Patches, x: DVec3, n: DVec3, near_gap: f64) -> Self {
+    fn new(patches: &'a Patches, x: DVec3, n: DVec3, limits: &'a GatherLimits) -> Self {
         PointGather {
             patches,
             x,
             n,
-            near_gap,
+            near_gap: limits.near_gap,
             h: [0.0; 3],
             near: None,
+            spheres: &limits.spheres,
+            near_field: if limits.spheres.is_empty() {
+                0.0
+            } else {
+                limits.near_field
+            },
+            field: Vec::new(),
         }
     }
 
@@ -265,6 +290,16 @@ impl<'a> PointGather<'a> {
         }
         for (h, b) in self.h.iter_mut().zip(b) {
             *h += fv * b as f64;
+        }
+        if self.near_field > 0.0
+            && e & FACET_BIT == 0
+            && g.patch != u32::MAX
+            && !self.patches.emits(g.patch as usize)
+        {
+            let (c, r) = self.spheres[e as usize];
+            if r > self.near_field * c.distance(self.x) {
+                self.field.push((e, fv));
+            }
         }
     }
 }
@@ -919,9 +954,11 @@ impl Solver<'_> {
         }
     }
 
-    /// Final gather at point `x` of leaf `leaf`: `(B(x), valid, fresh)`. `key`: the
-    /// point's place (its rays' jitter) and the leaf its terms are kept for in a
-    /// window ([`KeptKey`]).
+    /// Final gather at point `x` of leaf `leaf`: `(B(x), valid, fresh, near)`.
+    /// `key`: the point's place (its rays' jitter) and the leaf its terms are kept
+    /// for in a window ([`KeptKey`]). `near`: the terms of sources that look large
+    /// from the point ([`NearTerms`]; none unless `limits.near_field`, nor at a
+    /// point solved across a gap).
     ///
     /// A point with a near source (module docs, "Two surfaces across a narrow gap")
     /// gathers at its foot on that source too, and the two values are solved
@@ -934,10 +971,15 @@ impl Solver<'_> {
         key: KeptKey,
         admit: bool,
         limits: &GatherLimits,
-    ) -> ([f64; 3], bool, FreshTerms) {
-        let (sum, valid, fresh) = self.gather_sum(leaf, x, known, key, admit, false, limits);
+    ) -> ([f64; 3], bool, FreshTerms, NearTerms) {
+        let (mut sum, valid, fresh) = self.gather_sum(leaf, x, known, key, admit, false, limits);
         let p = self.elems.geoms.as_slice()[leaf.ix()].patch;
-        (self.across_gap(p, &sum, key.0, limits), valid, fresh)
+        let near = if sum.near.is_none() {
+            std::mem::take(&mut sum.field)
+        } else {
+            Vec::new()
+        };
+        (self.across_gap(p, &sum, key.0, limits), valid, fresh, near)
     }
 
     /// `B(x) = E + ρ H` at a point of patch `p` whose gather is `sum`. With a near
@@ -1040,16 +1082,16 @@ impl Solver<'_> {
     /// cast at the scene as it is now: no static masks, no cluster opened because a
     /// moving object may cross it.
     #[allow(clippy::too_many_arguments)]
-    fn gather_sum(
-        &self,
+    fn gather_sum<'a>(
+        &'a self,
         leaf: ElementId,
         x: DVec3,
         known: Option<&PointCache>,
         key: KeptKey,
         admit: bool,
         once: bool,
-        limits: &GatherLimits,
-    ) -> (PointGather<'_>, bool, FreshTerms) {
+        limits: &'a GatherLimits,
+    ) -> (PointGather<'a>, bool, FreshTerms) {
         // What the faint sources' shortcut may still leave out at this point.
         let mut faint_left = limits.faint;
         let pk = key.0;
@@ -1074,7 +1116,7 @@ impl Solver<'_> {
             .as_ref()
             .filter(|_| !once && !self.elem_moving(leaf));
         let cached = known.and_then(|m| m.get(&key));
-        let mut sum = PointGather::new(&self.patches, x, n, limits.near_gap);
+        let mut sum = PointGather::new(&self.patches, x, n, limits);
         let mut fresh = Vec::new();
         let mut terms = Terms::default();
         // A leaf smaller than the power area takes the visibility of non-emitting
@@ -1239,6 +1281,7 @@ impl Solver<'_> {
             },
             spread: self.radiosity_spread(),
             near_gap: self.opts.near_gap,
+            near_field: 0.0,
             shapes: Default::default(),
             spheres: if spheres {
                 self.elems

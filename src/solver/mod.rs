@@ -380,6 +380,15 @@ pub struct SolveOptions {
     /// radiosity varies across the part the point sees most (the Cornell ceiling
     /// by a wall; BENCHMARKS.md, "Static solver: error against run time").
     pub source_field: bool,
+    /// Static solves (and space-time windows of one instant): the reconstruction
+    /// mends the final-gather terms of sources
+    /// that look large from a point (a block's side seen from the floor beside it,
+    /// the wall from the ceiling by it) with its own field over the source, cell
+    /// by cell, instead of the source's constant radiosity, where that moves the
+    /// point by more than a share of the reconstruction tolerance
+    /// (`src/solver/reconstruct.rs`, "Near field"). Off by default (`--near-field`
+    /// says why: the answer depends more on how a wall is tiled).
+    pub near_field: bool,
     /// Keep the passive (refined) links of a static solve in the pool, for a caller
     /// that writes every link (`--keep-links`). False, the default: each round
     /// drops them once refined ([`crate::pools::LinkPool::drop_passive`]), which a
@@ -423,6 +432,7 @@ impl Default for SolveOptions {
             leaf_shapes: 0.0,
             near_gap: 0.0,
             source_field: false,
+            near_field: false,
             keep_passive: false,
             cluster_facets: false,
             row_open_ratio: 0.25,
@@ -1237,7 +1247,7 @@ impl<'a> Solver<'a> {
                     uv_inside(&g.uv, g.n, smp.uv)
                 })?;
                 let pk = (u32::MAX, i as u32, smp.patch);
-                let (b, valid, _) =
+                let (b, valid, _, _) =
                     self.gather_point(leaf, smp.x, None, (pk, ANY_LEAF), false, &limits);
                 let e = self.patches.emissions[smp.patch as usize];
                 valid.then(|| std::array::from_fn(|k| b[k] - e[k]))

@@ -372,6 +372,27 @@ pub struct AccuracyArgs {
     /// `--leaf-shapes` on the leaves it shapes.
     #[arg(long)]
     pub source_field: bool,
+    /// Mend the final gather's near sources from the reconstruction's own field
+    /// (static solves).
+    ///
+    /// A point that sees a source large (the floor beside a block sees the
+    /// block's side, a ceiling point by a wall the wall) then takes that source's
+    /// light from the reconstruction's cells over it, each cell seen by a ray, at
+    /// its own radiosity and exact factor, not from the source's mean radiosity,
+    /// wherever that moves the point by more than a share of the reconstruction
+    /// tolerance. It mends the contacts and concave edges, where the mean of a
+    /// coarse source misses the dark or bright strip the point sees most: the
+    /// Cornell box with blocks 1.61% → 0.94% off the lamp at the default eps, its
+    /// contact points 3.4% → 1.8%, for 15–30% more time (BENCHMARKS.md, "Static
+    /// solver: error against run time").
+    ///
+    /// Off by default because the answer then depends more on how a wall is
+    /// tiled: where a large source's field has few cells, the point is mended
+    /// from their bilinear values, and a room with one quad per wall and the same
+    /// room tiled differ by up to 1.17% at a point by a concave edge (1% is the
+    /// bar the default holds). Space-time windows that span time do without it.
+    #[arg(long)]
+    pub near_field: bool,
     /// Take a cluster whose patches face a few ways (a box, a group of boxes)
     /// whole in the leaf rows and final gathers wherever each of its orientations
     /// is wholly in front of or behind the point, each orientation at its own
@@ -664,6 +685,7 @@ impl AccuracyArgs {
             split_spread: a.split_spread,
             leaf_shapes: a.leaf_shapes,
             source_field: a.source_field,
+            near_field: a.near_field,
             cluster_facets: a.cluster_facets,
             near_gap: a.near_gap,
             max_rounds: a.max_rounds,

@@ -111,7 +111,13 @@ fn blender_error(opts: SolveOptions, paths: u32) -> (PointError, f64) {
 /// lamp (issue 45 part 4): within 5% off the lamp at the defaults, every point
 /// within 7%, and an estimate that reads at least a third of the error.
 ///
-/// Measured 2026-12-03 (100 000 paths): **2.78% off the lamp**, worst point 23
+/// Measured 2026-12-03 with the near field (`SolveOptions::near_field`, off by
+/// default; each field cell seen by a ray): 2.56% off the lamp, worst point 23 4.17%; with
+/// every cell of a near source counted, hidden or not, 5.36%, point 2 (the floor
+/// by the red wall) 20.1% bright from the red and back walls' faces running on
+/// inside the slabs they cross.
+///
+/// Measured 2026-12-03 at the defaults (100 000 paths): **2.78% off the lamp**, worst point 23
 /// (the ceiling by the red wall) 5.52%, since the final gather's faint sources
 /// take their links' visibility only while their bounds sum under
 /// `faint_source` at a point (`Solver::gather_sum`). Before, each source under
