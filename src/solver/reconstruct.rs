@@ -200,6 +200,9 @@ struct VertexCache {
     /// The gathered points with near terms, and those terms
     /// ([`super::gather::NearTerms`], [`Solver::mend_near_terms`]).
     near: Vec<(usize, NearTerms)>,
+    /// Every point mended so far: its near terms and the move applied, to mend
+    /// again from a finer field ([`Solver::mend_near_terms`]).
+    mended: Vec<(usize, NearTerms, [f64; 3])>,
 }
 
 /// What the reconstruction makes of one point: its value, whether it lies outside
@@ -434,6 +437,7 @@ impl Solver<'_> {
         // The first field, once the cells have stopped, to mend the near terms
         // from ([`Solver::near_field`]).
         let mut field: Option<NearField> = None;
+        let mut near_rounds = 0;
         loop {
             while !cells.is_empty() {
                 // Register every corner and centre, gather the new ones in parallel.
@@ -510,7 +514,7 @@ impl Solver<'_> {
                     }
                 }
                 if let Some(f) = field.as_mut() {
-                    self.mend_near_terms(&mut cache, f, tol);
+                    self.mend_near_terms(&mut cache, f, tol, false);
                 }
                 let mut next = Vec::new();
                 for (c, (corners, centre, mids, dirs)) in cells.into_iter().zip(ids) {
@@ -566,14 +570,25 @@ impl Solver<'_> {
             // The near field: once, after the cells have stopped. Its points are
             // mended from the field they make, and the cells whose mended values
             // now bend split on, their new points mended as they come.
-            if limits.near_field <= 0.0 || field.is_some() || cache.near.is_empty() {
+            if limits.near_field <= 0.0
+                || near_rounds >= NEAR_ROUNDS
+                || (near_rounds == 0 && cache.near.is_empty())
+            {
                 break;
             }
+            near_rounds += 1;
             let mut f = self.near_field(&mut cache, &done);
-            self.mend_near_terms(&mut cache, &mut f, tol);
+            let coarse = self.mend_near_terms(&mut cache, &mut f, tol, near_rounds > 1);
             field = Some(f);
+            let mut coarse_set = vec![false; done.len()];
+            if near_rounds < NEAR_ROUNDS {
+                for j in coarse {
+                    coarse_set[j as usize] = true;
+                }
+            }
+            let mut refined = false;
             let mut kept = Vec::with_capacity(done.len());
-            for (c, corners, centre) in done {
+            for (j, (c, corners, centre)) in done.into_iter().enumerate() {
                 let n = c.n as usize;
                 let b_leaf = self.elems.radiosities.as_slice()[c.leaf.ix()];
                 let interp = mean3(&corner_values(&cache, &corners, n, b_leaf)[..n]);
@@ -581,19 +596,23 @@ impl Solver<'_> {
                 let off = (0..3)
                     .map(|k| (cv[k] - interp[k]).abs())
                     .fold(0.0, f64::max);
-                let split = if ok && off > tol {
+                let split = if ok && (off > tol || coarse_set[j]) {
                     c.split_dirs(min_len, &self.patches)
                 } else {
                     (false, false)
                 };
                 if split != (false, false) {
+                    refined |= coarse_set[j];
                     cells.extend(c.split_along(split));
                 } else {
                     kept.push((c, corners, centre));
                 }
             }
             done = kept;
-            if cells.is_empty() {
+            if !refined {
+                near_rounds = NEAR_ROUNDS;
+            }
+            if cells.is_empty() && near_rounds >= NEAR_ROUNDS {
                 break;
             }
         }
@@ -885,8 +904,14 @@ impl Solver<'_> {
     /// for [`Solver::mend_near_terms`]; the cache's values are left as they are.
     fn near_field(&self, cache: &mut VertexCache, done: &[(Cell, [usize; 4], usize)]) -> NearField {
         let b = self.elems.radiosities.as_slice();
-        let raw = cache.per_leaf.then(|| cache.values.clone());
-        if raw.is_some() {
+        let raw = cache.values.clone();
+        // The field of the gathers as they came, before any mend.
+        for (i, _, d) in &cache.mended {
+            for k in 0..3 {
+                cache.values[*i].0[k] -= d[k];
+            }
+        }
+        if cache.per_leaf {
             self.weld(cache);
         }
         let shift = self.mean_shifts(cache, done);
@@ -913,9 +938,7 @@ impl Solver<'_> {
                 }
             })
             .collect();
-        if let Some(raw) = raw {
-            cache.values = raw;
-        }
+        cache.values = raw;
         NearField {
             cells,
             cells_of,
@@ -934,13 +957,26 @@ impl Solver<'_> {
     /// term; a term whose bound on that (the field's largest distance from `B_s`
     /// over the source) is under [`NEAR_FIELD_SHARE`] of the reconstruction
     /// tolerance `tol` is left alone.
-    fn mend_near_terms(&self, cache: &mut VertexCache, f: &mut NearField, tol: f64) {
+    fn mend_near_terms(
+        &self,
+        cache: &mut VertexCache,
+        f: &mut NearField,
+        tol: f64,
+        again: bool,
+    ) -> Vec<u32> {
         let geoms = self.elems.geoms.as_slice();
         let b = self.elems.radiosities.as_slice();
-        let near = std::mem::take(&mut cache.near);
+        let near: Vec<(usize, NearTerms, [f64; 3])> = if again {
+            std::mem::take(&mut cache.mended)
+        } else {
+            std::mem::take(&mut cache.near)
+                .into_iter()
+                .map(|(i, t)| (i, t, [0.0; 3]))
+                .collect()
+        };
         // Each source of a near term: its cells and the field's largest distance
         // from its constant per channel.
-        for (_, terms) in &near {
+        for (_, terms, _) in &near {
             for &(e, _) in terms {
                 if f.sources.contains_key(&e) {
                     continue;
@@ -970,9 +1006,9 @@ impl Solver<'_> {
         }
         let patches = &self.patches;
         let f = &*f;
-        let moves: Vec<(usize, [f64; 3])> = near
+        let moves: Vec<([f64; 3], Vec<u32>)> = near
             .par_iter()
-            .filter_map(|(i, terms)| {
+            .map(|(i, terms, _)| {
                 let (leaf, patch, uv, toward, _) = cache.points[*i];
                 let p = patch as usize;
                 let x0 = patches.point(p, uv[0] as f64, uv[1] as f64);
@@ -992,7 +1028,7 @@ impl Solver<'_> {
                     )
                 };
                 let mut d = [0.0f64; 3];
-                let mut moved = false;
+                let mut coarse = Vec::new();
                 for &(e, fv) in terms {
                     let src = &f.sources[&e];
                     let bound = (0..3).map(|k| rho[k] * fv * src.dev[k]).fold(0.0, f64::max);
@@ -1001,6 +1037,15 @@ impl Solver<'_> {
                     }
                     let mut acc = ([0.0f64; 3], 0.0f64);
                     for &j in &src.cells {
+                        let c = &f.cells[j as usize];
+                        let centre = c.pts[..c.n].iter().copied().sum::<DVec3>() / c.n as f64;
+                        let r = c.pts[..c.n]
+                            .iter()
+                            .map(|p| p.distance(centre))
+                            .fold(0.0, f64::max);
+                        if r > NEAR_FIELD_RATIO * centre.distance(x) {
+                            coarse.push(j);
+                        }
                         near_cell(
                             x,
                             n,
@@ -1017,16 +1062,21 @@ impl Solver<'_> {
                     for k in 0..3 {
                         d[k] += rho[k] * fv * (acc.0[k] / acc.1 - be[k] as f64);
                     }
-                    moved = true;
                 }
-                moved.then_some((*i, d))
+                (d, coarse)
             })
             .collect();
-        for (i, d) in moves {
-            for (v, d) in cache.values[i].0.iter_mut().zip(d) {
-                *v += d;
+        let mut coarse_all = Vec::new();
+        for ((i, terms, old), (d, coarse)) in near.into_iter().zip(moves) {
+            for k in 0..3 {
+                cache.values[i].0[k] += d[k] - old[k];
             }
+            coarse_all.extend(coarse);
+            cache.mended.push((i, terms, d));
         }
+        coarse_all.sort_unstable();
+        coarse_all.dedup();
+        coarse_all
     }
 
     /// Per gathered point: how far its value is raised so that the cells around
@@ -1206,6 +1256,9 @@ const NEAR_FIELD_RATIO: f64 = 0.3;
 /// A near term is mended only where it could move its point by more than this
 /// share of the reconstruction tolerance ([`Solver::mend_near_terms`]).
 const NEAR_FIELD_SHARE: f64 = 0.25;
+
+/// Most fields the near terms are mended from.
+const NEAR_ROUNDS: u32 = 3;
 
 /// Most times [`near_cell`] halves a field cell.
 const NEAR_SPLIT_DEPTH: u32 = 2;
