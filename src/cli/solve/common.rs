@@ -383,8 +383,8 @@ pub struct AccuracyArgs {
     /// tolerance. It mends the contacts and concave edges, where the mean of a
     /// coarse source misses the dark or bright strip the point sees most: the
     /// Cornell box with blocks 1.61% → 0.94% off the lamp at the default eps, its
-    /// contact points 3.4% → 1.8%, for 15–30% more time (BENCHMARKS.md, "Static
-    /// solver: error against run time").
+    /// contact points 3.4% → 1.8%, for about 25% more time there and 40% on the
+    /// empty box (BENCHMARKS.md, "The near field").
     ///
     /// Off by default because the answer then depends more on how a wall is
     /// tiled: where a large source's field has few cells, the point is mended
