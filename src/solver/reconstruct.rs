@@ -523,17 +523,14 @@ impl Solver<'_> {
                     );
                     let interp = mean3(&vals[..n]);
                     let (cv, ok) = cache.values[centre];
-                    let dev = |v: [f64; 3], m: [f64; 3]| {
-                        (0..3).map(|k| (v[k] - m[k]).abs()).fold(0.0, f64::max)
-                    };
-                    let mut off = dev(cv, interp);
+                    let mut off = max_dev(cv, interp);
                     // An edge's midpoint off its ends' mean: a shadow edge crossing the
                     // cell where its centre does not see it (a root cell a shadow edge
                     // may cross only).
                     for i in (0..n).filter(|&i| mids[i] != usize::MAX) {
                         let (m, m_ok) = cache.values[mids[i]];
                         if m_ok {
-                            off = off.max(dev(m, mean3(&[vals[i], vals[(i + 1) % n]])));
+                            off = off.max(max_dev(m, mean3(&[vals[i], vals[(i + 1) % n]])));
                         }
                     }
                     let cell_tol = if self.motion.moving_patch.get(c.patch as usize) == Some(&true)
@@ -574,13 +571,8 @@ impl Solver<'_> {
             field = Some(f);
             let mut kept = Vec::with_capacity(done.len());
             for (c, corners, centre) in done {
-                let n = c.n as usize;
-                let b_leaf = self.elems.radiosities.as_slice()[c.leaf.ix()];
-                let interp = mean3(&corner_values(&cache, &corners, n, b_leaf)[..n]);
                 let (cv, ok) = cache.values[centre];
-                let off = (0..3)
-                    .map(|k| (cv[k] - interp[k]).abs())
-                    .fold(0.0, f64::max);
+                let off = max_dev(cv, self.corners_mean(&cache, &c, &corners));
                 let split = if ok && off > tol {
                     c.split_dirs(min_len, &self.patches)
                 } else {
@@ -601,9 +593,7 @@ impl Solver<'_> {
         for (c, corners, centre) in &done {
             let (cv, ok) = cache.values[*centre];
             if ok {
-                let n = c.n as usize;
-                let b_leaf = self.elems.radiosities.as_slice()[c.leaf.ix()];
-                let interp = mean3(&corner_values(&cache, corners, n, b_leaf)[..n]);
+                let interp = self.corners_mean(&cache, c, corners);
                 let e = self.patches.emissions[c.patch as usize];
                 for k in 0..3 {
                     interp_num += c.area * (cv[k] - interp[k]).powi(2);
@@ -879,6 +869,14 @@ impl Solver<'_> {
                 cache.values[i].0 = s.map(|x| x / w);
             }
         }
+    }
+
+    /// The mean of the values at the corners of cell `c` (`corners` in `cache`):
+    /// the value the cell interpolates at its centre.
+    fn corners_mean(&self, cache: &VertexCache, c: &Cell, corners: &[usize; 4]) -> [f64; 3] {
+        let n = c.n as usize;
+        let b_leaf = self.elems.radiosities.as_slice()[c.leaf.ix()];
+        mean3(&corner_values(cache, corners, n, b_leaf)[..n])
     }
 
     /// The field of the cells `done` as they would be stored (welded, shifted),
@@ -1215,6 +1213,11 @@ const NEAR_SPLIT_DEPTH: u32 = 2;
 /// times its area ([`near_cell`]), not its exact factor.
 const NEAR_KERNEL_RATIO: f64 = 0.2;
 
+/// The largest difference between `a` and `b` over the three channels.
+fn max_dev(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max)
+}
+
 /// One stored cell of the first field ([`Solver::mend_near_terms`]): its corners
 /// in space and their radiosities (bilinear between them; a triangle linear).
 struct FieldCell {
@@ -1276,10 +1279,10 @@ fn near_cell(
             let bm: [f64; 3] = std::array::from_fn(|j| 0.5 * (c.b[a][j] + c.b[b][j]));
             (0.5 * (c.pts[a] + c.pts[b]), bm)
         };
-        let kids: Vec<[(DVec3, [f64; 3]); 4]> = if k == 3 {
+        let kids: [[(DVec3, [f64; 3]); 4]; 4] = if k == 3 {
             let (m01, m12, m20) = (mid(0, 1), mid(1, 2), mid(2, 0));
             let p = |i: usize| (c.pts[i], c.b[i]);
-            vec![
+            [
                 [p(0), m01, m20, m20],
                 [m01, p(1), m12, m12],
                 [m20, m12, p(2), p(2)],
@@ -1290,7 +1293,7 @@ fn near_cell(
             let cb = mean3(&c.b[..4]);
             let cc = (centre, cb);
             let p = |i: usize| (c.pts[i], c.b[i]);
-            vec![
+            [
                 [p(0), m01, cc, m30],
                 [m01, p(1), m12, cc],
                 [cc, m12, p(2), m23],
