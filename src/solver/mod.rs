@@ -389,6 +389,12 @@ pub struct SolveOptions {
     /// (`src/solver/reconstruct.rs`, "Near field"). Off by default (`--near-field`
     /// says why: the answer depends more on how a wall is tiled).
     pub near_field: bool,
+    /// With [`SolveOptions::near_field`], the most fields its terms are mended
+    /// from (`--near-fields`): 1 mends from the reconstruction's first field;
+    /// more refine the field cells a near term sees coarse, where their spread
+    /// can move the point by a share of the tolerance, gather them and mend the
+    /// terms that saw them again from the finer field, up to this many fields.
+    pub near_fields: u32,
     /// Keep the passive (refined) links of a static solve in the pool, for a caller
     /// that writes every link (`--keep-links`). False, the default: each round
     /// drops them once refined ([`crate::pools::LinkPool::drop_passive`]), which a
@@ -433,6 +439,7 @@ impl Default for SolveOptions {
             near_gap: 0.0,
             source_field: false,
             near_field: false,
+            near_fields: 1,
             keep_passive: false,
             cluster_facets: false,
             row_open_ratio: 0.25,

@@ -27,9 +27,14 @@
 //! ([`Solver::mend_near_terms`]), where that can move the point by a share of the
 //! tolerance, and the cells whose mended values now bend split on (a point by a
 //! concave edge moves more than one a cell further: unsplit, the cell would
-//! interpolate between them). One pass, from the first field (a Jacobi step), in
-//! the manner of a final gather from a first solution (Lischinski et al. 1993
-//! §3).
+//! interpolate between them). From the first field (a Jacobi step), in the
+//! manner of a final gather from a first solution (Lischinski et al. 1993 §3).
+//! With [`super::SolveOptions::near_fields`] above 1, the field cells a term
+//! sees coarse where the field's spread over them could move the point by a
+//! share of the tolerance split (across the way to the point), are gathered, and
+//! the terms that saw a split cell are mended again from the finer field, each
+//! replacing its own move: a one-quad floor's 0.75 m cells otherwise hand a wall
+//! point their bilinear guess at the strip it sees most.
 //!
 //! In a space-time window the
 //! points a frame between two solved frames may take on the line between theirs
@@ -54,6 +59,9 @@ use super::{
 /// with 256; with its leaves out of core too, 128 takes another 0.6–1.8 MiB off
 /// both scenes at the same time (BENCHMARKS.md).
 const GATHER_BATCH: usize = 128;
+
+/// A hash set with aHash, as [`FastMap`].
+type FastSet<K> = std::collections::HashSet<K, ahash::RandomState>;
 
 /// What [`Solver::reconstruct_between`] did.
 #[derive(Clone, Debug, Default)]
@@ -200,6 +208,9 @@ struct VertexCache {
     /// The gathered points with near terms, and those terms
     /// ([`super::gather::NearTerms`], [`Solver::mend_near_terms`]).
     near: Vec<(usize, NearTerms)>,
+    /// Every point mended so far, its near terms and their moves, to mend again
+    /// from a finer field ([`Solver::mend_near_terms`]).
+    mended: Vec<MendedPoint>,
 }
 
 /// What the reconstruction makes of one point: its value, whether it lies outside
@@ -434,6 +445,10 @@ impl Solver<'_> {
         // The first field, once the cells have stopped, to mend the near terms
         // from ([`Solver::near_field`]).
         let mut field: Option<NearField> = None;
+        let mut near_rounds = 0;
+        // The field cells (by their centre points) split since the last field:
+        // the near terms that saw one of them coarse are mended again.
+        let mut split_cells: FastSet<u32> = FastSet::default();
         loop {
             while !cells.is_empty() {
                 // Register every corner and centre, gather the new ones in parallel.
@@ -510,7 +525,7 @@ impl Solver<'_> {
                     }
                 }
                 if let Some(f) = field.as_mut() {
-                    self.mend_near_terms(&mut cache, f, tol);
+                    self.mend_near_terms(&mut cache, f, tol, None, false);
                 }
                 let mut next = Vec::new();
                 for (c, (corners, centre, mids, dirs)) in cells.into_iter().zip(ids) {
@@ -563,29 +578,55 @@ impl Solver<'_> {
             // The near field: once, after the cells have stopped. Its points are
             // mended from the field they make, and the cells whose mended values
             // now bend split on, their new points mended as they come.
-            if limits.near_field <= 0.0 || field.is_some() || cache.near.is_empty() {
+            if limits.near_field <= 0.0
+                || near_rounds >= self.opts.near_fields
+                || (near_rounds == 0 && cache.near.is_empty())
+            {
                 break;
             }
+            near_rounds += 1;
             let mut f = self.near_field(&mut cache, &done);
-            self.mend_near_terms(&mut cache, &mut f, tol);
+            let refine = near_rounds < self.opts.near_fields;
+            let needs = self.mend_near_terms(
+                &mut cache,
+                &mut f,
+                tol,
+                (near_rounds > 1).then_some(&split_cells),
+                refine,
+            );
             field = Some(f);
+            let mut need_set = vec![(false, false); done.len()];
+            for (j, d) in needs {
+                need_set[j as usize] = d;
+            }
+            split_cells.clear();
+            let mut refined = false;
             let mut kept = Vec::with_capacity(done.len());
-            for (c, corners, centre) in done {
+            for (j, (c, corners, centre)) in done.into_iter().enumerate() {
                 let (cv, ok) = cache.values[centre];
                 let off = max_dev(cv, self.corners_mean(&cache, &c, &corners));
-                let split = if ok && off > tol {
-                    c.split_dirs(min_len, &self.patches)
-                } else {
+                let dirs = c.split_dirs(min_len, &self.patches);
+                let (nu, nv) = need_set[j];
+                let split = if !ok {
                     (false, false)
+                } else if off > tol {
+                    dirs
+                } else {
+                    (dirs.0 && nu, dirs.1 && nv)
                 };
                 if split != (false, false) {
+                    refined |= nu || nv;
+                    split_cells.insert(centre as u32);
                     cells.extend(c.split_along(split));
                 } else {
                     kept.push((c, corners, centre));
                 }
             }
             done = kept;
-            if cells.is_empty() {
+            if !refined {
+                near_rounds = self.opts.near_fields;
+            }
+            if cells.is_empty() && near_rounds >= self.opts.near_fields {
                 break;
             }
         }
@@ -880,20 +921,30 @@ impl Solver<'_> {
     }
 
     /// The field of the cells `done` as they would be stored (welded, shifted),
-    /// for [`Solver::mend_near_terms`]; the cache's values are left as they are.
+    /// of the gathers as they came (the near terms' moves taken back), for
+    /// [`Solver::mend_near_terms`]; the cache's values are left as they are.
     fn near_field(&self, cache: &mut VertexCache, done: &[(Cell, [usize; 4], usize)]) -> NearField {
         let b = self.elems.radiosities.as_slice();
-        let raw = cache.per_leaf.then(|| cache.values.clone());
-        if raw.is_some() {
+        let raw = cache.values.clone();
+        for m in &cache.mended {
+            for t in &m.terms {
+                for k in 0..3 {
+                    cache.values[m.point].0[k] -= t.delta[k];
+                }
+            }
+        }
+        if cache.per_leaf {
             self.weld(cache);
         }
         let shift = self.mean_shifts(cache, done);
         let mut cells_of: FastMap<u32, Vec<u32>> = FastMap::default();
+        let mut keys = Vec::with_capacity(done.len());
         let cells = done
             .iter()
             .enumerate()
-            .map(|(j, (c, corners, _))| {
+            .map(|(j, (c, corners, centre))| {
                 cells_of.entry(c.leaf.0).or_default().push(j as u32);
+                keys.push(*centre as u32);
                 let n = c.n as usize;
                 let mut vals = corner_values(cache, corners, n, b[c.leaf.ix()]);
                 for (v, &i) in vals.iter_mut().zip(corners).take(n) {
@@ -911,36 +962,73 @@ impl Solver<'_> {
                 }
             })
             .collect();
-        if let Some(raw) = raw {
-            cache.values = raw;
-        }
+        cache.values = raw;
         NearField {
             cells,
+            keys,
             cells_of,
             sources: FastMap::default(),
         }
     }
 
-    /// Mends the near terms of the gathered points (`cache.near`, then emptied)
-    /// from the field `f` ([`Solver::near_field`]): each such term took its source
-    /// at its constant radiosity `B_s` (the leaf system's), and takes it instead at
-    /// the mean of the field over the source weighted by the point's kernel, `Σ F_c
-    /// B_c / Σ F_c` over the field's cells `c` of the leaves under the source (`B_c`
-    /// a cell's mean), a cell still large seen from the point split further
+    /// Mends the near terms of the gathered points from the field `f`
+    /// ([`Solver::near_field`]): each such term took its source at its constant
+    /// radiosity `B_s` (the leaf system's), and takes it instead at the mean of
+    /// the field over the source weighted by the point's kernel, `Σ F_c B_c / Σ
+    /// F_c` over the field's cells `c` of the leaves under the source (`B_c` a
+    /// cell's mean), a cell still large seen from the point split further
     /// ([`near_cell`]), each (sub-)cell counted only if a ray from the point
     /// reaches its centre. A point moves by `ρ f v (Σ F_c B_c / Σ F_c − B_s)` per
     /// term; a term whose bound on that (the field's largest distance from `B_s`
     /// over the source) is under [`NEAR_FIELD_SHARE`] of the reconstruction
     /// tolerance `tol` is left alone.
-    fn mend_near_terms(&self, cache: &mut VertexCache, f: &mut NearField, tol: f64) {
+    ///
+    /// The new points (`cache.near`, then emptied) are mended whole; with `split`
+    /// (the cells, by centre point, split since the field the terms were mended
+    /// from) a mended point's terms that saw one of those cells coarse are mended
+    /// again, each replacing its own move ([`MendedTerm`]), and no other. With
+    /// `refine`, returns the field cells a term sees coarse (bounding radius above
+    /// [`NEAR_FIELD_RATIO`] times the distance) whose share of the term, times the
+    /// spread of the field's values over the cell, could move the point by more
+    /// than [`NEAR_REFINE_SHARE`] of `tol`: a field that coarse there is the
+    /// bilinear guess of the cell's corners at the strip the point sees most.
+    fn mend_near_terms(
+        &self,
+        cache: &mut VertexCache,
+        f: &mut NearField,
+        tol: f64,
+        split: Option<&FastSet<u32>>,
+        refine: bool,
+    ) -> Vec<CellSplit> {
         let geoms = self.elems.geoms.as_slice();
         let b = self.elems.radiosities.as_slice();
-        let near = std::mem::take(&mut cache.near);
-        // Each source of a near term: its cells and the field's largest distance
-        // from its constant per channel.
-        for (_, terms) in &near {
-            for &(e, _) in terms {
-                if f.sources.contains_key(&e) {
+        let fresh = std::mem::take(&mut cache.near);
+        let first = cache.mended.len();
+        cache.mended.extend(fresh.into_iter().map(|(point, terms)| {
+            MendedPoint {
+                point,
+                terms: terms
+                    .into_iter()
+                    .map(|(source, fv)| MendedTerm {
+                        source,
+                        fv,
+                        delta: [0.0; 3],
+                        seen: Vec::new(),
+                    })
+                    .collect(),
+            }
+        }));
+        // Which term of which point to mend: every term of a new point, the terms
+        // of the others that saw a split cell.
+        let redo = |t: &MendedTerm, slot: usize| {
+            slot >= first || split.is_some_and(|s| t.seen.iter().any(|c| s.contains(c)))
+        };
+        // Each source of a term to mend: its cells and the field's largest
+        // distance from its constant per channel.
+        for (slot, m) in cache.mended.iter().enumerate() {
+            for t in &m.terms {
+                let e = t.source;
+                if f.sources.contains_key(&e) || !redo(t, slot) {
                     continue;
                 }
                 let mut cells = Vec::new();
@@ -968,10 +1056,21 @@ impl Solver<'_> {
         }
         let patches = &self.patches;
         let f = &*f;
-        let moves: Vec<(usize, [f64; 3])> = near
-            .par_iter()
-            .filter_map(|(i, terms)| {
-                let (leaf, patch, uv, toward, _) = cache.points[*i];
+        let points = &cache.points;
+        let mut mended = std::mem::take(&mut cache.mended);
+        let moves: Vec<([f64; 3], Vec<CellSplit>)> = mended
+            .par_iter_mut()
+            .enumerate()
+            .map(|(slot, m)| {
+                let mut d = [0.0f64; 3];
+                let mut needs = Vec::new();
+                let todo: Vec<usize> = (0..m.terms.len())
+                    .filter(|&q| redo(&m.terms[q], slot))
+                    .collect();
+                if todo.is_empty() {
+                    return (d, needs);
+                }
+                let (leaf, patch, uv, toward, _) = points[m.point];
                 let p = patch as usize;
                 let x0 = patches.point(p, uv[0] as f64, uv[1] as f64);
                 let c = patches.point(p, toward[0] as f64, toward[1] as f64);
@@ -989,42 +1088,78 @@ impl Solver<'_> {
                         &mut last,
                     )
                 };
-                let mut d = [0.0f64; 3];
-                let mut moved = false;
-                for &(e, fv) in terms {
-                    let src = &f.sources[&e];
-                    let bound = (0..3).map(|k| rho[k] * fv * src.dev[k]).fold(0.0, f64::max);
-                    if src.cells.is_empty() || bound < NEAR_FIELD_SHARE * tol {
-                        continue;
+                let mut seen_f = Vec::new();
+                for q in todo {
+                    let t = &mut m.terms[q];
+                    let old = t.delta;
+                    t.delta = [0.0; 3];
+                    t.seen.clear();
+                    let src = &f.sources[&t.source];
+                    let bound = (0..3)
+                        .map(|k| rho[k] * t.fv * src.dev[k])
+                        .fold(0.0, f64::max);
+                    if !src.cells.is_empty() && bound >= NEAR_FIELD_SHARE * tol {
+                        let mut acc = ([0.0f64; 3], 0.0f64);
+                        seen_f.clear();
+                        for &j in &src.cells {
+                            let cell = &f.cells[j as usize];
+                            let before = acc.1;
+                            near_cell(
+                                x,
+                                n,
+                                cell,
+                                (NEAR_FIELD_RATIO, NEAR_SPLIT_DEPTH),
+                                &mut visible,
+                                &mut acc,
+                            );
+                            let (centre, r) = cell.sphere();
+                            if r > NEAR_FIELD_RATIO * centre.distance(x) {
+                                t.seen.push(f.keys[j as usize]);
+                                seen_f.push((j, acc.1 - before));
+                            }
+                        }
+                        if acc.1 > 0.0 {
+                            let be = b[t.source as usize];
+                            for k in 0..3 {
+                                t.delta[k] = rho[k] * t.fv * (acc.0[k] / acc.1 - be[k] as f64);
+                            }
+                            if refine {
+                                for &(j, fj) in &seen_f {
+                                    let spread = f.cells[j as usize].spread();
+                                    let w = t.fv * fj / acc.1;
+                                    let moves =
+                                        (0..3).map(|k| rho[k] * w * spread[k]).fold(0.0, f64::max);
+                                    if moves > NEAR_REFINE_SHARE * tol {
+                                        needs.push((j, f.cells[j as usize].toward(x)));
+                                    }
+                                }
+                            }
+                        }
                     }
-                    let mut acc = ([0.0f64; 3], 0.0f64);
-                    for &j in &src.cells {
-                        near_cell(
-                            x,
-                            n,
-                            &f.cells[j as usize],
-                            (NEAR_FIELD_RATIO, NEAR_SPLIT_DEPTH),
-                            &mut visible,
-                            &mut acc,
-                        );
-                    }
-                    if acc.1 <= 0.0 {
-                        continue;
-                    }
-                    let be = b[e as usize];
                     for k in 0..3 {
-                        d[k] += rho[k] * fv * (acc.0[k] / acc.1 - be[k] as f64);
+                        d[k] += t.delta[k] - old[k];
                     }
-                    moved = true;
                 }
-                moved.then_some((*i, d))
+                (d, needs)
             })
             .collect();
-        for (i, d) in moves {
-            for (v, d) in cache.values[i].0.iter_mut().zip(d) {
+        let mut needs_all = Vec::new();
+        for (m, (d, needs)) in mended.iter().zip(moves) {
+            for (v, d) in cache.values[m.point].0.iter_mut().zip(d) {
                 *v += d;
             }
+            needs_all.extend(needs);
         }
+        cache.mended = mended;
+        needs_all.sort_unstable_by_key(|n| n.0);
+        let mut merged: Vec<CellSplit> = Vec::with_capacity(needs_all.len());
+        for (j, (u, v)) in needs_all {
+            match merged.last_mut() {
+                Some(m) if m.0 == j => m.1 = (m.1.0 || u, m.1.1 || v),
+                _ => merged.push((j, (u, v))),
+            }
+        }
+        merged
     }
 
     /// Per gathered point: how far its value is raised so that the cells around
@@ -1205,6 +1340,11 @@ const NEAR_FIELD_RATIO: f64 = 0.3;
 /// share of the reconstruction tolerance ([`Solver::mend_near_terms`]).
 const NEAR_FIELD_SHARE: f64 = 0.25;
 
+/// A field cell a near term sees coarse is split when its share of the term,
+/// times the spread of the field over it, could move the point by more than
+/// this share of the reconstruction tolerance ([`Solver::mend_near_terms`]).
+const NEAR_REFINE_SHARE: f64 = 0.1;
+
 /// Most times [`near_cell`] halves a field cell.
 const NEAR_SPLIT_DEPTH: u32 = 2;
 
@@ -1228,6 +1368,69 @@ struct FieldCell {
     b: [[f64; 3]; 4],
 }
 
+impl FieldCell {
+    /// The centre of the corners and the largest distance of a corner from it.
+    fn sphere(&self) -> (DVec3, f64) {
+        let k = self.n;
+        let centre = self.pts[..k].iter().copied().sum::<DVec3>() / k as f64;
+        let r = self.pts[..k]
+            .iter()
+            .map(|p| p.distance(centre))
+            .fold(0.0, f64::max);
+        (centre, r)
+    }
+
+    /// Along which parameter directions `(u, v)` (a quad's edges from corner 0 to
+    /// 1 and from 0 to 3, see `Cell::split_dirs`) the cell is split for the point
+    /// `x` that sees it coarse: along an axis the way from the point to the cell's
+    /// centre runs at least half as much as along the other (a floor cell by a
+    /// wall seen from the wall's foot: across the wall only, where the field
+    /// bends), both where the point is over the cell; a triangle both.
+    fn toward(&self, x: DVec3) -> (bool, bool) {
+        if self.n == 3 {
+            return (true, true);
+        }
+        let (centre, _) = self.sphere();
+        let w = centre - x;
+        let u = (self.pts[1] - self.pts[0]).normalize_or_zero();
+        let v = (self.pts[3] - self.pts[0]).normalize_or_zero();
+        let (a, b) = (w.dot(u).abs(), w.dot(v).abs());
+        if a.max(b) < 0.5 * w.length() {
+            return (true, true);
+        }
+        (a >= 0.5 * b, b >= 0.5 * a)
+    }
+
+    /// Per channel, the largest value at a corner minus the smallest.
+    fn spread(&self) -> [f64; 3] {
+        std::array::from_fn(|k| {
+            let v = self.b[..self.n].iter().map(|b| b[k]);
+            v.clone().fold(f64::NEG_INFINITY, f64::max) - v.fold(f64::INFINITY, f64::min)
+        })
+    }
+}
+
+/// A field cell to split for the near field, by its index in the field, and
+/// along which of its directions `(u, v)` ([`FieldCell::toward`]).
+type CellSplit = (u32, (bool, bool));
+
+/// A point whose near terms were mended ([`Solver::mend_near_terms`]): its index
+/// in the cache and its terms.
+struct MendedPoint {
+    point: usize,
+    terms: Vec<MendedTerm>,
+}
+
+/// One near term of a mended point: its source, `f v`, the move it made, and
+/// the field cells (by centre point, [`NearField::keys`]) it saw coarse, whose
+/// split has it mended again.
+struct MendedTerm {
+    source: u32,
+    fv: f64,
+    delta: [f64; 3],
+    seen: Vec<u32>,
+}
+
 /// A source of near terms ([`Solver::mend_near_terms`]): its field cells and the
 /// field's largest distance from its constant radiosity per channel.
 struct NearSource {
@@ -1235,11 +1438,14 @@ struct NearSource {
     dev: [f64; 3],
 }
 
-/// The first field of a reconstruction, that its near terms are mended from
+/// A field of a reconstruction, that its near terms are mended from
 /// ([`Solver::near_field`], [`Solver::mend_near_terms`]).
 struct NearField {
     /// Every stored cell.
     cells: Vec<FieldCell>,
+    /// Each cell's centre point (its key in the cache), that a cell keeps from
+    /// one field to the next ([`MendedTerm::seen`]).
+    keys: Vec<u32>,
     /// `leaf →` its cells.
     cells_of: FastMap<u32, Vec<u32>>,
     /// The sources met so far.

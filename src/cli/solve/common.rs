@@ -393,6 +393,19 @@ pub struct AccuracyArgs {
     /// bar the default holds). Space-time windows that span time do without it.
     #[arg(long)]
     pub near_field: bool,
+    /// With `--near-field`: the most fields its terms are mended from. 1 mends
+    /// from the reconstruction's first field. More refine the field where a
+    /// mended point sees a cell coarse and the field's spread over the cell can
+    /// move the point by a tenth of the reconstruction tolerance (a floor cell by
+    /// a wall, split across the wall only), gather the new points and mend again
+    /// the terms that saw a refined cell, up to this many fields.
+    ///
+    /// 3 makes the near field tiling-independent (the one-quad room against the
+    /// tiled room of tests/it/solver/tiled_lamp.rs, 1.17% -> 0.57% at worst; the
+    /// walls tiled three ways 1.00% -> 0.91%) for about 2.5x the CPU of 1 on the
+    /// Cornell box (BENCHMARKS.md, "The near field").
+    #[arg(long, default_value_t = SolveOptions::default().near_fields)]
+    pub near_fields: u32,
     /// Take a cluster whose patches face a few ways (a box, a group of boxes)
     /// whole in the leaf rows and final gathers wherever each of its orientations
     /// is wholly in front of or behind the point, each orientation at its own
@@ -686,6 +699,7 @@ impl AccuracyArgs {
             leaf_shapes: a.leaf_shapes,
             source_field: a.source_field,
             near_field: a.near_field,
+            near_fields: a.near_fields,
             cluster_facets: a.cluster_facets,
             near_gap: a.near_gap,
             max_rounds: a.max_rounds,

@@ -74,10 +74,17 @@ fn points() -> Vec<ProbePoint> {
 }
 
 fn radiosity(scene: &Scene, eps: f64) -> Vec<f64> {
-    let opts = SolveOptions {
-        eps,
-        ..SolveOptions::default()
-    };
+    radiosity_with(
+        scene,
+        SolveOptions {
+            eps,
+            ..SolveOptions::default()
+        },
+    )
+}
+
+/// [`radiosity`] under `opts`.
+fn radiosity_with(scene: &Scene, opts: SolveOptions) -> Vec<f64> {
     let (sol, _) = solve(scene, opts).expect("solve");
     probe(&sol, &points(), 0.0)
         .expect("probe")
@@ -114,10 +121,16 @@ fn worst_apart(base: Tiling, others: &[Tiling]) -> f64 {
 
 /// [`worst_apart`] with the lamp hung `gap` under the ceiling.
 fn worst_apart_at(gap: f64, base: Tiling, others: &[Tiling]) -> f64 {
-    let a = radiosity(&lamp_room_at(base, gap), 0.5);
+    worst_apart_with(gap, base, others, SolveOptions::default())
+}
+
+/// [`worst_apart_at`] under `opts` (at eps 0.5).
+fn worst_apart_with(gap: f64, base: Tiling, others: &[Tiling], opts: SolveOptions) -> f64 {
+    let opts = SolveOptions { eps: 0.5, ..opts };
+    let a = radiosity_with(&lamp_room_at(base, gap), opts.clone());
     let mut worst = 0.0f64;
     for &tiling in others {
-        let b = radiosity(&lamp_room_at(tiling, gap), 0.5);
+        let b = radiosity_with(&lamp_room_at(tiling, gap), opts.clone());
         let (i, w) = a
             .iter()
             .zip(&b)
@@ -171,6 +184,35 @@ fn the_tiling_of_the_walls_changes_little() {
 #[test]
 fn one_quad_per_wall_agrees_with_the_tiled_room() {
     let worst = worst_apart(Tiling::Quads(6), &[Tiling::Quads(1)]);
+    assert!(worst < 0.01, "{worst}");
+}
+
+/// The near field refined to three fields (`SolveOptions::near_fields`) keeps
+/// the rooms of [`the_tiling_of_the_walls_changes_little`] and
+/// [`one_quad_per_wall_agrees_with_the_tiled_room`] within 1% at every point.
+/// Measured 2026-12-03: one quad 0.57% from the tiled room at worst, unequal
+/// triangles 0.85%, T-junctions 0.91%. From its first field alone (one field)
+/// one quad read 1.17% (at a wall point 0.3 m over the floor, mended from the
+/// one-quad floor's 0.75 m cells) and T-junctions 1.00%; refining cells where
+/// the field's spread could move a point by a quarter of the tolerance (not a
+/// tenth), T-junctions 1.00%.
+#[test]
+fn the_refined_near_field_keeps_the_tilings_alike() {
+    let opts = SolveOptions {
+        near_field: true,
+        near_fields: 3,
+        ..SolveOptions::default()
+    };
+    let worst = worst_apart_with(
+        0.01,
+        Tiling::Quads(6),
+        &[
+            Tiling::Quads(1),
+            Tiling::UnequalTriangles(4),
+            Tiling::TJunctions(3),
+        ],
+        opts,
+    );
     assert!(worst < 0.01, "{worst}");
 }
 

@@ -62,6 +62,7 @@ fn in_key() -> Vec<(&'static str, Change)> {
         }),
         ("solve.near_gap", |o, _| o.near_gap += 0.1),
         ("solve.near_field", |o, _| o.near_field = !o.near_field),
+        ("solve.near_fields", |o, _| o.near_fields += 1),
         ("space_time.fps", |_, s| s.fps *= 2.0),
         ("space_time.window", |_, s| s.window = Some(0.5)),
         ("space_time.merge_tol", |_, s| s.merge_tol *= 0.5),
