@@ -99,6 +99,9 @@ struct Cell {
     n: u32,
     uv: [[f32; 2]; 4],
     area: f64,
+    /// The centre point of the field cell it was split from for the near field
+    /// ([`NearField::origins`]; `u32::MAX` for none).
+    origin: u32,
 }
 
 impl Cell {
@@ -435,6 +438,7 @@ impl Solver<'_> {
                     n: g.n,
                     uv: g.uv,
                     area: g.area,
+                    origin: u32::MAX,
                 }
             })
             .collect();
@@ -617,7 +621,12 @@ impl Solver<'_> {
                 if split != (false, false) {
                     refined |= nu || nv;
                     split_cells.insert(centre as u32);
-                    cells.extend(c.split_along(split));
+                    let origin = centre as u32;
+                    cells.extend(
+                        c.split_along(split)
+                            .into_iter()
+                            .map(|k| Cell { origin, ..k }),
+                    );
                 } else {
                     kept.push((c, corners, centre));
                 }
@@ -939,12 +948,14 @@ impl Solver<'_> {
         let shift = self.mean_shifts(cache, done);
         let mut cells_of: FastMap<u32, Vec<u32>> = FastMap::default();
         let mut keys = Vec::with_capacity(done.len());
+        let mut origins = Vec::with_capacity(done.len());
         let cells = done
             .iter()
             .enumerate()
             .map(|(j, (c, corners, centre))| {
                 cells_of.entry(c.leaf.0).or_default().push(j as u32);
                 keys.push(*centre as u32);
+                origins.push(c.origin);
                 let n = c.n as usize;
                 let mut vals = corner_values(cache, corners, n, b[c.leaf.ix()]);
                 for (v, &i) in vals.iter_mut().zip(corners).take(n) {
@@ -966,6 +977,7 @@ impl Solver<'_> {
         NearField {
             cells,
             keys,
+            origins,
             cells_of,
             sources: FastMap::default(),
         }
@@ -986,7 +998,9 @@ impl Solver<'_> {
     /// The new points (`cache.near`, then emptied) are mended whole; with `split`
     /// (the cells, by centre point, split since the field the terms were mended
     /// from) a mended point's terms that saw one of those cells coarse are mended
-    /// again, each replacing its own move ([`MendedTerm`]), and no other. With
+    /// again, each replacing its own move ([`MendedTerm`]), and no other, summing
+    /// again only the cells it saw coarse and their children (the rest, its far
+    /// part, as they were: [`MendedTerm::far`]). With
     /// `refine`, returns the field cells a term sees coarse (bounding radius above
     /// [`NEAR_FIELD_RATIO`] times the distance) whose share of the term, times the
     /// spread of the field's values over the cell, could move the point by more
@@ -1014,6 +1028,7 @@ impl Solver<'_> {
                         fv,
                         delta: [0.0; 3],
                         seen: Vec::new(),
+                        far: ([0.0; 3], 0.0),
                     })
                     .collect(),
             }
@@ -1093,30 +1108,69 @@ impl Solver<'_> {
                     let t = &mut m.terms[q];
                     let old = t.delta;
                     t.delta = [0.0; 3];
-                    t.seen.clear();
+                    // A new term sums every cell; one mended before keeps its far
+                    // part and sums again the cells it saw coarse and their children.
+                    let again = slot < first;
+                    let mut seen_before = std::mem::take(&mut t.seen);
+                    seen_before.sort_unstable();
+                    if !again {
+                        t.far = ([0.0; 3], 0.0);
+                    }
                     let src = &f.sources[&t.source];
                     let bound = (0..3)
                         .map(|k| rho[k] * t.fv * src.dev[k])
                         .fold(0.0, f64::max);
                     if !src.cells.is_empty() && bound >= NEAR_FIELD_SHARE * tol {
-                        let mut acc = ([0.0f64; 3], 0.0f64);
+                        let mut acc = if again { t.far } else { ([0.0f64; 3], 0.0f64) };
                         seen_f.clear();
                         for &j in &src.cells {
-                            let cell = &f.cells[j as usize];
-                            let before = acc.1;
+                            let ju = j as usize;
+                            let was_seen = |k: u32| seen_before.binary_search(&k).is_ok();
+                            if again && !was_seen(f.keys[ju]) && !was_seen(f.origins[ju]) {
+                                continue;
+                            }
+                            let cell = &f.cells[ju];
+                            let (centre, r) = cell.sphere();
+                            let coarse = r > NEAR_FIELD_RATIO * centre.distance(x);
+                            if !coarse && !again {
+                                near_cell(
+                                    x,
+                                    n,
+                                    cell,
+                                    (NEAR_FIELD_RATIO, NEAR_SPLIT_DEPTH),
+                                    &mut visible,
+                                    &mut t.far,
+                                );
+                                continue;
+                            }
+                            let mut one = ([0.0f64; 3], 0.0f64);
                             near_cell(
                                 x,
                                 n,
                                 cell,
                                 (NEAR_FIELD_RATIO, NEAR_SPLIT_DEPTH),
                                 &mut visible,
-                                &mut acc,
+                                &mut one,
                             );
-                            let (centre, r) = cell.sphere();
-                            if r > NEAR_FIELD_RATIO * centre.distance(x) {
-                                t.seen.push(f.keys[j as usize]);
-                                seen_f.push((j, acc.1 - before));
+                            for k in 0..3 {
+                                acc.0[k] += one.0[k];
                             }
+                            acc.1 += one.1;
+                            if coarse {
+                                t.seen.push(f.keys[ju]);
+                                seen_f.push((j, one.1));
+                            } else {
+                                for k in 0..3 {
+                                    t.far.0[k] += one.0[k];
+                                }
+                                t.far.1 += one.1;
+                            }
+                        }
+                        if !again {
+                            for k in 0..3 {
+                                acc.0[k] += t.far.0[k];
+                            }
+                            acc.1 += t.far.1;
                         }
                         if acc.1 > 0.0 {
                             let be = b[t.source as usize];
@@ -1429,6 +1483,9 @@ struct MendedTerm {
     fv: f64,
     delta: [f64; 3],
     seen: Vec<u32>,
+    /// `(Σ F B̄, Σ F)` over the cells it did not see coarse, which a later field
+    /// leaves as they were.
+    far: ([f64; 3], f64),
 }
 
 /// A source of near terms ([`Solver::mend_near_terms`]): its field cells and the
@@ -1446,6 +1503,9 @@ struct NearField {
     /// Each cell's centre point (its key in the cache), that a cell keeps from
     /// one field to the next ([`MendedTerm::seen`]).
     keys: Vec<u32>,
+    /// Each cell's [`Cell::origin`]: the cell of an earlier field it was split
+    /// from, whose terms' far part stands ([`MendedTerm::far`]).
+    origins: Vec<u32>,
     /// `leaf →` its cells.
     cells_of: FastMap<u32, Vec<u32>>,
     /// The sources met so far.
@@ -1581,6 +1641,7 @@ mod tests {
                 n: 4,
                 uv,
                 area: e(0, 1) * e(0, 3),
+                origin: u32::MAX,
             }
         };
         let strip = cell(1.0, 0.02);
