@@ -16,6 +16,10 @@ inflates less than the wall time.
 Arguments after `--` go to every `rhier solve` (e.g. `-- --recon-tol 0.02
 --no-contact-meshing`, to measure a setting against the default).
 
+The worst point: of the grid points off the lamp (and apart, of the contact
+points), the one whose largest channel is furthest from the reference, relative
+to the reference's largest channel.
+
 Probe points: a 3 x 3 grid on every published polygon (inset, triangles strictly
 inside), plus, with the
 blocks, points on the floor 2, 5, 10, 20, 40 mm from the middle of every block base
@@ -88,6 +92,16 @@ def rel_rms(b, r):
     return math.sqrt(num / den)
 
 
+def worst_point(b, r, idx):
+    """The point of `idx` whose largest channel difference is largest against its
+    reference's largest channel: (relative error, index)."""
+    best = (0.0, -1)
+    for i in idx:
+        d = max(abs(x - y) for x, y in zip(b[i], r[i])) / max(max(r[i]), 1e-12)
+        best = max(best, (d, i))
+    return best
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("rhier")
@@ -148,10 +162,16 @@ def main():
             err_contact = rel_rms(b[n_grid:], ref[n_grid:]) if len(b) > n_grid else float("nan")
             lit = [i for i in range(len(b)) if i >= n_grid or not emits[i]]
             err_lit = rel_rms([b[i] for i in lit], [ref[i] for i in lit])
-            rows.append((name, eps, best, cpu, err, err_grid, err_contact, err_lit))
-            print(f"{name:15s} eps {eps:<5} {best:7.3f} s  cpu {cpu:7.3f} s  off the lamp {err_lit:.4f}  contact {err_contact:.4f}  (all points {err:.4f}, grid {err_grid:.4f})", flush=True)
+            at = lambda i: "(" + " ".join(f"{c:.0f}" for c in pts[i]["p"]) + ")"
+            worst, wi = worst_point(b, ref, [i for i in lit if i < n_grid])
+            line = f"worst grid point {worst:.4f} at {at(wi)}"
+            worst_c, wc = worst_point(b, ref, range(n_grid, len(b)))
+            if wc >= 0:
+                line += f", worst contact point {worst_c:.4f} at {at(wc)}"
+            rows.append((name, eps, best, cpu, err, err_grid, err_contact, err_lit, worst, at(wi), worst_c if wc >= 0 else float("nan")))
+            print(f"{name:15s} eps {eps:<5} {best:7.3f} s  cpu {cpu:7.3f} s  off the lamp {err_lit:.4f}  contact {err_contact:.4f}  {line}  (all points {err:.4f}, grid {err_grid:.4f})", flush=True)
     with open(os.path.join(args.out, "cornell_error_vs_time.csv"), "w") as f:
-        f.write("scene,eps,seconds,cpu_seconds,error,error_grid,error_contact,error_non_emitters\n")
+        f.write("scene,eps,seconds,cpu_seconds,error,error_grid,error_contact,error_non_emitters,worst_grid_error,worst_grid_point,worst_contact_error\n")
         for r in rows:
             f.write(",".join(str(x) for x in r) + "\n")
 

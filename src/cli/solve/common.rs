@@ -382,8 +382,8 @@ pub struct AccuracyArgs {
     /// wherever that moves the point by more than a share of the reconstruction
     /// tolerance. It mends the contacts and concave edges, where the mean of a
     /// coarse source misses the dark or bright strip the point sees most: the
-    /// Cornell box with blocks 1.61% → 0.94% off the lamp at the default eps, its
-    /// contact points 3.4% → 1.8%, for about 25% more time there and 40% on the
+    /// Cornell box with blocks 1.66% → 1.01% off the lamp at the default eps, its
+    /// contact points 3.5% → 1.9%, for about 25% more time there and 40% on the
     /// empty box (BENCHMARKS.md, "The near field").
     ///
     /// Off by default because the answer then depends more on how a wall is
