@@ -167,6 +167,7 @@ fn small_part_rays(m: u32, k: f64) -> u32 {
 /// factor, were 17% of the solve's samples and the largest single item
 /// (`perf record`, BENCHMARKS.md "Scale"): a point by the boxes sees many box
 /// faces partly hidden at factors of 3e-3 to 2e-2.
+#[allow(dead_code)] // experiment h48rays2: replaced by surface_recast_rays
 fn recast_rays(m: u32, k: f64) -> u32 {
     let full = m * super::rows::PARTIAL_CLUSTER_RAYS;
     let scaled = (f64::from(m) * k / PARTIAL_PART_MIN_FACTOR).ceil();
@@ -210,6 +211,20 @@ fn emitter_recast_rays(m: u32, w: f64, tol: f64) -> u32 {
     } else {
         need.min(f64::from(full)) as u32
     }
+}
+
+/// The rays a partly hidden non-emitting surface source whose term at a
+/// final-gather point weighs `w` (`ρ_x k B_s`) is cast again with:
+/// [`emitter_recast_rays`]' weight-at-tolerance rule, at least twice the first
+/// rays (the floor [`recast_rays`] keeps for the row sums of the L-shaped room,
+/// [`Solver::surface_visibility`]). Experiment (branch h48rays2); `RHIER_NOFLOOR` set: no floor (the first
+/// `m` rays kept where the weight asks no more).
+fn surface_recast_rays(m: u32, w: f64, tol: f64) -> u32 {
+    let full = m * super::rows::PARTIAL_CLUSTER_RAYS;
+    static NO_FLOOR: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let no_floor = *NO_FLOOR.get_or_init(|| std::env::var_os("RHIER_NOFLOOR").is_some());
+    let floor = if no_floor { m } else { (2 * m).min(full) };
+    emitter_recast_rays(m, w, tol).max(floor)
 }
 
 /// A source is near a point only if the point's normal is within this cosine of
@@ -1000,7 +1015,8 @@ impl Solver<'_> {
             let w = self.term_weight(r.skip[0], s, k);
             emitter_recast_rays(r.m, w, limits.recast_tol)
         } else {
-            recast_rays(r.m, k)
+            let w = self.term_weight(r.skip[0], s, k);
+            surface_recast_rays(r.m, w, limits.recast_tol)
         };
         if m <= r.m {
             return v;
