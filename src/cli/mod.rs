@@ -33,7 +33,9 @@ enum Command {
     /// a final gather. A scene with motion is solved over its whole time domain, in
     /// time windows that share what does not move (space-time), or frame by frame
     /// with `--per-frame`. The answer goes to a `.rhier` file that `rhier probe`,
-    /// `play` and `inspect` read back.
+    /// `play` and `inspect` read back. Patches that no emitter's light can reach
+    /// (sealed off by a closed shell) are stored black without being solved
+    /// (`--no-sealed`).
     ///
     /// The last line of a static solve says how much of the emitted power the
     /// solution absorbs: no exact answer absorbs more, and a closed scene absorbs all

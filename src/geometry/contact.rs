@@ -89,6 +89,22 @@ pub struct ContactStats {
 /// time, whatever `t` (module docs, "Moving objects"): every frame of an animation
 /// gets the same patches.
 pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, ContactStats) {
+    split_at_contacts_but(scene, patches, t, &[])
+}
+
+/// [`split_at_contacts`], with the patches `cut_nothing` marks (a flag per patch
+/// of `patches`; empty: none) cutting no other: the patches no light reaches
+/// ([`super::Shells::dark`]). Such a patch touches a lit one only from behind (a
+/// sealed room's wall against the lit room's) or along lines the lit faces of its
+/// own solid give anyway (a crate's bottom on the floor, its sides standing
+/// there), and cut along it, the lit wall of a room took every edge of the dark
+/// room's tessellated wall behind it.
+pub fn split_at_contacts_but(
+    scene: &Scene,
+    patches: &Patches,
+    t: f64,
+    cut_nothing: &[bool],
+) -> (Patches, ContactStats) {
     // The static part does not depend on the time; the moving objects stand where
     // they stand at the start (module docs, "Moving objects").
     let start = scene.time.start;
@@ -119,11 +135,12 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
             continue;
         }
         let n = patches.normals[i];
+        let cuts_nothing = |j: usize| moving(j) || cut_nothing.get(j).copied().unwrap_or(false);
         let Contacts {
             lines,
             facing,
             covering,
-        } = contacts(patches, &bvh, i, &moving, tol, near_gap);
+        } = contacts(patches, &bvh, i, &cuts_nothing, tol, near_gap);
         let pieces = cut_by_lines(poly, n, lines, tol);
         // Hidden: inside the solid resting on the patch (the first thing straight
         // above is a back face), or a face resting face to face on a coplanar

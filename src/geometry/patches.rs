@@ -29,7 +29,8 @@ pub struct Patches {
     pub objects: Vec<u32>,
     /// Object-space description (what the store keeps).
     pub geometry: Vec<PatchGeometry>,
-    /// Diameter of the bounding box of all patches.
+    /// Diameter of the bounding box of all patches (the solver's scale: it keeps
+    /// the lit patches' box alone when some are dark, `Solver::at_time`).
     pub diameter: f64,
 }
 

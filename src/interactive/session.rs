@@ -145,6 +145,8 @@ impl<'a> Session<'a> {
         // Moves refine the hierarchy further: keep the refined links a static solve
         // would drop ([`SolveOptions::keep_passive`]).
         opts.keep_passive = true;
+        // A move may open a shell: no patch is left out as dark.
+        opts.sealed_regions = false;
         let mut solver = Solver::new(&stage.scene, opts)?;
         if stage.scene.has_emitter() {
             solver.run(|_, _| {})?;
@@ -166,6 +168,8 @@ impl<'a> Session<'a> {
         file: &Path,
     ) -> Result<Self> {
         opts.keep_passive = true;
+        // A move may open a shell: no patch is left out as dark.
+        opts.sealed_regions = false;
         let movable = stage.movable_names();
         if h.movable != movable {
             return Err(Error::Usage(format!(

@@ -21,10 +21,17 @@ use crate::pools::{ElementId, ElementKind, ElementPool};
 
 /// Builds the cluster tree and patch roots into an empty pool; returns the root
 /// (`None` for a scene with no patches). Every element gets time range `time`.
+///
+/// `dark` (empty, or a flag per patch): patches no light reaches
+/// ([`crate::geometry::dark_patches`]). When some are and some are not, the root's
+/// two children are the lit patches' tree and the dark patches' tree, so that no
+/// cluster mixes them and the lit tree is the one the lit patches alone would
+/// make.
 pub fn build(
     pool: &mut ElementPool,
     patches: &Patches,
     time: [f32; 2],
+    dark: &[bool],
 ) -> Result<Option<ElementId>> {
     if patches.is_empty() {
         return Ok(None);
@@ -35,13 +42,19 @@ pub fn build(
     } else {
         push_cluster(pool, patches, &ids, u32::MAX, 0, time)?
     };
+    let is_dark = |i: u32| dark.get(i as usize).copied().unwrap_or(false);
+    let split_dark = ids.iter().any(|&i| is_dark(i)) && ids.iter().any(|&i| !is_dark(i));
     // Top-down: each cluster allocates its two children together.
     let mut stack = vec![(root, std::mem::take(&mut ids))];
     while let Some((cluster, members)) = stack.pop() {
         if pool.kind(cluster) != ElementKind::Cluster {
             continue;
         }
-        let (left, right) = split_median(patches, members);
+        let (left, right) = if cluster == root && split_dark {
+            members.into_iter().partition(|&i| !is_dark(i))
+        } else {
+            split_median(patches, members)
+        };
         let depth = pool.nodes.as_slice()[cluster.ix()].depth.saturating_add(1);
         let first = pool.len() as u32;
         let mut kids = Vec::with_capacity(2);

@@ -74,7 +74,9 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::Result;
-use crate::geometry::{Patches, SceneBvh, cosine_direction, point_to_polygon, split_at_contacts};
+use crate::geometry::{
+    Patches, SceneBvh, Shells, cosine_direction, point_to_polygon, split_at_contacts_but,
+};
 use crate::oracle::{self, EvalSettings, Split};
 use crate::pools::elements::{Cone, Geom, Node};
 use crate::pools::links::{Ends, Retained, Transport};
@@ -322,9 +324,10 @@ pub struct SolveOptions {
     pub recon_tol_moving: Option<f64>,
     /// Smallest reconstruction cell edge, as a fraction of the scene's diameter.
     pub recon_min_size: f64,
-    /// Cut patches along contact lines before solving ([`split_at_contacts`]). On
-    /// by default: it lowers the error at contact points; in cluttered scenes it
-    /// multiplies patches (BENCHMARKS.md, "Contact meshing").
+    /// Cut patches along contact lines before solving
+    /// ([`crate::geometry::split_at_contacts`]). On by default: it lowers the error
+    /// at contact points; in cluttered scenes it multiplies patches (BENCHMARKS.md,
+    /// "Contact meshing").
     pub contact_meshing: bool,
     /// Edge, as a fraction of the scene's diameter, of the square area `A_p` below
     /// which a receiver is refined on the *power* its links may get wrong instead of
@@ -402,6 +405,12 @@ pub struct SolveOptions {
     /// that hide each other, and the leaf system made 12% more light than was
     /// emitted (BENCHMARKS.md, "Scale"). Scenes without motion only.
     pub cluster_facets: bool,
+    /// Leave out of every link and gather the patches no emitter's light can reach
+    /// (inside closed shells the emitters are outside of, and the reverse:
+    /// [`crate::geometry::dark_patches`]), and store them black. On by default; a
+    /// scene with motion and an interactive session (whose moves may open a shell)
+    /// never do it.
+    pub sealed_regions: bool,
 }
 
 impl Default for SolveOptions {
@@ -435,6 +444,7 @@ impl Default for SolveOptions {
             near_field: false,
             keep_passive: false,
             cluster_facets: false,
+            sealed_regions: true,
             row_open_ratio: 0.25,
             cluster_open_ratio: CLUSTER_OPEN_RATIO,
         }
@@ -565,6 +575,12 @@ pub struct Solver<'a> {
     /// Per cluster built at the start (and patch root): true if an emitting patch
     /// lies under it.
     emits_under: Vec<bool>,
+    /// Per patch: no emitter's light reaches it ([`SolveOptions::sealed_regions`]);
+    /// empty when none is dark. Dark patches get no link and gather nothing.
+    dark: Vec<bool>,
+    /// Per element of the built tree: every patch under it is dark (empty when
+    /// none is). Elements split later are dark with their patch.
+    dark_under: Vec<bool>,
     /// The facets of the clusters as they stood at the start or at
     /// [`Solver::freeze_motion`] ([`facets`]; unused in a scene with motion).
     facets: facets::ClusterFacets,
@@ -777,18 +793,37 @@ impl<'a> Solver<'a> {
     /// labels the solution's leaves with the time range `range`. The patch set does
     /// not depend on `t`: contact meshing only cuts along static objects, and hides
     /// the pieces inside moving ones where they stand at the scene's start time
-    /// ([`split_at_contacts`]).
+    /// ([`crate::geometry::split_at_contacts`]).
     pub fn at_time(scene: &'a Scene, opts: SolveOptions, t: f64, range: [f32; 2]) -> Result<Self> {
         opts.validate()?;
-        let mut patches = Patches::at_time(scene, t);
-        if opts.contact_meshing {
-            patches = split_at_contacts(scene, &patches, t).0;
-        }
+        let loaded = Patches::at_time(scene, t);
+        // Sealed regions only where nothing moves: a moving object may open a
+        // shell or carry light through it.
+        let moves = scene.objects.iter().any(|o| o.is_moving());
+        let shells = (opts.sealed_regions && !moves).then(|| Shells::find(&loaded));
+        let shells = shells.filter(|s| !s.is_empty());
+        let mut patches = if opts.contact_meshing {
+            // What no light reaches cuts nothing lit (`split_at_contacts_but`).
+            let dark = shells.as_ref().map(|s| s.dark(&loaded).dark);
+            split_at_contacts_but(scene, &loaded, t, dark.as_deref().unwrap_or(&[])).0
+        } else {
+            loaded.clone()
+        };
+        let dark = shells.map(|s| s.dark(&patches).dark).unwrap_or_default();
+        drop(loaded);
+        let dark = if dark.iter().any(|&d| d) {
+            // The solve's scale (its floors and tolerances) is the lit part's: a
+            // dark room beside a lit one changes nothing of the lit one's solve.
+            patches.diameter = lit_diameter(&patches, &dark);
+            dark
+        } else {
+            Vec::new()
+        };
         let bvh = SceneBvh::build(scene, &patches, t);
         let mut elems = ElementPool::new(&opts.storage)?;
         let links = LinkPool::new(&opts.storage)?;
         let time = range;
-        let root = hierarchy::build(&mut elems, &patches, time)?;
+        let root = hierarchy::build(&mut elems, &patches, time, &dark)?;
         let diam = patches.diameter;
         let rho_max = patches
             .rhos
@@ -815,6 +850,8 @@ impl<'a> Solver<'a> {
             time,
             rho_max,
             emits_under: Vec::new(),
+            dark,
+            dark_under: Vec::new(),
             facets: facets::ClusterFacets::default(),
             facet_b: Vec::new(),
             sys: LeafSystem::default(),
@@ -847,6 +884,10 @@ impl<'a> Solver<'a> {
             s.facets = facets::ClusterFacets::build(&s.elems);
         }
         s.emits_under = any_patch_under(&s.elems, |p| s.patches.emits(p));
+        if !s.dark.is_empty() {
+            let lit = any_patch_under(&s.elems, |p| !s.dark[p]);
+            s.dark_under = lit.into_iter().map(|l| !l).collect();
+        }
         // Initial guess B = E at the patch roots, pulled up.
         for i in 0..s.elems.len() {
             let g = s.elems.geoms.as_slice()[i];
@@ -1198,7 +1239,14 @@ impl<'a> Solver<'a> {
     /// `count` sample points of the error estimate, spread over the patches by
     /// area (stratified, a fixed hash for the jitter), those inside solids left out.
     fn error_samples(&self, count: usize) -> Vec<ErrorSample> {
-        let total: f64 = self.patches.areas.iter().sum();
+        let area = |p: usize| {
+            if self.dark_patch(p) {
+                0.0
+            } else {
+                self.patches.areas[p]
+            }
+        };
+        let total: f64 = (0..self.patches.len()).map(area).sum();
         if total.is_nan() || total <= 0.0 {
             return Vec::new();
         }
@@ -1208,9 +1256,12 @@ impl<'a> Solver<'a> {
         for i in 0..count {
             let r = |k: u64| oracle::unit(oracle::hash3(self.opts.seed, i as u64, k));
             let target = (i as f64 + r(1)) / count as f64 * total;
-            while p + 1 < self.patches.len() && acc + self.patches.areas[p] < target {
-                acc += self.patches.areas[p];
+            while p + 1 < self.patches.len() && (acc + area(p) < target || area(p) == 0.0) {
+                acc += area(p);
                 p += 1;
+            }
+            if self.dark_patch(p) {
+                continue;
             }
             let (mut u, mut v) = (r(2), r(3));
             if self.patches.polys[p].n == 3 && u + v > 1.0 {
@@ -1329,6 +1380,9 @@ impl<'a> Solver<'a> {
     fn enclosure_estimate(&self) -> f64 {
         let (mut ae, mut ar, mut a) = (0.0, 0.0, 0.0);
         for i in 0..self.patches.len() {
+            if self.dark_patch(i) {
+                continue;
+            }
             let area = self.patches.areas[i];
             ae += area
                 * self.patches.emissions[i]
@@ -1365,6 +1419,9 @@ impl<'a> Solver<'a> {
         let (mut s, mut a) = (0.0, 0.0);
         for &l in &self.sys.leaves {
             let g = &self.elems.geoms.as_slice()[l.ix()];
+            if self.dark_patch(g.patch as usize) {
+                continue;
+            }
             let b = self.elems.radiosities.as_slice()[l.ix()];
             let e = self.patches.emissions[g.patch as usize];
             let m = (0..3)
@@ -1374,6 +1431,30 @@ impl<'a> Solver<'a> {
             a += g.area;
         }
         if a > 0.0 { (s / a).sqrt() } else { 0.0 }
+    }
+
+    /// True if no emitter's light reaches patch `p` ([`SolveOptions::sealed_regions`]).
+    pub fn dark_patch(&self, p: usize) -> bool {
+        self.dark.get(p).copied().unwrap_or(false)
+    }
+
+    /// True if every patch under element `e` is dark: it gathers nothing and sends
+    /// nothing, and the solve gives it no link.
+    pub(crate) fn is_dark(&self, e: ElementId) -> bool {
+        if self.dark.is_empty() {
+            return false;
+        }
+        let p = self.elems.geoms.as_slice()[e.ix()].patch;
+        if p != u32::MAX {
+            self.dark_patch(p as usize)
+        } else {
+            self.dark_under.get(e.ix()).copied().unwrap_or(false)
+        }
+    }
+
+    /// Patches no emitter's light reaches ([`SolveOptions::sealed_regions`]).
+    pub fn dark_patch_count(&self) -> usize {
+        self.dark.iter().filter(|&&d| d).count()
     }
 
     fn rho_of(&self, e: ElementId) -> f64 {
@@ -1479,6 +1560,10 @@ impl<'a> Solver<'a> {
                 }
                 self.links.set_passive(l);
                 changed = true;
+            }
+            // Light never crosses into or out of a dark element ([`Solver::is_dark`]).
+            if !self.dark.is_empty() {
+                pairs.retain(|&(r, s)| !self.is_dark(r) && !self.is_dark(s));
             }
             if pairs.is_empty() {
                 return Ok(changed);
@@ -2146,6 +2231,24 @@ pub fn solve(scene: &Scene, opts: SolveOptions) -> Result<(Solution, Vec<RoundRe
         sol.stats.residual = last.residual;
     }
     Ok((sol, records))
+}
+
+/// The diameter of the box around the patches not `dark`.
+fn lit_diameter(patches: &Patches, dark: &[bool]) -> f64 {
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for (p, &d) in patches.polys.iter().zip(dark) {
+        if !d {
+            for &c in p.corners() {
+                lo = lo.min(c);
+                hi = hi.max(c);
+            }
+        }
+    }
+    if lo.x <= hi.x {
+        (hi - lo).length()
+    } else {
+        patches.diameter
+    }
 }
 
 /// Per element of the pool: true if `patch_holds` is true of some patch under it

@@ -37,12 +37,13 @@ pub(super) struct RestorePoint {
 
 /// The solve settings as [`Hierarchy::options`] keeps them: `opts` as JSON
 /// without its storage (where the pools live does not change them) and without
-/// `keep_passive` (a session keeps them whatever it was given).
+/// `keep_passive` and `sealed_regions` (a session sets them whatever it was given).
 pub fn options_text(opts: &SolveOptions) -> String {
     let mut v = serde_json::to_value(opts).unwrap_or(serde_json::Value::Null);
     if let Some(m) = v.as_object_mut() {
         m.remove("storage");
         m.remove("keep_passive");
+        m.remove("sealed_regions");
     }
     v.to_string()
 }

@@ -181,15 +181,17 @@ impl Solver<'_> {
         pull(nodes, geoms, &mut e_field);
         let (eb, efb) = self.gained(e_field);
         // The leaves checked: outside solids, emitting nothing (what they gather
-        // is what reaches the answer off the emitters). Their gathers as solved.
+        // is what reaches the answer off the emitters), not dark (they gather
+        // exactly nothing). Their gathers as solved.
         let checked: Vec<bool> = self
             .sys
             .leaves
             .iter()
             .zip(&outside)
             .map(|(&l, &out)| {
-                let e = self.patches.emissions[geoms[l.ix()].patch as usize];
-                out && e.iter().all(|&x| x <= 0.0)
+                let p = geoms[l.ix()].patch as usize;
+                let e = self.patches.emissions[p];
+                out && e.iter().all(|&x| x <= 0.0) && !self.dark_patch(p)
             })
             .collect();
         let (h_row, h_first): (Vec<[f64; 3]>, Vec<[f64; 3]>) = (0..nl)

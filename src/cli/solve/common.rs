@@ -433,6 +433,20 @@ pub struct AccuracyArgs {
     /// the floor under where a sliding block starts stays missing after it leaves.
     #[arg(long)]
     pub no_contact_meshing: bool,
+    /// Solve every patch, also those no emitter's light can reach.
+    ///
+    /// By default a static solve first finds the closed shells of the scene (an
+    /// object whose polygons' edges pair up exactly: a crate, a box, a room of six
+    /// walls, a closed tessellated mesh) and the patches that lie on the other side
+    /// of one from every emitter (what a sealed crate holds, a closed room with no
+    /// lamp beside the lit one, a box's bottom resting on the floor). Their radiosity
+    /// is exactly zero: they get no link, no row and no gather, are stored black
+    /// (a probe there reads 0), and the lit part is solved at the scale it would have
+    /// alone. A shell with a gap, a T-junction or two-sided faces is not a shell;
+    /// what is unsure is solved. Scenes with motion and `rhier interact` solve every
+    /// patch (a move may open a shell). This flag turns the analysis off, to compare.
+    #[arg(long)]
+    pub no_sealed: bool,
     /// Most refine-and-solve rounds.
     #[arg(long, default_value_t = SolveOptions::default().max_rounds)]
     pub max_rounds: u32,
@@ -693,6 +707,7 @@ impl AccuracyArgs {
             time_budget: a.time_budget,
             seed: a.seed,
             contact_meshing: !a.no_contact_meshing,
+            sealed_regions: !a.no_sealed,
             ..SolveOptions::default()
         };
         opts.validate()?;

@@ -156,8 +156,12 @@ pub fn run(
     }
     if !output.quiet {
         eprintln!(
-            "solved {} patches in {:.3} s: {} stored cells, {} elements, {} active / {} passive links, estimated error {}, absorbs {} of the emitted power{}; stopped: {}; wrote {}",
+            "solved {} patches{} in {:.3} s: {} stored cells, {} elements, {} active / {} passive links, estimated error {}, absorbs {} of the emitted power{}; stopped: {}; wrote {}",
             solution.patches.len(),
+            match solver.dark_patch_count() {
+                0 => String::new(),
+                n => format!(" ({n} sealed off from every emitter: black, not solved)"),
+            },
             solution.stats.seconds,
             solution.leaves.len(),
             solution.stats.elements,
@@ -222,6 +226,11 @@ pub fn run_staged(
             Ok(report::write_csv(path, &[])?)
         });
     }
+    // As `rhier interact` solves it: a move may open a shell, so no patch is dark.
+    let opts = SolveOptions {
+        sealed_regions: false,
+        ..opts
+    };
     let mut solver = Solver::new(&stage.scene, opts)?;
     solver.keep_restore_point();
     let quiet = output.quiet;

@@ -178,6 +178,9 @@ pub const SOLVE_OPTIONS_NOT_IN_KEY: &[&str] = &[
     // A space-time solve keeps its passive links whatever it says (only a static
     // solve drops them, `Solver::drop_passive_links`).
     "keep_passive",
+    // Only a scene without motion leaves dark patches out (`Solver::at_time`): a
+    // space-time solve solves every patch whatever it says.
+    "sealed_regions",
 ];
 
 /// Fields of [`SpaceTimeOptions`] left out of [`result_settings`]: none.

@@ -111,10 +111,16 @@ fn element_box(s: &Solver, e: u32) -> (DVec3, DVec3) {
 
 /// Cluster links between the rooms (one end wholly in A, x < 5, the other wholly in
 /// B) and their largest coefficient; and the area-weighted mean radiosity of room
-/// B's leaves.
-fn solve_rooms(walls: bool) -> (usize, f64, f64) {
+/// B's leaves. `sealed`: [`SolveOptions::sealed_regions`] (off, the links between
+/// the rooms are made and their rays must find the walls; on, the closed dark room
+/// is left out whole and no link reaches it).
+fn solve_rooms(walls: bool, sealed: bool) -> (usize, f64, f64) {
     let scene = two_rooms(walls);
-    let mut s = Solver::new(&scene, coarse()).unwrap();
+    let opts = SolveOptions {
+        sealed_regions: sealed,
+        ..coarse()
+    };
+    let mut s = Solver::new(&scene, opts).unwrap();
     s.run(|_, _| {}).unwrap();
     let mut between = 0;
     let mut fmax: f64 = 0.0;
@@ -153,18 +159,25 @@ fn solve_rooms(walls: bool) -> (usize, f64, f64) {
 
 #[test]
 fn a_closed_dark_room_gets_no_light_through_cluster_links() {
-    let (between, fmax, b_dark) = solve_rooms(true);
+    let (between, fmax, b_dark) = solve_rooms(true, false);
     assert!(
         between > 0,
         "no cluster link between the rooms was evaluated"
     );
     assert_eq!(fmax, 0.0, "a cluster link leaks through the walls");
     assert_eq!(b_dark, 0.0, "the closed dark room is lit: {b_dark}");
-    // With the facing walls open, the same links carry light.
-    let (between, fmax, b_open) = solve_rooms(false);
-    assert!(between > 0);
-    assert!(fmax > 0.0);
-    assert!(b_open > 1e-3, "the open dark room gets no light: {b_open}");
+    // With the facing walls open, the same links carry light, whether the solve
+    // looks for sealed regions or not (there is none).
+    for sealed in [false, true] {
+        let (between, fmax, b_open) = solve_rooms(false, sealed);
+        assert!(between > 0);
+        assert!(fmax > 0.0);
+        assert!(b_open > 1e-3, "the open dark room gets no light: {b_open}");
+    }
+    // Closed and left out as sealed: no link between the rooms at all, and black.
+    let (between, _, b_dark) = solve_rooms(true, true);
+    assert_eq!(between, 0);
+    assert_eq!(b_dark, 0.0);
 }
 
 /// A flat lamp of 2×2 emitting quads in the plane z = 0 facing +z (side 0.4), and

@@ -1,5 +1,5 @@
 //! The hierarchical solver: known answers, invariants, accuracy against the path
-//! tracer, cluster links, scale, the `--min-size` floor per object, and the
+//! tracer, cluster links, scale, the `--min-size` floor per object, sealed regions, and the
 //! frame-by-frame baseline.
 
 mod accuracy;
@@ -12,5 +12,6 @@ mod known;
 mod per_frame;
 mod scale;
 mod scale_free;
+mod sealed;
 mod shadow_edge;
 mod tiled_lamp;

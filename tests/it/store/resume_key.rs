@@ -89,6 +89,9 @@ fn not_in_key() -> Vec<(&'static str, Change)> {
         ("solve.keep_passive", |o, _| {
             o.keep_passive = !o.keep_passive
         }),
+        ("solve.sealed_regions", |o, _| {
+            o.sealed_regions = !o.sealed_regions
+        }),
     ]
 }
 
