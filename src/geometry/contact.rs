@@ -93,12 +93,14 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
 }
 
 /// [`split_at_contacts`], with the patches `cut_nothing` marks (a flag per patch
-/// of `patches`; empty: none) cutting no other: the patches no light reaches
-/// ([`super::Shells::dark`]). Such a patch touches a lit one only from behind (a
-/// sealed room's wall against the lit room's) or along lines the lit faces of its
-/// own solid give anyway (a crate's bottom on the floor, its sides standing
-/// there), and cut along it, the lit wall of a room took every edge of the dark
-/// room's tessellated wall behind it.
+/// of `patches`; empty: none) drawing no line as resting faces: the patches no
+/// light reaches ([`super::Shells::dark`]). A dark polygon face to face with a lit
+/// one lies behind it (a sealed room's wall against the lit room's): cut along it,
+/// the lit wall took every edge of the dark room's tessellated wall. Their other
+/// lines are kept: where a dark face passes through a lit one (a two-sided slab's
+/// inner face through the room side of another, Blender's box) the cut is where
+/// the lit side ends, and without those cuts the Blender box read 6.0% off the
+/// path tracer for 2.8%.
 pub fn split_at_contacts_but(
     scene: &Scene,
     patches: &Patches,
@@ -135,12 +137,12 @@ pub fn split_at_contacts_but(
             continue;
         }
         let n = patches.normals[i];
-        let cuts_nothing = |j: usize| moving(j) || cut_nothing.get(j).copied().unwrap_or(false);
+        let dark = |j: usize| cut_nothing.get(j).copied().unwrap_or(false);
         let Contacts {
             lines,
             facing,
             covering,
-        } = contacts(patches, &bvh, i, &cuts_nothing, tol, near_gap);
+        } = contacts(patches, &bvh, i, (&moving, &dark), tol, near_gap);
         let pieces = cut_by_lines(poly, n, lines, tol);
         // Hidden: inside the solid resting on the patch (the first thing straight
         // above is a back face), or a face resting face to face on a coplanar
@@ -245,7 +247,7 @@ fn contacts(
     patches: &Patches,
     bvh: &SceneBvh,
     i: usize,
-    moving: &impl Fn(usize) -> bool,
+    (moving, dark): (&impl Fn(usize) -> bool, &impl Fn(usize) -> bool),
     tol: f64,
     near_gap: f64,
 ) -> Contacts {
@@ -292,8 +294,12 @@ fn contacts(
         if coplanar {
             if n.dot(nj) < -0.99 && !is_twin(&poly, other, tol) {
                 facing.push(j);
-                for e in 0..k {
-                    lines.push((other.v[e], other.v[(e + 1) % k] - other.v[e]));
+                // A dark polygon resting face to face (a sealed room's wall behind
+                // this one) draws no line on it ([`split_at_contacts_but`]).
+                if !dark(j) {
+                    for e in 0..k {
+                        lines.push((other.v[e], other.v[(e + 1) % k] - other.v[e]));
+                    }
                 }
             }
             continue;

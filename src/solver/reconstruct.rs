@@ -412,21 +412,22 @@ impl Solver<'_> {
             && self.motion.moving_patch.contains(&true))
         .then(|| self.emitters_now())
         .flatten();
-        let mut cells: Vec<Cell> = self
-            .sys
-            .leaves
-            .iter()
-            .map(|&l| {
-                let g = &geoms[l.ix()];
-                Cell {
-                    leaf: l,
-                    patch: g.patch,
-                    n: g.n,
-                    uv: g.uv,
-                    area: g.area,
-                }
-            })
-            .collect();
+        let root_cell = |l: ElementId| {
+            let g = &geoms[l.ix()];
+            Cell {
+                leaf: l,
+                patch: g.patch,
+                n: g.n,
+                uv: g.uv,
+                area: g.area,
+            }
+        };
+        // A dark leaf ([`Solver::is_dark`]) is one black cell: nothing gathered,
+        // nothing welded (a two-sided slab's inner face shares its corners with
+        // the lit room side, whose values the weld would hand it).
+        let (lit, dark): (Vec<ElementId>, Vec<ElementId>) =
+            self.sys.leaves.iter().partition(|&&l| !self.is_dark(l));
+        let mut cells: Vec<Cell> = lit.into_iter().map(root_cell).collect();
         let planes = self.emitter_planes();
         let mut done: Vec<(Cell, [usize; 4], usize)> = Vec::with_capacity(cells.len());
         // The root cells (the leaves) test their edges' midpoints too, see below.
@@ -636,6 +637,17 @@ impl Solver<'_> {
                 time: self.time,
                 uv: c.uv,
                 b,
+            });
+        }
+        for l in dark {
+            let c = root_cell(l);
+            cell_leaves.push(c.leaf.0);
+            leaves.push(Leaf {
+                patch: c.patch,
+                corners: c.n,
+                time: self.time,
+                uv: c.uv,
+                b: [[0.0; 3]; 4],
             });
         }
         let mut order: Vec<usize> = (0..leaves.len()).collect();

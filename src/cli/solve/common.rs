@@ -435,16 +435,18 @@ pub struct AccuracyArgs {
     pub no_contact_meshing: bool,
     /// Solve every patch, also those no emitter's light can reach.
     ///
-    /// By default a static solve first finds the closed shells of the scene (an
-    /// object whose polygons' edges pair up exactly: a crate, a box, a room of six
-    /// walls, a closed tessellated mesh) and the patches that lie on the other side
-    /// of one from every emitter (what a sealed crate holds, a closed room with no
-    /// lamp beside the lit one, a box's bottom resting on the floor). Their radiosity
-    /// is exactly zero: they get no link, no row and no gather, are stored black
-    /// (a probe there reads 0), and the lit part is solved at the scale it would have
-    /// alone. A shell with a gap, a T-junction or two-sided faces is not a shell;
-    /// what is unsure is solved. Scenes with motion and `rhier interact` solve every
-    /// patch (a move may open a shell). This flag turns the analysis off, to compare.
+    /// By default a static solve first finds the closed shells of the scene
+    /// (polygons whose edges pair up exactly, in one object or several: a crate, a
+    /// box, a room of six walls, two rooms as two objects sharing a wall, a closed
+    /// tessellated mesh; two-sided surfaces are left out)
+    /// and the patches that lie on the other side of one from every emitter (what a
+    /// sealed crate holds, a closed room with no lamp beside the lit one, a box's
+    /// bottom resting on the floor). Their radiosity is exactly zero: they get no
+    /// link, no row and no gather, are stored black (a probe there reads 0), and the
+    /// lit part is solved at the scale it would have alone. A shell with a gap or a
+    /// T-junction is not a shell; what is unsure is solved. Scenes with motion and
+    /// `rhier interact` solve every patch (a move may open a shell). This flag turns
+    /// the analysis off, to compare.
     #[arg(long)]
     pub no_sealed: bool,
     /// Most refine-and-solve rounds.

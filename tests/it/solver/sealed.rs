@@ -324,6 +324,13 @@ fn what_no_light_reaches_costs_nothing_and_changes_nothing() {
             sealed.elements,
             alone.elements
         );
+        // The far room and its box as one object with the crate, the lit room
+        // apart: the shells are found across objects all the same.
+        let mut one = scene(materials.clone(), &p, true, fan);
+        let far = one.objects.remove(3);
+        one.objects[1].polygons.extend(far.polygons);
+        let merged = solve(&one, opts.clone());
+        assert_eq!(merged.dark_patches, sealed.dark_patches);
         assert!(
             every.links as f64 > 1.3 * alone.links as f64,
             "{}",
