@@ -93,8 +93,8 @@ pub fn split_at_contacts(scene: &Scene, patches: &Patches, t: f64) -> (Patches, 
 }
 
 /// [`split_at_contacts`], with the patches `cut_nothing` marks (a flag per patch
-/// of `patches`; empty: none) drawing no line as resting faces: the patches no
-/// light reaches ([`super::Shells::dark`]). A dark polygon face to face with a lit
+/// of `patches`; empty: none) drawing no line as resting faces and cut by none:
+/// the patches no light reaches ([`super::Shells::dark`]). A dark polygon face to face with a lit
 /// one lies behind it (a sealed room's wall against the lit room's): cut along it,
 /// the lit wall took every edge of the dark room's tessellated wall. Their other
 /// lines are kept: where a dark face passes through a lit one (a two-sided slab's
@@ -143,6 +143,9 @@ pub fn split_at_contacts_but(
             facing,
             covering,
         } = contacts(patches, &bvh, i, (&moving, &dark), tol, near_gap);
+        // A dark patch is black whole: cut, it would only store more cells (it is
+        // still dropped whole where hidden, as a box's bottom on the floor).
+        let lines = if dark(i) { Vec::new() } else { lines };
         let pieces = cut_by_lines(poly, n, lines, tol);
         // Hidden: inside the solid resting on the patch (the first thing straight
         // above is a back face), or a face resting face to face on a coplanar
