@@ -9,6 +9,7 @@ mod exported;
 mod floor;
 mod invariants;
 mod known;
+mod l_room_lit;
 mod per_frame;
 mod scale;
 mod scale_free;
