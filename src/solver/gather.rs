@@ -60,7 +60,7 @@ pub(super) struct GatherLimits {
     /// Sources seen by their quadrants ([`super::reconstruct::FieldShapes`]).
     pub(super) shapes: super::reconstruct::FieldShapes,
     /// `recon_tol · B_ref`: what a partly hidden emitter's visibility noise may
-    /// move a point by ([`emitter_recast_rays`]).
+    /// move a point by ([`recast_rays`]).
     recast_tol: f64,
 }
 
@@ -153,33 +153,14 @@ fn small_part_rays(m: u32, k: f64) -> u32 {
     (scaled as u32).clamp(SMALL_PART_MIN_RAYS.min(m), m)
 }
 
-/// The rays a non-emitting surface source with factor `k` at a final-gather
-/// point is cast again with where its `m` first rays find it partly hidden
-/// ([`Solver::surface_visibility`]): [`small_part_rays`]' rule carried on above
-/// [`PARTIAL_PART_MIN_FACTOR`], `m` times `k` over that bound, at least twice
-/// the first rays and at most [`super::rows::PARTIAL_CLUSTER_RAYS`] times them
-/// (the full recast from a factor of 8 × 3e-3 = 0.024 up).
-///
-/// Why: as for the small parts, a source's visibility noise enters the point
-/// times its factor, so the rays that make the sum's variance least go in
-/// proportion to it. In `tools/gen_cubes.py 20` the final gather's recasts at
-/// the chain's partly hidden surface sources, 64 rays each whatever their
-/// factor, were 17% of the solve's samples and the largest single item
-/// (`perf record`, BENCHMARKS.md "Scale"): a point by the boxes sees many box
-/// faces partly hidden at factors of 3e-3 to 2e-2.
-fn recast_rays(m: u32, k: f64) -> u32 {
-    let full = m * super::rows::PARTIAL_CLUSTER_RAYS;
-    let scaled = (f64::from(m) * k / PARTIAL_PART_MIN_FACTOR).ceil();
-    (scaled.min(f64::from(full)) as u32).clamp((2 * m).min(full), full)
-}
-
-/// The rays a partly hidden emitter whose term at a final-gather point weighs `w`
-/// (`ρ_x k B_s`: what it hands the point's radiosity wholly visible) is cast again
-/// with where its `m` first stratified rays find it partly hidden, for the term's
-/// visibility noise to stay within `tol` ([`GatherLimits::recast_tol`], the
-/// reconstruction tolerance): `(w / (√2 tol))^(4/3)`, rounded up, at most
-/// [`super::rows::PARTIAL_CLUSTER_RAYS`] times `m`. An answer of `m` or fewer
-/// keeps the first rays.
+/// The rays a partly hidden surface source whose term at a final-gather point
+/// weighs `w` (`ρ_x k B_s`: what it hands the point's radiosity wholly visible)
+/// is cast again with where its `m` first stratified rays find it partly hidden,
+/// for the term's visibility noise to stay within `tol`
+/// ([`GatherLimits::recast_tol`], the reconstruction tolerance): `(w / (√2
+/// tol))^(4/3)`, rounded up, at most [`super::rows::PARTIAL_CLUSTER_RAYS`] times
+/// `m`. An answer of `m` or fewer keeps the first rays. Emitters and non-emitting
+/// sources alike ([`Solver::surface_visibility`]).
 ///
 /// Why: `m` jittered rays, one per cell of a grid over the source
 /// ([`oracle::ray_params`]), estimate its visible fraction with variance
@@ -187,17 +168,42 @@ fn recast_rays(m: u32, k: f64) -> u32 {
 /// cells a shadow edge cuts count, about `2√m` of them for one straight edge, at
 /// most `1/4` each, so `σ_v ≤ (√2/2) m^(-3/4)`, and the point's value is off by
 /// `w σ_v`. Setting that to `tol`, the noise the reconstruction accepts between a
-/// cell's centre and its corners, gives the count. With `m = 32` (an emitter's
-/// first rays, [`Solver::corner_rays_to`]) the first rays are kept while
-/// `w < 19 tol` (`0.38 B_ref` at the default `recon_tol` 0.02), and the full
-/// 8× recast is reached at `w ≥ 90 tol`. The fixed 8× recast it replaces cast, on
-/// the Cornell box with blocks (eps 0.16, one thread), 2.67 of the final gathers'
-/// 6.44 million surface rays (the lamp hands the floor's middle `ρ k E ≈ 0.18`);
-/// under this rule 11 of its 11 900 partly hidden emitter
-/// terms were cast again, 4.0 million surface rays in all, 12% less CPU, the error
-/// off the lamp within 1e-4 and at the contact points within 5e-4 of it over four
-/// seeds (the seeds themselves 0.4–1.0% apart).
-fn emitter_recast_rays(m: u32, w: f64, tol: f64) -> u32 {
+/// cell's centre and its corners, gives the count.
+///
+/// Emitters: with `m = 32` (an emitter's first rays, [`Solver::corner_rays_to`])
+/// the first rays are kept while `w < 19 tol` (`0.38 B_ref` at the default
+/// `recon_tol` 0.02), and the full 8× recast is reached at `w ≥ 90 tol`. The fixed
+/// 8× recast it replaces cast, on the Cornell box with blocks (eps 0.16, one
+/// thread), 2.67 of the final gathers' 6.44 million surface rays (the lamp hands
+/// the floor's middle `ρ k E ≈ 0.18`); under this rule 11 of its 11 900 partly
+/// hidden emitter terms were cast again, 4.0 million surface rays in all, 12% less
+/// CPU, the error off the lamp within 1e-4 and at the contact points within 5e-4
+/// of it over four seeds (the seeds themselves 0.4–1.0% apart).
+///
+/// Non-emitting sources: with `m = 8` the first rays are kept while `w < 6.7 tol`
+/// and the full 8× recast is reached at `w ≥ 32 tol`. The rule it replaces cast
+/// `8 k / 3e-3` rays by the factor `k` alone, at least `2m` (the doubling kept
+/// for the row sums of the L-shaped room of `tests/it/solver/enclosures.rs`,
+/// where every surface emits, so this branch never ran there), whatever the
+/// source's radiosity: a dim wall far across the room got its 16 to 64 rays as
+/// a bright one did. Its noise `w σ_v` is what matters, and this rule bounds
+/// it as for emitters. Measured (h48rays3, paired with main 7f6e3cf, 2 threads,
+/// load 2–5): `tools/gen_cubes.py 16` 42.8 → 39.8 CPU s (−7%, means of four
+/// runs), the error 1.66 → 1.67% and 1.68 → 1.69% at seeds 7 and 99, 1.20 →
+/// 1.66% at the default seed, where one gap probe reads 18% low (as main reads it
+/// at seed 99); the Cornell box with blocks 1.59–1.61 → 1.48–1.50 CPU s at eps
+/// 0.16 and 0.83–0.85 → 0.64–0.65 at eps 0.5, the error off the lamp unchanged
+/// (0.0098, 0.0166 → 0.0165). In the L-shaped room lit in one arm
+/// (`tests/it/solver/l_room_lit.rs`), where all the light of the probes comes
+/// through partly hidden non-emitting surfaces, the error is within 0.09 points
+/// of the factor rule's at three seeds and three tilings (97% of those terms
+/// weigh under `tol`; none reaches the `6.7 tol` of a recast). But the twin
+/// solves of `spacetime::tests::surfaces_that_move_as_one_are_linked_once_and_give_the_frames_of_links_evaluated_at_each`
+/// (points on a sliding trough's inner faces) drift 0.600% apart at `t =
+/// 0` where the factor rule's were 0.289% (bar 0.5%), also at `tol / 4`: not
+/// traced (likely the noise of the many light terms the floor cast 16 rays
+/// each, adding up).
+fn recast_rays(m: u32, w: f64, tol: f64) -> u32 {
     let full = m * super::rows::PARTIAL_CLUSTER_RAYS;
     if tol <= 0.0 {
         return full;
@@ -973,9 +979,9 @@ impl Solver<'_> {
 
     /// The visible fraction of surface source `s` with factor `k` at the point by
     /// the rays `r` ([`Solver::gather_rays`]), cast again where they find it
-    /// partly hidden: at an emitter as many as the term's weight asks for at the
-    /// reconstruction tolerance ([`emitter_recast_rays`]; none again where the
-    /// first rays meet it), by [`recast_rays`] (in proportion to `k`) elsewhere.
+    /// partly hidden, as many as the term's weight asks for at the reconstruction
+    /// tolerance ([`recast_rays`]; none again where the first rays meet it),
+    /// emitter or not.
     ///
     /// Why: 8 stratified rays give the fraction in steps of 1/8. In the L-shaped
     /// room of `tests/it/solver/enclosures.rs` a floor point by the re-entrant
@@ -984,7 +990,11 @@ impl Solver<'_> {
     /// cluster's shared fraction its factors summed to 1.0093 (1.0001 with 4096
     /// rays per tile). An emitter's first rays are 4× as many
     /// ([`Solver::corner_rays_to`]), steps of 1/32; in the enclosures of that test
-    /// every surface emits, and the rule for emitters holds them within their 1%.
+    /// every surface emits, and the rule holds them within their 1%. Where the
+    /// light comes through partly hidden non-emitting surfaces (the L-shaped room
+    /// lit in one arm, `tests/it/solver/l_room_lit.rs`), a term's step of 1/8
+    /// weighs what its radiosity makes it, and the rule casts again only where
+    /// that step would show.
     fn surface_visibility(
         &self,
         mut r: oracle::PointRays,
@@ -996,12 +1006,8 @@ impl Solver<'_> {
         if v <= 0.0 || v >= 1.0 {
             return v;
         }
-        let m = if self.patches.emits(r.gs.patch as usize) {
-            let w = self.term_weight(r.skip[0], s, k);
-            emitter_recast_rays(r.m, w, limits.recast_tol)
-        } else {
-            recast_rays(r.m, k)
-        };
+        let w = self.term_weight(r.skip[0], s, k);
+        let m = recast_rays(r.m, w, limits.recast_tol);
         if m <= r.m {
             return v;
         }
