@@ -82,7 +82,7 @@ impl Sealed {
 }
 
 /// One closed shell: its triangles (quads split along their first diagonal), its
-/// edges once each, its box and its orientation.
+/// edges once each and its box.
 struct Shell {
     tris: Vec<[DVec3; 3]>,
     edges: Vec<[DVec3; 2]>,
