@@ -264,11 +264,7 @@ fn contacts(
     let mut facing: Vec<usize> = Vec::new();
     // Polygons hanging just in front, parallel, their back to the patch.
     let mut covering: Vec<usize> = Vec::new();
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for &c in poly.corners() {
-        lo = lo.min(c);
-        hi = hi.max(c);
-    }
+    let (lo, hi) = poly.bounds();
     // The patch swept `near_gap` along its normal: what rests on it or covers it.
     let pad = DVec3::splat(tol * 2.0);
     let (lo, hi) = (

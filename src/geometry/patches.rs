@@ -113,12 +113,18 @@ impl Patches {
 
     /// Diameter of the bounding box of all patches (what `diameter` caches).
     fn scene_diameter(&self) -> f64 {
+        self.diameter_where(|_| true)
+    }
+
+    /// Diameter of the bounding box of the patches `keep` admits (0 for none).
+    pub fn diameter_where(&self, keep: impl Fn(usize) -> bool) -> f64 {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for p in &self.polys {
-            for &c in p.corners() {
-                lo = lo.min(c);
-                hi = hi.max(c);
+        for (i, p) in self.polys.iter().enumerate() {
+            if keep(i) {
+                let (a, b) = p.bounds();
+                lo = lo.min(a);
+                hi = hi.max(b);
             }
         }
         if lo.x.is_finite() {

@@ -58,6 +58,14 @@ impl Poly {
         self.area_vector().normalize_or_zero()
     }
 
+    /// The box of the corners: `(lo, hi)`, both infinite for no corner.
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        self.corners().iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &c| (lo.min(c), hi.max(c)),
+        )
+    }
+
     /// Area-weighted centroid.
     pub fn centroid(&self) -> DVec3 {
         centroid_of(self.corners())

@@ -74,13 +74,6 @@ pub struct Sealed {
     pub dark_patches: usize,
 }
 
-impl Sealed {
-    /// True if some patch is dark.
-    pub fn any(&self) -> bool {
-        self.dark_patches > 0
-    }
-}
-
 /// One closed shell: its triangles (quads split along their first diagonal), its
 /// edges once each and its box.
 struct Shell {
@@ -165,7 +158,7 @@ fn dark_among(shells: &[Shell], diameter: f64, patches: &Patches) -> Sealed {
         .par_iter()
         .map(|&e| {
             let (poly, n) = (&patches.polys[e], patches.normals[e]);
-            let (lo, hi) = poly_box(poly);
+            let (lo, hi) = poly.bounds();
             grid.overlapping(lo, hi)
                 .into_iter()
                 .map(|s| (s, side_of(&shells[s], poly, n, offset, tol)))
@@ -182,7 +175,7 @@ fn dark_among(shells: &[Shell], diameter: f64, patches: &Patches) -> Sealed {
                 return false;
             }
             let poly = &patches.polys[i];
-            let (lo, hi) = poly_box(poly);
+            let (lo, hi) = poly.bounds();
             let near = grid.overlapping(lo, hi);
             let mut sides: HashMap<usize, Side> = HashMap::new();
             let mut side = |s: usize| {
@@ -442,7 +435,7 @@ fn winding(shell: &Shell, x: DVec3) -> f64 {
 
 /// The side of `shell` that `poly` (normal `n`) lies on (module docs, "Sides").
 fn side_of(shell: &Shell, poly: &Poly, n: DVec3, offset: f64, tol: f64) -> Side {
-    let (lo, hi) = poly_box(poly);
+    let (lo, hi) = poly.bounds();
     let pad = DVec3::splat(offset * 2.0);
     if lo.cmpgt(shell.hi + pad).any() || hi.cmplt(shell.lo - pad).any() {
         return Side::Outside;
@@ -498,13 +491,6 @@ fn crosses(shell: &Shell, poly: &Poly, n: DVec3, tol: f64) -> bool {
         }
     }
     shell.edges.iter().any(|e| through(e[0], e[1], c, n))
-}
-
-fn poly_box(p: &Poly) -> (DVec3, DVec3) {
-    p.corners().iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), &c| (lo.min(c), hi.max(c)),
-    )
 }
 
 /// A uniform grid over the shells' boxes: which shells a box may overlap.

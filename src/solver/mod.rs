@@ -814,7 +814,7 @@ impl<'a> Solver<'a> {
         let dark = if dark.iter().any(|&d| d) {
             // The solve's scale (its floors and tolerances) is the lit part's: a
             // dark room beside a lit one changes nothing of the lit one's solve.
-            patches.diameter = lit_diameter(&patches, &dark);
+            patches.diameter = patches.diameter_where(|i| !dark[i]);
             dark
         } else {
             Vec::new()
@@ -2231,24 +2231,6 @@ pub fn solve(scene: &Scene, opts: SolveOptions) -> Result<(Solution, Vec<RoundRe
         sol.stats.residual = last.residual;
     }
     Ok((sol, records))
-}
-
-/// The diameter of the box around the patches not `dark`.
-fn lit_diameter(patches: &Patches, dark: &[bool]) -> f64 {
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for (p, &d) in patches.polys.iter().zip(dark) {
-        if !d {
-            for &c in p.corners() {
-                lo = lo.min(c);
-                hi = hi.max(c);
-            }
-        }
-    }
-    if lo.x <= hi.x {
-        (hi - lo).length()
-    } else {
-        patches.diameter
-    }
 }
 
 /// Per element of the pool: true if `patch_holds` is true of some patch under it
